@@ -1,0 +1,33 @@
+/* tinyvo: the 8-bit grey image view.
+ *
+ * A view does not own its pixels. width, height and stride are const: a view is made once with
+ * tvo_image_make() (or an initialiser) and its geometry never changes afterwards. Pixel (x, y) is
+ * data[y * stride + x]. Valid views have 1 <= width, height <= TVO_MAX_IMAGE_DIM, stride >= width
+ * and data != NULL; tvo_image_check() tells. */
+#ifndef TINYVO_IMAGE_H
+#define TINYVO_IMAGE_H
+
+#include "tinyvo/types.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct tvo_image {
+    const int32_t width;   /* pixels */
+    const int32_t height;  /* pixels */
+    const int32_t stride;  /* bytes from one row to the next, >= width */
+    uint8_t *data;         /* first pixel; owned by the caller */
+} tvo_image;
+
+/* Make a view. Does not validate: pass the result to tvo_image_check(). */
+tvo_image tvo_image_make(int32_t width, int32_t height, int32_t stride, uint8_t *data);
+
+/* TVO_OK for a valid view; TVO_ERR_NULL for a NULL view or data; TVO_ERR_SIZE for a bad size/stride. */
+tvo_status tvo_image_check(const tvo_image *img);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* TINYVO_IMAGE_H */

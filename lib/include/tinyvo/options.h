@@ -1,0 +1,22 @@
+/* tinyvo: library options. Every option has an #ifndef default here; override them on the compiler
+ * command line (-DTVO_MAX_IMAGE_DIM=2048), never by editing this file. */
+#ifndef TINYVO_OPTIONS_H
+#define TINYVO_OPTIONS_H
+
+/* Largest accepted image width or height, in pixels. Larger images are refused with TVO_ERR_SIZE. */
+#ifndef TVO_MAX_IMAGE_DIM
+#define TVO_MAX_IMAGE_DIM 8192
+#endif
+
+/* Deepest image pyramid (levels including the full-resolution level 0). */
+#ifndef TVO_MAX_PYR_LEVELS
+#define TVO_MAX_PYR_LEVELS 8
+#endif
+
+/* Numeric type of the geometry (camera models, essential matrix, poses): double by default.
+ * Define TVO_REAL_FLOAT to 1 for single-precision builds on FPUs without double support. */
+#ifndef TVO_REAL_FLOAT
+#define TVO_REAL_FLOAT 0
+#endif
+
+#endif /* TINYVO_OPTIONS_H */

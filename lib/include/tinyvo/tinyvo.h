@@ -1,0 +1,15 @@
+/* tinyvo: umbrella header. Include this, or only the module headers you need. */
+#ifndef TINYVO_TINYVO_H
+#define TINYVO_TINYVO_H
+
+#define TVO_VERSION_MAJOR 0
+#define TVO_VERSION_MINOR 1
+#define TVO_VERSION_PATCH 0
+
+#include "tinyvo/status.h"
+#include "tinyvo/options.h"
+#include "tinyvo/types.h"
+#include "tinyvo/image.h"
+#include "tinyvo/arena.h"
+
+#endif
