@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# The test command (README, .ci/run): installs what is needed, then builds and runs every test:
+#   1. Release build with -Werror, all cmocka unit tests (ctest -j2)
+#   2. the OpenCV oracle tests (pytest, test/oracle) against that build
+#   3. an ASan+UBSan build running the unit tests again
+# Tests that need ../shared/data skip with a message when it is absent.
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+bash tools/install-deps.sh
+JOBS=2
+
+echo "== release build + unit tests"
+cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release -DTVO_WERROR=ON >/dev/null
+cmake --build build/release -j$JOBS
+ctest --test-dir build/release -j$JOBS --output-on-failure
+
+echo "== oracle tests (OpenCV)"
+TVO_BUILD_DIR="$ROOT/build/release" "$ROOT/.venv/bin/python" -m pytest -q -rs test/oracle
+
+echo "== ASan + UBSan build + unit tests"
+cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DTVO_SANITIZE=ON -DTVO_WERROR=ON \
+      -DTVO_BUILD_BENCH=OFF >/dev/null
+cmake --build build/asan -j$JOBS
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
+  ctest --test-dir build/asan -j$JOBS --output-on-failure
+
+echo "== all tests passed"
