@@ -1,0 +1,450 @@
+/* Bucketed corner detection: FAST-9 with non-max suppression, a per-cell shortlist by FAST score,
+ * Harris / Shi-Tomasi ranking of the shortlist, and greedy selection with a minimum spacing.
+ * See tinyvo/corners.h for the contract. */
+#include "tinyvo/corners.h"
+#include "tinyvo/arena.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define DET_BAND 32             /* rows per FAST band */
+#define DET_MIN_GRID_CELL 8.0f  /* smallest cell of the spacing grid, px */
+#define DET_MAX_CORNERS (1 << 20)
+#define DET_MAX_CANDIDATES 4096
+
+typedef struct det_cand {
+    int32_t x, y;
+    float score;   /* FAST score, then the ranking score */
+    int32_t order; /* y * width + x: raster order, unique */
+} det_cand;
+
+typedef struct det_pick {
+    float x, y, score;
+    int32_t rank, cell, order;
+} det_pick;
+
+typedef struct det_box {
+    float x0, y0, x1, y1; /* bounding box of the points in a spacing cell; empty when x0 > x1 */
+} det_box;
+
+/* derived sizes of one configuration on one image */
+typedef struct det_layout {
+    int32_t border, inner_w, inner_h, ncells, quota, ncand;
+    int32_t band_cap;
+    int32_t gw, gh;   /* spacing grid (0 x 0 when min_distance == 0) */
+    float gcell;
+    size_t off_fast, off_band, off_cand, off_ncand, off_nexist, off_cursor, off_grid, off_picks, total;
+    int32_t npicks_max;
+} det_layout;
+
+void tvo_detect_config_default(tvo_detect_config *cfg)
+{
+    if (cfg == NULL)
+        return;
+    cfg->fast_threshold = 20;
+    cfg->score = TVO_SCORE_SHI_TOMASI;
+    cfg->block_size = 5;
+    cfg->harris_k = 0.04f;
+    cfg->grid_cols = 8;
+    cfg->grid_rows = 6;
+    cfg->max_corners = 300;
+    cfg->max_per_cell = 0;
+    cfg->min_distance = 10.0f;
+    cfg->border = 8;
+    cfg->candidates_per_cell = 0;
+}
+
+tvo_status tvo_detect_config_check(const tvo_detect_config *cfg)
+{
+    if (cfg == NULL)
+        return TVO_ERR_NULL;
+    if (!isfinite(cfg->harris_k) || !isfinite(cfg->min_distance))
+        return TVO_ERR_NOT_FINITE;
+    if (cfg->fast_threshold < 0 || cfg->fast_threshold > 255)
+        return TVO_ERR_ARG;
+    if (cfg->score != TVO_SCORE_FAST && cfg->score != TVO_SCORE_HARRIS && cfg->score != TVO_SCORE_SHI_TOMASI)
+        return TVO_ERR_ARG;
+    if (cfg->block_size < 1 || cfg->block_size > TVO_CORNER_MAX_BLOCK)
+        return TVO_ERR_ARG;
+    if (cfg->grid_cols < 1 || cfg->grid_cols > 256 || cfg->grid_rows < 1 || cfg->grid_rows > 256)
+        return TVO_ERR_ARG;
+    if (cfg->max_corners < 0 || cfg->max_corners > DET_MAX_CORNERS || cfg->max_per_cell < 0 ||
+        cfg->max_per_cell > DET_MAX_CORNERS)
+        return TVO_ERR_ARG;
+    if (cfg->min_distance < 0.0f || cfg->min_distance > (float)TVO_MAX_IMAGE_DIM)
+        return TVO_ERR_ARG;
+    if (cfg->border < 0 || cfg->border > TVO_MAX_IMAGE_DIM)
+        return TVO_ERR_ARG;
+    if (cfg->candidates_per_cell < 0 || cfg->candidates_per_cell > DET_MAX_CANDIDATES)
+        return TVO_ERR_ARG;
+    return TVO_OK;
+}
+
+static size_t det_round(size_t n)
+{
+    return tvo_arena_round(n); /* saturates at SIZE_MAX */
+}
+
+/* TVO_OK and *L filled, or an error for a bad config / size */
+static tvo_status det_plan(const tvo_detect_config *cfg, int32_t width, int32_t height, det_layout *L)
+{
+    tvo_status st = tvo_detect_config_check(cfg);
+    int32_t b, q;
+    size_t n;
+    if (st != TVO_OK)
+        return st;
+    if (width < 1 || height < 1 || width > TVO_MAX_IMAGE_DIM || height > TVO_MAX_IMAGE_DIM)
+        return TVO_ERR_SIZE;
+    memset(L, 0, sizeof(*L));
+    b = cfg->border > 3 ? cfg->border : 3;
+    if (cfg->score != TVO_SCORE_FAST && b < cfg->block_size / 2 + 2)
+        b = cfg->block_size / 2 + 2;
+    L->border = b;
+    L->inner_w = width - 2 * b > 0 ? width - 2 * b : 0;
+    L->inner_h = height - 2 * b > 0 ? height - 2 * b : 0;
+    L->ncells = cfg->grid_cols * cfg->grid_rows;
+    q = cfg->max_per_cell;
+    if (q == 0)
+        q = (cfg->max_corners + L->ncells - 1) / L->ncells;
+    L->quota = q;
+    L->ncand = cfg->candidates_per_cell;
+    if (L->ncand == 0)
+        L->ncand = 4 * q > 16 ? (4 * q > DET_MAX_CANDIDATES ? DET_MAX_CANDIDATES : 4 * q) : 16;
+    L->band_cap = ((width + 1) / 2) * ((DET_BAND + 1) / 2);
+    if (cfg->min_distance > 0.0f) {
+        L->gcell = cfg->min_distance > DET_MIN_GRID_CELL ? cfg->min_distance : DET_MIN_GRID_CELL;
+        L->gw = (int32_t)ceilf((float)width / L->gcell);
+        L->gh = (int32_t)ceilf((float)height / L->gcell);
+        if (L->gw < 1)
+            L->gw = 1;
+        if (L->gh < 1)
+            L->gh = 1;
+    }
+    /* layout: offsets from a 16-aligned base */
+    n = 0;
+    L->off_fast = n;
+    n = tvo_size_add(n, det_round(tvo_fast_scratch_size(width)));
+    L->off_band = n;
+    n = tvo_size_add(n, det_round((size_t)L->band_cap * sizeof(tvo_corner)));
+    L->off_cand = n;
+    n = tvo_size_add(n, det_round(tvo_size_mul(tvo_size_mul((size_t)L->ncells, (size_t)L->ncand),
+                                               sizeof(det_cand))));
+    L->off_ncand = n;
+    n = tvo_size_add(n, det_round((size_t)L->ncells * sizeof(int32_t)));
+    L->off_nexist = n;
+    n = tvo_size_add(n, det_round((size_t)L->ncells * sizeof(int32_t)));
+    L->off_cursor = n;
+    n = tvo_size_add(n, det_round(tvo_size_mul((size_t)L->ncells, 2u * sizeof(int32_t))));
+    L->off_grid = n;
+    n = tvo_size_add(n, det_round((size_t)L->gw * (size_t)L->gh * sizeof(det_box)));
+    L->off_picks = n;
+    L->npicks_max = (int32_t)((int64_t)L->ncells * L->quota > cfg->max_corners
+                                  ? (int64_t)L->ncells * L->quota : cfg->max_corners);
+    n = tvo_size_add(n, det_round(tvo_size_mul((size_t)L->npicks_max, sizeof(det_pick))));
+    L->total = tvo_size_add(n, 16u); /* alignment slack */
+    return TVO_OK;
+}
+
+size_t tvo_detect_scratch_size(const tvo_detect_config *cfg, int32_t width, int32_t height)
+{
+    det_layout L;
+    if (det_plan(cfg, width, height, &L) != TVO_OK)
+        return 0;
+    return L.total >= SIZE_MAX / 2 ? 0 : L.total;
+}
+
+/* min-heap of candidates: the root is the worst (lowest score; among equal scores, the latest) */
+static int det_worse(const det_cand *a, const det_cand *b)
+{
+    return a->score < b->score || (a->score == b->score && a->order > b->order);
+}
+
+static void det_sift_down(det_cand *h, int32_t n, int32_t i)
+{
+    for (;;) {
+        int32_t l = 2 * i + 1, r = l + 1, m = i;
+        det_cand t;
+        if (l < n && det_worse(&h[l], &h[m]))
+            m = l;
+        if (r < n && det_worse(&h[r], &h[m]))
+            m = r;
+        if (m == i)
+            return;
+        t = h[i];
+        h[i] = h[m];
+        h[m] = t;
+        i = m;
+    }
+}
+
+static void det_heap_push(det_cand *h, int32_t *n, int32_t cap, const det_cand *c)
+{
+    if (*n < cap) {
+        int32_t i = (*n)++;
+        h[i] = *c;
+        while (i > 0) {
+            int32_t p = (i - 1) / 2;
+            det_cand t;
+            if (!det_worse(&h[i], &h[p]))
+                break;
+            t = h[i];
+            h[i] = h[p];
+            h[p] = t;
+            i = p;
+        }
+    } else if (cap > 0 && det_worse(&h[0], c)) {
+        h[0] = *c;
+        det_sift_down(h, *n, 0);
+    }
+}
+
+static int det_cmp_cand(const void *pa, const void *pb)
+{
+    const det_cand *a = (const det_cand *)pa, *b = (const det_cand *)pb;
+    if (a->score != b->score)
+        return a->score > b->score ? -1 : 1;
+    return a->order < b->order ? -1 : (a->order > b->order ? 1 : 0);
+}
+
+static int det_cmp_pick(const void *pa, const void *pb)
+{
+    const det_pick *a = (const det_pick *)pa, *b = (const det_pick *)pb;
+    if (a->rank != b->rank)
+        return a->rank < b->rank ? -1 : 1;
+    if (a->score != b->score)
+        return a->score > b->score ? -1 : 1;
+    if (a->cell != b->cell)
+        return a->cell < b->cell ? -1 : 1;
+    return a->order < b->order ? -1 : (a->order > b->order ? 1 : 0);
+}
+
+static int32_t det_clampi(int32_t v, int32_t lo, int32_t hi)
+{
+    return v < lo ? lo : (v > hi ? hi : v);
+}
+
+/* 1 when (x, y) keeps min_distance from every point in the spacing grid */
+static int det_far_enough(const det_box *grid, const det_layout *L, float md2, float x, float y)
+{
+    int32_t gx = det_clampi((int32_t)(x / L->gcell), 0, L->gw - 1);
+    int32_t gy = det_clampi((int32_t)(y / L->gcell), 0, L->gh - 1);
+    int32_t i, j;
+    for (j = gy - 1; j <= gy + 1; ++j) {
+        if (j < 0 || j >= L->gh)
+            continue;
+        for (i = gx - 1; i <= gx + 1; ++i) {
+            const det_box *b;
+            float dx, dy;
+            if (i < 0 || i >= L->gw)
+                continue;
+            b = &grid[(size_t)j * (size_t)L->gw + (size_t)i];
+            if (b->x0 > b->x1)
+                continue;
+            dx = b->x0 - x > 0.0f ? b->x0 - x : (x - b->x1 > 0.0f ? x - b->x1 : 0.0f);
+            dy = b->y0 - y > 0.0f ? b->y0 - y : (y - b->y1 > 0.0f ? y - b->y1 : 0.0f);
+            if (dx * dx + dy * dy < md2)
+                return 0;
+        }
+    }
+    return 1;
+}
+
+static void det_grid_add(det_box *grid, const det_layout *L, float x, float y)
+{
+    int32_t gx = det_clampi((int32_t)(x / L->gcell), 0, L->gw - 1);
+    int32_t gy = det_clampi((int32_t)(y / L->gcell), 0, L->gh - 1);
+    det_box *b = &grid[(size_t)gy * (size_t)L->gw + (size_t)gx];
+    if (b->x0 > b->x1) {
+        b->x0 = b->x1 = x;
+        b->y0 = b->y1 = y;
+    } else {
+        b->x0 = x < b->x0 ? x : b->x0;
+        b->x1 = x > b->x1 ? x : b->x1;
+        b->y0 = y < b->y0 ? y : b->y0;
+        b->y1 = y > b->y1 ? y : b->y1;
+    }
+}
+
+/* take candidate h of cell c when it keeps the spacing; returns 1 when taken */
+static int det_try_take(det_box *grid, const det_layout *L, float md2, const det_cand *h, int32_t c,
+                        int32_t *taken, det_pick *picks, int32_t *npicks)
+{
+    float x = (float)h->x, y = (float)h->y;
+    det_pick *p;
+    if (L->gw > 0) {
+        if (!det_far_enough(grid, L, md2, x, y))
+            return 0;
+        det_grid_add(grid, L, x, y);
+    }
+    p = &picks[*npicks];
+    p->x = x;
+    p->y = y;
+    p->score = h->score;
+    p->rank = (*taken)++;
+    p->cell = c;
+    p->order = h->order;
+    ++*npicks;
+    return 1;
+}
+
+tvo_status tvo_detect(const tvo_detect_config *cfg, const tvo_image *img,
+                      const tvo_point2f *existing, int32_t n_existing,
+                      tvo_corner *out, int32_t capacity, int32_t *count,
+                      void *scratch, size_t scratch_size)
+{
+    det_layout L;
+    tvo_status st;
+    uint8_t *base;
+    void *fast_mem;
+    tvo_corner *band;
+    det_cand *cand;
+    int32_t *ncand, *nexist, *cursor, *taken_n;
+    det_box *grid;
+    det_pick *picks;
+    int32_t W, H, B, i, c, y0, npicks = 0, limit;
+    float md, md2;
+
+    if (count != NULL)
+        *count = 0;
+    if (cfg == NULL || img == NULL || out == NULL || count == NULL || scratch == NULL ||
+        (existing == NULL && n_existing > 0))
+        return TVO_ERR_NULL;
+    st = tvo_detect_config_check(cfg);
+    if (st != TVO_OK)
+        return st;
+    if (capacity < 0 || n_existing < 0)
+        return TVO_ERR_ARG;
+    st = tvo_image_check(img);
+    if (st != TVO_OK)
+        return st;
+    st = det_plan(cfg, img->width, img->height, &L);
+    if (st != TVO_OK)
+        return st;
+    if (scratch_size < L.total)
+        return TVO_ERR_NO_MEMORY;
+    for (i = 0; i < n_existing; ++i)
+        if (!isfinite(existing[i].x) || !isfinite(existing[i].y))
+            return TVO_ERR_NOT_FINITE;
+
+    W = img->width;
+    H = img->height;
+    B = L.border;
+    limit = capacity < cfg->max_corners ? capacity : cfg->max_corners;
+    if (L.inner_w <= 0 || L.inner_h <= 0 || limit == 0 || L.quota == 0)
+        return TVO_OK;
+
+    {
+        size_t mis = (size_t)((uintptr_t)scratch % 16u);
+        base = (uint8_t *)scratch + (mis ? 16u - mis : 0);
+    }
+    fast_mem = base + L.off_fast;
+    band = (tvo_corner *)(void *)(base + L.off_band);
+    cand = (det_cand *)(void *)(base + L.off_cand);
+    ncand = (int32_t *)(void *)(base + L.off_ncand);
+    nexist = (int32_t *)(void *)(base + L.off_nexist);
+    cursor = (int32_t *)(void *)(base + L.off_cursor);
+    taken_n = cursor + L.ncells;
+    grid = (det_box *)(void *)(base + L.off_grid);
+    picks = (det_pick *)(void *)(base + L.off_picks);
+    memset(ncand, 0, (size_t)L.ncells * sizeof(int32_t));
+    memset(nexist, 0, (size_t)L.ncells * sizeof(int32_t));
+    memset(cursor, 0, 2u * (size_t)L.ncells * sizeof(int32_t));
+    md = cfg->min_distance;
+    md2 = md * md;
+    for (i = 0; i < L.gw * L.gh; ++i) {
+        grid[i].x0 = 1.0f;
+        grid[i].x1 = 0.0f;
+        grid[i].y0 = grid[i].y1 = 0.0f;
+    }
+
+    /* existing points: per-cell counts (inside the inner region) and the spacing grid (inside the image) */
+    for (i = 0; i < n_existing; ++i) {
+        float x = existing[i].x, y = existing[i].y;
+        if (!(x >= 0.0f && y >= 0.0f && x < (float)W && y < (float)H))
+            continue;
+        if (L.gw > 0)
+            det_grid_add(grid, &L, x, y);
+        {
+            int32_t u = (int32_t)x - B, v = (int32_t)y - B;
+            if (x >= (float)B && y >= (float)B && u < L.inner_w && v < L.inner_h) {
+                int32_t cx = (int32_t)(((int64_t)u * cfg->grid_cols) / L.inner_w);
+                int32_t cy = (int32_t)(((int64_t)v * cfg->grid_rows) / L.inner_h);
+                nexist[cy * cfg->grid_cols + cx]++;
+            }
+        }
+    }
+
+    /* FAST in bands of rows; shortlist the strongest per cell */
+    for (y0 = B; y0 < H - B; y0 += DET_BAND) {
+        int32_t y1 = y0 + DET_BAND < H - B ? y0 + DET_BAND : H - B;
+        int32_t nb = 0, k;
+        st = tvo_fast9_detect_rows(img, cfg->fast_threshold, 1, y0, y1, band, L.band_cap, &nb, fast_mem,
+                                   tvo_fast_scratch_size(W));
+        if (st != TVO_OK && st != TVO_ERR_NO_MEMORY)
+            return st;
+        for (k = 0; k < nb; ++k) {
+            int32_t x = (int32_t)band[k].x, y = (int32_t)band[k].y, cx, cy, cell;
+            det_cand cd;
+            if (x < B || x >= W - B)
+                continue;
+            cx = (int32_t)(((int64_t)(x - B) * cfg->grid_cols) / L.inner_w);
+            cy = (int32_t)(((int64_t)(y - B) * cfg->grid_rows) / L.inner_h);
+            cell = cy * cfg->grid_cols + cx;
+            if (nexist[cell] >= L.quota)
+                continue;
+            cd.x = x;
+            cd.y = y;
+            cd.score = band[k].score;
+            cd.order = y * W + x;
+            det_heap_push(cand + (size_t)cell * (size_t)L.ncand, &ncand[cell], L.ncand, &cd);
+        }
+    }
+
+    /* pass 1: rank each cell's shortlist and pick greedily up to the cell's quota */
+    for (c = 0; c < L.ncells; ++c) {
+        det_cand *h = cand + (size_t)c * (size_t)L.ncand;
+        int32_t n = ncand[c], q = L.quota - nexist[c], k;
+        if (n == 0 || q <= 0)
+            continue;
+        if (cfg->score != TVO_SCORE_FAST)
+            for (k = 0; k < n; ++k)
+                h[k].score = tvo_corner_score_at(img, h[k].x, h[k].y, cfg->score, cfg->block_size,
+                                                 cfg->harris_k);
+        qsort(h, (size_t)n, sizeof(det_cand), det_cmp_cand);
+        for (k = 0; k < n && taken_n[c] < q; ++k)
+            det_try_take(grid, &L, md2, &h[k], c, &taken_n[c], picks, &npicks);
+        cursor[c] = k;
+    }
+    /* pass 2: too few corners overall: the non-full cells give their next best in turns */
+    for (;;) {
+        int progress = 0;
+        for (c = 0; c < L.ncells && npicks < limit; ++c) {
+            det_cand *h = cand + (size_t)c * (size_t)L.ncand;
+            if (L.quota - nexist[c] <= 0)
+                continue;
+            while (cursor[c] < ncand[c]) {
+                int took = det_try_take(grid, &L, md2, &h[cursor[c]], c, &taken_n[c], picks, &npicks);
+                ++cursor[c];
+                if (took) {
+                    progress = 1;
+                    break;
+                }
+            }
+        }
+        if (!progress || npicks >= limit)
+            break;
+    }
+
+    if (npicks > 1)
+        qsort(picks, (size_t)npicks, sizeof(det_pick), det_cmp_pick);
+    if (npicks > limit)
+        npicks = limit;
+    for (i = 0; i < npicks; ++i) {
+        out[i].x = picks[i].x;
+        out[i].y = picks[i].y;
+        out[i].score = picks[i].score;
+    }
+    *count = npicks;
+    return TVO_OK;
+}

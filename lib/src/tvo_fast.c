@@ -1,0 +1,371 @@
+/* FAST-9 corner detector (16-pixel circle, 9 contiguous), OpenCV-compatible corner set, score and
+ * 3x3 non-max suppression. See tinyvo/corners.h for the contract.
+ *
+ * Structure: rows are scanned one at a time. A pixel is first screened with its 4 compass pixels
+ * (0, 4, 8, 12 of the circle): any 9-arc contains two neighbouring compass pixels, so a corner needs two
+ * neighbouring compass pixels on the same side. Survivors get the exact 16-bit "brighter" / "darker"
+ * masks and a branch-free test for a run of 9 set bits. The screening runs on 16 pixels at once with SSE2
+ * when available; the exact test and the score are always the portable scalar code, so every path gives
+ * the same bits. */
+#include "tinyvo/corners.h"
+
+#include <string.h>
+
+#if !defined(TVO_CORNERS_NO_SIMD) && (defined(__SSE2__) || defined(_M_X64))
+#include <emmintrin.h>
+#define TVO_FAST_SSE2 1
+#else
+#define TVO_FAST_SSE2 0
+#endif
+
+/* circle offsets (dx, dy), clockwise starting at 12 o'clock... as OpenCV's order: (0,3) first. */
+static const int8_t fast_circle[16][2] = {
+    { 0, 3 }, { 1, 3 }, { 2, 2 }, { 3, 1 }, { 3, 0 }, { 3, -1 }, { 2, -2 }, { 1, -3 },
+    { 0, -3 }, { -1, -3 }, { -2, -2 }, { -3, -1 }, { -3, 0 }, { -3, 1 }, { -2, 2 }, { -1, 3 }
+};
+
+static void fast_offsets(int32_t ofs[16], int32_t stride)
+{
+    int k;
+    for (k = 0; k < 16; ++k)
+        ofs[k] = (int32_t)fast_circle[k][0] + (int32_t)fast_circle[k][1] * stride;
+}
+
+/* 1 when the circular 16-bit mask m has a run of at least 9 set bits. */
+static int fast_has_run9(uint32_t m)
+{
+    uint32_t a = m | (m << 16);  /* unrolled circle */
+    uint32_t r2 = a & (a >> 1);  /* runs of 2 start here */
+    uint32_t r4 = r2 & (r2 >> 2);
+    uint32_t r8 = r4 & (r4 >> 4);
+    uint32_t r9 = r8 & (a >> 8);
+    return (r9 & 0xFFFFu) != 0;
+}
+
+/* OpenCV's FAST score: max over the 16 arcs of 9 of max(min(d), -max(d)) - 1, d = I(c) - I(p). */
+static int fast_score(const uint8_t *p, const int32_t ofs[16])
+{
+    int d[26];
+    int k, s, v = p[0];
+    int best_min = -1000, best_max = 1000;
+    for (k = 0; k < 16; ++k)
+        d[k] = v - (int)p[ofs[k]];
+    for (k = 16; k < 26; ++k)
+        d[k] = d[k - 16];
+    for (s = 0; s < 16; s += 2) {
+        int mn = d[s + 1], mx = d[s + 1], t;
+        for (k = s + 2; k <= s + 8; ++k) {
+            mn = d[k] < mn ? d[k] : mn;
+            mx = d[k] > mx ? d[k] : mx;
+        }
+        /* arcs s .. s+8 and s+1 .. s+9 */
+        t = d[s] < mn ? d[s] : mn;
+        best_min = t > best_min ? t : best_min;
+        t = d[s + 9] < mn ? d[s + 9] : mn;
+        best_min = t > best_min ? t : best_min;
+        t = d[s] > mx ? d[s] : mx;
+        best_max = t < best_max ? t : best_max;
+        t = d[s + 9] > mx ? d[s + 9] : mx;
+        best_max = t < best_max ? t : best_max;
+    }
+    return (best_min > -best_max ? best_min : -best_max) - 1;
+}
+
+/* Exact corner test of pixel p (centre value v) with the threshold table tab (1 = darker, 2 = brighter). */
+static int fast_is_corner(const uint8_t *p, const int32_t ofs[16], const uint8_t *tab)
+{
+    uint32_t bright = 0, dark = 0;
+    int k;
+    for (k = 0; k < 16; ++k) {
+        uint32_t t = tab[p[ofs[k]]];
+        dark |= (t & 1u) << k;
+        bright |= (t >> 1) << k;
+    }
+    return fast_has_run9(bright) || fast_has_run9(dark);
+}
+
+/* Detect the corners of one row (y fixed, x in [3, width-3)): positions into pos[], scores into the
+ * score row (zeroed first). Returns the number of corners. */
+static int32_t fast_row(const uint8_t *row, int32_t width, const int32_t ofs[16], const uint8_t *ttab,
+                        int32_t threshold, uint8_t *score_row, int32_t *pos)
+{
+    int32_t n = 0, x = 3;
+    const int32_t o0 = ofs[0], o4 = ofs[4], o8 = ofs[8], o12 = ofs[12];
+    memset(score_row, 0, (size_t)width);
+#if TVO_FAST_SSE2
+    {
+        const __m128i sign = _mm_set1_epi8((char)0x80);
+        const __m128i thr = _mm_set1_epi8((char)(uint8_t)threshold);
+        for (; x + 16 <= width - 3; x += 16) {
+            const uint8_t *p = row + x;
+            __m128i c = _mm_loadu_si128((const __m128i *)(const void *)p);
+            /* bright: q > min(c + t, 255)  (never true when c + t >= 255, as in the scalar test);
+             * dark:   q < max(c - t, 0). Unsigned compares via the sign flip. */
+            __m128i hi = _mm_xor_si128(_mm_adds_epu8(c, thr), sign);
+            __m128i lo = _mm_xor_si128(_mm_subs_epu8(c, thr), sign);
+            __m128i q0 = _mm_xor_si128(_mm_loadu_si128((const __m128i *)(const void *)(p + o0)), sign);
+            __m128i q4 = _mm_xor_si128(_mm_loadu_si128((const __m128i *)(const void *)(p + o4)), sign);
+            __m128i q8 = _mm_xor_si128(_mm_loadu_si128((const __m128i *)(const void *)(p + o8)), sign);
+            __m128i q12 = _mm_xor_si128(_mm_loadu_si128((const __m128i *)(const void *)(p + o12)), sign);
+            __m128i b0 = _mm_cmpgt_epi8(q0, hi), b4 = _mm_cmpgt_epi8(q4, hi);
+            __m128i b8 = _mm_cmpgt_epi8(q8, hi), b12 = _mm_cmpgt_epi8(q12, hi);
+            __m128i d0 = _mm_cmplt_epi8(q0, lo), d4 = _mm_cmplt_epi8(q4, lo);
+            __m128i d8 = _mm_cmplt_epi8(q8, lo), d12 = _mm_cmplt_epi8(q12, lo);
+            __m128i m = _mm_or_si128(
+                _mm_or_si128(_mm_or_si128(_mm_and_si128(b0, b4), _mm_and_si128(b4, b8)),
+                             _mm_or_si128(_mm_and_si128(b8, b12), _mm_and_si128(b12, b0))),
+                _mm_or_si128(_mm_or_si128(_mm_and_si128(d0, d4), _mm_and_si128(d4, d8)),
+                             _mm_or_si128(_mm_and_si128(d8, d12), _mm_and_si128(d12, d0))));
+            unsigned bits = (unsigned)_mm_movemask_epi8(m);
+            while (bits != 0u) {
+                int k = 0;
+                const uint8_t *pk;
+                while (((bits >> k) & 1u) == 0u)
+                    ++k;
+                bits &= bits - 1u;
+                pk = p + k;
+                if (fast_is_corner(pk, ofs, ttab + 255 - pk[0])) {
+                    int s = fast_score(pk, ofs);
+                    score_row[x + k] = (uint8_t)s;
+                    pos[n++] = x + k;
+                }
+            }
+        }
+    }
+#endif
+    for (; x < width - 3; ++x) {
+        const uint8_t *p = row + x;
+        const uint8_t *tab = ttab + 255 - p[0];
+        unsigned t0 = tab[p[o0]], t4 = tab[p[o4]], t8 = tab[p[o8]], t12 = tab[p[o12]];
+        if (((t0 & t4) | (t4 & t8) | (t8 & t12) | (t12 & t0)) == 0u)
+            continue;
+        if (fast_is_corner(p, ofs, tab)) {
+            score_row[x] = (uint8_t)fast_score(p, ofs);
+            pos[n++] = x;
+        }
+    }
+    return n;
+}
+
+size_t tvo_fast_scratch_size(int32_t width)
+{
+    size_t w;
+    if (width < 1 || width > TVO_MAX_IMAGE_DIM)
+        return 0;
+    w = (size_t)width;
+    /* 3 score rows + 3 position lists, plus alignment slack */
+    return 3u * w + 3u * w * sizeof(int32_t) + 16u;
+}
+
+static tvo_status fast_check(const tvo_image *img, int32_t threshold, const tvo_corner *out,
+                             int32_t capacity, const int32_t *count)
+{
+    tvo_status st;
+    if (count == NULL || out == NULL)
+        return TVO_ERR_NULL;
+    st = tvo_image_check(img);
+    if (st != TVO_OK)
+        return st;
+    if (threshold < 0 || threshold > 255 || capacity < 0)
+        return TVO_ERR_ARG;
+    return TVO_OK;
+}
+
+/* Emit the corners of row y (positions pos[0..n)) into out; with nonmax, keep those whose score is
+ * strictly above their 8 neighbours in rows above/cur/below. Returns 0, or 1 when out is full. */
+static int fast_emit(int32_t y, const int32_t *pos, int32_t n, const uint8_t *above, const uint8_t *cur,
+                     const uint8_t *below, int nonmax, tvo_corner *out, int32_t capacity, int32_t *count)
+{
+    int32_t i;
+    for (i = 0; i < n; ++i) {
+        int32_t x = pos[i];
+        int s = cur[x];
+        if (nonmax && !(s > cur[x - 1] && s > cur[x + 1] && s > above[x - 1] && s > above[x] &&
+                        s > above[x + 1] && s > below[x - 1] && s > below[x] && s > below[x + 1]))
+            continue;
+        if (*count >= capacity)
+            return 1;
+        out[*count].x = (float)x;
+        out[*count].y = (float)y;
+        out[*count].score = (float)s;
+        ++*count;
+    }
+    return 0;
+}
+
+tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int nonmax,
+                                 int32_t y_begin, int32_t y_end,
+                                 tvo_corner *out, int32_t capacity, int32_t *count,
+                                 void *scratch, size_t scratch_size)
+{
+    uint8_t ttab[511];
+    int32_t ofs[16];
+    uint8_t *srow[3];
+    int32_t *plist[3];
+    int32_t npos[3];
+    int32_t W, H, r, r0, r1, i;
+    size_t need;
+    uint8_t *mem;
+    tvo_status st = fast_check(img, threshold, out, capacity, count);
+    if (count != NULL)
+        *count = 0;
+    if (st != TVO_OK)
+        return st;
+    if (scratch == NULL)
+        return TVO_ERR_NULL;
+    need = tvo_fast_scratch_size(img->width);
+    if (scratch_size < need)
+        return TVO_ERR_NO_MEMORY;
+    W = img->width;
+    H = img->height;
+    if (y_begin < 3)
+        y_begin = 3;
+    if (y_end > H - 3)
+        y_end = H - 3;
+    if (W < 7 || H < 7 || y_begin >= y_end)
+        return TVO_OK;
+
+    for (i = 0; i < 511; ++i) {
+        int d = i - 255;
+        ttab[i] = (uint8_t)(d < -threshold ? 1 : d > threshold ? 2 : 0);
+    }
+    fast_offsets(ofs, img->stride);
+
+    mem = (uint8_t *)scratch;
+    {
+        /* align the int lists to 4 bytes */
+        size_t mis = (size_t)((uintptr_t)mem % sizeof(int32_t));
+        uint8_t *lists = mem + (mis ? sizeof(int32_t) - mis : 0);
+        for (i = 0; i < 3; ++i)
+            plist[i] = (int32_t *)(void *)(lists + (size_t)i * (size_t)W * sizeof(int32_t));
+        mem = lists + 3u * (size_t)W * sizeof(int32_t);
+        for (i = 0; i < 3; ++i) {
+            srow[i] = mem + (size_t)i * (size_t)W;
+            memset(srow[i], 0, (size_t)W);
+            npos[i] = 0;
+        }
+    }
+
+    nonmax = nonmax != 0;
+    r0 = y_begin - nonmax;
+    if (r0 < 3)
+        r0 = 3;
+    r1 = y_end - 1 + nonmax;
+    if (r1 > H - 4)
+        r1 = H - 4;
+
+    for (r = r0; r <= r1; ++r) {
+        int slot = r % 3;
+        npos[slot] = fast_row(img->data + (size_t)r * (size_t)img->stride, W, ofs, ttab, threshold,
+                              srow[slot], plist[slot]);
+        if (!nonmax) {
+            if (fast_emit(r, plist[slot], npos[slot], NULL, srow[slot], NULL, 0, out, capacity, count))
+                return TVO_ERR_NO_MEMORY;
+        } else if (r - 1 >= y_begin && r - 1 >= r0) {
+            int ps = (r - 1) % 3, pps = (r - 2) % 3;
+            if (r - 2 < r0)  /* never evaluated: no corners there */
+                memset(srow[pps], 0, (size_t)W);
+            if (fast_emit(r - 1, plist[ps], npos[ps], srow[pps], srow[ps], srow[slot], 1, out, capacity,
+                          count))
+                return TVO_ERR_NO_MEMORY;
+        }
+    }
+    if (nonmax && r1 >= r0 && r1 < y_end && r1 >= y_begin) {
+        /* last evaluated row: the row below it has no corners (image border or outside the range) */
+        int s = r1 % 3, as = (r1 + 2) % 3, bs = (r1 + 1) % 3;
+        if (r1 - 1 < r0)
+            memset(srow[as], 0, (size_t)W);
+        memset(srow[bs], 0, (size_t)W);
+        if (fast_emit(r1, plist[s], npos[s], srow[as], srow[s], srow[bs], 1, out, capacity, count))
+            return TVO_ERR_NO_MEMORY;
+    }
+    return TVO_OK;
+}
+
+tvo_status tvo_fast9_detect(const tvo_image *img, int32_t threshold, int nonmax,
+                            tvo_corner *out, int32_t capacity, int32_t *count,
+                            void *scratch, size_t scratch_size)
+{
+    return tvo_fast9_detect_rows(img, threshold, nonmax, 0, TVO_MAX_IMAGE_DIM, out, capacity, count,
+                                 scratch, scratch_size);
+}
+
+/* ---- reference implementation ---------------------------------------------------------------------- */
+
+/* FAST score of (x, y) when it is a corner, -1 otherwise (also outside the detection area). */
+static int fast_ref_corner_score(const tvo_image *img, int32_t threshold, int32_t x, int32_t y)
+{
+    int32_t ofs[16];
+    const uint8_t *p;
+    int s, k, v;
+    if (x < 3 || y < 3 || x >= img->width - 3 || y >= img->height - 3)
+        return -1;
+    fast_offsets(ofs, img->stride);
+    p = img->data + (size_t)y * (size_t)img->stride + (size_t)x;
+    v = p[0];
+    for (s = 0; s < 16; ++s) {
+        int nb = 0, nd = 0;
+        for (k = 0; k < 9; ++k) {
+            int q = p[ofs[(s + k) % 16]];
+            nb += q > v + threshold;
+            nd += q < v - threshold;
+        }
+        if (nb == 9 || nd == 9)
+            return fast_score(p, ofs);
+    }
+    return -1;
+}
+
+tvo_status tvo_fast9_detect_ref(const tvo_image *img, int32_t threshold, int nonmax,
+                                tvo_corner *out, int32_t capacity, int32_t *count)
+{
+    int32_t x, y;
+    tvo_status st = fast_check(img, threshold, out, capacity, count);
+    if (count != NULL)
+        *count = 0;
+    if (st != TVO_OK)
+        return st;
+    for (y = 3; y < img->height - 3; ++y) {
+        for (x = 3; x < img->width - 3; ++x) {
+            int s = fast_ref_corner_score(img, threshold, x, y);
+            if (s < 0)
+                continue;
+            if (nonmax) {
+                int dx, dy, keep = 1;
+                for (dy = -1; dy <= 1 && keep; ++dy)
+                    for (dx = -1; dx <= 1; ++dx) {
+                        int sn;
+                        if (dx == 0 && dy == 0)
+                            continue;
+                        sn = fast_ref_corner_score(img, threshold, x + dx, y + dy);
+                        if (sn < 0)
+                            sn = 0;
+                        if (!(s > sn)) {
+                            keep = 0;
+                            break;
+                        }
+                    }
+                if (!keep)
+                    continue;
+            }
+            if (*count >= capacity)
+                return TVO_ERR_NO_MEMORY;
+            out[*count].x = (float)x;
+            out[*count].y = (float)y;
+            out[*count].score = (float)s;
+            ++*count;
+        }
+    }
+    return TVO_OK;
+}
+
+int32_t tvo_fast9_score_at(const tvo_image *img, int32_t x, int32_t y)
+{
+    int32_t ofs[16];
+    if (tvo_image_check(img) != TVO_OK)
+        return -1;
+    if (x < 3 || y < 3 || x >= img->width - 3 || y >= img->height - 3)
+        return -1;
+    fast_offsets(ofs, img->stride);
+    return fast_score(img->data + (size_t)y * (size_t)img->stride + (size_t)x, ofs);
+}
