@@ -1,0 +1,191 @@
+"""Float per-DoF networks (torch-free) and their post-training int8 quantisation.
+
+A FloatBranch is what the trainer's checkpoint holds for one DoF: the input feature ids, the input
+normalisation (float32 scale/offset, fitted on the training data only), the float weights of an MLP
+(hidden layers share one activation), and the target de-normalisation. `quantize_model` calibrates
+activation ranges on calibration (training) features and produces an nnfmt.Model:
+  - inputs: per-branch asymmetric int8 (min/max of the normalised calibration inputs, 0 included)
+  - weights: symmetric int8 per output channel (max |w| / 127), biases int32 at scale s_in * s_w
+  - hidden layers: pre-activation asymmetric int8 (calibrated), requantised by (M, shift) with
+    M in [2^30, 2^31); activation as a 256-entry table to a post-activation int8 (calibrated)
+  - last layer (1 output): accumulator dequantised to float32, then de-normalised.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import List, Sequence
+
+import numpy as np
+
+from . import nnfmt
+
+LEAKY_SLOPE = 0.01
+SELU_ALPHA = 1.6732632423543772848170429916717
+SELU_SCALE = 1.0507009873554804934193349852946
+
+
+def activate(name: str, x: np.ndarray) -> np.ndarray:
+    """The activations in float64 (same definitions as torch.nn defaults)."""
+    x = np.asarray(x, np.float64)
+    if name == "none":
+        return x
+    if name == "relu":
+        return np.maximum(x, 0.0)
+    if name == "leaky_relu":
+        return np.where(x >= 0, x, LEAKY_SLOPE * x)
+    if name == "elu":
+        return np.where(x > 0, x, np.expm1(np.minimum(x, 0.0)))
+    if name == "selu":
+        return SELU_SCALE * np.where(x > 0, x, SELU_ALPHA * np.expm1(np.minimum(x, 0.0)))
+    if name == "tanh":
+        return np.tanh(x)
+    if name == "sigmoid":
+        return 1.0 / (1.0 + np.exp(-x))
+    raise ValueError(f"unknown activation {name}")
+
+
+@dataclass
+class FloatBranch:
+    dof: int
+    feature_ids: List[int]
+    norm_scale: np.ndarray
+    norm_offset: np.ndarray
+    weights: List[np.ndarray]   # (n_out, n_in) float
+    biases: List[np.ndarray]    # (n_out,) float
+    activation: str
+    out_scale: float = 1.0
+    out_offset: float = 0.0
+
+    def normalise(self, features: np.ndarray) -> np.ndarray:
+        f = np.asarray(features, np.float32)[:, self.feature_ids]
+        return (f * np.asarray(self.norm_scale, np.float32) + np.asarray(self.norm_offset, np.float32)).astype(np.float64)
+
+    def forward_all(self, features: np.ndarray):
+        """Normalised inputs, then (pre, post) activations of every layer, float64."""
+        x = self.normalise(features)
+        trace = [x]
+        for k, (w, b) in enumerate(zip(self.weights, self.biases)):
+            a = x @ np.asarray(w, np.float64).T + np.asarray(b, np.float64)
+            last = k == len(self.weights) - 1
+            x = a if last else activate(self.activation, a)
+            trace.append((a, x))
+        return trace
+
+    def forward(self, features: np.ndarray) -> np.ndarray:
+        y = self.forward_all(features)[-1][1][:, 0]
+        return y * self.out_scale + self.out_offset
+
+
+def float_run(branches: Sequence[FloatBranch], features: np.ndarray) -> np.ndarray:
+    features = np.atleast_2d(features)
+    out = np.full((features.shape[0], 6), np.nan)
+    for b in branches:
+        out[:, b.dof] = b.forward(features)
+    return out
+
+
+def quantize_multiplier(real: float):
+    """real > 0 -> (M, shift) with real ~= M * 2^-shift, M in [2^30, 2^31), shift in [1, 62]."""
+    if not (real > 0 and math.isfinite(real)):
+        raise ValueError(f"bad multiplier {real}")
+    m, e = math.frexp(real)  # real = m * 2^e, m in [0.5, 1)
+    M = int(round(m * (1 << 31)))
+    if M == 1 << 31:
+        M //= 2
+        e += 1
+    shift = 31 - e
+    if shift < 1:
+        raise ValueError(f"multiplier {real} too large for the format")
+    if shift > 62:  # below 2^-32: the output is the zero point anyway
+        M, shift = 1 << 30, 62
+    return M, shift
+
+
+def asym_params(lo: float, hi: float):
+    """Asymmetric int8 (scale, zero point) covering [lo, hi] (0 always included)."""
+    lo, hi = min(float(lo), 0.0), max(float(hi), 0.0)
+    if hi - lo < 1e-8:
+        hi = lo + 1e-8
+    scale = float(np.float32((hi - lo) / 255.0))
+    zp = int(np.clip(round(-128 - lo / scale), -128, 127))
+    return scale, zp
+
+
+def make_lut(act: str, in_scale: float, in_zp: int, out_scale: float, out_zp: int) -> np.ndarray:
+    q = np.arange(-128, 128)
+    y = activate(act, (q - in_zp) * in_scale)
+    r = np.rint(y / out_scale) + out_zp
+    return np.clip(r, -128, 127).astype(np.int8)
+
+
+def quantize_branch(fb: FloatBranch, calib: np.ndarray) -> nnfmt.Branch:
+    trace = fb.forward_all(calib)
+    s_in, zp_in = asym_params(trace[0].min(), trace[0].max())
+    br = nnfmt.Branch(dof=fb.dof, feature_ids=list(fb.feature_ids),
+                      norm_scale=np.asarray(fb.norm_scale, np.float32),
+                      norm_offset=np.asarray(fb.norm_offset, np.float32),
+                      in_scale=s_in, in_zp=zp_in, out_scale=float(np.float32(fb.out_scale)),
+                      out_offset=float(np.float32(fb.out_offset)))
+    n = len(fb.weights)
+    for k, (w, b) in enumerate(zip(fb.weights, fb.biases)):
+        w = np.asarray(w, np.float64)
+        b = np.asarray(b, np.float64)
+        amax = np.abs(w).max(axis=1)
+        s_w = np.where(amax > 0, amax / 127.0, 1.0)
+        wq = np.clip(np.rint(w / s_w[:, None]), -127, 127).astype(np.int8)
+        acc_scale = s_in * s_w
+        bq = np.clip(np.rint(b / acc_scale), -(2**30), 2**30).astype(np.int32)
+        pre, post = trace[k + 1]
+        if k == n - 1:
+            L = nnfmt.Layer(w=wq, bias=bq, act="none", out_kind=nnfmt.OUT_F32, in_zp=zp_in, in_scale=s_in,
+                            scale=acc_scale.astype(np.float32))
+        else:
+            s_out, zp_out = asym_params(pre.min(), pre.max())
+            mult, shift = zip(*(quantize_multiplier(r) for r in acc_scale / s_out))
+            L = nnfmt.Layer(w=wq, bias=bq, act=fb.activation, out_kind=nnfmt.OUT_S8, in_zp=zp_in,
+                            out_zp=zp_out, in_scale=s_in, out_scale=s_out,
+                            mult=np.array(mult, np.int32), shift=np.array(shift, np.int32))
+            if fb.activation == "none":
+                L.act_zp, L.act_scale = zp_out, s_out
+            else:
+                s_act, zp_act = asym_params(post.min(), post.max())
+                L.act_zp, L.act_scale = zp_act, s_act
+                L.lut = make_lut(fb.activation, s_out, zp_out, s_act, zp_act)
+            s_in, zp_in = L.act_scale, L.act_zp
+        br.layers.append(L)
+    return br
+
+
+def quantize_model(branches: Sequence[FloatBranch], calib: np.ndarray) -> nnfmt.Model:
+    return nnfmt.Model(branches=[quantize_branch(b, np.atleast_2d(calib)) for b in branches])
+
+
+def random_float_branch(rng: np.random.Generator, dof: int, activation: str, sizes=(256, 32, 32),
+                        feature_ids=None, init_scale: float = 1.0) -> FloatBranch:
+    """A random (He-initialised) branch for tests, golden vectors and benchmarks."""
+    ids = list(range(nnfmt.FEAT_COUNT)) if feature_ids is None else list(feature_ids)
+    dims = [len(ids), *sizes, 1]
+    ws, bs = [], []
+    for a, b in zip(dims[:-1], dims[1:]):
+        ws.append(rng.normal(0, init_scale * math.sqrt(2.0 / a), (b, a)))
+        bs.append(rng.normal(0, 0.1, b))
+    return FloatBranch(dof=dof, feature_ids=ids,
+                       norm_scale=rng.uniform(0.5, 2.0, len(ids)).astype(np.float32),
+                       norm_offset=rng.uniform(-0.5, 0.5, len(ids)).astype(np.float32),
+                       weights=ws, biases=bs, activation=activation,
+                       out_scale=float(rng.uniform(0.05, 1.0)), out_offset=float(rng.uniform(-0.1, 0.1)))
+
+
+def synthetic_features(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Plausible random front-end features (N, FEAT_COUNT) float32, for tests and calibration demos."""
+    f = np.zeros((n, nnfmt.FEAT_COUNT), np.float32)
+    f[:, 0:3] = rng.normal(0, 0.02, (n, 3))
+    t = rng.normal(0, 1, (n, 3)) + np.array([0.0, 0.0, 0.5])
+    f[:, 3:6] = t / np.linalg.norm(t, axis=1, keepdims=True)
+    f[:, 6] = rng.uniform(0.3, 1.0, n)
+    f[:, 7] = rng.gamma(2.0, 1.0, n)
+    f[:, 8] = rng.uniform(0.1, 1.5, n)
+    f[:, 9] = rng.choice([0.05, 0.1], n) * rng.uniform(0.98, 1.02, n)
+    f[:, 10] = (rng.uniform(size=n) < 0.1).astype(np.float32)
+    return f
