@@ -1,0 +1,557 @@
+/* Pyramidal Lucas-Kanade tracking, OpenCV-compatible arithmetic (see tinyvo/lk.h).
+ *
+ * Fixed point: bilinear weights have W_BITS = 14 fractional bits and sum to 1 << 14. Window grey
+ * values keep 5 fractional bits (0..8160), Scharr derivatives are raw (|d| <= 16 * 255 = 4080) and
+ * interpolated back to integers. Products fit int32; a window row of up to 63 products fits int32;
+ * the window sums are int64, so the sums are exact. Right shifts of possibly negative values are done
+ * on a positive biased value (arithmetic shift of negatives is implementation-defined in C99). */
+#include "tinyvo/lk.h"
+
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+#include "tinyvo/arena.h"
+
+#define LK_W_BITS 14
+#define LK_ONE (1 << LK_W_BITS)
+/* Descale of the grey value (5 fractional bits kept): (v + 2^8) >> 9, v >= 0. */
+#define LK_I_SHIFT (LK_W_BITS - 5)
+#define LK_I_ROUND (1 << (LK_I_SHIFT - 1))
+/* Descale of derivatives: (v + 2^13) >> 14 with v >= -4080 * 2^14; bias by 4096 * 2^14. */
+#define LK_D_BIAS 4096
+#define LK_D_ROUND ((1 << (LK_W_BITS - 1)) + (LK_D_BIAS << LK_W_BITS))
+#define LK_FLT_SCALE (1.0f / (float)(1 << 20))
+
+typedef struct lk_level {
+    const uint8_t *data;
+    int32_t w, h, stride;
+} lk_level;
+
+typedef struct lk_work {
+    int32_t win;
+    uint8_t *patch;   /* (win+3)^2 gathered pixels near borders */
+    int16_t *tv0;     /* win+3: vertical Scharr smoothing */
+    int16_t *tv1;     /* win+3: vertical Scharr difference */
+    int16_t *gx, *gy; /* (win+1)^2 Scharr derivatives on the integer grid */
+    int16_t *iwin;    /* win^2 window grey values, 5 fractional bits */
+    int16_t *ixwin;   /* win^2 interpolated d/dx */
+    int16_t *iywin;   /* win^2 interpolated d/dy */
+} lk_work;
+
+typedef struct lk_params {
+    int32_t win;
+    int32_t max_iters;
+    double eps2;
+    float min_eig;
+} lk_params;
+
+void tvo_lk_config_default(tvo_lk_config *cfg)
+{
+    if (cfg == NULL)
+        return;
+    cfg->win_size = 21;
+    cfg->max_level = 3;
+    cfg->max_iters = 30;
+    cfg->epsilon = 0.01f;
+    cfg->min_eig_threshold = 1e-4f;
+    cfg->use_initial_flow = 0;
+    cfg->fb_check = 0;
+    cfg->fb_max_error = 1.0f;
+}
+
+tvo_status tvo_lk_config_check(const tvo_lk_config *cfg)
+{
+    if (cfg == NULL)
+        return TVO_ERR_NULL;
+    if (cfg->win_size < TVO_LK_MIN_WIN_SIZE || cfg->win_size > TVO_LK_MAX_WIN_SIZE ||
+        (cfg->win_size & 1) == 0)
+        return TVO_ERR_ARG;
+    if (cfg->max_level < 0 || cfg->max_level > TVO_MAX_PYR_LEVELS - 1)
+        return TVO_ERR_ARG;
+    if (cfg->max_iters < 0 || cfg->max_iters > TVO_LK_MAX_ITERS)
+        return TVO_ERR_ARG;
+    if (!isfinite(cfg->epsilon) || !isfinite(cfg->min_eig_threshold) ||
+        (cfg->fb_check && !isfinite(cfg->fb_max_error)))
+        return TVO_ERR_NOT_FINITE;
+    if (cfg->epsilon < 0.0f || cfg->epsilon > 10.0f || cfg->min_eig_threshold < 0.0f)
+        return TVO_ERR_ARG;
+    if (cfg->fb_check && !(cfg->fb_max_error > 0.0f))
+        return TVO_ERR_ARG;
+    return TVO_OK;
+}
+
+/* Block sizes of the scratch, in the order they are carved. */
+static void lk_blocks(int32_t win, size_t sz[8])
+{
+    size_t p = (size_t)win + 3u, g = (size_t)win + 1u, w = (size_t)win;
+    sz[0] = p * p;
+    sz[1] = p * sizeof(int16_t);
+    sz[2] = p * sizeof(int16_t);
+    sz[3] = g * g * sizeof(int16_t);
+    sz[4] = g * g * sizeof(int16_t);
+    sz[5] = w * w * sizeof(int16_t);
+    sz[6] = w * w * sizeof(int16_t);
+    sz[7] = w * w * sizeof(int16_t);
+}
+
+size_t tvo_lk_scratch_size(const tvo_lk_config *cfg)
+{
+    size_t sz[8], total = TVO_ARENA_ALIGN - 1u;
+    int i;
+    if (tvo_lk_config_check(cfg) != TVO_OK)
+        return 0;
+    lk_blocks(cfg->win_size, sz);
+    for (i = 0; i < 8; ++i)
+        total = tvo_size_add(total, tvo_arena_round(sz[i]));
+    return total;
+}
+
+static tvo_status lk_work_init(lk_work *wk, int32_t win, void *scratch, size_t scratch_size)
+{
+    size_t sz[8];
+    void *b[8];
+    tvo_arena arena;
+    int i;
+    lk_blocks(win, sz);
+    tvo_arena_init(&arena, scratch, scratch_size);
+    for (i = 0; i < 8; ++i) {
+        b[i] = tvo_arena_alloc(&arena, sz[i]);
+        if (b[i] == NULL)
+            return TVO_ERR_NO_MEMORY;
+    }
+    wk->win = win;
+    wk->patch = (uint8_t *)b[0];
+    wk->tv0 = (int16_t *)b[1];
+    wk->tv1 = (int16_t *)b[2];
+    wk->gx = (int16_t *)b[3];
+    wk->gy = (int16_t *)b[4];
+    wk->iwin = (int16_t *)b[5];
+    wk->ixwin = (int16_t *)b[6];
+    wk->iywin = (int16_t *)b[7];
+    return TVO_OK;
+}
+
+/* BORDER_REFLECT_101 index for any i; n >= 1. */
+static int32_t lk_reflect101(int32_t i, int32_t n)
+{
+    if (n == 1)
+        return 0;
+    while (i < 0 || i >= n) {
+        if (i < 0)
+            i = -i;
+        else
+            i = 2 * n - 2 - i;
+    }
+    return i;
+}
+
+/* Copy the size x size block whose top-left is (x0, y0) (may lie outside) into dst, reflecting. */
+static void lk_gather(const lk_level *lv, int32_t x0, int32_t y0, int32_t size, uint8_t *dst)
+{
+    int32_t r, c;
+    for (r = 0; r < size; ++r) {
+        const uint8_t *row = lv->data + (size_t)lk_reflect101(y0 + r, lv->h) * (size_t)lv->stride;
+        uint8_t *out = dst + (size_t)r * (size_t)size;
+        for (c = 0; c < size; ++c)
+            out[c] = row[lk_reflect101(x0 + c, lv->w)];
+    }
+}
+
+/* cvRound for 0 <= v < 2^23: round half to even, without relying on the FPU rounding mode. */
+static int32_t lk_round(float v)
+{
+    float f = floorf(v);
+    float d = v - f; /* exact */
+    int32_t i = (int32_t)f;
+    if (d > 0.5f || (d == 0.5f && (i & 1) != 0))
+        ++i;
+    return i;
+}
+
+/* Bilinear weights for the fractional offsets a, b in [0, 1), as OpenCV computes them. */
+static void lk_weights(float a, float b, int32_t w[4])
+{
+    w[0] = lk_round((1.f - a) * (1.f - b) * (float)LK_ONE);
+    w[1] = lk_round(a * (1.f - b) * (float)LK_ONE);
+    w[2] = lk_round((1.f - a) * b * (float)LK_ONE);
+    w[3] = LK_ONE - w[0] - w[1] - w[2];
+}
+
+/* Previous-image window: grey values and interpolated Scharr derivatives at (ix + a, iy + b) + (x, y)
+ * for x, y in 0..win-1, into wk->iwin / ixwin / iywin; the gradient sums into A[3]. */
+static void lk_prev_window(const lk_level *lv, int32_t ix, int32_t iy, const int32_t wt[4],
+                           lk_work *wk, int64_t A[3])
+{
+    const int32_t win = wk->win, g = win + 1, p = win + 3;
+    const uint8_t *src;
+    int32_t sstride, r, c, x, y;
+    int inside = ix >= 1 && iy >= 1 && ix + win + 1 <= lv->w - 1 && iy + win + 1 <= lv->h - 1;
+    const int32_t w00 = wt[0], w01 = wt[1], w10 = wt[2], w11 = wt[3];
+    int64_t a11 = 0, a12 = 0, a22 = 0;
+
+    if (inside) {
+        src = lv->data + (size_t)(iy - 1) * (size_t)lv->stride + (size_t)(ix - 1);
+        sstride = lv->stride;
+    } else {
+        lk_gather(lv, ix - 1, iy - 1, p, wk->patch);
+        src = wk->patch;
+        sstride = p;
+    }
+
+    /* Scharr derivatives on the (win+1)^2 integer grid whose top-left is (ix, iy) */
+    for (r = 0; r < g; ++r) {
+        const uint8_t *s0 = src + (size_t)r * (size_t)sstride;
+        const uint8_t *s1 = s0 + sstride;
+        const uint8_t *s2 = s1 + sstride;
+        int16_t *t0 = wk->tv0, *t1 = wk->tv1;
+        int16_t *dx = wk->gx + (size_t)r * (size_t)g, *dy = wk->gy + (size_t)r * (size_t)g;
+        for (c = 0; c < p; ++c) {
+            t0[c] = (int16_t)(3 * (s0[c] + s2[c]) + 10 * s1[c]);
+            t1[c] = (int16_t)(s2[c] - s0[c]);
+        }
+        for (c = 0; c < g; ++c) {
+            dx[c] = (int16_t)(t0[c + 2] - t0[c]);
+            dy[c] = (int16_t)(3 * (t1[c] + t1[c + 2]) + 10 * t1[c + 1]);
+        }
+    }
+    if (!inside) { /* derivatives outside the image are 0 (OpenCV's BORDER_CONSTANT) */
+        for (r = 0; r < g; ++r) {
+            int row_out = iy + r < 0 || iy + r >= lv->h;
+            for (c = 0; c < g; ++c) {
+                if (row_out || ix + c < 0 || ix + c >= lv->w) {
+                    wk->gx[r * g + c] = 0;
+                    wk->gy[r * g + c] = 0;
+                }
+            }
+        }
+    }
+
+    for (y = 0; y < win; ++y) {
+        const uint8_t *s0 = src + (size_t)(y + 1) * (size_t)sstride + 1;
+        const uint8_t *s1 = s0 + sstride;
+        const int16_t *gx0 = wk->gx + (size_t)y * (size_t)g, *gx1 = gx0 + g;
+        const int16_t *gy0 = wk->gy + (size_t)y * (size_t)g, *gy1 = gy0 + g;
+        int16_t *iw = wk->iwin + (size_t)y * (size_t)win;
+        int16_t *ixw = wk->ixwin + (size_t)y * (size_t)win;
+        int16_t *iyw = wk->iywin + (size_t)y * (size_t)win;
+        int32_t r11 = 0, r12 = 0, r22 = 0;
+        for (x = 0; x < win; ++x) {
+            int32_t iv = (s0[x] * w00 + s0[x + 1] * w01 + s1[x] * w10 + s1[x + 1] * w11 + LK_I_ROUND) >> LK_I_SHIFT;
+            int32_t dxv = ((gx0[x] * w00 + gx0[x + 1] * w01 + gx1[x] * w10 + gx1[x + 1] * w11 + LK_D_ROUND) >> LK_W_BITS) - LK_D_BIAS;
+            int32_t dyv = ((gy0[x] * w00 + gy0[x + 1] * w01 + gy1[x] * w10 + gy1[x + 1] * w11 + LK_D_ROUND) >> LK_W_BITS) - LK_D_BIAS;
+            iw[x] = (int16_t)iv;
+            ixw[x] = (int16_t)dxv;
+            iyw[x] = (int16_t)dyv;
+            r11 += dxv * dxv;
+            r12 += dxv * dyv;
+            r22 += dyv * dyv;
+        }
+        a11 += r11;
+        a12 += r12;
+        a22 += r22;
+    }
+    A[0] = a11;
+    A[1] = a12;
+    A[2] = a22;
+}
+
+/* Sums of (J(window) - I) * Ix and * Iy with J sampled at (jx + a, jy + b) (weights wt), src the
+ * top-left of the (win+1)^2 J block with its stride. */
+static void lk_mismatch(const uint8_t *src, int32_t sstride, const int32_t wt[4], const lk_work *wk,
+                        int64_t *b1, int64_t *b2)
+{
+    const int32_t win = wk->win;
+    const int32_t w00 = wt[0], w01 = wt[1], w10 = wt[2], w11 = wt[3];
+    int64_t s1 = 0, s2 = 0;
+    int32_t x, y;
+    for (y = 0; y < win; ++y) {
+        const uint8_t *j0 = src + (size_t)y * (size_t)sstride, *j1 = j0 + sstride;
+        const int16_t *iw = wk->iwin + (size_t)y * (size_t)win;
+        const int16_t *ixw = wk->ixwin + (size_t)y * (size_t)win;
+        const int16_t *iyw = wk->iywin + (size_t)y * (size_t)win;
+        int32_t r1 = 0, r2 = 0;
+        for (x = 0; x < win; ++x) {
+            int32_t jv = (j0[x] * w00 + j0[x + 1] * w01 + j1[x] * w10 + j1[x + 1] * w11 + LK_I_ROUND) >> LK_I_SHIFT;
+            int32_t d = jv - iw[x];
+            r1 += d * ixw[x];
+            r2 += d * iyw[x];
+        }
+        s1 += r1;
+        s2 += r2;
+    }
+    *b1 = s1;
+    *b2 = s2;
+}
+
+/* Sum of |J(window) - I| (OpenCV's error before scaling). */
+static int32_t lk_abs_error(const uint8_t *src, int32_t sstride, const int32_t wt[4], const lk_work *wk)
+{
+    const int32_t win = wk->win;
+    int32_t x, y, s = 0;
+    for (y = 0; y < win; ++y) {
+        const uint8_t *j0 = src + (size_t)y * (size_t)sstride, *j1 = j0 + sstride;
+        const int16_t *iw = wk->iwin + (size_t)y * (size_t)win;
+        for (x = 0; x < win; ++x) {
+            int32_t jv = (j0[x] * wt[0] + j0[x + 1] * wt[1] + j1[x] * wt[2] + j1[x + 1] * wt[3] + LK_I_ROUND) >> LK_I_SHIFT;
+            int32_t d = jv - iw[x];
+            s += d < 0 ? -d : d;
+        }
+    }
+    return s;
+}
+
+/* OpenCV's bounds test on a window corner: inside when -win <= floor(v) < n, NaN is outside. */
+static int lk_corner_ok(float v, int32_t win, int32_t n)
+{
+    return v >= (float)-win && v < (float)n;
+}
+
+/* The (win+1)^2 block of lv at (jx, jy): a pointer into the image, or into the gathered patch. */
+static const uint8_t *lk_next_block(const lk_level *lv, int32_t jx, int32_t jy, lk_work *wk,
+                                    int32_t *sstride)
+{
+    const int32_t win = wk->win;
+    if (jx >= 0 && jy >= 0 && jx + win <= lv->w - 1 && jy + win <= lv->h - 1) {
+        *sstride = lv->stride;
+        return lv->data + (size_t)jy * (size_t)lv->stride + (size_t)jx;
+    }
+    lk_gather(lv, jx, jy, win + 1, wk->patch);
+    *sstride = win + 1;
+    return wk->patch;
+}
+
+/* One level of one point. (px, py): point in prev at this level; (*nx, *ny): in = guess, out =
+ * estimate (OpenCV's nextPts). Returns 1, or 0 when the point is lost at this level. When err is not
+ * NULL (level 0), the final error is stored there. */
+static int lk_track_level(const lk_params *prm, const lk_level *I, const lk_level *J, float px, float py,
+                          float *nx, float *ny, lk_work *wk, float *err)
+{
+    const int32_t win = prm->win;
+    const float half = (float)(win - 1) * 0.5f;
+    int32_t ix, iy, wt[4], j, sstride;
+    int64_t A[3], ib1, ib2;
+    float a11, a12, a22, det, min_eig, inv_det, cx, cy, pdx = 0.f, pdy = 0.f;
+    float outx = *nx, outy = *ny;
+    const uint8_t *blk;
+    int ok = 1;
+
+    px -= half;
+    py -= half;
+    if (!lk_corner_ok(px, win, I->w) || !lk_corner_ok(py, win, I->h))
+        return 0;
+    ix = (int32_t)floorf(px);
+    iy = (int32_t)floorf(py);
+    lk_weights(px - (float)ix, py - (float)iy, wt);
+    lk_prev_window(I, ix, iy, wt, wk, A);
+
+    a11 = (float)A[0] * LK_FLT_SCALE;
+    a12 = (float)A[1] * LK_FLT_SCALE;
+    a22 = (float)A[2] * LK_FLT_SCALE;
+    det = a11 * a22 - a12 * a12;
+    min_eig = (a22 + a11 - sqrtf((a11 - a22) * (a11 - a22) + 4.f * a12 * a12)) / (float)(2 * win * win);
+    if (min_eig < prm->min_eig || det < FLT_EPSILON)
+        return 0;
+    inv_det = 1.f / det;
+
+    cx = *nx - half;
+    cy = *ny - half;
+    for (j = 0; j < prm->max_iters; ++j) {
+        float b1, b2, dx, dy;
+        if (!lk_corner_ok(cx, win, J->w) || !lk_corner_ok(cy, win, J->h)) {
+            ok = 0;
+            break;
+        }
+        ix = (int32_t)floorf(cx);
+        iy = (int32_t)floorf(cy);
+        lk_weights(cx - (float)ix, cy - (float)iy, wt);
+        blk = lk_next_block(J, ix, iy, wk, &sstride);
+        lk_mismatch(blk, sstride, wt, wk, &ib1, &ib2);
+        b1 = (float)ib1 * LK_FLT_SCALE;
+        b2 = (float)ib2 * LK_FLT_SCALE;
+        dx = (a12 * b2 - a22 * b1) * inv_det;
+        dy = (a12 * b1 - a11 * b2) * inv_det;
+        cx += dx;
+        cy += dy;
+        outx = cx + half;
+        outy = cy + half;
+        if ((double)dx * (double)dx + (double)dy * (double)dy <= prm->eps2)
+            break;
+        if (j > 0 && fabs((double)(dx + pdx)) < 0.01 && fabs((double)(dy + pdy)) < 0.01) {
+            outx -= dx * 0.5f;
+            outy -= dy * 0.5f;
+            break;
+        }
+        pdx = dx;
+        pdy = dy;
+    }
+    *nx = outx;
+    *ny = outy;
+    if (!ok)
+        return 0;
+
+    if (err != NULL) {
+        float fx = outx - half, fy = outy - half;
+        if (!lk_corner_ok(fx, win, J->w) || !lk_corner_ok(fy, win, J->h))
+            return 0;
+        ix = (int32_t)floorf(fx);
+        iy = (int32_t)floorf(fy);
+        lk_weights(fx - (float)ix, fy - (float)iy, wt);
+        blk = lk_next_block(J, ix, iy, wk, &sstride);
+        *err = (float)lk_abs_error(blk, sstride, wt, wk) * (1.f / (float)(32 * win * win));
+    }
+    return 1;
+}
+
+/* Track one point through the levels top..0 from pyramid I to J. (*nx, *ny): in = level-0 guess
+ * (used when use_guess), out = level-0 estimate. Returns 1 tracked, 0 lost. */
+static int lk_track_point(const lk_params *prm, const tvo_pyramid *I, const tvo_pyramid *J, int32_t top,
+                          float x0, float y0, int use_guess, float *nx, float *ny, lk_work *wk, float *err)
+{
+    /* err != NULL: compute the level-0 error into *err (0 when lost) */
+    int32_t l;
+    float gx = 0.f, gy = 0.f, e = 0.f;
+    int st = 1;
+    for (l = top; l >= 0; --l) {
+        const float s = 1.f / (float)(1 << l);
+        lk_level li, lj;
+        float px = x0 * s, py = y0 * s;
+        li.data = I->data[l];
+        li.w = I->width[l];
+        li.h = I->height[l];
+        li.stride = I->stride[l];
+        lj.data = J->data[l];
+        lj.w = J->width[l];
+        lj.h = J->height[l];
+        lj.stride = J->stride[l];
+        if (l == top) {
+            if (use_guess) {
+                gx = *nx * s;
+                gy = *ny * s;
+            } else {
+                gx = px;
+                gy = py;
+            }
+        } else {
+            gx *= 2.f;
+            gy *= 2.f;
+        }
+        st = lk_track_level(prm, &li, &lj, px, py, &gx, &gy, wk, (l == 0 && err != NULL) ? &e : NULL);
+    }
+    *nx = gx;
+    *ny = gy;
+    if (st && !(gx >= 0.f && gy >= 0.f && gx <= (float)(J->width[0] - 1) && gy <= (float)(J->height[0] - 1)))
+        st = 0; /* left the image */
+    if (err != NULL)
+        *err = st ? e : 0.f;
+    return st;
+}
+
+static tvo_status lk_check_pyramid(const tvo_pyramid *p, int32_t max_level)
+{
+    int32_t l;
+    if (p->levels < 1 || p->levels > TVO_MAX_PYR_LEVELS)
+        return TVO_ERR_SIZE;
+    if (p->levels < max_level + 1)
+        return TVO_ERR_ARG;
+    for (l = 0; l <= max_level; ++l) {
+        if (p->data[l] == NULL)
+            return TVO_ERR_NULL;
+        if (p->width[l] < 1 || p->height[l] < 1 || p->width[l] > TVO_MAX_IMAGE_DIM ||
+            p->height[l] > TVO_MAX_IMAGE_DIM || p->stride[l] < p->width[l])
+            return TVO_ERR_SIZE;
+        if (l > 0 && (p->width[l] != (p->width[l - 1] + 1) / 2 || p->height[l] != (p->height[l - 1] + 1) / 2))
+            return TVO_ERR_SIZE;
+    }
+    return TVO_OK;
+}
+
+static tvo_status lk_validate(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,
+                              const tvo_point2f *prev_pts, tvo_point2f *next_pts, int32_t n,
+                              void *scratch, size_t scratch_size)
+{
+    tvo_status st;
+    int32_t l, i;
+    if (cfg == NULL || prev == NULL || next == NULL || prev_pts == NULL || next_pts == NULL ||
+        scratch == NULL)
+        return TVO_ERR_NULL;
+    st = tvo_lk_config_check(cfg);
+    if (st != TVO_OK)
+        return st;
+    if (n < 0)
+        return TVO_ERR_SIZE;
+    st = lk_check_pyramid(prev, cfg->max_level);
+    if (st != TVO_OK)
+        return st;
+    st = lk_check_pyramid(next, cfg->max_level);
+    if (st != TVO_OK)
+        return st;
+    for (l = 0; l <= cfg->max_level; ++l)
+        if (prev->width[l] != next->width[l] || prev->height[l] != next->height[l])
+            return TVO_ERR_MISMATCH;
+    if (scratch_size < tvo_lk_scratch_size(cfg))
+        return TVO_ERR_NO_MEMORY;
+    for (i = 0; i < n; ++i) {
+        if (!isfinite(prev_pts[i].x) || !isfinite(prev_pts[i].y))
+            return TVO_ERR_NOT_FINITE;
+        if (cfg->use_initial_flow && (!isfinite(next_pts[i].x) || !isfinite(next_pts[i].y)))
+            return TVO_ERR_NOT_FINITE;
+    }
+    return TVO_OK;
+}
+
+tvo_status tvo_lk_track(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,
+                        const tvo_point2f *prev_pts, tvo_point2f *next_pts, uint8_t *status, float *err,
+                        int32_t n, void *scratch, size_t scratch_size)
+{
+    lk_work wk;
+    lk_params prm;
+    int32_t i, top;
+    tvo_status st;
+
+    if (status == NULL)
+        return TVO_ERR_NULL;
+    st = lk_validate(cfg, prev, next, prev_pts, next_pts, n, scratch, scratch_size);
+    if (st == TVO_OK)
+        st = lk_work_init(&wk, cfg->win_size, scratch, scratch_size);
+    if (st != TVO_OK) {
+        if (n > 0)
+            memset(status, TVO_LK_LOST, (size_t)n);
+        return st;
+    }
+
+    prm.win = cfg->win_size;
+    prm.max_iters = cfg->max_iters;
+    prm.eps2 = (double)cfg->epsilon * (double)cfg->epsilon;
+    prm.min_eig = cfg->min_eig_threshold;
+
+    /* as OpenCV: levels whose size is <= the window are not used */
+    top = cfg->max_level;
+    while (top > 0 && (prev->width[top] <= prm.win || prev->height[top] <= prm.win))
+        --top;
+
+    for (i = 0; i < n; ++i) {
+        float x0 = prev_pts[i].x, y0 = prev_pts[i].y;
+        float nx = next_pts[i].x, ny = next_pts[i].y;
+        float e = 0.f;
+        int ok = lk_track_point(&prm, prev, next, top, x0, y0, cfg->use_initial_flow != 0, &nx, &ny, &wk,
+                                err != NULL ? &e : NULL);
+        if (ok && cfg->fb_check) {
+            float bx = nx, by = ny, ddx, ddy;
+            int back = lk_track_point(&prm, next, prev, top, nx, ny, 0, &bx, &by, &wk, NULL);
+            ddx = bx - x0;
+            ddy = by - y0;
+            if (!back || !((double)ddx * ddx + (double)ddy * ddy <=
+                           (double)cfg->fb_max_error * (double)cfg->fb_max_error)) {
+                ok = 0;
+                e = 0.f;
+            }
+        }
+        next_pts[i].x = nx;
+        next_pts[i].y = ny;
+        status[i] = ok ? TVO_LK_TRACKED : TVO_LK_LOST;
+        if (err != NULL)
+            err[i] = e;
+    }
+    return TVO_OK;
+}
