@@ -142,6 +142,8 @@ static tvo_status check_layer(const uint8_t *f, size_t size, const uint8_t *e, u
         if (l_off != 0)
             return TVO_ERR_FORMAT;
     } else {
+        if (l_off == 0)
+            return TVO_ERR_FORMAT;
         TVO_TRY(check_span(l_off, 256u, TVO_NN_PAYLOAD_ALIGN, size));
     }
     for (o = 0; o < n_out; ++o) {
@@ -258,9 +260,11 @@ tvo_status tvo_nn_load(tvo_nn **out, const void *file, size_t file_size, void *m
     tvo_arena arena;
     tvo_nn *nn;
     uint32_t nb, b, width = TVO_FEAT_COUNT;
-    if (out == NULL || file == NULL || mem == NULL)
+    if (out == NULL)
         return TVO_ERR_NULL;
     *out = NULL;
+    if (file == NULL || mem == NULL)
+        return TVO_ERR_NULL;
     TVO_TRY(tvo_nn_validate(f, file_size, &need));
     if (mem_size < need)
         return TVO_ERR_NO_MEMORY;
