@@ -68,3 +68,26 @@ void tvo_nn_fc_s8_f32(const int8_t *x, const int8_t *w, const int32_t *bias, con
         y[o] = a * scale[o];
     }
 }
+
+void tvo_nn_fc_s8_cols(const int8_t *x, const int8_t *wt, const int32_t *bias, const int32_t *mult,
+                       const int32_t *shift, int32_t out_zp, int32_t n_in, int32_t n_out, int8_t *y)
+{
+    int32_t acc[64];
+    int32_t o0, o, i;
+    for (o0 = 0; o0 < n_out; o0 += 64) {
+        int32_t m = n_out - o0 < 64 ? n_out - o0 : 64;
+        for (o = 0; o < m; ++o)
+            acc[o] = bias[o0 + o];
+        for (i = 0; i < n_in; ++i) {
+            const int8_t *r = wt + (size_t)i * (size_t)n_out + o0;
+            int32_t xi = x[i];
+            for (o = 0; o < m; ++o)
+                acc[o] += (int32_t)r[o] * xi;
+        }
+        for (o = 0; o < m; ++o) {
+            int32_t v = tvo_nn_requantize(acc[o], mult[o0 + o], shift[o0 + o]) + out_zp;
+            v = v < -128 ? -128 : (v > 127 ? 127 : v);
+            y[o0 + o] = (int8_t)v;
+        }
+    }
+}

@@ -7,7 +7,7 @@
 #include "tinyvo/nn.h"
 
 typedef struct tvo_nn_layer_rt {
-    int32_t n_in, n_out, act, out_kind, out_zp;
+    int32_t n_in, n_out, act, out_kind, out_zp, cols; /* cols: weights stored column-major */
     int8_t *w;          /* n_out x n_in, row-major */
     int32_t *bias;      /* bias with the input zero point folded in */
     int32_t *mult;      /* S8 layers */
@@ -309,11 +309,15 @@ tvo_status tvo_nn_load(tvo_nn **out, const void *file, size_t file_size, void *m
             L->bias = (int32_t *)tvo_arena_alloc(&arena, tvo_arena_round((size_t)n_out * 4u));
             if (L->w == NULL || L->bias == NULL)
                 return TVO_ERR_NO_MEMORY;
-            memcpy(L->w, wf, (size_t)n_in * n_out);
+            const int8_t *ws = (const int8_t *)wf; /* int8_t is two's complement: bytes read as-is */
+            L->cols = L->out_kind == (int32_t)TVO_NN_OUT_S8 && n_in < TVO_NN_COLS_MAX_IN;
+            for (o = 0; o < n_out; ++o)
+                for (j = 0; j < n_in; ++j)
+                    L->w[L->cols ? (size_t)j * n_out + o : (size_t)o * n_in + j] = ws[(size_t)o * n_in + j];
             for (o = 0; o < n_out; ++o) {
                 int32_t rowsum = 0;
                 for (j = 0; j < n_in; ++j)
-                    rowsum += L->w[(size_t)o * n_in + j];
+                    rowsum += ws[(size_t)o * n_in + j];
                 /* bias + sum w (x - zp) = (bias - zp sum w) + sum w x; bounded by the validation */
                 L->bias[o] = rd_i32(bf + 4u * o) - in_zp * rowsum;
             }
@@ -380,7 +384,10 @@ tvo_status tvo_nn_run(const tvo_nn *nn, const float features[TVO_FEAT_COUNT], fl
                 tvo_nn_fc_s8_f32(x, L->w, L->bias, L->scale, L->n_in, 1, &r);
                 break;
             }
-            tvo_nn_fc_s8(x, L->w, L->bias, L->mult, L->shift, L->out_zp, L->n_in, L->n_out, y);
+            if (L->cols)
+                tvo_nn_fc_s8_cols(x, L->w, L->bias, L->mult, L->shift, L->out_zp, L->n_in, L->n_out, y);
+            else
+                tvo_nn_fc_s8(x, L->w, L->bias, L->mult, L->shift, L->out_zp, L->n_in, L->n_out, y);
             if (L->lut != NULL)
                 tvo_nn_lut_s8(y, L->n_out, L->lut);
             t = x;

@@ -154,6 +154,14 @@ static inline int32_t tvo_nn_requantize(int32_t acc, int32_t mult, int32_t shift
 void tvo_nn_fc_s8(const int8_t *x, const int8_t *w, const int32_t *bias, const int32_t *mult,
                   const int32_t *shift, int32_t out_zp, int32_t n_in, int32_t n_out, int8_t *y);
 
+/* Same as tvo_nn_fc_s8 with column-major weights wt[i * n_out + o]: faster for short inputs (the
+ * loader uses it when n_in < TVO_NN_COLS_MAX_IN), same results. */
+void tvo_nn_fc_s8_cols(const int8_t *x, const int8_t *wt, const int32_t *bias, const int32_t *mult,
+                       const int32_t *shift, int32_t out_zp, int32_t n_in, int32_t n_out, int8_t *y);
+#ifndef TVO_NN_COLS_MAX_IN
+#define TVO_NN_COLS_MAX_IN 16
+#endif
+
 /* Fully connected int8 layer with float output: y[o] = (float)acc * scale[o], acc as above. */
 void tvo_nn_fc_s8_f32(const int8_t *x, const int8_t *w, const int32_t *bias, const float *scale,
                       int32_t n_in, int32_t n_out, float *y);
