@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define DET_BAND 32             /* rows per FAST band */
+#define DET_BAND 48             /* rows per FAST band */
 #define DET_MIN_GRID_CELL 8.0f  /* smallest cell of the spacing grid, px */
 #define DET_MAX_CORNERS (1 << 20)
 #define DET_MAX_CANDIDATES 4096
@@ -110,7 +110,7 @@ static tvo_status det_plan(const tvo_detect_config *cfg, int32_t width, int32_t 
     L->quota = q;
     L->ncand = cfg->candidates_per_cell;
     if (L->ncand == 0)
-        L->ncand = 4 * q > 16 ? (4 * q > DET_MAX_CANDIDATES ? DET_MAX_CANDIDATES : 4 * q) : 16;
+        L->ncand = 3 * q > 12 ? (3 * q > DET_MAX_CANDIDATES ? DET_MAX_CANDIDATES : 3 * q) : 12;
     L->band_cap = ((width + 1) / 2) * ((DET_BAND + 1) / 2);
     if (cfg->min_distance > 0.0f) {
         L->gcell = cfg->min_distance > DET_MIN_GRID_CELL ? cfg->min_distance : DET_MIN_GRID_CELL;

@@ -31,6 +31,14 @@ static void fast_offsets(int32_t ofs[16], int32_t stride)
         ofs[k] = (int32_t)fast_circle[k][0] + (int32_t)fast_circle[k][1] * stride;
 }
 
+/* index of the lowest set bit of v != 0 (portable de Bruijn multiply) */
+static int fast_ctz(uint32_t v)
+{
+    static const uint8_t tab[32] = { 0, 1, 28, 2, 29, 14, 24, 3, 30, 22, 20, 15, 25, 17, 4, 8,
+                                     31, 27, 13, 23, 21, 19, 16, 7, 26, 12, 18, 6, 11, 5, 10, 9 };
+    return tab[(uint32_t)((v & (0u - v)) * 0x077CB531u) >> 27];
+}
+
 /* 1 when the circular 16-bit mask m has a run of at least 9 set bits. */
 static int fast_has_run9(uint32_t m)
 {
@@ -94,40 +102,74 @@ static int32_t fast_row(const uint8_t *row, int32_t width, const int32_t ofs[16]
     memset(score_row, 0, (size_t)width);
 #if TVO_FAST_SSE2
     {
-        const __m128i sign = _mm_set1_epi8((char)0x80);
+        const __m128i zero = _mm_setzero_si128();
         const __m128i thr = _mm_set1_epi8((char)(uint8_t)threshold);
         for (; x + 16 <= width - 3; x += 16) {
             const uint8_t *p = row + x;
             __m128i c = _mm_loadu_si128((const __m128i *)(const void *)p);
-            /* bright: q > min(c + t, 255)  (never true when c + t >= 255, as in the scalar test);
-             * dark:   q < max(c - t, 0). Unsigned compares via the sign flip. */
-            __m128i hi = _mm_xor_si128(_mm_adds_epu8(c, thr), sign);
-            __m128i lo = _mm_xor_si128(_mm_subs_epu8(c, thr), sign);
-            __m128i q0 = _mm_xor_si128(_mm_loadu_si128((const __m128i *)(const void *)(p + o0)), sign);
-            __m128i q4 = _mm_xor_si128(_mm_loadu_si128((const __m128i *)(const void *)(p + o4)), sign);
-            __m128i q8 = _mm_xor_si128(_mm_loadu_si128((const __m128i *)(const void *)(p + o8)), sign);
-            __m128i q12 = _mm_xor_si128(_mm_loadu_si128((const __m128i *)(const void *)(p + o12)), sign);
-            __m128i b0 = _mm_cmpgt_epi8(q0, hi), b4 = _mm_cmpgt_epi8(q4, hi);
-            __m128i b8 = _mm_cmpgt_epi8(q8, hi), b12 = _mm_cmpgt_epi8(q12, hi);
-            __m128i d0 = _mm_cmplt_epi8(q0, lo), d4 = _mm_cmplt_epi8(q4, lo);
-            __m128i d8 = _mm_cmplt_epi8(q8, lo), d12 = _mm_cmplt_epi8(q12, lo);
-            __m128i m = _mm_or_si128(
-                _mm_or_si128(_mm_or_si128(_mm_and_si128(b0, b4), _mm_and_si128(b4, b8)),
-                             _mm_or_si128(_mm_and_si128(b8, b12), _mm_and_si128(b12, b0))),
-                _mm_or_si128(_mm_or_si128(_mm_and_si128(d0, d4), _mm_and_si128(d4, d8)),
-                             _mm_or_si128(_mm_and_si128(d8, d12), _mm_and_si128(d12, d0))));
-            unsigned bits = (unsigned)_mm_movemask_epi8(m);
-            while (bits != 0u) {
-                int k = 0;
-                const uint8_t *pk;
-                while (((bits >> k) & 1u) == 0u)
-                    ++k;
-                bits &= bits - 1u;
-                pk = p + k;
-                if (fast_is_corner(pk, ofs, ttab + 255 - pk[0])) {
-                    int s = fast_score(pk, ofs);
-                    score_row[x + k] = (uint8_t)s;
-                    pos[n++] = x + k;
+            /* screen: q brighter iff sat(q - sat(c + t)) != 0, darker iff sat(sat(c - t) - q) != 0
+             * (exactly q > c + t and q < c - t); a corner needs a neighbouring compass pair on one side */
+            __m128i hi = _mm_adds_epu8(c, thr), lo = _mm_subs_epu8(c, thr);
+            __m128i q0 = _mm_loadu_si128((const __m128i *)(const void *)(p + o0));
+            __m128i q4 = _mm_loadu_si128((const __m128i *)(const void *)(p + o4));
+            __m128i q8 = _mm_loadu_si128((const __m128i *)(const void *)(p + o8));
+            __m128i q12 = _mm_loadu_si128((const __m128i *)(const void *)(p + o12));
+            __m128i b0 = _mm_subs_epu8(q0, hi), b4 = _mm_subs_epu8(q4, hi);
+            __m128i b8 = _mm_subs_epu8(q8, hi), b12 = _mm_subs_epu8(q12, hi);
+            __m128i d0 = _mm_subs_epu8(lo, q0), d4 = _mm_subs_epu8(lo, q4);
+            __m128i d8 = _mm_subs_epu8(lo, q8), d12 = _mm_subs_epu8(lo, q12);
+            __m128i m = _mm_max_epu8(
+                _mm_max_epu8(_mm_max_epu8(_mm_min_epu8(b0, b4), _mm_min_epu8(b4, b8)),
+                             _mm_max_epu8(_mm_min_epu8(b8, b12), _mm_min_epu8(b12, b0))),
+                _mm_max_epu8(_mm_max_epu8(_mm_min_epu8(d0, d4), _mm_min_epu8(d4, d8)),
+                             _mm_max_epu8(_mm_min_epu8(d8, d12), _mm_min_epu8(d12, d0))));
+            unsigned bits;
+            if (_mm_movemask_epi8(_mm_cmpeq_epi8(m, zero)) == 0xFFFF)
+                continue;
+            {
+                /* exact test and score of all 16 lanes: with bright = sat(q - c), dark = sat(c - q)
+                 * (unsigned saturating), best = max over the 16 arcs of 9 of max(min_arc bright,
+                 * min_arc dark). Lane is a corner iff best > threshold, and then best - 1 is OpenCV's score
+                 * (saturation at 0 cannot change a maximum that is >= threshold + 1 >= 1). */
+                __m128i xb[16], xd[16], r2b[8], r2d[8], r4b[8], r4d[8];
+                __m128i bestb = _mm_setzero_si128(), bestd = _mm_setzero_si128(), best, corner, one;
+                int k;
+                for (k = 0; k < 16; ++k) {
+                    __m128i q = _mm_loadu_si128((const __m128i *)(const void *)(p + ofs[k]));
+                    xb[k] = _mm_subs_epu8(q, c);
+                    xd[k] = _mm_subs_epu8(c, q);
+                }
+                /* runs starting at even e: R2_e = min(x_e, x_e+1), R4_e = min(R2_e, R2_e+2),
+                 * R8_e = min(R4_e, R4_e+4); the 9-arcs are e..e+8 = min(R8_e, x_e+8) and
+                 * e-1..e+7 = min(x_e-1, R8_e), so best = max_e min(R8_e, max(x_e+8, x_e-1)). */
+                for (k = 0; k < 8; ++k) {
+                    r2b[k] = _mm_min_epu8(xb[2 * k], xb[2 * k + 1]);
+                    r2d[k] = _mm_min_epu8(xd[2 * k], xd[2 * k + 1]);
+                }
+                for (k = 0; k < 8; ++k) {
+                    r4b[k] = _mm_min_epu8(r2b[k], r2b[(k + 1) & 7]);
+                    r4d[k] = _mm_min_epu8(r2d[k], r2d[(k + 1) & 7]);
+                }
+                for (k = 0; k < 8; ++k) {
+                    int e = 2 * k;
+                    __m128i r8b = _mm_min_epu8(r4b[k], r4b[(k + 2) & 7]);
+                    __m128i r8d = _mm_min_epu8(r4d[k], r4d[(k + 2) & 7]);
+                    __m128i endb = _mm_max_epu8(xb[(e + 8) & 15], xb[(e + 15) & 15]);
+                    __m128i endd = _mm_max_epu8(xd[(e + 8) & 15], xd[(e + 15) & 15]);
+                    bestb = _mm_max_epu8(bestb, _mm_min_epu8(r8b, endb));
+                    bestd = _mm_max_epu8(bestd, _mm_min_epu8(r8d, endd));
+                }
+                best = _mm_max_epu8(bestb, bestd);
+                corner = _mm_cmpeq_epi8(_mm_subs_epu8(best, thr), _mm_setzero_si128()); /* NOT corner */
+                bits = (unsigned)_mm_movemask_epi8(corner) ^ 0xFFFFu;
+                if (bits == 0u)
+                    continue;
+                one = _mm_set1_epi8(1);
+                _mm_storeu_si128((__m128i *)(void *)(score_row + x),
+                                 _mm_andnot_si128(corner, _mm_sub_epi8(best, one)));
+                while (bits != 0u) {
+                    pos[n++] = x + fast_ctz(bits);
+                    bits &= bits - 1u;
                 }
             }
         }

@@ -121,7 +121,7 @@ typedef struct tvo_detect_config {
     int32_t border;           /* px ignored at the image border, >= 0; default 8. The effective border is
                                  at least 3 (FAST) and block_size/2 + 2 (Harris/Shi-Tomasi). */
     int32_t candidates_per_cell; /* FAST corners kept per cell (the strongest by FAST score) before the
-                                    ranking score is computed, >= 0; 0 = 4 * per-cell quota (min 16);
+                                    ranking score is computed, [0, 4096]; 0 = 3 * per-cell quota (min 12);
                                     default 0. Bounds the Harris/Shi-Tomasi evaluations. */
 } tvo_detect_config;
 
