@@ -189,3 +189,42 @@ def synthetic_features(rng: np.random.Generator, n: int) -> np.ndarray:
     f[:, 9] = rng.choice([0.05, 0.1], n) * rng.uniform(0.98, 1.02, n)
     f[:, 10] = (rng.uniform(size=n) < 0.1).astype(np.float32)
     return f
+
+
+# ---- float checkpoints (torch-free; written by train.py, read by export.py) ------------------
+
+def save_checkpoint(path, branches: Sequence[FloatBranch], meta: dict) -> None:
+    """A .npz: per branch d arrays b{d}_w{k}, b{d}_b{k}, b{d}_norm_scale, b{d}_norm_offset, and a JSON
+    string 'meta' (training settings + per-branch dof/features/activation/output de-normalisation)."""
+    import json
+    arrays = {}
+    meta = dict(meta)
+    meta["branches"] = []
+    for i, b in enumerate(branches):
+        for k, (w, bb) in enumerate(zip(b.weights, b.biases)):
+            arrays[f"b{i}_w{k}"] = np.asarray(w, np.float32)
+            arrays[f"b{i}_b{k}"] = np.asarray(bb, np.float32)
+        arrays[f"b{i}_norm_scale"] = np.asarray(b.norm_scale, np.float32)
+        arrays[f"b{i}_norm_offset"] = np.asarray(b.norm_offset, np.float32)
+        meta["branches"].append({"dof": int(b.dof), "feature_ids": [int(x) for x in b.feature_ids],
+                                 "activation": b.activation, "n_layers": len(b.weights),
+                                 "out_scale": float(b.out_scale), "out_offset": float(b.out_offset)})
+    arrays["meta"] = np.array(json.dumps(meta))
+    with open(path, "wb") as fh:
+        np.savez(fh, **arrays)
+
+
+def load_checkpoint(path):
+    """-> (list of FloatBranch, meta dict)."""
+    import json
+    z = np.load(path, allow_pickle=False)
+    meta = json.loads(str(z["meta"]))
+    branches = []
+    for i, m in enumerate(meta["branches"]):
+        branches.append(FloatBranch(
+            dof=m["dof"], feature_ids=m["feature_ids"], norm_scale=z[f"b{i}_norm_scale"],
+            norm_offset=z[f"b{i}_norm_offset"],
+            weights=[z[f"b{i}_w{k}"].astype(np.float64) for k in range(m["n_layers"])],
+            biases=[z[f"b{i}_b{k}"].astype(np.float64) for k in range(m["n_layers"])],
+            activation=m["activation"], out_scale=m["out_scale"], out_offset=m["out_offset"]))
+    return branches, meta

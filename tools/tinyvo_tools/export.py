@@ -1,0 +1,80 @@
+"""Exporter: float checkpoint -> int8 weights file (docs/weights-format.md) + golden vectors + report.
+
+    python -m tinyvo_tools.export model.ckpt.npz DATASET.npz -o model.tvonn [--golden model.golden]
+
+Activation ranges are calibrated on the training rows of DATASET (the sequences the checkpoint was
+trained on; its validation sequences are never used for calibration). The report compares the
+quantised model (NumPy integer reference == the C interpreter) with the float model per DoF on the
+validation rows (all rows if there are none): RMS difference divided by that DoF's ground-truth std.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+
+from . import nnfmt, quant, train
+
+GOLDEN_GENERATOR = "tinyvo_tools.export 1"
+
+
+def compare(model: nnfmt.Model, branches, features: np.ndarray, targets: np.ndarray) -> dict:
+    """Per-DoF quantised-vs-float difference relative to the DoF's std (of the targets)."""
+    q = nnfmt.reference_run(model, features).astype(np.float64)
+    f = quant.float_run(branches, features)
+    rep = {}
+    for b in branches:
+        d = b.dof
+        std = float(targets[:, d].std()) or 1.0
+        diff = q[:, d] - f[:, d]
+        rep[nnfmt.DOFS[d]] = {"std": std, "rms_diff_over_std": float(np.sqrt(np.mean(diff ** 2)) / std),
+                              "max_abs_diff_over_std": float(np.abs(diff).max() / std),
+                              "float_rmse": float(np.sqrt(np.mean((f[:, d] - targets[:, d]) ** 2))),
+                              "quant_rmse": float(np.sqrt(np.mean((q[:, d] - targets[:, d]) ** 2)))}
+    return rep
+
+
+def export(branches, meta, features, targets, seq, out_path, golden_path=None, n_golden=256, seed=0):
+    """Quantise, write the weights file (and golden vectors); return the report dict."""
+    val = meta.get("val_sequences") or []
+    tr, va = train.split_rows(seq, val)
+    if not tr.any():
+        raise ValueError("no training rows to calibrate on")
+    model = quant.quantize_model(branches, features[tr])
+    data = nnfmt.write(model)
+    with open(out_path, "wb") as fh:
+        fh.write(data)
+    evalrows = va if va.any() else tr
+    rep = {"file": str(out_path), "bytes": len(data), "macs": model.macs, "output_mask": model.output_mask,
+           "calibration_rows": int(tr.sum()), "eval_rows": int(evalrows.sum()),
+           "eval_split": "validation" if va.any() else "training",
+           "per_dof": compare(model, branches, features[evalrows], targets[evalrows])}
+    rep["worst_rms_diff_over_std"] = max(v["rms_diff_over_std"] for v in rep["per_dof"].values())
+    if golden_path is not None:
+        rng = np.random.default_rng(seed)
+        pick = rng.choice(len(features), size=min(n_golden, len(features)), replace=False)
+        x = features[np.sort(pick)]
+        nnfmt.write_golden(golden_path, x, nnfmt.reference_run(nnfmt.read(data), x), GOLDEN_GENERATOR)
+    return rep
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("checkpoint")
+    ap.add_argument("dataset", help="the training dataset .npz ('synthetic' for train.py's demo data)")
+    ap.add_argument("-o", "--out", required=True)
+    ap.add_argument("--golden", default=None, help="also write golden vectors here")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args(argv)
+    branches, meta = quant.load_checkpoint(args.checkpoint)
+    if args.dataset == "synthetic":
+        f, t, seq = train.synthetic_dataset(np.random.default_rng(meta.get("seed", 0)), 20000)
+    else:
+        f, t, seq = train.load_dataset(args.dataset)
+    rep = export(branches, meta, f, t, seq, args.out, args.golden, seed=args.seed)
+    print(json.dumps(rep, indent=2))
+
+
+if __name__ == "__main__":
+    main()
