@@ -1,0 +1,113 @@
+/* tinyvo: the monocular visual odometry object (front end of the "system of systems" VO).
+ *
+ * Per frame: pyramid -> LK tracking of the current tracks (forward-backward checked) -> undistortion
+ * to normalised coordinates -> relative pose (5-point essential matrix in RANSAC, or rotation-only /
+ * homography when the geometry calls for it) -> outlier removal -> re-detection spread over the image
+ * when tracks run low. The result is the RAW relative pose of this frame to the previous one, with a
+ * unit (scale-free) translation; tvo_traj_step() integrates it with a per-step scale that the caller
+ * takes from ground truth, from the per-DoF networks (nn.h) or from nothing (unit steps).
+ *
+ * Memory: tvo_vo_required_size(&cfg) bytes, handed to tvo_vo_init(); nothing is allocated afterwards.
+ * For 752x480 with the default configuration this is about 1.1 MB (see the README for the figure
+ * printed by `tvo_replay --print-memory`). Not thread-safe: one tvo_vo per thread.
+ */
+#ifndef TINYVO_VO_H
+#define TINYVO_VO_H
+
+#include "tinyvo/camera.h"
+#include "tinyvo/corners.h"
+#include "tinyvo/image.h"
+#include "tinyvo/lk.h"
+#include "tinyvo/nn.h"
+#include "tinyvo/relpose.h"
+#include "tinyvo/se3.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* What the VO made of a frame. */
+typedef enum tvo_vo_state {
+    TVO_VO_OK = 0,             /* relative pose with a translation direction */
+    TVO_VO_INITIALISING = 1,   /* first frame (or first after a reset): corners detected, identity pose */
+    TVO_VO_ROTATION_ONLY = 2,  /* low parallax: rotation estimated, translation reported as zero */
+    TVO_VO_LOST = 3,           /* too few tracks or no trustworthy model: identity pose, tracker re-initialised */
+    TVO_VO_STATE_COUNT = 4
+} tvo_vo_state;
+
+/* Per-stage timing slots in tvo_vo_result.stage_ns (filled only when the config has a clock). */
+typedef enum tvo_vo_stage {
+    TVO_STAGE_PYRAMID = 0,
+    TVO_STAGE_TRACK = 1,
+    TVO_STAGE_UNDISTORT = 2,
+    TVO_STAGE_POSE = 3,
+    TVO_STAGE_DETECT = 4,
+    TVO_STAGE_TOTAL = 5,
+    TVO_STAGE_COUNT = 6
+} tvo_vo_stage;
+
+/* A monotonic clock in nanoseconds, supplied by the port layer (lib has no OS access). */
+typedef int64_t (*tvo_clock_fn)(void *user);
+
+typedef struct tvo_vo_config {
+    tvo_camera camera;          /* intrinsics + distortion; camera.width/height is the frame size */
+    tvo_detect_config detect;   /* corner detection + bucketing (detect.max_corners is ignored: see below) */
+    tvo_lk_config lk;           /* tracker; forward-backward check recommended */
+    tvo_relpose_config relpose; /* RANSAC; relpose.threshold is derived from pose_threshold_px */
+    int32_t max_tracks;         /* capacity of the track list, >= 16; default 300 */
+    int32_t min_tracks;         /* re-detect when fewer tracks survive; default 200 */
+    int32_t min_pose_tracks;    /* fewer tracked points than this -> LOST; default 30 */
+    double pose_threshold_px;   /* RANSAC inlier threshold in pixels, converted with the focal length; default 1.0 */
+    tvo_clock_fn clock;         /* optional (NULL: no timings) */
+    void *clock_user;
+} tvo_vo_config;
+
+/* Fill cfg with defaults for `camera` (copied). */
+void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
+
+typedef struct tvo_vo_result {
+    tvo_vo_state state;
+    int32_t relpose_flags;     /* TVO_RELPOSE_FLAG_* of this frame's estimate (0 when none ran) */
+    tvo_pose T_prev_cur;       /* raw relative pose: p_prev = R p_cur + t, |t| = 1 or t = 0 */
+    int32_t tracked;           /* tracks that survived LK + forward-backward into this frame */
+    int32_t inliers;           /* pose inliers among them */
+    int32_t new_corners;       /* corners added by re-detection in this frame */
+    int32_t tracks;            /* tracks carried to the next frame */
+    double parallax_deg;       /* median rotation-compensated parallax of the inliers */
+    int64_t dt_ns;             /* time since the previous frame (0 on the first) */
+    float features[TVO_FEAT_COUNT]; /* front-end features for the per-DoF networks (nn.h layout) */
+    int64_t stage_ns[TVO_STAGE_COUNT];
+} tvo_vo_result;
+
+typedef struct tvo_vo tvo_vo;
+
+/* Bytes of memory tvo_vo_init() needs for `cfg`, or 0 if cfg is invalid. */
+size_t tvo_vo_required_size(const tvo_vo_config *cfg);
+
+/* Lay the VO out in mem (which must stay valid while *vo is used). Copies cfg. */
+tvo_status tvo_vo_init(tvo_vo **vo, const tvo_vo_config *cfg, void *mem, size_t mem_size);
+
+/* Process one grey frame of exactly camera.width x camera.height. t_ns must increase; a frame
+ * whose timestamp does not increase is refused with TVO_ERR_ARG and leaves the VO unchanged.
+ * On any error the VO is unchanged and *res holds state LOST with an identity pose.
+ * res->T_prev_cur is always finite. */
+tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_vo_result *res);
+
+/* Forget the tracks: the next frame initialises again (after a gap, a bad frame, ...). */
+void tvo_vo_reset(tvo_vo *vo);
+
+/* Trajectory integration: T_w_c(k+1) = T_w_c(k) * [R | scale * t]. */
+typedef struct tvo_traj {
+    tvo_pose T_w_c;            /* current camera pose in the world */
+    int32_t steps;
+} tvo_traj;
+void tvo_traj_init(tvo_traj *traj, const tvo_pose *T_w_c0);
+/* scale in metres for the unit translation of T_prev_cur; refuses non-finite input (TVO_ERR_NOT_FINITE)
+ * and leaves the trajectory unchanged. */
+tvo_status tvo_traj_step(tvo_traj *traj, const tvo_pose *T_prev_cur, double scale);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* TINYVO_VO_H */

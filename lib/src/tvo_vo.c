@@ -1,0 +1,378 @@
+/* tinyvo: the VO object. See vo.h for the per-frame data flow. */
+#include "tinyvo/vo.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "tinyvo/arena.h"
+#include "tinyvo/pyramid.h"
+
+struct tvo_vo {
+    tvo_vo_config cfg;
+    tvo_pyramid pyr[2];
+    int32_t cur;              /* index of the pyramid that receives the next frame */
+    int32_t has_prev;         /* a previous frame with tracks exists */
+    int64_t t_prev;
+    int32_t n;                /* tracks in pts (positions in the previous frame) */
+    tvo_point2f *pts;         /* [max_tracks] */
+    tvo_point2f *next;        /* [max_tracks] */
+    uint8_t *st;              /* [max_tracks] */
+    float *err;               /* [max_tracks] */
+    tvo_point2d *x1, *x2;     /* [max_tracks] normalised prev / cur */
+    uint8_t *ok1, *ok2, *mask;/* [max_tracks] */
+    tvo_corner *corners;      /* [max_tracks] */
+    void *scratch;
+    size_t scratch_size;
+};
+
+void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
+{
+    if (cfg == NULL)
+        return;
+    memset(cfg, 0, sizeof(*cfg));
+    if (camera != NULL)
+        cfg->camera = *camera;
+    tvo_detect_config_default(&cfg->detect);
+    tvo_lk_config_default(&cfg->lk);
+    cfg->lk.fb_check = 1;
+    tvo_relpose_config_default(&cfg->relpose);
+    cfg->max_tracks = 300;
+    cfg->min_tracks = 200;
+    cfg->min_pose_tracks = 30;
+    cfg->pose_threshold_px = 1.0;
+    /* rotation-only below 0.15 deg of rotation-compensated parallax: about 4x the noise floor of
+       0.3 px tracking noise at f = 460 px; pure rotation measures ~0.005 deg in test_vo */
+    cfg->relpose.min_parallax_deg = 0.15;
+    cfg->clock = NULL;
+    cfg->clock_user = NULL;
+}
+
+static int config_valid(const tvo_vo_config *cfg)
+{
+    if (cfg == NULL || tvo_camera_check(&cfg->camera) != TVO_OK)
+        return 0;
+    if (cfg->max_tracks < 16 || cfg->max_tracks > 100000)
+        return 0;
+    if (cfg->min_tracks < 0 || cfg->min_tracks > cfg->max_tracks)
+        return 0;
+    if (cfg->min_pose_tracks < 8 || cfg->min_pose_tracks > cfg->max_tracks)
+        return 0;
+    if (!(cfg->pose_threshold_px > 0.0) || !isfinite(cfg->pose_threshold_px))
+        return 0;
+    if (cfg->lk.max_level < 0 || cfg->lk.max_level + 1 > TVO_MAX_PYR_LEVELS)
+        return 0;
+    return 1;
+}
+
+static size_t scratch_need(const tvo_vo_config *cfg)
+{
+    size_t a = tvo_detect_scratch_size(&cfg->detect, cfg->camera.width, cfg->camera.height);
+    size_t b = tvo_lk_scratch_size(&cfg->lk);
+    size_t c = tvo_relpose_scratch_size(cfg->max_tracks);
+    size_t m = a > b ? a : b;
+    return m > c ? m : c;
+}
+
+/* Bytes tvo_vo_init() carves out of the caller's block, in the order it carves them. */
+static size_t layout_size(const tvo_vo_config *cfg)
+{
+    const size_t n = (size_t)cfg->max_tracks;
+    const int32_t levels = cfg->lk.max_level + 1;
+    size_t pyr = tvo_pyramid_required_size(cfg->camera.width, cfg->camera.height, levels);
+    size_t s = tvo_arena_round(sizeof(tvo_vo));
+    if (pyr == 0)
+        return 0;
+    s = tvo_size_add(s, tvo_size_mul(2, tvo_arena_round(pyr)));
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2f))) * 2);
+    s = tvo_size_add(s, tvo_arena_round(n) * 4);                        /* st ok1 ok2 mask */
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(float))));
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))) * 2);
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_corner))));
+    s = tvo_size_add(s, tvo_arena_round(scratch_need(cfg)));
+    return tvo_size_add(s, TVO_ARENA_ALIGN); /* slack for an unaligned block */
+}
+
+size_t tvo_vo_required_size(const tvo_vo_config *cfg)
+{
+    if (!config_valid(cfg))
+        return 0;
+    return layout_size(cfg);
+}
+
+tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg, void *mem, size_t mem_size)
+{
+    tvo_arena a;
+    tvo_vo *vo;
+    size_t n, pyr;
+    int32_t levels;
+    if (out == NULL || cfg == NULL || mem == NULL)
+        return TVO_ERR_NULL;
+    *out = NULL;
+    if (!config_valid(cfg))
+        return TVO_ERR_ARG;
+    if (mem_size < layout_size(cfg))
+        return TVO_ERR_NO_MEMORY;
+    n = (size_t)cfg->max_tracks;
+    levels = cfg->lk.max_level + 1;
+    pyr = tvo_pyramid_required_size(cfg->camera.width, cfg->camera.height, levels);
+    tvo_arena_init(&a, mem, mem_size);
+    vo = (tvo_vo *)tvo_arena_alloc(&a, sizeof(tvo_vo));
+    if (vo == NULL)
+        return TVO_ERR_NO_MEMORY;
+    memset(vo, 0, sizeof(*vo));
+    vo->cfg = *cfg;
+    for (int i = 0; i < 2; ++i) {
+        void *pm = tvo_arena_alloc(&a, pyr);
+        tvo_status st;
+        if (pm == NULL)
+            return TVO_ERR_NO_MEMORY;
+        st = tvo_pyramid_init(&vo->pyr[i], cfg->camera.width, cfg->camera.height, levels, pm, pyr);
+        if (st != TVO_OK)
+            return st;
+    }
+    vo->pts = (tvo_point2f *)tvo_arena_alloc(&a, n * sizeof(tvo_point2f));
+    vo->next = (tvo_point2f *)tvo_arena_alloc(&a, n * sizeof(tvo_point2f));
+    vo->st = (uint8_t *)tvo_arena_alloc(&a, n);
+    vo->ok1 = (uint8_t *)tvo_arena_alloc(&a, n);
+    vo->ok2 = (uint8_t *)tvo_arena_alloc(&a, n);
+    vo->mask = (uint8_t *)tvo_arena_alloc(&a, n);
+    vo->err = (float *)tvo_arena_alloc(&a, n * sizeof(float));
+    vo->x1 = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
+    vo->x2 = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
+    vo->corners = (tvo_corner *)tvo_arena_alloc(&a, n * sizeof(tvo_corner));
+    vo->scratch_size = scratch_need(cfg);
+    vo->scratch = tvo_arena_alloc(&a, vo->scratch_size);
+    if (vo->pts == NULL || vo->next == NULL || vo->st == NULL || vo->ok1 == NULL || vo->ok2 == NULL ||
+        vo->mask == NULL || vo->err == NULL || vo->x1 == NULL || vo->x2 == NULL || vo->corners == NULL ||
+        vo->scratch == NULL)
+        return TVO_ERR_NO_MEMORY;
+    *out = vo;
+    return TVO_OK;
+}
+
+void tvo_vo_reset(tvo_vo *vo)
+{
+    if (vo == NULL)
+        return;
+    vo->has_prev = 0;
+    vo->n = 0;
+}
+
+static int64_t now_ns(const tvo_vo *vo)
+{
+    return vo->cfg.clock != NULL ? vo->cfg.clock(vo->cfg.clock_user) : 0;
+}
+
+static void result_clear(tvo_vo_result *res, tvo_vo_state state)
+{
+    memset(res, 0, sizeof(*res));
+    res->state = state;
+    res->T_prev_cur = tvo_pose_identity();
+}
+
+/* Detect corners on pyramid level 0 of `pyr`, avoiding the n current tracks, and append them. */
+static int32_t redetect(tvo_vo *vo, const tvo_pyramid *pyr)
+{
+    tvo_image img = tvo_pyramid_level(pyr, 0);
+    tvo_detect_config dc = vo->cfg.detect;
+    int32_t room = vo->cfg.max_tracks - vo->n, got = 0;
+    tvo_status st;
+    if (room <= 0)
+        return 0;
+    dc.max_corners = room;
+    st = tvo_detect(&dc, &img, vo->pts, vo->n, vo->corners, room, &got, vo->scratch, vo->scratch_size);
+    if (st != TVO_OK && st != TVO_ERR_NO_MEMORY)
+        return 0; /* a frame without corners is not an error: tracking just stays low */
+    if (got > room)
+        got = room;
+    for (int32_t i = 0; i < got; ++i) {
+        vo->pts[vo->n + i].x = vo->corners[i].x;
+        vo->pts[vo->n + i].y = vo->corners[i].y;
+    }
+    vo->n += got;
+    return got;
+}
+
+static void fill_features(const tvo_vo_result *res, float f[TVO_FEAT_COUNT])
+{
+    double v[3];
+    tvo_rot_to_rotvec(res->T_prev_cur.R, v);
+    f[TVO_FEAT_RX] = (float)v[0];
+    f[TVO_FEAT_RY] = (float)v[1];
+    f[TVO_FEAT_RZ] = (float)v[2];
+    f[TVO_FEAT_TX] = (float)res->T_prev_cur.t[0];
+    f[TVO_FEAT_TY] = (float)res->T_prev_cur.t[1];
+    f[TVO_FEAT_TZ] = (float)res->T_prev_cur.t[2];
+    f[TVO_FEAT_INLIER_RATIO] = res->tracked > 0 ? (float)res->inliers / (float)res->tracked : 0.0f;
+    f[TVO_FEAT_PARALLAX_DEG] = (float)res->parallax_deg;
+    f[TVO_FEAT_TRACKS] = (float)res->tracked / 1000.0f;
+    f[TVO_FEAT_DT] = (float)((double)res->dt_ns * 1e-9);
+    f[TVO_FEAT_ROT_ONLY] = res->state == TVO_VO_ROTATION_ONLY ? 1.0f : 0.0f;
+}
+
+/* Keep the entries i with keep[i] != 0 of the parallel track arrays, in order. */
+static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
+{
+    int32_t m = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        if (!keep[i])
+            continue;
+        vo->pts[m] = vo->pts[i];
+        vo->next[m] = vo->next[i];
+        vo->x1[m] = vo->x1[i];
+        vo->x2[m] = vo->x2[i];
+        ++m;
+    }
+    return m;
+}
+
+tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_vo_result *res)
+{
+    tvo_status st;
+    tvo_pyramid *pc, *pp;
+    int64_t t0, t1;
+    const int32_t w = vo != NULL ? vo->cfg.camera.width : 0, h = vo != NULL ? vo->cfg.camera.height : 0;
+    int32_t m;
+    if (res == NULL)
+        return TVO_ERR_NULL;
+    result_clear(res, TVO_VO_LOST);
+    if (vo == NULL || frame == NULL)
+        return TVO_ERR_NULL;
+    st = tvo_image_check(frame);
+    if (st != TVO_OK)
+        return st;
+    if (frame->width != w || frame->height != h)
+        return TVO_ERR_SIZE;
+    if (vo->has_prev && t_ns <= vo->t_prev)
+        return TVO_ERR_ARG;
+
+    t0 = now_ns(vo);
+    pc = &vo->pyr[vo->cur];
+    pp = &vo->pyr[vo->cur ^ 1];
+    st = tvo_pyramid_build(pc, frame);
+    if (st != TVO_OK)
+        return st;
+    t1 = now_ns(vo);
+    res->stage_ns[TVO_STAGE_PYRAMID] = t1 - t0;
+
+    if (!vo->has_prev) {
+        vo->n = 0;
+        res->state = TVO_VO_INITIALISING;
+        t1 = now_ns(vo);
+        res->new_corners = redetect(vo, pc);
+        res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
+        goto done;
+    }
+    res->dt_ns = t_ns - vo->t_prev;
+
+    /* 1. track */
+    t1 = now_ns(vo);
+    st = tvo_lk_track(&vo->cfg.lk, pp, pc, vo->pts, vo->next, vo->st, vo->err, vo->n, vo->scratch,
+                      vo->scratch_size);
+    if (st != TVO_OK)
+        memset(vo->st, 0, (size_t)vo->n);
+    for (int32_t i = 0; i < vo->n; ++i) {
+        const tvo_point2f q = vo->next[i];
+        if (vo->st[i] && !(q.x >= 0.0f && q.y >= 0.0f && q.x <= (float)(w - 1) && q.y <= (float)(h - 1)))
+            vo->st[i] = 0;
+    }
+    m = compact(vo, vo->n, vo->st);
+    res->tracked = m;
+    res->stage_ns[TVO_STAGE_TRACK] = now_ns(vo) - t1;
+
+    /* 2. undistort both ends to normalised coordinates */
+    t1 = now_ns(vo);
+    if (m > 0) {
+        tvo_camera_undistort(&vo->cfg.camera, vo->pts, vo->x1, vo->ok1, m);
+        tvo_camera_undistort(&vo->cfg.camera, vo->next, vo->x2, vo->ok2, m);
+        for (int32_t i = 0; i < m; ++i)
+            vo->ok1[i] = (uint8_t)(vo->ok1[i] && vo->ok2[i]);
+        m = compact(vo, m, vo->ok1);
+    }
+    res->stage_ns[TVO_STAGE_UNDISTORT] = now_ns(vo) - t1;
+
+    /* 3. relative pose */
+    t1 = now_ns(vo);
+    if (m < vo->cfg.min_pose_tracks) {
+        res->state = TVO_VO_LOST;
+        vo->n = 0; /* re-initialise on this frame */
+    } else {
+        tvo_relpose rp;
+        tvo_relpose_config rc = vo->cfg.relpose;
+        const double f = 0.5 * (vo->cfg.camera.fx + vo->cfg.camera.fy);
+        rc.threshold = vo->cfg.pose_threshold_px / f;
+        st = tvo_relpose_estimate(&rc, vo->x1, vo->x2, m, &rp, vo->mask, vo->scratch, vo->scratch_size);
+        if (st != TVO_OK || (rp.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE)) {
+            /* keep the tracks, but report no motion we could trust */
+            res->state = TVO_VO_LOST;
+            res->relpose_flags = st == TVO_OK ? rp.flags : 0;
+            vo->n = m;
+            for (int32_t i = 0; i < m; ++i)
+                vo->pts[i] = vo->next[i];
+        } else {
+            /* rp: X_cur = R X_prev + t, i.e. T_cur_prev; report T_prev_cur */
+            tvo_pose T_cur_prev;
+            memcpy(T_cur_prev.R, rp.R, sizeof(rp.R));
+            memcpy(T_cur_prev.t, rp.t, sizeof(rp.t));
+            res->T_prev_cur = tvo_pose_inverse(&T_cur_prev);
+            res->relpose_flags = rp.flags;
+            res->inliers = rp.inliers;
+            res->parallax_deg = rp.parallax_deg;
+            res->state = (rp.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY) ? TVO_VO_ROTATION_ONLY : TVO_VO_OK;
+            if (res->state == TVO_VO_ROTATION_ONLY)
+                res->T_prev_cur.t[0] = res->T_prev_cur.t[1] = res->T_prev_cur.t[2] = 0.0;
+            /* carry the inliers (the outliers are bad tracks) */
+            m = compact(vo, m, vo->mask);
+            for (int32_t i = 0; i < m; ++i)
+                vo->pts[i] = vo->next[i];
+            vo->n = m;
+            if (!tvo_pose_is_finite(&res->T_prev_cur)) { /* cannot happen by contract; never emit it */
+                res->T_prev_cur = tvo_pose_identity();
+                res->state = TVO_VO_LOST;
+            }
+        }
+    }
+    res->stage_ns[TVO_STAGE_POSE] = now_ns(vo) - t1;
+
+    /* 4. re-detect when tracks run low */
+    t1 = now_ns(vo);
+    if (vo->n < vo->cfg.min_tracks)
+        res->new_corners = redetect(vo, pc);
+    res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
+
+done:
+    res->tracks = vo->n;
+    vo->has_prev = 1;
+    vo->t_prev = t_ns;
+    vo->cur ^= 1;
+    fill_features(res, res->features);
+    res->stage_ns[TVO_STAGE_TOTAL] = now_ns(vo) - t0;
+    return TVO_OK;
+}
+
+void tvo_traj_init(tvo_traj *traj, const tvo_pose *T_w_c0)
+{
+    if (traj == NULL)
+        return;
+    traj->T_w_c = T_w_c0 != NULL ? *T_w_c0 : tvo_pose_identity();
+    traj->steps = 0;
+}
+
+tvo_status tvo_traj_step(tvo_traj *traj, const tvo_pose *T_prev_cur, double scale)
+{
+    tvo_pose step, next;
+    if (traj == NULL || T_prev_cur == NULL)
+        return TVO_ERR_NULL;
+    if (!isfinite(scale) || !tvo_pose_is_finite(T_prev_cur))
+        return TVO_ERR_NOT_FINITE;
+    step = *T_prev_cur;
+    for (int i = 0; i < 3; ++i)
+        step.t[i] *= scale;
+    next = tvo_pose_compose(&traj->T_w_c, &step);
+    if (!tvo_pose_is_finite(&next))
+        return TVO_ERR_NOT_FINITE;
+    tvo_rot_orthonormalize(next.R);
+    traj->T_w_c = next;
+    traj->steps++;
+    return TVO_OK;
+}

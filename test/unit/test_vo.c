@@ -1,0 +1,278 @@
+/* The VO object end to end on frames rendered here from a textured 3D box room with known poses,
+ * plus its bad-input contract. */
+#include "tvo_test.h"
+
+#include <math.h>
+
+#include "tinyvo/vo.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+#define W 320
+#define H 240
+#define FOCAL 250.0
+
+/* ---- a tiny ray caster: camera inside a box room, every wall textured with value noise ---------- */
+
+static double hash2(int32_t x, int32_t y, uint32_t seed)
+{
+    uint32_t h = (uint32_t)x * 374761393u + (uint32_t)y * 668265263u + seed * 2246822519u;
+    h = (h ^ (h >> 13)) * 1274126177u;
+    h ^= h >> 16;
+    return (double)(h & 0xffffu) / 65535.0;
+}
+
+static double value_noise(double u, double v, uint32_t seed)
+{
+    const double fu = floor(u), fv = floor(v);
+    const int32_t iu = (int32_t)fu, iv = (int32_t)fv;
+    const double a = u - fu, b = v - fv;
+    const double sa = a * a * (3 - 2 * a), sb = b * b * (3 - 2 * b);
+    const double h00 = hash2(iu, iv, seed), h10 = hash2(iu + 1, iv, seed);
+    const double h01 = hash2(iu, iv + 1, seed), h11 = hash2(iu + 1, iv + 1, seed);
+    return (h00 * (1 - sa) + h10 * sa) * (1 - sb) + (h01 * (1 - sa) + h11 * sa) * sb;
+}
+
+static double texture(double u, double v, uint32_t wall)
+{
+    double s = 0.0, amp = 0.5, freq = 3.0;
+    for (int o = 0; o < 4; ++o) {
+        s += amp * value_noise(u * freq, v * freq, wall * 17u + (uint32_t)o);
+        amp *= 0.5;
+        freq *= 2.0;
+    }
+    return s;
+}
+
+/* Room: x in [-3, 3], y in [-1.5, 1.5], z in [-2, 6]. */
+static void render(const tvo_pose *T_w_c, uint8_t *img)
+{
+    static const double lo[3] = { -3.0, -1.5, -2.0 }, hi[3] = { 3.0, 1.5, 6.0 };
+    for (int y = 0; y < H; ++y) {
+        for (int x = 0; x < W; ++x) {
+            const double dc[3] = { (x - (W - 1) / 2.0) / FOCAL, (y - (H - 1) / 2.0) / FOCAL, 1.0 };
+            double d[3], best = 1e30, u = 0, v = 0;
+            uint32_t wall = 0;
+            for (int i = 0; i < 3; ++i)
+                d[i] = T_w_c->R[3 * i] * dc[0] + T_w_c->R[3 * i + 1] * dc[1] + T_w_c->R[3 * i + 2] * dc[2];
+            for (int ax = 0; ax < 3; ++ax) {
+                for (int side = 0; side < 2; ++side) {
+                    const double plane = side ? hi[ax] : lo[ax];
+                    double tt;
+                    if (fabs(d[ax]) < 1e-12)
+                        continue;
+                    tt = (plane - T_w_c->t[ax]) / d[ax];
+                    if (tt > 0 && tt < best) {
+                        const int a1 = (ax + 1) % 3, a2 = (ax + 2) % 3;
+                        best = tt;
+                        u = T_w_c->t[a1] + tt * d[a1];
+                        v = T_w_c->t[a2] + tt * d[a2];
+                        wall = (uint32_t)(ax * 2 + side);
+                    }
+                }
+            }
+            {
+                const double g = 128.0 + 420.0 * (texture(u, v, wall) - 0.47);
+                img[y * W + x] = (uint8_t)(g < 0.0 ? 0.0 : (g > 255.0 ? 255.0 : g));
+            }
+        }
+    }
+}
+
+static tvo_camera test_camera(void)
+{
+    tvo_camera cam;
+    memset(&cam, 0, sizeof(cam));
+    cam.width = W;
+    cam.height = H;
+    cam.fx = cam.fy = FOCAL;
+    cam.cx = (W - 1) / 2.0;
+    cam.cy = (H - 1) / 2.0;
+    cam.model = TVO_DIST_NONE;
+    return cam;
+}
+
+typedef struct fixture {
+    tvo_vo_config cfg;
+    void *mem;
+    tvo_vo *vo;
+    uint8_t img[W * H];
+} fixture;
+
+static int setup(void **state)
+{
+    fixture *f = calloc(1, sizeof(fixture));
+    tvo_camera cam = test_camera();
+    size_t need;
+    assert_non_null(f);
+    tvo_vo_config_default(&f->cfg, &cam);
+    need = tvo_vo_required_size(&f->cfg);
+    assert_true(need > 0);
+    f->mem = malloc(need);
+    assert_non_null(f->mem);
+    assert_int_equal(tvo_vo_init(&f->vo, &f->cfg, f->mem, need), TVO_OK);
+    *state = f;
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    fixture *f = *state;
+    free(f->mem);
+    free(f);
+    return 0;
+}
+
+static double angle_between(const double a[3], const double b[3])
+{
+    const double na = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    const double nb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+    double c = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) / (na * nb);
+    c = c > 1 ? 1 : (c < -1 ? -1 : c);
+    return acos(c);
+}
+
+static double rot_err_deg(const tvo_pose *est, const tvo_pose *gt)
+{
+    tvo_pose d = tvo_pose_relative(est, gt);
+    return tvo_rot_angle(d.R) * 180.0 / M_PI;
+}
+
+/* Camera pose k of a smooth motion: translation `step` per frame along dir, yaw `yaw_deg` per frame. */
+static tvo_pose motion(int k, const double dir[3], double step, double yaw_deg)
+{
+    tvo_pose T = tvo_pose_identity();
+    const double v[3] = { 0.0, yaw_deg * M_PI / 180.0 * k, 0.02 * sin(0.3 * k) };
+    tvo_rotvec_to_rot(v, T.R);
+    for (int i = 0; i < 3; ++i)
+        T.t[i] = dir[i] * step * k;
+    return T;
+}
+
+static void run_sequence(fixture *f, const double dir[3], double step, double yaw_deg, int frames,
+                         int expect_translation)
+{
+    tvo_pose prev = tvo_pose_identity();
+    int ok_frames = 0, rot_frames = 0;
+    for (int k = 0; k < frames; ++k) {
+        tvo_pose T = motion(k, dir, step, yaw_deg);
+        tvo_vo_result res;
+        tvo_image img = tvo_image_make(W, H, W, f->img);
+        render(&T, f->img);
+        assert_int_equal(tvo_vo_process(f->vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
+        assert_true(tvo_pose_is_finite(&res.T_prev_cur));
+        if (k == 0) {
+            assert_int_equal(res.state, TVO_VO_INITIALISING);
+            assert_true(res.tracks > 100);
+        } else {
+            tvo_pose gt = tvo_pose_relative(&prev, &T);
+            assert_true(res.state == TVO_VO_OK || res.state == TVO_VO_ROTATION_ONLY);
+            assert_true(rot_err_deg(&res.T_prev_cur, &gt) < 0.2);
+            if (res.state == TVO_VO_OK) {
+                ok_frames++;
+                assert_true(angle_between(res.T_prev_cur.t, gt.t) * 180.0 / M_PI < 5.0);
+            } else {
+                rot_frames++;
+                assert_true(res.T_prev_cur.t[0] == 0.0 && res.T_prev_cur.t[1] == 0.0 &&
+                            res.T_prev_cur.t[2] == 0.0);
+            }
+            assert_true(res.tracks >= f->cfg.min_tracks || res.new_corners > 0 || res.tracks > 50);
+        }
+        prev = T;
+    }
+    if (expect_translation)
+        assert_true(ok_frames >= (frames - 1) * 8 / 10);
+    else
+        assert_true(rot_frames >= (frames - 1) * 8 / 10);
+}
+
+static void test_translating_camera(void **state)
+{
+    const double dir[3] = { 0.8, 0.1, 0.6 };
+    run_sequence(*state, dir, 0.10, 0.3, 12, 1);
+}
+
+static void test_pure_rotation_reports_rotation_only(void **state)
+{
+    const double dir[3] = { 0.0, 0.0, 0.0 };
+    run_sequence(*state, dir, 0.0, 0.8, 10, 0);
+}
+
+static void test_bad_input(void **state)
+{
+    fixture *f = *state;
+    tvo_vo_result res;
+    uint8_t small[16 * 16];
+    tvo_image img = tvo_image_make(W, H, W, f->img);
+    tvo_image wrong = tvo_image_make(16, 16, 16, small);
+    tvo_vo *vo2 = NULL;
+    tvo_vo_config bad = f->cfg;
+    tvo_pose T = tvo_pose_identity();
+    memset(f->img, 0, sizeof(f->img));
+
+    assert_int_equal(tvo_vo_process(NULL, &img, 1, &res), TVO_ERR_NULL);
+    assert_int_equal(res.state, TVO_VO_LOST);
+    assert_int_equal(tvo_vo_process(f->vo, NULL, 1, &res), TVO_ERR_NULL);
+    assert_int_equal(tvo_vo_process(f->vo, &img, 1, NULL), TVO_ERR_NULL);
+    assert_int_equal(tvo_vo_process(f->vo, &wrong, 1, &res), TVO_ERR_SIZE);
+    assert_true(tvo_pose_is_finite(&res.T_prev_cur));
+
+    /* black frames: no corners, never a NaN pose */
+    assert_int_equal(tvo_vo_process(f->vo, &img, 100, &res), TVO_OK);
+    assert_int_equal(tvo_vo_process(f->vo, &img, 200, &res), TVO_OK);
+    assert_int_equal(res.state, TVO_VO_LOST);
+    assert_true(tvo_pose_is_finite(&res.T_prev_cur));
+    /* timestamps must increase */
+    assert_int_equal(tvo_vo_process(f->vo, &img, 200, &res), TVO_ERR_ARG);
+    assert_int_equal(tvo_vo_process(f->vo, &img, 150, &res), TVO_ERR_ARG);
+
+    /* random noise frames: whatever happens, finite */
+    {
+        uint64_t s = 42;
+        for (int k = 0; k < 4; ++k) {
+            for (int i = 0; i < W * H; ++i)
+                f->img[i] = (uint8_t)(tvo_test_rand(&s) >> 56);
+            assert_int_equal(tvo_vo_process(f->vo, &img, 300 + k, &res), TVO_OK);
+            assert_true(tvo_pose_is_finite(&res.T_prev_cur));
+        }
+    }
+
+    /* config and memory checks */
+    assert_int_equal(tvo_vo_init(NULL, &f->cfg, f->mem, 10), TVO_ERR_NULL);
+    assert_int_equal(tvo_vo_init(&vo2, &f->cfg, f->mem, 10), TVO_ERR_NO_MEMORY);
+    bad.max_tracks = 3;
+    assert_int_equal(tvo_vo_required_size(&bad), 0);
+    assert_int_equal(tvo_vo_init(&vo2, &bad, f->mem, 10), TVO_ERR_ARG);
+    bad = f->cfg;
+    bad.camera.fx = NAN;
+    assert_int_equal(tvo_vo_required_size(&bad), 0);
+    bad = f->cfg;
+    bad.pose_threshold_px = -1.0;
+    assert_int_equal(tvo_vo_required_size(&bad), 0);
+
+    /* trajectory integration refuses non-finite input and keeps its state */
+    {
+        tvo_traj traj;
+        tvo_pose step = tvo_pose_identity();
+        tvo_traj_init(&traj, &T);
+        step.t[0] = 1.0;
+        assert_int_equal(tvo_traj_step(&traj, &step, 2.0), TVO_OK);
+        assert_true(fabs(traj.T_w_c.t[0] - 2.0) < 1e-12);
+        assert_int_equal(tvo_traj_step(&traj, &step, NAN), TVO_ERR_NOT_FINITE);
+        step.t[1] = INFINITY;
+        assert_int_equal(tvo_traj_step(&traj, &step, 1.0), TVO_ERR_NOT_FINITE);
+        assert_true(fabs(traj.T_w_c.t[0] - 2.0) < 1e-12);
+        assert_int_equal(traj.steps, 1);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_setup_teardown(test_translating_camera, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_pure_rotation_reports_rotation_only, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_bad_input, setup, teardown),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
