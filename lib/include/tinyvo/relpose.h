@@ -1,0 +1,117 @@
+/* tinyvo: two-view relative pose from normalised correspondences.
+ *
+ * Conventions
+ *   - Inputs are undistorted NORMALISED image coordinates (x/z, y/z of the ray, focal length 1):
+ *     pixel u = fx * x + cx. Convert pixel thresholds with the focal length (1 px ~ 1/fx).
+ *   - The pose maps frame-1 points to frame 2: X2 = R * X1 + t (OpenCV recoverPose convention),
+ *     so the essential matrix is E = [t]_x R and x2^T E x1 = 0. R is row-major, t has unit norm
+ *     (the scale is unobservable) or is all zero for a rotation-only result.
+ *   - Everything is double precision and deterministic for a given seed (no global state).
+ *
+ * What tvo_relpose_estimate does (see docs/geometry.md for the details and the costs)
+ *   1. checks the input (NULLs, n, NaN/Inf, |x| > 1e6, fewer than 5 distinct points, all points
+ *      collinear in either image -> error status);
+ *   2. RANSAC (MSAC scoring of the Sampson error, adaptive iteration count, seeded xorshift
+ *      generator) around the 5-point (Nister-style, up to 10 solutions) or the normalised 8-point
+ *      solver;
+ *   3. a rotation-only RANSAC (2-point Kabsch on bearing vectors): the median angle between
+ *      R_rot * f1 and f2 over the epipolar inliers is the rotation-compensated parallax; below
+ *      cfg->min_parallax_deg the result is rotation-only (t = 0, R from the rotation model) with
+ *      LOW_PARALLAX | ROTATION_ONLY: no translation is made up and no twisted pair can come out;
+ *   4. otherwise a homography RANSAC (4-point DLT) is scored against the epipolar model
+ *      (ORB-SLAM style scores); when the homography explains the data (ratio > 0.45, a dominant
+ *      plane) its decomposition, chosen by cheirality, seeds the pose and HOMOGRAPHY is set;
+ *   5. the pose is refined by Levenberg-Marquardt on the Sampson error over the (R, unit t)
+ *      manifold (5 parameters), the inliers are re-selected and the pose refined again;
+ *   6. R, t are chosen among the four decompositions of E by cheirality (triangulated depth > 0
+ *      in both views).
+ * Fewer than cfg->min_inliers inliers (or too few points in front of both cameras) sets
+ * LOW_CONFIDENCE. A result is never NaN: on any numerical failure R = I, t = 0 and LOW_CONFIDENCE.
+ */
+#ifndef TINYVO_RELPOSE_H
+#define TINYVO_RELPOSE_H
+
+#include "tinyvo/types.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum tvo_relpose_method {
+    TVO_RELPOSE_5PT = 0, /* minimal 5-point essential matrix solver in RANSAC (default) */
+    TVO_RELPOSE_8PT = 1  /* normalised 8-point (fundamental matrix on normalised coordinates,
+                            projected onto the essential manifold) in RANSAC */
+} tvo_relpose_method;
+
+typedef struct tvo_relpose_config {
+    tvo_relpose_method method;  /* default TVO_RELPOSE_5PT */
+    double threshold;           /* inlier threshold on the Sampson error, in NORMALISED image units
+                                   (pixels / focal length), > 0; default 1.0 / 460 */
+    double confidence;          /* RANSAC confidence p in (0, 1); default 0.999 */
+    int32_t max_iters;          /* hard bound on RANSAC iterations, >= 1; default 1000 */
+    uint64_t seed;              /* seed of the deterministic generator; default 0x5eed */
+    double min_parallax_deg;    /* median rotation-compensated parallax (degrees) below which the
+                                   result is rotation-only; >= 0, 0 disables; default 0.5 */
+    int32_t min_inliers;        /* fewer inliers -> LOW_CONFIDENCE; >= 0; default 15 */
+    /* ---- added fields (the defaults are what tvo_relpose_config_default sets) ---- */
+    int32_t use_homography;     /* 1: score a homography for dominant planes (default); 0: never */
+    int32_t refine_iters;       /* Levenberg-Marquardt iterations per refinement round, 0..100;
+                                   default 10 (0 disables the refinement) */
+} tvo_relpose_config;
+
+/* Fill cfg with the defaults above. NULL is ignored. */
+void tvo_relpose_config_default(tvo_relpose_config *cfg);
+
+enum {
+    TVO_RELPOSE_FLAG_LOW_PARALLAX = 1,   /* parallax below cfg->min_parallax_deg */
+    TVO_RELPOSE_FLAG_ROTATION_ONLY = 2,  /* t is zero; R from the rotation-only model */
+    TVO_RELPOSE_FLAG_HOMOGRAPHY = 4,     /* a homography (dominant plane) chose the pose */
+    TVO_RELPOSE_FLAG_LOW_CONFIDENCE = 8  /* too few inliers / cheirality-consistent points */
+};
+
+typedef struct tvo_relpose {
+    double R[9];        /* row-major rotation, X2 = R * X1 + t (frame 1 -> frame 2) */
+    double t[3];        /* unit translation direction; all zero when ROTATION_ONLY */
+    int32_t inliers;    /* inlier count of the chosen model */
+    int32_t flags;      /* TVO_RELPOSE_FLAG_* */
+    double parallax_deg;/* median rotation-compensated parallax angle of the inliers (degrees),
+                           compensated with the best rotation-only model */
+    int32_t iterations; /* RANSAC iterations run (epipolar model) */
+} tvo_relpose;
+
+/* Minimal 5-point solver (Nister's formulation: null space of the 5x9 epipolar system,
+ * Gauss-Jordan on the 10x20 cubic constraints, degree-10 hidden-variable polynomial solved by
+ * Sturm sequences). x1, x2: normalised coordinates of 5 correspondences (x2^T E x1 = 0).
+ * Writes up to 10 essential matrices (row-major, Frobenius norm 1) to E and returns how many;
+ * 0 for a degenerate sample or NULL pointers. Cost ~5-10 us. */
+int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10][9]);
+
+/* Normalised 8-point: least-squares E (>= 8 correspondences, Hartley-normalised, smallest
+ * eigenvector of the 9x9 normal matrix, then projected onto the essential manifold with singular
+ * values (1, 1, 0)). x1, x2: n normalised points as x[i][0], x[i][1]. Returns 1 on success, 0 for
+ * n < 8, NULL pointers or degenerate input. Cost ~10 us + 0.05 us per point. */
+int tvo_essential_8pt(const double (*x1)[2], const double (*x2)[2], int32_t n, double E[9]);
+
+/* Bytes of scratch memory tvo_relpose_estimate needs for up to max_points correspondences
+ * (saturates at SIZE_MAX; about 66 bytes per point plus a small constant). */
+size_t tvo_relpose_scratch_size(int32_t max_points);
+
+/* Estimate the relative pose of frame 2 with respect to frame 1.
+ * x1[i], x2[i]: undistorted NORMALISED coordinates (z = 1) of the same point in frames 1 and 2.
+ * n >= 5 (>= 8 for TVO_RELPOSE_8PT). inlier_mask (may be NULL) gets n entries, 1 for inliers.
+ * scratch: at least tvo_relpose_scratch_size(n) bytes, any alignment, owned by the caller.
+ * cfg NULL -> the defaults.
+ * Returns TVO_OK (check out->flags), or TVO_ERR_NULL, TVO_ERR_ARG (bad config), TVO_ERR_TOO_FEW,
+ * TVO_ERR_NO_MEMORY (scratch too small), TVO_ERR_NOT_FINITE (a NaN/Inf coordinate),
+ * TVO_ERR_RANGE (|coordinate| > 1e6), TVO_ERR_DEGENERATE (fewer than 5 distinct points or all
+ * points collinear in one image); on error *out is R = I, t = 0, LOW_CONFIDENCE and the mask is 0.
+ * Cost: ~0.1-1 ms for 300 points (see docs/geometry.md); bounded by cfg->max_iters. */
+tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg, const tvo_point2d *x1,
+                                const tvo_point2d *x2, int32_t n, tvo_relpose *out,
+                                uint8_t *inlier_mask, void *scratch, size_t scratch_size);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* TINYVO_RELPOSE_H */

@@ -1,0 +1,299 @@
+/* Minimal 5-point essential matrix solver (Nister's formulation, written from the paper).
+ *
+ * 1. Each correspondence gives one row of x2^T E x1 = 0 in the 9 entries of E; the 4-dimensional
+ *    null space of the 5x9 system (Householder QR of its transpose) gives E = x X + y Y + z Z + W.
+ * 2. det(E) = 0 and 2 E E^T E - tr(E E^T) E = 0 give 10 cubic equations in (x, y, z) over 20
+ *    monomials; Gauss-Jordan elimination of the first 10 monomials leaves rows of the form
+ *    <monomial> + (terms in xz^2 xz x yz^2 yz y z^3 z^2 z 1).
+ * 3. Subtracting z times the <x^2>, <y^2>, <xy> rows from the <x^2 z>, <y^2 z>, <xyz> rows gives a
+ *    3x3 matrix B(z) with B(z) [x y 1]^T = 0, so det B(z) is a degree-10 polynomial in z.
+ * 4. Its real roots (Sturm sequences) give z; x, y follow from the null vector of B(z). */
+#include "tinyvo/relpose.h"
+#include "tinyvo/linalg.h"
+
+#include <math.h>
+#include <string.h>
+
+/* monomial order: 0 x^3, 1 y^3, 2 x^2y, 3 xy^2, 4 x^2z, 5 x^2, 6 y^2z, 7 y^2, 8 xyz, 9 xy,
+ *                 10 xz^2, 11 xz, 12 x, 13 yz^2, 14 yz, 15 y, 16 z^3, 17 z^2, 18 z, 19 1
+ * quadratic order: 0 xx, 1 xy, 2 xz, 3 yy, 4 yz, 5 zz, 6 x, 7 y, 8 z, 9 1
+ * linear order: 0 x, 1 y, 2 z, 3 1 */
+static const unsigned char k_mul_ql[10][4] = {
+    {0, 2, 4, 5},     /* xx * (x y z 1) */
+    {2, 3, 8, 9},     /* xy */
+    {4, 8, 10, 11},   /* xz */
+    {3, 1, 6, 7},     /* yy */
+    {8, 6, 13, 14},   /* yz */
+    {10, 13, 16, 17}, /* zz */
+    {5, 9, 11, 12},   /* x */
+    {9, 7, 14, 15},   /* y */
+    {11, 14, 17, 18}, /* z */
+    {12, 15, 18, 19}, /* 1 */
+};
+
+static void mul_ll(const double a[4], const double b[4], double q[10])
+{
+    q[0] = a[0] * b[0];
+    q[1] = a[0] * b[1] + a[1] * b[0];
+    q[2] = a[0] * b[2] + a[2] * b[0];
+    q[3] = a[1] * b[1];
+    q[4] = a[1] * b[2] + a[2] * b[1];
+    q[5] = a[2] * b[2];
+    q[6] = a[0] * b[3] + a[3] * b[0];
+    q[7] = a[1] * b[3] + a[3] * b[1];
+    q[8] = a[2] * b[3] + a[3] * b[2];
+    q[9] = a[3] * b[3];
+}
+
+/* c += q * l */
+static void mul_ql_acc(const double q[10], const double l[4], double c[20])
+{
+    for (int i = 0; i < 10; ++i) {
+        if (q[i] == 0.0)
+            continue;
+        for (int j = 0; j < 4; ++j)
+            c[k_mul_ql[i][j]] += q[i] * l[j];
+    }
+}
+
+/* ascending-coefficient polynomial product: r (deg da+db) = a * b */
+static void pmul(const double *a, int da, const double *b, int db, double *r)
+{
+    for (int i = 0; i <= da + db; ++i)
+        r[i] = 0.0;
+    for (int i = 0; i <= da; ++i)
+        for (int j = 0; j <= db; ++j)
+            r[i + j] += a[i] * b[j];
+}
+
+/* 4-dim null space of the 5x9 matrix A (rows) as the last 4 columns of Q in A^T = Q R. */
+static int null_space_5x9(double A[5][9], double N[4][9])
+{
+    double M[9][5]; /* A^T */
+    double v[5][9];
+    double beta[5];
+    for (int i = 0; i < 9; ++i)
+        for (int j = 0; j < 5; ++j)
+            M[i][j] = A[j][i];
+    for (int k = 0; k < 5; ++k) {
+        double norm = 0.0;
+        for (int i = k; i < 9; ++i)
+            norm += M[i][k] * M[i][k];
+        norm = sqrt(norm);
+        if (!(norm > 1e-300))
+            return 0;
+        double alpha = M[k][k] > 0.0 ? -norm : norm;
+        for (int i = 0; i < 9; ++i)
+            v[k][i] = (i < k) ? 0.0 : M[i][k];
+        v[k][k] -= alpha;
+        double vv = 0.0;
+        for (int i = k; i < 9; ++i)
+            vv += v[k][i] * v[k][i];
+        if (!(vv > 1e-300))
+            return 0;
+        beta[k] = 2.0 / vv;
+        for (int j = k; j < 5; ++j) {
+            double d = 0.0;
+            for (int i = k; i < 9; ++i)
+                d += v[k][i] * M[i][j];
+            d *= beta[k];
+            for (int i = k; i < 9; ++i)
+                M[i][j] -= d * v[k][i];
+        }
+        /* rank check: the diagonal of R must not vanish relative to the row scale */
+        if (!(fabs(M[k][k]) > 1e-10 * fabs(M[0][0])))
+            return 0;
+    }
+    for (int c = 0; c < 4; ++c) {
+        double e[9] = {0};
+        e[5 + c] = 1.0;
+        for (int k = 4; k >= 0; --k) {
+            double d = 0.0;
+            for (int i = k; i < 9; ++i)
+                d += v[k][i] * e[i];
+            d *= beta[k];
+            for (int i = k; i < 9; ++i)
+                e[i] -= d * v[k][i];
+        }
+        memcpy(N[c], e, sizeof e);
+    }
+    return 1;
+}
+
+int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10][9])
+{
+    if (x1 == NULL || x2 == NULL || E == NULL)
+        return 0;
+    double A[5][9];
+    for (int i = 0; i < 5; ++i) {
+        double a[3] = {x1[i][0], x1[i][1], 1.0};
+        double b[3] = {x2[i][0], x2[i][1], 1.0};
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c)
+                A[i][3 * r + c] = b[r] * a[c];
+        for (int j = 0; j < 9; ++j)
+            if (!isfinite(A[i][j]))
+                return 0;
+    }
+    double N[4][9];
+    if (!null_space_5x9(A, N))
+        return 0;
+    /* entries of E as linear polynomials in (x, y, z, 1) */
+    double L[9][4];
+    for (int k = 0; k < 9; ++k) {
+        L[k][0] = N[0][k];
+        L[k][1] = N[1][k];
+        L[k][2] = N[2][k];
+        L[k][3] = N[3][k];
+    }
+    double M[10][20];
+    memset(M, 0, sizeof M);
+    /* E E^T (symmetric, quadratic entries) */
+    double EEt[3][3][10];
+    for (int i = 0; i < 3; ++i) {
+        for (int j = i; j < 3; ++j) {
+            double acc[10] = {0}, q[10];
+            for (int k = 0; k < 3; ++k) {
+                mul_ll(L[3 * i + k], L[3 * j + k], q);
+                for (int m = 0; m < 10; ++m)
+                    acc[m] += q[m];
+            }
+            memcpy(EEt[i][j], acc, sizeof acc);
+            memcpy(EEt[j][i], acc, sizeof acc);
+        }
+    }
+    double tr[10];
+    for (int m = 0; m < 10; ++m)
+        tr[m] = EEt[0][0][m] + EEt[1][1][m] + EEt[2][2][m];
+    /* Aq = 2 E E^T - tr I ; rows 0..8: (Aq E)_ij */
+    for (int i = 0; i < 3; ++i) {
+        double Aq[3][10];
+        for (int k = 0; k < 3; ++k)
+            for (int m = 0; m < 10; ++m)
+                Aq[k][m] = 2.0 * EEt[i][k][m] - (i == k ? tr[m] : 0.0);
+        for (int j = 0; j < 3; ++j)
+            for (int k = 0; k < 3; ++k)
+                mul_ql_acc(Aq[k], L[3 * k + j], M[3 * i + j]);
+    }
+    /* row 9: det E = sum_j E_0j * cofactor_0j */
+    {
+        double c0[10], c1[10], c2[10], t0[10], t1[10];
+        mul_ll(L[4], L[8], t0);
+        mul_ll(L[5], L[7], t1);
+        for (int m = 0; m < 10; ++m)
+            c0[m] = t0[m] - t1[m];
+        mul_ll(L[5], L[6], t0);
+        mul_ll(L[3], L[8], t1);
+        for (int m = 0; m < 10; ++m)
+            c1[m] = t0[m] - t1[m];
+        mul_ll(L[3], L[7], t0);
+        mul_ll(L[4], L[6], t1);
+        for (int m = 0; m < 10; ++m)
+            c2[m] = t0[m] - t1[m];
+        mul_ql_acc(c0, L[0], M[9]);
+        mul_ql_acc(c1, L[1], M[9]);
+        mul_ql_acc(c2, L[2], M[9]);
+    }
+    /* Gauss-Jordan on the first 10 columns, partial pivoting */
+    for (int c = 0; c < 10; ++c) {
+        int p = c;
+        for (int r = c + 1; r < 10; ++r)
+            if (fabs(M[r][c]) > fabs(M[p][c]))
+                p = r;
+        if (!(fabs(M[p][c]) > 1e-300))
+            return 0;
+        if (p != c)
+            for (int k = 0; k < 20; ++k) {
+                double t = M[c][k];
+                M[c][k] = M[p][k];
+                M[p][k] = t;
+            }
+        double inv = 1.0 / M[c][c];
+        for (int k = c; k < 20; ++k)
+            M[c][k] *= inv;
+        for (int r = 0; r < 10; ++r) {
+            if (r == c || M[r][c] == 0.0)
+                continue;
+            double f = M[r][c];
+            for (int k = c; k < 20; ++k)
+                M[r][k] -= f * M[c][k];
+        }
+    }
+    /* B(z): rows from (x^2z, x^2), (y^2z, y^2), (xyz, xy); ascending coefficients in z */
+    double B[3][3][5];
+    static const int pairs[3][2] = {{4, 5}, {6, 7}, {8, 9}};
+    for (int r = 0; r < 3; ++r) {
+        const double *a = M[pairs[r][0]];
+        const double *b = M[pairs[r][1]];
+        B[r][0][0] = a[12];
+        B[r][0][1] = a[11] - b[12];
+        B[r][0][2] = a[10] - b[11];
+        B[r][0][3] = -b[10];
+        B[r][0][4] = 0.0;
+        B[r][1][0] = a[15];
+        B[r][1][1] = a[14] - b[15];
+        B[r][1][2] = a[13] - b[14];
+        B[r][1][3] = -b[13];
+        B[r][1][4] = 0.0;
+        B[r][2][0] = a[19];
+        B[r][2][1] = a[18] - b[19];
+        B[r][2][2] = a[17] - b[18];
+        B[r][2][3] = a[16] - b[17];
+        B[r][2][4] = -b[16];
+    }
+    /* det B: degrees 3, 3, 4 per column */
+    double p1[8], p2[8], m0[8], m1[8], m2[8], d0[12], d1[12], d2[12], poly[11];
+    pmul(B[1][1], 3, B[2][2], 4, p1);
+    pmul(B[1][2], 4, B[2][1], 3, p2);
+    for (int i = 0; i <= 7; ++i)
+        m0[i] = p1[i] - p2[i];
+    pmul(B[1][0], 3, B[2][2], 4, p1);
+    pmul(B[1][2], 4, B[2][0], 3, p2);
+    for (int i = 0; i <= 7; ++i)
+        m1[i] = p1[i] - p2[i];
+    pmul(B[1][0], 3, B[2][1], 3, p1);
+    pmul(B[1][1], 3, B[2][0], 3, p2);
+    for (int i = 0; i <= 6; ++i)
+        m2[i] = p1[i] - p2[i];
+    m2[7] = 0.0;
+    pmul(B[0][0], 3, m0, 7, d0);
+    pmul(B[0][1], 3, m1, 7, d1);
+    pmul(B[0][2], 4, m2, 6, d2);
+    for (int i = 0; i <= 10; ++i)
+        poly[i] = d0[i] - d1[i] + d2[i];
+    double roots[10];
+    int nr = tvo_la_poly_real_roots(poly, 10, roots);
+    int ns = 0;
+    for (int k = 0; k < nr; ++k) {
+        double z = roots[k];
+        double Bz[3][3];
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c)
+                Bz[r][c] = tvo_la_poly_eval(B[r][c], c == 2 ? 4 : 3, z);
+        double best[3] = {0, 0, 0}, bn = 0.0;
+        for (int a = 0; a < 3; ++a) {
+            double cr[3];
+            tvo_la_cross(Bz[a], Bz[(a + 1) % 3], cr);
+            double nn = cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2];
+            if (nn > bn) {
+                bn = nn;
+                memcpy(best, cr, sizeof best);
+            }
+        }
+        if (!(bn > 0.0) || !(fabs(best[2]) > 1e-12 * sqrt(bn)))
+            continue;
+        double x = best[0] / best[2], y = best[1] / best[2];
+        double e[9], nrm = 0.0;
+        for (int i = 0; i < 9; ++i) {
+            e[i] = x * N[0][i] + y * N[1][i] + z * N[2][i] + N[3][i];
+            nrm += e[i] * e[i];
+        }
+        nrm = sqrt(nrm);
+        if (!(nrm > 0.0) || !isfinite(nrm))
+            continue;
+        for (int i = 0; i < 9; ++i)
+            E[ns][i] = e[i] / nrm;
+        ++ns;
+    }
+    return ns;
+}

@@ -1,0 +1,521 @@
+/* Small dense linear algebra for the geometry: 3x3 helpers, 3x3 SVD (one-sided Jacobi), symmetric
+ * Jacobi eigen-decomposition, Gaussian elimination and Sturm-sequence polynomial root finding. */
+#include "tinyvo/linalg.h"
+
+#include <math.h>
+#include <string.h>
+
+void tvo_la_mat3_mul(const double A[9], const double B[9], double C[9])
+{
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            C[3 * i + j] = A[3 * i] * B[j] + A[3 * i + 1] * B[3 + j] + A[3 * i + 2] * B[6 + j];
+}
+
+void tvo_la_mat3_mul_bt(const double A[9], const double B[9], double C[9])
+{
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            C[3 * i + j] = A[3 * i] * B[3 * j] + A[3 * i + 1] * B[3 * j + 1] + A[3 * i + 2] * B[3 * j + 2];
+}
+
+void tvo_la_mat3_mul_at(const double A[9], const double B[9], double C[9])
+{
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            C[3 * i + j] = A[i] * B[j] + A[3 + i] * B[3 + j] + A[6 + i] * B[6 + j];
+}
+
+void tvo_la_mat3_vec(const double A[9], const double x[3], double y[3])
+{
+    y[0] = A[0] * x[0] + A[1] * x[1] + A[2] * x[2];
+    y[1] = A[3] * x[0] + A[4] * x[1] + A[5] * x[2];
+    y[2] = A[6] * x[0] + A[7] * x[1] + A[8] * x[2];
+}
+
+void tvo_la_mat3_tvec(const double A[9], const double x[3], double y[3])
+{
+    y[0] = A[0] * x[0] + A[3] * x[1] + A[6] * x[2];
+    y[1] = A[1] * x[0] + A[4] * x[1] + A[7] * x[2];
+    y[2] = A[2] * x[0] + A[5] * x[1] + A[8] * x[2];
+}
+
+double tvo_la_mat3_det(const double A[9])
+{
+    return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
+           A[2] * (A[3] * A[7] - A[4] * A[6]);
+}
+
+void tvo_la_skew(const double v[3], double S[9])
+{
+    S[0] = 0.0;   S[1] = -v[2]; S[2] = v[1];
+    S[3] = v[2];  S[4] = 0.0;   S[5] = -v[0];
+    S[6] = -v[1]; S[7] = v[0];  S[8] = 0.0;
+}
+
+void tvo_la_cross(const double a[3], const double b[3], double c[3])
+{
+    c[0] = a[1] * b[2] - a[2] * b[1];
+    c[1] = a[2] * b[0] - a[0] * b[2];
+    c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+void tvo_la_so3_exp(const double w[3], double R[9])
+{
+    double th2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+    double a, b;
+    if (th2 < 1e-16) {
+        a = 1.0 - th2 / 6.0;
+        b = 0.5 - th2 / 24.0;
+    } else {
+        double th = sqrt(th2);
+        a = sin(th) / th;
+        b = (1.0 - cos(th)) / th2;
+    }
+    /* R = I + a [w] + b [w]^2, [w]^2 = w w^T - th2 I */
+    R[0] = 1.0 + b * (w[0] * w[0] - th2);
+    R[4] = 1.0 + b * (w[1] * w[1] - th2);
+    R[8] = 1.0 + b * (w[2] * w[2] - th2);
+    R[1] = b * w[0] * w[1] - a * w[2];
+    R[3] = b * w[0] * w[1] + a * w[2];
+    R[2] = b * w[0] * w[2] + a * w[1];
+    R[6] = b * w[0] * w[2] - a * w[1];
+    R[5] = b * w[1] * w[2] - a * w[0];
+    R[7] = b * w[1] * w[2] + a * w[0];
+}
+
+double tvo_la_rot_angle(const double R[9])
+{
+    double c = 0.5 * (R[0] + R[4] + R[8] - 1.0);
+    double vx = R[7] - R[5], vy = R[2] - R[6], vz = R[3] - R[1];
+    double s = 0.5 * sqrt(vx * vx + vy * vy + vz * vz);
+    if (c > 1.0)
+        c = 1.0;
+    if (c < -1.0)
+        c = -1.0;
+    return atan2(s, c);
+}
+
+double tvo_la_rot_dist(const double Ra[9], const double Rb[9])
+{
+    double D[9];
+    tvo_la_mat3_mul_at(Ra, Rb, D);
+    return tvo_la_rot_angle(D);
+}
+
+static void any_orthogonal(const double u[3], double v[3])
+{
+    /* a unit vector orthogonal to unit u */
+    double a[3] = {0.0, 0.0, 0.0};
+    int k = 0;
+    if (fabs(u[1]) < fabs(u[k]))
+        k = 1;
+    if (fabs(u[2]) < fabs(u[k]))
+        k = 2;
+    a[k] = 1.0;
+    tvo_la_cross(u, a, v);
+    double n = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    v[0] /= n;
+    v[1] /= n;
+    v[2] /= n;
+}
+
+void tvo_la_svd3(const double A[9], double U[9], double s[3], double V[9])
+{
+    double B[9];
+    memcpy(B, A, sizeof B);
+    for (int i = 0; i < 9; ++i)
+        V[i] = (i % 4 == 0) ? 1.0 : 0.0;
+    for (int sweep = 0; sweep < 30; ++sweep) {
+        int rotated = 0;
+        for (int p = 0; p < 2; ++p) {
+            for (int q = p + 1; q < 3; ++q) {
+                double al = 0.0, be = 0.0, ga = 0.0;
+                for (int i = 0; i < 3; ++i) {
+                    al += B[3 * i + p] * B[3 * i + p];
+                    be += B[3 * i + q] * B[3 * i + q];
+                    ga += B[3 * i + p] * B[3 * i + q];
+                }
+                if (fabs(ga) <= 1e-15 * sqrt(al * be) || ga == 0.0)
+                    continue;
+                rotated = 1;
+                double zeta = (be - al) / (2.0 * ga);
+                double t = (zeta >= 0.0 ? 1.0 : -1.0) / (fabs(zeta) + sqrt(1.0 + zeta * zeta));
+                double c = 1.0 / sqrt(1.0 + t * t), sn = c * t;
+                for (int i = 0; i < 3; ++i) {
+                    double bp = B[3 * i + p], bq = B[3 * i + q];
+                    B[3 * i + p] = c * bp - sn * bq;
+                    B[3 * i + q] = sn * bp + c * bq;
+                    double vp = V[3 * i + p], vq = V[3 * i + q];
+                    V[3 * i + p] = c * vp - sn * vq;
+                    V[3 * i + q] = sn * vp + c * vq;
+                }
+            }
+        }
+        if (!rotated)
+            break;
+    }
+    double nrm[3];
+    int ord[3] = {0, 1, 2};
+    for (int j = 0; j < 3; ++j)
+        nrm[j] = sqrt(B[j] * B[j] + B[3 + j] * B[3 + j] + B[6 + j] * B[6 + j]);
+    for (int a = 0; a < 2; ++a)
+        for (int b = a + 1; b < 3; ++b)
+            if (nrm[ord[b]] > nrm[ord[a]]) {
+                int tmp = ord[a];
+                ord[a] = ord[b];
+                ord[b] = tmp;
+            }
+    double Vs[9], u[3][3];
+    for (int j = 0; j < 3; ++j) {
+        int k = ord[j];
+        s[j] = nrm[k];
+        for (int i = 0; i < 3; ++i)
+            Vs[3 * i + j] = V[3 * i + k];
+        for (int i = 0; i < 3; ++i)
+            u[j][i] = s[j] > 0.0 ? B[3 * i + k] / s[j] : 0.0;
+    }
+    memcpy(V, Vs, sizeof Vs);
+    if (s[0] <= 1e-300) {
+        u[0][0] = 1.0; u[0][1] = 0.0; u[0][2] = 0.0;
+        u[1][0] = 0.0; u[1][1] = 1.0; u[1][2] = 0.0;
+    } else if (s[1] <= 1e-13 * s[0]) {
+        any_orthogonal(u[0], u[1]);
+    }
+    {
+        double c[3];
+        tvo_la_cross(u[0], u[1], c);
+        double dot = c[0] * u[2][0] + c[1] * u[2][1] + c[2] * u[2][2];
+        if (s[2] > 1e-13 * s[0] && dot < 0.0) {
+            c[0] = -c[0];
+            c[1] = -c[1];
+            c[2] = -c[2];
+        }
+        u[2][0] = c[0];
+        u[2][1] = c[1];
+        u[2][2] = c[2];
+    }
+    for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i)
+            U[3 * i + j] = u[j][i];
+}
+
+void tvo_la_orthonormalize(const double M[9], double R[9])
+{
+    double U[9], s[3], V[9];
+    tvo_la_svd3(M, U, s, V);
+    tvo_la_mat3_mul_bt(U, V, R);
+    if (tvo_la_mat3_det(R) < 0.0) {
+        U[2] = -U[2];
+        U[5] = -U[5];
+        U[8] = -U[8];
+        tvo_la_mat3_mul_bt(U, V, R);
+    }
+}
+
+tvo_status tvo_la_sym_eig(double *A, int n, double *w, double *V)
+{
+    if (A == NULL || w == NULL || V == NULL)
+        return TVO_ERR_NULL;
+    if (n < 1 || n > 10)
+        return TVO_ERR_ARG;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j)
+            V[i * n + j] = (i == j) ? 1.0 : 0.0;
+    for (int sweep = 0; sweep < 50; ++sweep) {
+        double off = 0.0, diag = 0.0;
+        for (int i = 0; i < n; ++i) {
+            diag += A[i * n + i] * A[i * n + i];
+            for (int j = i + 1; j < n; ++j)
+                off += A[i * n + j] * A[i * n + j];
+        }
+        if (off <= 1e-30 * diag || off == 0.0)
+            break;
+        for (int p = 0; p < n - 1; ++p) {
+            for (int q = p + 1; q < n; ++q) {
+                double apq = A[p * n + q];
+                if (apq == 0.0)
+                    continue;
+                double app = A[p * n + p], aqq = A[q * n + q];
+                double theta = (aqq - app) / (2.0 * apq);
+                double t = (theta >= 0.0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(1.0 + theta * theta));
+                double c = 1.0 / sqrt(1.0 + t * t), s = t * c;
+                for (int k = 0; k < n; ++k) {
+                    double akp = A[k * n + p], akq = A[k * n + q];
+                    A[k * n + p] = c * akp - s * akq;
+                    A[k * n + q] = s * akp + c * akq;
+                }
+                for (int k = 0; k < n; ++k) {
+                    double apk = A[p * n + k], aqk = A[q * n + k];
+                    A[p * n + k] = c * apk - s * aqk;
+                    A[q * n + k] = s * apk + c * aqk;
+                }
+                for (int k = 0; k < n; ++k) {
+                    double vkp = V[k * n + p], vkq = V[k * n + q];
+                    V[k * n + p] = c * vkp - s * vkq;
+                    V[k * n + q] = s * vkp + c * vkq;
+                }
+            }
+        }
+    }
+    for (int i = 0; i < n; ++i)
+        w[i] = A[i * n + i];
+    /* sort ascending (selection sort, swapping eigenvector columns) */
+    for (int i = 0; i < n - 1; ++i) {
+        int m = i;
+        for (int j = i + 1; j < n; ++j)
+            if (w[j] < w[m])
+                m = j;
+        if (m != i) {
+            double t = w[i];
+            w[i] = w[m];
+            w[m] = t;
+            for (int k = 0; k < n; ++k) {
+                t = V[k * n + i];
+                V[k * n + i] = V[k * n + m];
+                V[k * n + m] = t;
+            }
+        }
+    }
+    return TVO_OK;
+}
+
+tvo_status tvo_la_solve(double *A, double *b, int n, double *x)
+{
+    if (A == NULL || b == NULL || x == NULL)
+        return TVO_ERR_NULL;
+    if (n < 1 || n > 10)
+        return TVO_ERR_ARG;
+    double amax = 0.0;
+    for (int i = 0; i < n * n; ++i)
+        if (fabs(A[i]) > amax)
+            amax = fabs(A[i]);
+    double tiny = amax * 1e-14;
+    if (tiny < 1e-300)
+        tiny = 1e-300;
+    for (int k = 0; k < n; ++k) {
+        int p = k;
+        for (int i = k + 1; i < n; ++i)
+            if (fabs(A[i * n + k]) > fabs(A[p * n + k]))
+                p = i;
+        if (!(fabs(A[p * n + k]) > tiny))
+            return TVO_ERR_DEGENERATE;
+        if (p != k) {
+            for (int j = 0; j < n; ++j) {
+                double t = A[k * n + j];
+                A[k * n + j] = A[p * n + j];
+                A[p * n + j] = t;
+            }
+            double t = b[k];
+            b[k] = b[p];
+            b[p] = t;
+        }
+        for (int i = k + 1; i < n; ++i) {
+            double f = A[i * n + k] / A[k * n + k];
+            if (f == 0.0)
+                continue;
+            for (int j = k; j < n; ++j)
+                A[i * n + j] -= f * A[k * n + j];
+            b[i] -= f * b[k];
+        }
+    }
+    for (int i = n - 1; i >= 0; --i) {
+        double s = b[i];
+        for (int j = i + 1; j < n; ++j)
+            s -= A[i * n + j] * x[j];
+        x[i] = s / A[i * n + i];
+    }
+    return TVO_OK;
+}
+
+double tvo_la_poly_eval(const double *c, int deg, double t)
+{
+    double v = c[deg];
+    for (int i = deg - 1; i >= 0; --i)
+        v = v * t + c[i];
+    return v;
+}
+
+/* ---- Sturm sequences ------------------------------------------------------------------------ */
+
+typedef struct sturm_chain {
+    double p[11][11]; /* p[k][i]: coefficient of t^i of the k-th polynomial */
+    int deg[11];
+    int len;
+} sturm_chain;
+
+static int sturm_changes(const sturm_chain *s, double t)
+{
+    int changes = 0;
+    double prev = 0.0;
+    for (int k = 0; k < s->len; ++k) {
+        double v = tvo_la_poly_eval(s->p[k], s->deg[k], t);
+        if (v == 0.0)
+            continue;
+        if (prev != 0.0 && ((v > 0.0) != (prev > 0.0)))
+            ++changes;
+        prev = v;
+    }
+    return changes;
+}
+
+static void sturm_build(sturm_chain *s, const double *a, int deg)
+{
+    memset(s, 0, sizeof *s);
+    for (int i = 0; i <= deg; ++i)
+        s->p[0][i] = a[i];
+    s->deg[0] = deg;
+    for (int i = 1; i <= deg; ++i)
+        s->p[1][i - 1] = (double)i * a[i];
+    s->deg[1] = deg - 1;
+    s->len = 2;
+    while (s->len < 11 && s->deg[s->len - 1] > 0) {
+        const double *num = s->p[s->len - 2];
+        const double *den = s->p[s->len - 1];
+        int dn = s->deg[s->len - 2], dd = s->deg[s->len - 1];
+        double r[11];
+        double scale = 0.0;
+        for (int i = 0; i <= dn; ++i) {
+            r[i] = num[i];
+            if (fabs(num[i]) > scale)
+                scale = fabs(num[i]);
+        }
+        for (int k = dn - dd; k >= 0; --k) {
+            double q = r[k + dd] / den[dd];
+            for (int i = 0; i <= dd; ++i)
+                r[k + i] -= q * den[i];
+            r[k + dd] = 0.0;
+        }
+        int dr = dd - 1;
+        while (dr >= 0 && fabs(r[dr]) <= 1e-13 * scale)
+            --dr;
+        if (dr < 0)
+            break; /* exact division: the chain ends at the gcd (multiple roots) */
+        /* next = -remainder, normalised to unit max coefficient to keep the scale sane */
+        double m = 0.0;
+        for (int i = 0; i <= dr; ++i)
+            if (fabs(r[i]) > m)
+                m = fabs(r[i]);
+        for (int i = 0; i <= dr; ++i)
+            s->p[s->len][i] = -r[i] / m;
+        s->deg[s->len] = dr;
+        s->len++;
+    }
+}
+
+static double refine_root(const double *a, int deg, double lo, double hi)
+{
+    double flo = tvo_la_poly_eval(a, deg, lo);
+    double fhi = tvo_la_poly_eval(a, deg, hi);
+    if (flo == 0.0)
+        return lo;
+    if (fhi == 0.0)
+        return hi;
+    if ((flo > 0.0) == (fhi > 0.0))
+        return 0.5 * (lo + hi); /* no sign change (even multiplicity): caller bisected already */
+    double x = 0.5 * (lo + hi);
+    for (int it = 0; it < 100; ++it) {
+        double f = a[deg], df = 0.0;
+        for (int i = deg - 1; i >= 0; --i) {
+            df = df * x + f;
+            f = f * x + a[i];
+        }
+        if (f == 0.0)
+            return x;
+        if ((f > 0.0) == (flo > 0.0))
+            lo = x;
+        else
+            hi = x;
+        double xn = (df != 0.0) ? x - f / df : 0.5 * (lo + hi);
+        if (!(xn > lo && xn < hi))
+            xn = 0.5 * (lo + hi);
+        if (fabs(xn - x) <= 1e-15 * (1.0 + fabs(x)) || hi - lo <= 1e-15 * (1.0 + fabs(x)))
+            return xn;
+        x = xn;
+    }
+    return x;
+}
+
+int tvo_la_poly_real_roots(const double *c, int deg, double *roots)
+{
+    if (c == NULL || roots == NULL || deg < 1 || deg > 10)
+        return 0;
+    double cmax = 0.0;
+    for (int i = 0; i <= deg; ++i) {
+        if (!isfinite(c[i]))
+            return 0;
+        if (fabs(c[i]) > cmax)
+            cmax = fabs(c[i]);
+    }
+    if (cmax == 0.0)
+        return 0;
+    while (deg > 0 && fabs(c[deg]) <= 1e-14 * cmax)
+        --deg;
+    if (deg < 1)
+        return 0;
+    double a[11];
+    for (int i = 0; i <= deg; ++i)
+        a[i] = c[i] / c[deg];
+    double bound = 0.0;
+    for (int i = 0; i < deg; ++i)
+        if (fabs(a[i]) > bound)
+            bound = fabs(a[i]);
+    bound += 1.0;
+    sturm_chain s;
+    sturm_build(&s, a, deg);
+
+    struct { double lo, hi; int vlo, vhi, depth; } stack[160];
+    int sp = 0, nroots = 0;
+    stack[sp].lo = -bound;
+    stack[sp].hi = bound;
+    stack[sp].vlo = sturm_changes(&s, -bound);
+    stack[sp].vhi = sturm_changes(&s, bound);
+    stack[sp].depth = 0;
+    ++sp;
+    while (sp > 0 && nroots < deg) {
+        --sp;
+        double lo = stack[sp].lo, hi = stack[sp].hi;
+        int vlo = stack[sp].vlo, vhi = stack[sp].vhi, depth = stack[sp].depth;
+        int cnt = vlo - vhi;
+        if (cnt <= 0)
+            continue;
+        double mid = 0.5 * (lo + hi);
+        if (cnt == 1) {
+            double flo = tvo_la_poly_eval(a, deg, lo), fhi = tvo_la_poly_eval(a, deg, hi);
+            if ((flo > 0.0) != (fhi > 0.0) || flo == 0.0 || fhi == 0.0 || depth >= 64) {
+                roots[nroots++] = refine_root(a, deg, lo, hi);
+                continue;
+            }
+        } else if (depth >= 64 || !(hi - lo > 1e-14 * (1.0 + fabs(mid)))) {
+            roots[nroots++] = mid;
+            continue;
+        }
+        if (sp + 2 > 160) {
+            roots[nroots++] = mid;
+            continue;
+        }
+        int vmid = sturm_changes(&s, mid);
+        stack[sp].lo = mid;
+        stack[sp].hi = hi;
+        stack[sp].vlo = vmid;
+        stack[sp].vhi = vhi;
+        stack[sp].depth = depth + 1;
+        ++sp;
+        stack[sp].lo = lo;
+        stack[sp].hi = mid;
+        stack[sp].vlo = vlo;
+        stack[sp].vhi = vmid;
+        stack[sp].depth = depth + 1;
+        ++sp;
+    }
+    for (int i = 1; i < nroots; ++i) {
+        double v = roots[i];
+        int j = i - 1;
+        while (j >= 0 && roots[j] > v) {
+            roots[j + 1] = roots[j];
+            --j;
+        }
+        roots[j + 1] = v;
+    }
+    return nroots;
+}

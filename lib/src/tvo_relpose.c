@@ -1,0 +1,1040 @@
+/* Relative pose: RANSAC around the 5-point / 8-point solvers, Sampson scoring, rotation-only
+ * model for low parallax, homography model selection for dominant planes, LM refinement on the
+ * (R, unit t) manifold and cheirality-based decomposition. See tinyvo/relpose.h. */
+#include "tinyvo/relpose.h"
+#include "tinyvo/arena.h"
+#include "tinyvo/linalg.h"
+
+#include <math.h>
+#include <string.h>
+
+#define RP_PI 3.14159265358979323846
+#define RP_CHI2_1DOF 3.841
+#define RP_CHI2_2DOF 5.991
+#define RP_MAX_COORD 1e6
+#define RP_H_RATIO 0.40 /* ORB-SLAM2's homography / (homography + epipolar) score ratio */
+
+/* ---- deterministic generator ---------------------------------------------------------------- */
+
+typedef struct rp_rng {
+    uint64_t s;
+} rp_rng;
+
+static void rng_seed(rp_rng *r, uint64_t seed)
+{
+    uint64_t z = seed + 0x9E3779B97F4A7C15ULL; /* splitmix64 step: never a zero state */
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    z ^= z >> 31;
+    r->s = z != 0 ? z : 0x2545F4914F6CDD1DULL;
+}
+
+static uint32_t rng_next(rp_rng *r)
+{
+    uint64_t x = r->s;
+    x ^= x >> 12;
+    x ^= x << 25;
+    x ^= x >> 27;
+    r->s = x;
+    return (uint32_t)((x * 0x2545F4914F6CDD1DULL) >> 32);
+}
+
+/* k distinct indices in [0, n), n >= k; bounded retries (falls back to consecutive indices) */
+static void rng_sample(rp_rng *r, int32_t n, int k, int32_t *idx)
+{
+    for (int i = 0; i < k; ++i) {
+        int32_t v = 0;
+        int ok = 0;
+        for (int tries = 0; tries < 64 && !ok; ++tries) {
+            v = (int32_t)(((uint64_t)rng_next(r) * (uint64_t)n) >> 32);
+            ok = 1;
+            for (int j = 0; j < i; ++j)
+                if (idx[j] == v)
+                    ok = 0;
+        }
+        if (!ok) { /* practically unreachable: pick the next free index */
+            v = 0;
+            for (;;) {
+                int used = 0;
+                for (int j = 0; j < i; ++j)
+                    if (idx[j] == v)
+                        used = 1;
+                if (!used)
+                    break;
+                ++v;
+            }
+        }
+        idx[i] = v;
+    }
+}
+
+static int32_t ransac_needed(double confidence, int32_t inliers, int32_t n, int s, int32_t max_iters)
+{
+    if (inliers <= 0)
+        return max_iters;
+    double w = (double)inliers / (double)n;
+    if (w >= 1.0)
+        return 1;
+    double ws = pow(w, (double)s);
+    double denom = log1p(-ws);
+    if (!(denom < 0.0))
+        return max_iters;
+    double need = ceil(log1p(-confidence) / denom);
+    if (!(need < (double)max_iters))
+        return max_iters;
+    return need < 1.0 ? 1 : (int32_t)need;
+}
+
+/* ---- small helpers -------------------------------------------------------------------------- */
+
+static double dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static double sampson2(const double E[9], const tvo_point2d *p1, const tvo_point2d *p2)
+{
+    double a0 = p1->x, a1 = p1->y, b0 = p2->x, b1 = p2->y;
+    double ex0 = E[0] * a0 + E[1] * a1 + E[2];
+    double ex1 = E[3] * a0 + E[4] * a1 + E[5];
+    double ex2 = E[6] * a0 + E[7] * a1 + E[8];
+    double et0 = E[0] * b0 + E[3] * b1 + E[6];
+    double et1 = E[1] * b0 + E[4] * b1 + E[7];
+    double e = b0 * ex0 + b1 * ex1 + ex2;
+    double d = ex0 * ex0 + ex1 * ex1 + et0 * et0 + et1 * et1;
+    if (!(d > 1e-300))
+        return 1e300;
+    return e * e / d;
+}
+
+static void essential_from_pose(const double R[9], const double t[3], double E[9])
+{
+    double S[9];
+    tvo_la_skew(t, S);
+    tvo_la_mat3_mul(S, R, E);
+}
+
+/* MSAC cost of E, with early exit once it exceeds `bound`; *inl gets the inlier count when the
+ * pass completed */
+static double msac_cost(const double E[9], const tvo_point2d *x1, const tvo_point2d *x2, int32_t n,
+                        double thr2, double bound, int32_t *inl)
+{
+    double cost = 0.0;
+    int32_t cnt = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        double r2 = sampson2(E, &x1[i], &x2[i]);
+        if (r2 < thr2) {
+            cost += r2;
+            ++cnt;
+        } else {
+            cost += thr2;
+        }
+        if (cost > bound)
+            return cost;
+    }
+    *inl = cnt;
+    return cost;
+}
+
+static int32_t mark_inliers(const double E[9], const tvo_point2d *x1, const tvo_point2d *x2, int32_t n,
+                            double thr2, uint8_t *mask)
+{
+    int32_t cnt = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        int in = sampson2(E, &x1[i], &x2[i]) < thr2;
+        mask[i] = (uint8_t)in;
+        cnt += in;
+    }
+    return cnt;
+}
+
+/* depth signs of the midpoint triangulation: +1 both positive, -1 otherwise, 0 if rays ~parallel */
+static int cheiral_point(const double R[9], const double t[3], const tvo_point2d *p1, const tvo_point2d *p2)
+{
+    double f1[3] = {p1->x, p1->y, 1.0}, b[3] = {p2->x, p2->y, 1.0}, a[3];
+    tvo_la_mat3_vec(R, f1, a);
+    double aa = dot3(a, a), bb = dot3(b, b), ab = dot3(a, b), at = dot3(a, t), bt = dot3(b, t);
+    double det = aa * bb - ab * ab;
+    if (!(det > 1e-10 * aa * bb))
+        return 0;
+    double l1 = (-at * bb + ab * bt) / det;
+    double l2 = (aa * bt - ab * at) / det;
+    return (l1 > 0.0 && l2 > 0.0) ? 1 : -1;
+}
+
+static int32_t cheiral_count(const double R[9], const double t[3], const tvo_point2d *x1,
+                             const tvo_point2d *x2, int32_t n, const uint8_t *mask)
+{
+    int32_t good = 0;
+    for (int32_t i = 0; i < n; ++i)
+        if (mask == NULL || mask[i])
+            good += cheiral_point(R, t, &x1[i], &x2[i]) > 0;
+    return good;
+}
+
+/* The four (R, t) of E; picks the one with most points in front of both cameras among mask. */
+static int32_t decompose_essential(const double E[9], const tvo_point2d *x1, const tvo_point2d *x2,
+                                   int32_t n, const uint8_t *mask, double R[9], double t[3])
+{
+    double U[9], s[3], V[9];
+    tvo_la_svd3(E, U, s, V);
+    if (tvo_la_mat3_det(U) < 0.0)
+        for (int i = 0; i < 9; ++i)
+            U[i] = -U[i];
+    if (tvo_la_mat3_det(V) < 0.0)
+        for (int i = 0; i < 9; ++i)
+            V[i] = -V[i];
+    static const double W[9] = {0, -1, 0, 1, 0, 0, 0, 0, 1};
+    double UW[9], UWt[9], Ra[9], Rb[9];
+    tvo_la_mat3_mul(U, W, UW);
+    tvo_la_mat3_mul_bt(U, W, UWt);
+    tvo_la_mat3_mul_bt(UW, V, Ra);
+    tvo_la_mat3_mul_bt(UWt, V, Rb);
+    double tu[3] = {U[2], U[5], U[8]};
+    int32_t best = -1;
+    for (int k = 0; k < 4; ++k) {
+        const double *Rc = (k < 2) ? Ra : Rb;
+        double tc[3] = {tu[0], tu[1], tu[2]};
+        if (k & 1) {
+            tc[0] = -tc[0];
+            tc[1] = -tc[1];
+            tc[2] = -tc[2];
+        }
+        int32_t g = cheiral_count(Rc, tc, x1, x2, n, mask);
+        if (g > best) {
+            best = g;
+            memcpy(R, Rc, 9 * sizeof(double));
+            memcpy(t, tc, 3 * sizeof(double));
+        }
+    }
+    return best;
+}
+
+/* ---- refinement: LM on the Sampson error over (R, unit t) ----------------------------------- */
+
+static double sampson_cost_pose(const double R[9], const double t[3], const tvo_point2d *x1,
+                                const tvo_point2d *x2, int32_t n, const uint8_t *mask)
+{
+    double E[9], c = 0.0;
+    essential_from_pose(R, t, E);
+    for (int32_t i = 0; i < n; ++i)
+        if (mask[i])
+            c += sampson2(E, &x1[i], &x2[i]);
+    return c;
+}
+
+static void tangent_basis(const double t[3], double b1[3], double b2[3])
+{
+    double a[3] = {0.0, 0.0, 0.0};
+    int k = 0;
+    if (fabs(t[1]) < fabs(t[k]))
+        k = 1;
+    if (fabs(t[2]) < fabs(t[k]))
+        k = 2;
+    a[k] = 1.0;
+    tvo_la_cross(t, a, b1);
+    double nb = sqrt(dot3(b1, b1));
+    b1[0] /= nb;
+    b1[1] /= nb;
+    b1[2] /= nb;
+    tvo_la_cross(t, b1, b2);
+}
+
+static void refine_pose(double R[9], double t[3], const tvo_point2d *x1, const tvo_point2d *x2,
+                        int32_t n, const uint8_t *mask, int iters)
+{
+    double cost = sampson_cost_pose(R, t, x1, x2, n, mask);
+    double lambda = 1e-4;
+    for (int it = 0; it < iters; ++it) {
+        double H[25] = {0}, g[5] = {0}, b1[3], b2[3];
+        tangent_basis(t, b1, b2);
+        for (int32_t i = 0; i < n; ++i) {
+            if (!mask[i])
+                continue;
+            double f1[3] = {x1[i].x, x1[i].y, 1.0}, f2[3] = {x2[i].x, x2[i].y, 1.0}, u[3];
+            tvo_la_mat3_vec(R, f1, u);
+            double c[3], f2t[3], gw[3], ex[3], et[3];
+            tvo_la_cross(u, f2, c);         /* e = t . (u x f2) */
+            double e = dot3(t, c);
+            tvo_la_cross(f2, t, f2t);
+            tvo_la_cross(u, f2t, gw);       /* de/dw */
+            tvo_la_cross(t, u, ex);         /* E f1 */
+            tvo_la_mat3_tvec(R, f2t, et);   /* E^T f2 */
+            double d = ex[0] * ex[0] + ex[1] * ex[1] + et[0] * et[0] + et[1] * et[1];
+            if (!(d > 1e-300))
+                continue;
+            double J[5] = {gw[0], gw[1], gw[2], dot3(b1, c), dot3(b2, c)};
+            double wgt = 1.0 / d;
+            for (int p = 0; p < 5; ++p) {
+                g[p] += wgt * J[p] * e;
+                for (int q = p; q < 5; ++q)
+                    H[5 * p + q] += wgt * J[p] * J[q];
+            }
+        }
+        for (int p = 0; p < 5; ++p)
+            for (int q = 0; q < p; ++q)
+                H[5 * p + q] = H[5 * q + p];
+        int improved = 0;
+        for (int attempt = 0; attempt < 6 && !improved; ++attempt) {
+            double A[25], rhs[5], dx[5];
+            memcpy(A, H, sizeof A);
+            for (int p = 0; p < 5; ++p) {
+                A[6 * p] += lambda * (H[6 * p] > 1e-12 ? H[6 * p] : 1e-12);
+                rhs[p] = -g[p];
+            }
+            if (tvo_la_solve(A, rhs, 5, dx) != TVO_OK)
+                return;
+            double dR[9], Rn[9], tn[3];
+            tvo_la_so3_exp(dx, dR);
+            tvo_la_mat3_mul(dR, R, Rn);
+            for (int k = 0; k < 3; ++k)
+                tn[k] = t[k] + dx[3] * b1[k] + dx[4] * b2[k];
+            double nt = sqrt(dot3(tn, tn));
+            if (!(nt > 0.0) || !isfinite(nt))
+                return;
+            tn[0] /= nt;
+            tn[1] /= nt;
+            tn[2] /= nt;
+            double cn = sampson_cost_pose(Rn, tn, x1, x2, n, mask);
+            if (cn < cost && isfinite(cn)) {
+                double step = sqrt(dot3(dx, dx) + dx[3] * dx[3] + dx[4] * dx[4]);
+                double rel = (cost - cn) / (cost > 1e-300 ? cost : 1e-300);
+                memcpy(R, Rn, sizeof Rn);
+                memcpy(t, tn, sizeof tn);
+                cost = cn;
+                lambda = lambda * 0.1 > 1e-10 ? lambda * 0.1 : 1e-10;
+                improved = 1;
+                if (step < 1e-12 || rel < 1e-10)
+                    it = iters;
+            } else {
+                lambda *= 10.0;
+            }
+        }
+        if (!improved)
+            break;
+    }
+    /* keep R exactly orthonormal */
+    double Ro[9];
+    tvo_la_orthonormalize(R, Ro);
+    memcpy(R, Ro, sizeof Ro);
+}
+
+/* ---- rotation-only model (bearing vectors, Kabsch) ------------------------------------------ */
+
+static void bearing(const tvo_point2d *p, double f[3])
+{
+    double n = sqrt(p->x * p->x + p->y * p->y + 1.0);
+    f[0] = p->x / n;
+    f[1] = p->y / n;
+    f[2] = 1.0 / n;
+}
+
+static double rot_residual2(const double R[9], const tvo_point2d *p1, const tvo_point2d *p2)
+{
+    double f1[3], f2[3], u[3];
+    bearing(p1, f1);
+    bearing(p2, f2);
+    tvo_la_mat3_vec(R, f1, u);
+    double dx = u[0] - f2[0], dy = u[1] - f2[1], dz = u[2] - f2[2];
+    return dx * dx + dy * dy + dz * dz;
+}
+
+/* R maximising sum f2^T R f1 over the mask (or over idx[0..k) when idx != NULL) */
+static void kabsch(const tvo_point2d *x1, const tvo_point2d *x2, int32_t n, const uint8_t *mask,
+                   const int32_t *idx, int k, double R[9])
+{
+    double M[9] = {0};
+    int32_t count = idx != NULL ? k : n;
+    for (int32_t j = 0; j < count; ++j) {
+        int32_t i = idx != NULL ? idx[j] : j;
+        if (idx == NULL && !mask[i])
+            continue;
+        double f1[3], f2[3];
+        bearing(&x1[i], f1);
+        bearing(&x2[i], f2);
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c)
+                M[3 * r + c] += f2[r] * f1[c];
+    }
+    tvo_la_orthonormalize(M, R);
+}
+
+static int32_t rot_inliers(const double R[9], const tvo_point2d *x1, const tvo_point2d *x2, int32_t n,
+                           double thr2, uint8_t *mask)
+{
+    int32_t cnt = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        int in = rot_residual2(R, &x1[i], &x2[i]) < thr2;
+        if (mask != NULL)
+            mask[i] = (uint8_t)in;
+        cnt += in;
+    }
+    return cnt;
+}
+
+static int32_t rotation_ransac(const tvo_relpose_config *cfg, const tvo_point2d *x1, const tvo_point2d *x2,
+                               int32_t n, double thr2, double R[9], uint8_t *mask)
+{
+    rp_rng rng;
+    rng_seed(&rng, cfg->seed ^ 0x526F74ULL);
+    int32_t best = -1, need = cfg->max_iters;
+    double Rb[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    for (int32_t it = 0; it < need && it < cfg->max_iters; ++it) {
+        int32_t idx[2];
+        double Rc[9];
+        rng_sample(&rng, n, 2, idx);
+        kabsch(x1, x2, n, NULL, idx, 2, Rc);
+        int32_t c = rot_inliers(Rc, x1, x2, n, thr2, NULL);
+        if (c > best) {
+            best = c;
+            memcpy(Rb, Rc, sizeof Rc);
+            need = ransac_needed(cfg->confidence, best, n, 2, cfg->max_iters);
+        }
+    }
+    int32_t cnt = rot_inliers(Rb, x1, x2, n, thr2, mask);
+    /* least-squares refit on the inliers (always accepted: the 2-point model is noisier even when
+     * it happens to count a few more inliers) */
+    for (int round = 0; round < 3 && cnt >= 2; ++round) {
+        double Rc[9];
+        kabsch(x1, x2, n, mask, NULL, 0, Rc);
+        int32_t c2 = rot_inliers(Rc, x1, x2, n, thr2, NULL);
+        if (c2 < 2)
+            break;
+        memcpy(Rb, Rc, sizeof Rc);
+        cnt = rot_inliers(Rb, x1, x2, n, thr2, mask);
+    }
+    memcpy(R, Rb, sizeof Rb);
+    return cnt;
+}
+
+/* ---- homography ----------------------------------------------------------------------------- */
+
+static int homography_4pt(const tvo_point2d *x1, const tvo_point2d *x2, const int32_t *idx, double H[9])
+{
+    double A[64], b[8], h[8];
+    for (int k = 0; k < 4; ++k) {
+        double a0 = x1[idx[k]].x, a1 = x1[idx[k]].y, u = x2[idx[k]].x, v = x2[idx[k]].y;
+        double *r0 = &A[16 * k], *r1 = &A[16 * k + 8];
+        r0[0] = a0; r0[1] = a1; r0[2] = 1; r0[3] = 0;  r0[4] = 0;  r0[5] = 0; r0[6] = -u * a0; r0[7] = -u * a1;
+        r1[0] = 0;  r1[1] = 0;  r1[2] = 0; r1[3] = a0; r1[4] = a1; r1[5] = 1; r1[6] = -v * a0; r1[7] = -v * a1;
+        b[2 * k] = u;
+        b[2 * k + 1] = v;
+    }
+    if (tvo_la_solve(A, b, 8, h) != TVO_OK)
+        return 0;
+    for (int k = 0; k < 8; ++k) {
+        if (!isfinite(h[k]))
+            return 0;
+        H[k] = h[k];
+    }
+    H[8] = 1.0;
+    return 1;
+}
+
+static void adjugate3(const double A[9], double B[9])
+{
+    B[0] = A[4] * A[8] - A[5] * A[7];
+    B[1] = A[2] * A[7] - A[1] * A[8];
+    B[2] = A[1] * A[5] - A[2] * A[4];
+    B[3] = A[5] * A[6] - A[3] * A[8];
+    B[4] = A[0] * A[8] - A[2] * A[6];
+    B[5] = A[2] * A[3] - A[0] * A[5];
+    B[6] = A[3] * A[7] - A[4] * A[6];
+    B[7] = A[1] * A[6] - A[0] * A[7];
+    B[8] = A[0] * A[4] - A[1] * A[3];
+}
+
+static double transfer2(const double H[9], const tvo_point2d *a, const tvo_point2d *b)
+{
+    double w = H[6] * a->x + H[7] * a->y + H[8];
+    if (!(fabs(w) > 1e-12))
+        return 1e300;
+    double u = (H[0] * a->x + H[1] * a->y + H[2]) / w - b->x;
+    double v = (H[3] * a->x + H[4] * a->y + H[5]) / w - b->y;
+    return u * u + v * v;
+}
+
+/* ORB-SLAM style score of H (both transfer directions, chi-square 2 dof gate) */
+static double homography_score(const double H[9], const double Hi[9], const tvo_point2d *x1,
+                               const tvo_point2d *x2, int32_t n, double inv_s2, double best, uint8_t *mask,
+                               int32_t *inl)
+{
+    double score = 0.0, remaining = 2.0 * RP_CHI2_2DOF * (double)n;
+    int32_t cnt = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        double c1 = transfer2(H, &x1[i], &x2[i]) * inv_s2;
+        double c2 = transfer2(Hi, &x2[i], &x1[i]) * inv_s2;
+        int in = 1;
+        if (c1 < RP_CHI2_2DOF)
+            score += RP_CHI2_2DOF - c1;
+        else
+            in = 0;
+        if (c2 < RP_CHI2_2DOF)
+            score += RP_CHI2_2DOF - c2;
+        else
+            in = 0;
+        if (mask != NULL)
+            mask[i] = (uint8_t)in;
+        cnt += in;
+        remaining -= 2.0 * RP_CHI2_2DOF;
+        if (mask == NULL && score + remaining < best)
+            return -1.0;
+    }
+    *inl = cnt;
+    return score;
+}
+
+static double essential_score(const double E[9], const tvo_point2d *x1, const tvo_point2d *x2, int32_t n,
+                              double inv_s2)
+{
+    double score = 0.0;
+    for (int32_t i = 0; i < n; ++i) {
+        double a0 = x1[i].x, a1 = x1[i].y, b0 = x2[i].x, b1 = x2[i].y;
+        double ex0 = E[0] * a0 + E[1] * a1 + E[2];
+        double ex1 = E[3] * a0 + E[4] * a1 + E[5];
+        double ex2 = E[6] * a0 + E[7] * a1 + E[8];
+        double et0 = E[0] * b0 + E[3] * b1 + E[6];
+        double et1 = E[1] * b0 + E[4] * b1 + E[7];
+        double e = b0 * ex0 + b1 * ex1 + ex2;
+        double d2 = ex0 * ex0 + ex1 * ex1, d1 = et0 * et0 + et1 * et1;
+        if (d2 > 1e-300) {
+            double c = e * e / d2 * inv_s2;
+            if (c < RP_CHI2_1DOF)
+                score += RP_CHI2_2DOF - c;
+        }
+        if (d1 > 1e-300) {
+            double c = e * e / d1 * inv_s2;
+            if (c < RP_CHI2_1DOF)
+                score += RP_CHI2_2DOF - c;
+        }
+    }
+    return score;
+}
+
+/* least-squares H over the mask (Hartley-normalised DLT); 0 on failure */
+static int homography_dlt(const tvo_point2d *x1, const tvo_point2d *x2, int32_t n, const uint8_t *mask,
+                          double H[9])
+{
+    double c1x = 0, c1y = 0, c2x = 0, c2y = 0, s1 = 0, s2 = 0;
+    int32_t m = 0;
+    for (int32_t i = 0; i < n; ++i)
+        if (mask[i]) {
+            c1x += x1[i].x; c1y += x1[i].y; c2x += x2[i].x; c2y += x2[i].y;
+            ++m;
+        }
+    if (m < 4)
+        return 0;
+    c1x /= m; c1y /= m; c2x /= m; c2y /= m;
+    for (int32_t i = 0; i < n; ++i)
+        if (mask[i]) {
+            s1 += hypot(x1[i].x - c1x, x1[i].y - c1y);
+            s2 += hypot(x2[i].x - c2x, x2[i].y - c2y);
+        }
+    if (!(s1 > 1e-12) || !(s2 > 1e-12))
+        return 0;
+    s1 = sqrt(2.0) * m / s1;
+    s2 = sqrt(2.0) * m / s2;
+    double AtA[81] = {0};
+    for (int32_t i = 0; i < n; ++i) {
+        if (!mask[i])
+            continue;
+        double a0 = (x1[i].x - c1x) * s1, a1 = (x1[i].y - c1y) * s1;
+        double u = (x2[i].x - c2x) * s2, v = (x2[i].y - c2y) * s2;
+        double r0[9] = {a0, a1, 1, 0, 0, 0, -u * a0, -u * a1, -u};
+        double r1[9] = {0, 0, 0, a0, a1, 1, -v * a0, -v * a1, -v};
+        for (int p = 0; p < 9; ++p)
+            for (int q = p; q < 9; ++q)
+                AtA[9 * p + q] += r0[p] * r0[q] + r1[p] * r1[q];
+    }
+    for (int p = 0; p < 9; ++p)
+        for (int q = 0; q < p; ++q)
+            AtA[9 * p + q] = AtA[9 * q + p];
+    double w[9], V[81];
+    if (tvo_la_sym_eig(AtA, 9, w, V) != TVO_OK)
+        return 0;
+    double Hn[9], T1[9] = {s1, 0, -s1 * c1x, 0, s1, -s1 * c1y, 0, 0, 1};
+    double T2i[9] = {1.0 / s2, 0, c2x, 0, 1.0 / s2, c2y, 0, 0, 1}, tmp[9];
+    for (int k = 0; k < 9; ++k)
+        Hn[k] = V[9 * k];
+    tvo_la_mat3_mul(Hn, T1, tmp);
+    tvo_la_mat3_mul(T2i, tmp, H);
+    for (int k = 0; k < 9; ++k)
+        if (!isfinite(H[k]))
+            return 0;
+    return 1;
+}
+
+/* Faugeras decomposition of H ~ R + t n^T: up to 8 (R, t) candidates, each also with -t (16). */
+static int decompose_homography(const double H[9], double Rs[16][9], double ts[16][3])
+{
+    double U[9], d[3], V[9];
+    tvo_la_svd3(H, U, d, V);
+    if (!(d[2] > 0.0))
+        return 0;
+    if (d[0] / d[1] < 1.00001 || d[1] / d[2] < 1.00001)
+        return 0;
+    double s = tvo_la_mat3_det(U) * tvo_la_mat3_det(V);
+    double d1 = d[0], d2 = d[1], d3 = d[2];
+    double a1 = sqrt((d1 * d1 - d2 * d2) / (d1 * d1 - d3 * d3));
+    double a3 = sqrt((d2 * d2 - d3 * d3) / (d1 * d1 - d3 * d3));
+    double x1s[4] = {a1, a1, -a1, -a1}, x3s[4] = {a3, -a3, a3, -a3};
+    double root = sqrt((d1 * d1 - d2 * d2) * (d2 * d2 - d3 * d3));
+    int nc = 0;
+    for (int sign = 0; sign < 2; ++sign) {
+        double cth, sth;
+        if (sign == 0) {
+            sth = root / ((d1 + d3) * d2);
+            cth = (d2 * d2 + d1 * d3) / ((d1 + d3) * d2);
+        } else {
+            sth = root / ((d1 - d3) * d2);
+            cth = (d1 * d3 - d2 * d2) / ((d1 - d3) * d2);
+        }
+        for (int i = 0; i < 4; ++i) {
+            double st = (i == 0 || i == 3) ? sth : -sth;
+            double Rp[9], tp[3], tmp[9], R[9], t[3];
+            if (sign == 0) {
+                double r[9] = {cth, 0, -st, 0, 1, 0, st, 0, cth};
+                memcpy(Rp, r, sizeof r);
+                tp[0] = x1s[i] * (d1 - d3);
+                tp[1] = 0.0;
+                tp[2] = -x3s[i] * (d1 - d3);
+            } else {
+                double r[9] = {cth, 0, st, 0, -1, 0, st, 0, -cth};
+                memcpy(Rp, r, sizeof r);
+                tp[0] = x1s[i] * (d1 + d3);
+                tp[1] = 0.0;
+                tp[2] = x3s[i] * (d1 + d3);
+            }
+            tvo_la_mat3_mul_bt(Rp, V, tmp);
+            tvo_la_mat3_mul(U, tmp, R);
+            for (int k = 0; k < 9; ++k)
+                R[k] *= s;
+            tvo_la_mat3_vec(U, tp, t);
+            double nt = sqrt(dot3(t, t));
+            if (!(nt > 1e-12))
+                continue;
+            for (int pm = 0; pm < 2; ++pm) {
+                double f = (pm == 0 ? 1.0 : -1.0) / nt;
+                memcpy(Rs[nc], R, sizeof R);
+                ts[nc][0] = t[0] * f;
+                ts[nc][1] = t[1] * f;
+                ts[nc][2] = t[2] * f;
+                ++nc;
+            }
+        }
+    }
+    return nc;
+}
+
+/* points that are Sampson inliers of [t]x R AND in front of both cameras */
+static int32_t good_count(const double R[9], const double t[3], const tvo_point2d *x1, const tvo_point2d *x2,
+                          int32_t n, double thr2, const uint8_t *mask)
+{
+    double E[9];
+    int32_t g = 0;
+    essential_from_pose(R, t, E);
+    for (int32_t i = 0; i < n; ++i) {
+        if (mask != NULL && !mask[i])
+            continue;
+        if (sampson2(E, &x1[i], &x2[i]) < thr2 && cheiral_point(R, t, &x1[i], &x2[i]) > 0)
+            ++g;
+    }
+    return g;
+}
+
+static int poses_differ(const double Ra[9], const double ta[3], const double Rb[9], const double tb[3])
+{
+    double c = dot3(ta, tb);
+    return tvo_la_rot_dist(Ra, Rb) > 0.5 * RP_PI / 180.0 || c < cos(2.0 * RP_PI / 180.0);
+}
+
+/* ---- median --------------------------------------------------------------------------------- */
+
+static double select_kth(double *a, int32_t n, int32_t k)
+{
+    int32_t lo = 0, hi = n - 1;
+    while (lo < hi) {
+        double pivot = a[lo + (hi - lo) / 2];
+        int32_t i = lo, j = hi;
+        while (i <= j) {
+            while (a[i] < pivot)
+                ++i;
+            while (a[j] > pivot)
+                --j;
+            if (i <= j) {
+                double t = a[i];
+                a[i] = a[j];
+                a[j] = t;
+                ++i;
+                --j;
+            }
+        }
+        if (k <= j)
+            hi = j;
+        else if (k >= i)
+            lo = i;
+        else
+            break;
+    }
+    return a[k];
+}
+
+/* ---- public API ----------------------------------------------------------------------------- */
+
+void tvo_relpose_config_default(tvo_relpose_config *cfg)
+{
+    if (cfg == NULL)
+        return;
+    cfg->method = TVO_RELPOSE_5PT;
+    cfg->threshold = 1.0 / 460.0;
+    cfg->confidence = 0.999;
+    cfg->max_iters = 1000;
+    cfg->seed = 0x5eedULL;
+    cfg->min_parallax_deg = 0.5;
+    cfg->min_inliers = 15;
+    cfg->use_homography = 1;
+    cfg->refine_iters = 10;
+}
+
+size_t tvo_relpose_scratch_size(int32_t max_points)
+{
+    size_t n = max_points > 0 ? (size_t)max_points : 0;
+    size_t s = TVO_ARENA_ALIGN;
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(double))));
+    for (int k = 0; k < 4; ++k)
+        s = tvo_size_add(s, tvo_arena_round(n));
+    return s;
+}
+
+static void set_identity_result(tvo_relpose *out)
+{
+    memset(out, 0, sizeof *out);
+    out->R[0] = out->R[4] = out->R[8] = 1.0;
+    out->flags = TVO_RELPOSE_FLAG_LOW_CONFIDENCE;
+}
+
+static int pose_finite(const double R[9], const double t[3])
+{
+    for (int k = 0; k < 9; ++k)
+        if (!isfinite(R[k]))
+            return 0;
+    for (int k = 0; k < 3; ++k)
+        if (!isfinite(t[k]))
+            return 0;
+    return 1;
+}
+
+static tvo_status check_config(const tvo_relpose_config *c)
+{
+    if (c->method != TVO_RELPOSE_5PT && c->method != TVO_RELPOSE_8PT)
+        return TVO_ERR_ARG;
+    if (!(c->threshold > 0.0) || !isfinite(c->threshold))
+        return TVO_ERR_ARG;
+    if (!(c->confidence > 0.0 && c->confidence < 1.0))
+        return TVO_ERR_ARG;
+    if (c->max_iters < 1 || c->min_inliers < 0)
+        return TVO_ERR_ARG;
+    if (!(c->min_parallax_deg >= 0.0) || !isfinite(c->min_parallax_deg))
+        return TVO_ERR_ARG;
+    if (c->use_homography != 0 && c->use_homography != 1)
+        return TVO_ERR_ARG;
+    if (c->refine_iters < 0 || c->refine_iters > 100)
+        return TVO_ERR_ARG;
+    return TVO_OK;
+}
+
+/* smallest / largest eigenvalue ratio of the 2x2 scatter of the points: 0 when collinear */
+static int collinear(const tvo_point2d *x, int32_t n)
+{
+    double mx = 0, my = 0, sxx = 0, sxy = 0, syy = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        mx += x[i].x;
+        my += x[i].y;
+    }
+    mx /= n;
+    my /= n;
+    for (int32_t i = 0; i < n; ++i) {
+        double dx = x[i].x - mx, dy = x[i].y - my;
+        sxx += dx * dx;
+        sxy += dx * dy;
+        syy += dy * dy;
+    }
+    double tr = sxx + syy, det = sxx * syy - sxy * sxy;
+    if (!(tr > 1e-24))
+        return 1;
+    double disc = sqrt(fmax(0.0, 0.25 * tr * tr - det));
+    double lmin = 0.5 * tr - disc;
+    return lmin <= 1e-12 * tr;
+}
+
+/* epipolar RANSAC; returns the best E's inlier count (0 when no model) */
+static int32_t essential_ransac(const tvo_relpose_config *cfg, const tvo_point2d *x1, const tvo_point2d *x2,
+                                int32_t n, double thr2, double Ebest[9], int32_t *iters_out)
+{
+    rp_rng rng;
+    rng_seed(&rng, cfg->seed);
+    int s = cfg->method == TVO_RELPOSE_8PT ? 8 : 5;
+    double best_cost = INFINITY;
+    int32_t best_inl = 0, need = cfg->max_iters, it;
+    double min_sep2 = 1e-6 * thr2;
+    for (it = 0; it < need && it < cfg->max_iters; ++it) {
+        int32_t idx[8];
+        double a[8][2], b[8][2];
+        rng_sample(&rng, n, s, idx);
+        int degenerate = 0;
+        for (int k = 0; k < s; ++k) {
+            a[k][0] = x1[idx[k]].x;
+            a[k][1] = x1[idx[k]].y;
+            b[k][0] = x2[idx[k]].x;
+            b[k][1] = x2[idx[k]].y;
+            for (int j = 0; j < k; ++j) {
+                double d1 = (a[k][0] - a[j][0]) * (a[k][0] - a[j][0]) + (a[k][1] - a[j][1]) * (a[k][1] - a[j][1]);
+                double d2 = (b[k][0] - b[j][0]) * (b[k][0] - b[j][0]) + (b[k][1] - b[j][1]) * (b[k][1] - b[j][1]);
+                if (d1 < min_sep2 || d2 < min_sep2)
+                    degenerate = 1;
+            }
+        }
+        if (degenerate)
+            continue;
+        double Es[10][9];
+        int ns;
+        if (s == 5)
+            ns = tvo_essential_5pt((const double (*)[2])a, (const double (*)[2])b, Es);
+        else
+            ns = tvo_essential_8pt((const double (*)[2])a, (const double (*)[2])b, 8, Es[0]);
+        for (int m = 0; m < ns; ++m) {
+            int32_t inl = 0;
+            double c = msac_cost(Es[m], x1, x2, n, thr2, best_cost, &inl);
+            if (c < best_cost) {
+                best_cost = c;
+                best_inl = inl;
+                memcpy(Ebest, Es[m], 9 * sizeof(double));
+                need = ransac_needed(cfg->confidence, best_inl, n, s, cfg->max_iters);
+            }
+        }
+    }
+    *iters_out = it;
+    return best_inl;
+}
+
+/* re-select inliers of (R, t) and refine, twice; returns the final inlier count in mask */
+static int32_t polish(const tvo_relpose_config *cfg, double R[9], double t[3], const tvo_point2d *x1,
+                      const tvo_point2d *x2, int32_t n, double thr2, uint8_t *mask)
+{
+    double E[9];
+    int32_t cnt = 0;
+    for (int round = 0; round < 2; ++round) {
+        essential_from_pose(R, t, E);
+        cnt = mark_inliers(E, x1, x2, n, thr2, mask);
+        if (cnt < 6 || cfg->refine_iters == 0)
+            break;
+        refine_pose(R, t, x1, x2, n, mask, cfg->refine_iters);
+    }
+    essential_from_pose(R, t, E);
+    return mark_inliers(E, x1, x2, n, thr2, mask);
+}
+
+tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_point2d *x1,
+                                const tvo_point2d *x2, int32_t n, tvo_relpose *out,
+                                uint8_t *inlier_mask, void *scratch, size_t scratch_size)
+{
+    if (out == NULL)
+        return TVO_ERR_NULL;
+    set_identity_result(out);
+    if (inlier_mask != NULL && n > 0)
+        memset(inlier_mask, 0, (size_t)n);
+    if (x1 == NULL || x2 == NULL || scratch == NULL)
+        return TVO_ERR_NULL;
+    tvo_relpose_config cfg;
+    if (cfg_in != NULL)
+        cfg = *cfg_in;
+    else
+        tvo_relpose_config_default(&cfg);
+    tvo_status st = check_config(&cfg);
+    if (st != TVO_OK)
+        return st;
+    int smin = cfg.method == TVO_RELPOSE_8PT ? 8 : 5;
+    if (n < smin)
+        return TVO_ERR_TOO_FEW;
+    if (scratch_size < tvo_relpose_scratch_size(n))
+        return TVO_ERR_NO_MEMORY;
+    for (int32_t i = 0; i < n; ++i) {
+        if (!isfinite(x1[i].x) || !isfinite(x1[i].y) || !isfinite(x2[i].x) || !isfinite(x2[i].y))
+            return TVO_ERR_NOT_FINITE;
+        if (fabs(x1[i].x) > RP_MAX_COORD || fabs(x1[i].y) > RP_MAX_COORD || fabs(x2[i].x) > RP_MAX_COORD ||
+            fabs(x2[i].y) > RP_MAX_COORD)
+            return TVO_ERR_RANGE;
+    }
+    if (collinear(x1, n) || collinear(x2, n))
+        return TVO_ERR_DEGENERATE;
+
+    tvo_arena arena;
+    tvo_arena_init(&arena, scratch, scratch_size);
+    double *buf = (double *)tvo_arena_alloc(&arena, (size_t)n * sizeof(double));
+    uint8_t *mask_e = (uint8_t *)tvo_arena_alloc(&arena, (size_t)n);
+    uint8_t *mask_r = (uint8_t *)tvo_arena_alloc(&arena, (size_t)n);
+    uint8_t *mask_h = (uint8_t *)tvo_arena_alloc(&arena, (size_t)n);
+    uint8_t *mask_c = (uint8_t *)tvo_arena_alloc(&arena, (size_t)n);
+    if (buf == NULL || mask_e == NULL || mask_r == NULL || mask_h == NULL || mask_c == NULL)
+        return TVO_ERR_NO_MEMORY;
+
+    const double thr2 = cfg.threshold * cfg.threshold;
+
+    /* 1. epipolar RANSAC */
+    double E[9];
+    int32_t iters = 0;
+    int32_t e_inl = essential_ransac(&cfg, x1, x2, n, thr2, E, &iters);
+    out->iterations = iters;
+    if (e_inl > 0)
+        mark_inliers(E, x1, x2, n, thr2, mask_e);
+    else
+        memset(mask_e, 0, (size_t)n);
+
+    /* 2. rotation-only model and rotation-compensated parallax */
+    double Rrot[9];
+    int32_t r_inl = rotation_ransac(&cfg, x1, x2, n, 4.0 * thr2, Rrot, mask_r);
+    const uint8_t *pmask = e_inl >= 5 ? mask_e : mask_r;
+    int32_t m = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        if (!pmask[i])
+            continue;
+        double f1[3], f2[3], u[3], c[3];
+        bearing(&x1[i], f1);
+        bearing(&x2[i], f2);
+        tvo_la_mat3_vec(Rrot, f1, u);
+        tvo_la_cross(u, f2, c);
+        buf[m++] = atan2(sqrt(dot3(c, c)), dot3(u, f2));
+    }
+    double parallax = m > 0 ? select_kth(buf, m, m / 2) * (180.0 / RP_PI) : 0.0;
+    out->parallax_deg = parallax;
+
+    if (parallax < cfg.min_parallax_deg || e_inl < 5) {
+        if (!pose_finite(Rrot, out->t))
+            return TVO_OK; /* identity + LOW_CONFIDENCE already set */
+        memcpy(out->R, Rrot, sizeof Rrot);
+        out->t[0] = out->t[1] = out->t[2] = 0.0;
+        out->inliers = r_inl;
+        out->flags = TVO_RELPOSE_FLAG_ROTATION_ONLY;
+        if (parallax < cfg.min_parallax_deg)
+            out->flags |= TVO_RELPOSE_FLAG_LOW_PARALLAX;
+        if (r_inl < cfg.min_inliers || r_inl < 3 || (e_inl < 5 && parallax >= cfg.min_parallax_deg))
+            out->flags |= TVO_RELPOSE_FLAG_LOW_CONFIDENCE;
+        if (inlier_mask != NULL)
+            memcpy(inlier_mask, mask_r, (size_t)n);
+        return TVO_OK;
+    }
+
+    /* 3. pose from the epipolar model, refined */
+    double R[9], t[3];
+    decompose_essential(E, x1, x2, n, mask_e, R, t);
+    int32_t inl = polish(&cfg, R, t, x1, x2, n, thr2, mask_e);
+    int32_t good = good_count(R, t, x1, x2, n, thr2, mask_e);
+    int use_h = 0, ambiguous = 0;
+
+    /* 4. homography model selection (dominant plane) */
+    if (cfg.use_homography) {
+        rp_rng rng;
+        rng_seed(&rng, cfg.seed ^ 0x486F6DULL);
+        double inv_s2 = 1.0 / thr2, Hb[9], best = -1.0;
+        int32_t need = cfg.max_iters, h_inl = 0;
+        for (int32_t it = 0; it < need && it < cfg.max_iters; ++it) {
+            int32_t idx[4];
+            double H[9], Hi[9];
+            rng_sample(&rng, n, 4, idx);
+            if (!homography_4pt(x1, x2, idx, H))
+                continue;
+            adjugate3(H, Hi);
+            int32_t c = 0;
+            double sc = homography_score(H, Hi, x1, x2, n, inv_s2, best, NULL, &c);
+            if (sc > best) {
+                best = sc;
+                h_inl = c;
+                memcpy(Hb, H, sizeof H);
+                need = ransac_needed(cfg.confidence, h_inl, n, 4, cfg.max_iters);
+            }
+        }
+        if (best > 0.0) {
+            double Ecur[9], Hi[9];
+            essential_from_pose(R, t, Ecur);
+            double se = essential_score(Ecur, x1, x2, n, inv_s2);
+            adjugate3(Hb, Hi);
+            homography_score(Hb, Hi, x1, x2, n, inv_s2, -1.0, mask_h, &h_inl);
+            double Hr[9];
+            if (homography_dlt(x1, x2, n, mask_h, Hr)) {
+                double Hri[9];
+                int32_t c2 = 0;
+                adjugate3(Hr, Hri);
+                double s2 = homography_score(Hr, Hri, x1, x2, n, inv_s2, -1.0, NULL, &c2);
+                if (s2 >= best) {
+                    best = s2;
+                    memcpy(Hb, Hr, sizeof Hr);
+                    homography_score(Hb, Hri, x1, x2, n, inv_s2, -1.0, mask_h, &h_inl);
+                }
+            }
+            double ratio = best / (best + se);
+            if (ratio > RP_H_RATIO) {
+                double Rs[16][9], ts[16][3];
+                int nc = decompose_homography(Hb, Rs, ts);
+                int32_t gk[16];
+                int kb = -1, kb2 = -1;
+                for (int k = 0; k < nc; ++k) {
+                    gk[k] = good_count(Rs[k], ts[k], x1, x2, n, 4.0 * thr2, mask_h);
+                    if (kb < 0 || gk[k] > gk[kb])
+                        kb = k;
+                }
+                /* the best clearly different candidate: the plane's "twin" solution */
+                for (int k = 0; kb >= 0 && k < nc; ++k)
+                    if (poses_differ(Rs[k], ts[k], Rs[kb], ts[kb]) && (kb2 < 0 || gk[k] > gk[kb2]))
+                        kb2 = k;
+                if (kb >= 0 && gk[kb] >= 5) {
+                    double Rh[9], th[3], R2[9], t2[3];
+                    memcpy(Rh, Rs[kb], sizeof Rh);
+                    memcpy(th, ts[kb], sizeof th);
+                    int32_t inl_h = polish(&cfg, Rh, th, x1, x2, n, thr2, mask_c);
+                    int32_t good_h = good_count(Rh, th, x1, x2, n, thr2, mask_c);
+                    if (kb2 >= 0 && gk[kb2] >= 5) {
+                        memcpy(R2, Rs[kb2], sizeof R2);
+                        memcpy(t2, ts[kb2], sizeof t2);
+                        int32_t inl_2 = polish(&cfg, R2, t2, x1, x2, n, thr2, mask_h);
+                        int32_t good_2 = good_count(R2, t2, x1, x2, n, thr2, mask_h);
+                        if (poses_differ(R2, t2, Rh, th) && (double)good_2 >= 0.85 * good_h &&
+                            (double)good_h >= 0.85 * good_2)
+                            ambiguous = 1;
+                        if (good_2 > good_h && pose_finite(R2, t2)) {
+                            memcpy(Rh, R2, sizeof R2);
+                            memcpy(th, t2, sizeof t2);
+                            memcpy(mask_c, mask_h, (size_t)n);
+                            inl_h = inl_2;
+                            good_h = good_2;
+                        }
+                    }
+                    if (good_h >= good && pose_finite(Rh, th)) {
+                        memcpy(R, Rh, sizeof Rh);
+                        memcpy(t, th, sizeof th);
+                        memcpy(mask_e, mask_c, (size_t)n);
+                        inl = inl_h;
+                        good = good_h;
+                        use_h = 1;
+                    }
+                }
+            }
+        }
+    }
+
+    if (!pose_finite(R, t))
+        return TVO_OK; /* identity + LOW_CONFIDENCE */
+    double nt = sqrt(dot3(t, t));
+    if (!(nt > 0.0))
+        return TVO_OK;
+    memcpy(out->R, R, sizeof R);
+    out->t[0] = t[0] / nt;
+    out->t[1] = t[1] / nt;
+    out->t[2] = t[2] / nt;
+    out->inliers = inl;
+    out->flags = use_h ? TVO_RELPOSE_FLAG_HOMOGRAPHY : 0;
+    if (inl < cfg.min_inliers || inl < 5 || good < inl / 2 || ambiguous)
+        out->flags |= TVO_RELPOSE_FLAG_LOW_CONFIDENCE;
+    if (inlier_mask != NULL)
+        memcpy(inlier_mask, mask_e, (size_t)n);
+    return TVO_OK;
+}

@@ -1,0 +1,448 @@
+/* Relative pose: 5-point solver, 8-point, RANSAC pipeline, rotation-only, planar scenes, bad input.
+ * Synthetic scenes: f = 460 px, 752x480 image, points 1..8 m deep, seeded generator. */
+#include "tvo_test.h"
+#include <math.h>
+#include "tinyvo/linalg.h"
+#include "tinyvo/relpose.h"
+
+#define F_PX 460.0
+#define HALF_W (376.0 / F_PX)
+#define HALF_H (240.0 / F_PX)
+#define DEG (180.0 / 3.14159265358979323846)
+
+static double urand(uint64_t *s)
+{
+    return (double)(tvo_test_rand(s) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static double nrand(uint64_t *s)
+{
+    double u1 = urand(s), u2 = urand(s);
+    if (u1 < 1e-300)
+        u1 = 1e-300;
+    return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
+}
+
+typedef struct scene {
+    double R[9], t[3]; /* ground truth, t unit (or zero) */
+    tvo_point2d x1[600], x2[600];
+    uint8_t outlier[600];
+    int n;
+} scene;
+
+/* random rotation of angle <= max_deg, translation of length `base` in a random direction (0 for
+ * pure rotation); planar != 0 puts all points on one plane (2: and moves mostly sideways) */
+static void make_scene(scene *sc, uint64_t seed, int n, double max_deg, double base, double noise_px,
+                       double outlier_ratio, int planar)
+{
+    uint64_t s = seed * 0x9E3779B97F4A7C15ULL + 12345;
+    double w[3], ang = max_deg / DEG * urand(&s);
+    double ax[3] = {nrand(&s), nrand(&s), nrand(&s)};
+    double na = sqrt(ax[0] * ax[0] + ax[1] * ax[1] + ax[2] * ax[2]);
+    for (int k = 0; k < 3; ++k)
+        w[k] = ax[k] / na * ang;
+    tvo_la_so3_exp(w, sc->R);
+    double td[3] = {nrand(&s), nrand(&s), nrand(&s)};
+    if (planar == 2)
+        td[2] *= 0.2; /* mostly sideways motion: cheirality can rule out the plane's twin solution */
+    double nt = sqrt(td[0] * td[0] + td[1] * td[1] + td[2] * td[2]);
+    for (int k = 0; k < 3; ++k)
+        sc->t[k] = base > 0.0 ? td[k] / nt : 0.0;
+    /* plane: normal tilted from the optical axis, 4 m away */
+    double pn[3] = {0.3 * nrand(&s), 0.3 * nrand(&s), 1.0};
+    double pnn = sqrt(pn[0] * pn[0] + pn[1] * pn[1] + pn[2] * pn[2]);
+    for (int k = 0; k < 3; ++k)
+        pn[k] /= pnn;
+    sc->n = n;
+    for (int i = 0; i < n; ++i) {
+        for (int tries = 0; tries < 1000; ++tries) {
+            double x = (2.0 * urand(&s) - 1.0) * HALF_W, y = (2.0 * urand(&s) - 1.0) * HALF_H;
+            double z = planar ? 4.0 / (pn[0] * x + pn[1] * y + pn[2]) : 1.0 + 7.0 * urand(&s);
+            if (!(z > 0.5 && z < 50.0))
+                continue;
+            double X1[3] = {x * z, y * z, z}, X2[3];
+            tvo_la_mat3_vec(sc->R, X1, X2);
+            for (int k = 0; k < 3; ++k)
+                X2[k] += base * sc->t[k];
+            if (X2[2] < 0.5)
+                continue;
+            double u = X2[0] / X2[2], v = X2[1] / X2[2];
+            if (fabs(u) > HALF_W || fabs(v) > HALF_H)
+                continue;
+            sc->x1[i].x = x + noise_px / F_PX * nrand(&s);
+            sc->x1[i].y = y + noise_px / F_PX * nrand(&s);
+            sc->x2[i].x = u + noise_px / F_PX * nrand(&s);
+            sc->x2[i].y = v + noise_px / F_PX * nrand(&s);
+            sc->outlier[i] = 0;
+            break;
+        }
+        if (urand(&s) < outlier_ratio) {
+            sc->x2[i].x = (2.0 * urand(&s) - 1.0) * HALF_W;
+            sc->x2[i].y = (2.0 * urand(&s) - 1.0) * HALF_H;
+            sc->outlier[i] = 1;
+        }
+    }
+}
+
+static double t_err_deg(const double a[3], const double b[3])
+{
+    double d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    double na = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    double nb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+    double c = d / (na * nb);
+    if (c > 1.0)
+        c = 1.0;
+    if (c < -1.0)
+        c = -1.0;
+    return acos(c) * DEG;
+}
+
+static unsigned char g_scratch[1 << 16];
+
+static void test_fivept_noise_free(void **state)
+{
+    (void)state;
+    int hits = 0;
+    for (int trial = 0; trial < 200; ++trial) {
+        scene sc;
+        make_scene(&sc, 1000 + trial, 5, 30.0, 1.0, 0.0, 0.0, 0);
+        double a[5][2], b[5][2], E[10][9];
+        for (int i = 0; i < 5; ++i) {
+            a[i][0] = sc.x1[i].x;
+            a[i][1] = sc.x1[i].y;
+            b[i][0] = sc.x2[i].x;
+            b[i][1] = sc.x2[i].y;
+        }
+        int ns = tvo_essential_5pt((const double (*)[2])a, (const double (*)[2])b, E);
+        assert_true(ns >= 0 && ns <= 10);
+        /* ground-truth E, normalised, compared up to sign */
+        double S[9] = {0, -sc.t[2], sc.t[1], sc.t[2], 0, -sc.t[0], -sc.t[1], sc.t[0], 0}, Eg[9];
+        tvo_la_mat3_mul(S, sc.R, Eg);
+        double ng = 0;
+        for (int k = 0; k < 9; ++k)
+            ng += Eg[k] * Eg[k];
+        ng = sqrt(ng);
+        double best = 1e9;
+        for (int m = 0; m < ns; ++m) {
+            double dp = 0, dm = 0;
+            for (int k = 0; k < 9; ++k) {
+                dp += (E[m][k] - Eg[k] / ng) * (E[m][k] - Eg[k] / ng);
+                dm += (E[m][k] + Eg[k] / ng) * (E[m][k] + Eg[k] / ng);
+            }
+            if (dp < best)
+                best = dp;
+            if (dm < best)
+                best = dm;
+            /* every solution satisfies the 5 epipolar constraints */
+            for (int i = 0; i < 5; ++i) {
+                double f1[3] = {a[i][0], a[i][1], 1}, y[3];
+                tvo_la_mat3_vec(E[m], f1, y);
+                assert_true(fabs(b[i][0] * y[0] + b[i][1] * y[1] + y[2]) < 1e-6);
+            }
+        }
+        if (sqrt(best) < 1e-6)
+            ++hits;
+    }
+    /* the true E is among the solutions in (almost) every sample */
+    assert_true(hits >= 197);
+}
+
+static void test_pipeline_noise_free(void **state)
+{
+    (void)state;
+    tvo_relpose_config cfg;
+    tvo_relpose_config_default(&cfg);
+    for (int method = 0; method < 2; ++method) {
+        cfg.method = (tvo_relpose_method)method;
+        for (int trial = 0; trial < 20; ++trial) {
+            scene sc;
+            tvo_relpose out;
+            make_scene(&sc, 77 + trial, 200, 20.0, 1.0, 0.0, 0.0, 0);
+            cfg.seed = (uint64_t)trial;
+            assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &out, NULL, g_scratch,
+                                                  sizeof g_scratch), TVO_OK);
+            assert_true(tvo_la_rot_dist(out.R, sc.R) < 1e-6);
+            assert_true(t_err_deg(out.t, sc.t) < 1e-4);
+            assert_int_equal(out.flags & (TVO_RELPOSE_FLAG_ROTATION_ONLY | TVO_RELPOSE_FLAG_LOW_CONFIDENCE), 0);
+            assert_int_equal(out.inliers, sc.n);
+        }
+    }
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* 0.5 px noise, 30% outliers: the accuracy figures on TRIALS seeded trials */
+#define TRIALS 300
+static void test_pipeline_noise_outliers(void **state)
+{
+    (void)state;
+    static double rerr[TRIALS], terr[TRIALS];
+    tvo_relpose_config cfg;
+    tvo_relpose_config_default(&cfg);
+    int success = 0, mask_ok = 0;
+    for (int trial = 0; trial < TRIALS; ++trial) {
+        scene sc;
+        tvo_relpose out;
+        uint8_t mask[600];
+        make_scene(&sc, 5000 + trial, 300, 20.0, 1.0, 0.5, 0.3, 0);
+        cfg.seed = (uint64_t)trial;
+        assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &out, mask, g_scratch,
+                                              sizeof g_scratch), TVO_OK);
+        rerr[trial] = tvo_la_rot_dist(out.R, sc.R) * DEG;
+        terr[trial] = (out.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY) ? 180.0 : t_err_deg(out.t, sc.t);
+        if (rerr[trial] < 1.0 && terr[trial] < 5.0)
+            ++success;
+        int wrong = 0;
+        for (int i = 0; i < sc.n; ++i)
+            wrong += sc.outlier[i] && mask[i];
+        if (wrong <= sc.n / 50)
+            ++mask_ok;
+    }
+    qsort(rerr, TRIALS, sizeof(double), cmp_double);
+    qsort(terr, TRIALS, sizeof(double), cmp_double);
+    fprintf(stderr, "noise+outliers: median rot %.4f deg, median t %.4f deg, success %d/%d\n", rerr[TRIALS / 2],
+            terr[TRIALS / 2], success, TRIALS);
+    assert_true(rerr[TRIALS / 2] <= 0.05);
+    assert_true(terr[TRIALS / 2] <= 1.0);
+    assert_true(success >= TRIALS - TRIALS / 200); /* >= 99.5 % */
+    assert_true(mask_ok >= TRIALS - 2);
+}
+
+static void test_pure_rotation(void **state)
+{
+    (void)state;
+    tvo_relpose_config cfg;
+    tvo_relpose_config_default(&cfg);
+    for (int trial = 0; trial < 50; ++trial) {
+        scene sc;
+        tvo_relpose out;
+        /* exact pure rotation, and a tiny (1 mm at 1..8 m) baseline */
+        make_scene(&sc, 900 + trial, 300, 20.0, (trial & 1) ? 0.001 : 0.0, 0.5, 0.3, 0);
+        cfg.seed = (uint64_t)trial;
+        assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &out, NULL, g_scratch,
+                                              sizeof g_scratch), TVO_OK);
+        double e = tvo_la_rot_dist(out.R, sc.R) * DEG;
+        assert_true(e <= 0.1);
+        assert_true(out.flags & TVO_RELPOSE_FLAG_LOW_PARALLAX);
+        assert_true(out.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY);
+        assert_true(out.t[0] == 0.0 && out.t[1] == 0.0 && out.t[2] == 0.0);
+        assert_true(out.parallax_deg < cfg.min_parallax_deg);
+    }
+}
+
+static void test_planar_scene(void **state)
+{
+    (void)state;
+    tvo_relpose_config cfg;
+    tvo_relpose_config_default(&cfg);
+    const int trials = 40;
+    for (int kind = 1; kind <= 2; ++kind) {
+        int h_flag = 0, ok = 0, flagged = 0;
+        for (int trial = 0; trial < trials; ++trial) {
+            scene sc;
+            tvo_relpose out;
+            make_scene(&sc, 300 + trial, 300, 15.0, 1.0, 0.5, 0.2, kind);
+            cfg.seed = (uint64_t)trial;
+            assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &out, NULL, g_scratch,
+                                                  sizeof g_scratch), TVO_OK);
+            double re = tvo_la_rot_dist(out.R, sc.R) * DEG, te = t_err_deg(out.t, sc.t);
+            int correct = re < 0.5 && te < 3.0;
+            if (out.flags & TVO_RELPOSE_FLAG_HOMOGRAPHY)
+                ++h_flag;
+            if (out.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE)
+                ++flagged;
+            ok += correct;
+            /* a wrong pose (the plane's twin) must never come out unflagged */
+            assert_true(correct || (out.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE));
+        }
+        fprintf(stderr, "planar kind %d: %d/%d correct, homography chosen %d, low-confidence %d\n", kind, ok,
+                trials, h_flag, flagged);
+        assert_true(h_flag >= trials * 8 / 10);
+        if (kind == 2) /* sideways motion is not ambiguous: all correct */
+            assert_true(ok >= trials - 1);
+    }
+}
+
+static void test_deterministic(void **state)
+{
+    (void)state;
+    scene sc;
+    tvo_relpose a, b;
+    tvo_relpose_config cfg;
+    tvo_relpose_config_default(&cfg);
+    make_scene(&sc, 42, 300, 20.0, 1.0, 0.5, 0.3, 0);
+    assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &a, NULL, g_scratch, sizeof g_scratch), TVO_OK);
+    assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &b, NULL, g_scratch, sizeof g_scratch), TVO_OK);
+    assert_memory_equal(&a, &b, sizeof a);
+    assert_true(a.iterations >= 1 && a.iterations <= cfg.max_iters);
+}
+
+static void test_bad_input(void **state)
+{
+    (void)state;
+    scene sc;
+    tvo_relpose out;
+    uint8_t mask[600];
+    tvo_relpose_config cfg;
+    tvo_relpose_config_default(&cfg);
+    make_scene(&sc, 7, 100, 20.0, 1.0, 0.5, 0.0, 0);
+    void *sb = g_scratch;
+    size_t ss = sizeof g_scratch;
+    assert_int_equal(tvo_relpose_estimate(&cfg, NULL, sc.x2, sc.n, &out, mask, sb, ss), TVO_ERR_NULL);
+    assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, NULL, sc.n, &out, mask, sb, ss), TVO_ERR_NULL);
+    assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, NULL, mask, sb, ss), TVO_ERR_NULL);
+    assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &out, mask, NULL, ss), TVO_ERR_NULL);
+    assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, 4, &out, mask, sb, ss), TVO_ERR_TOO_FEW);
+    assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, -3, &out, mask, sb, ss), TVO_ERR_TOO_FEW);
+    assert_int_equal(out.R[0], 1.0);
+    assert_int_equal(out.flags, TVO_RELPOSE_FLAG_LOW_CONFIDENCE);
+    assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &out, mask, sb,
+                                          tvo_relpose_scratch_size(sc.n) - 1), TVO_ERR_NO_MEMORY);
+    assert_true(tvo_relpose_scratch_size(INT32_MAX) > tvo_relpose_scratch_size(1000));
+    assert_true(tvo_relpose_scratch_size(-1) > 0);
+    cfg.method = TVO_RELPOSE_8PT;
+    assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, 7, &out, mask, sb, ss), TVO_ERR_TOO_FEW);
+    /* bad configurations */
+    tvo_relpose_config bad;
+    tvo_relpose_config_default(&bad);
+    bad.threshold = 0.0;
+    assert_int_equal(tvo_relpose_estimate(&bad, sc.x1, sc.x2, sc.n, &out, mask, sb, ss), TVO_ERR_ARG);
+    tvo_relpose_config_default(&bad);
+    bad.threshold = NAN;
+    assert_int_equal(tvo_relpose_estimate(&bad, sc.x1, sc.x2, sc.n, &out, mask, sb, ss), TVO_ERR_ARG);
+    tvo_relpose_config_default(&bad);
+    bad.confidence = 1.0;
+    assert_int_equal(tvo_relpose_estimate(&bad, sc.x1, sc.x2, sc.n, &out, mask, sb, ss), TVO_ERR_ARG);
+    tvo_relpose_config_default(&bad);
+    bad.max_iters = 0;
+    assert_int_equal(tvo_relpose_estimate(&bad, sc.x1, sc.x2, sc.n, &out, mask, sb, ss), TVO_ERR_ARG);
+    tvo_relpose_config_default(&bad);
+    bad.method = (tvo_relpose_method)7;
+    assert_int_equal(tvo_relpose_estimate(&bad, sc.x1, sc.x2, sc.n, &out, mask, sb, ss), TVO_ERR_ARG);
+    tvo_relpose_config_default(&bad);
+    bad.min_parallax_deg = -1.0;
+    assert_int_equal(tvo_relpose_estimate(&bad, sc.x1, sc.x2, sc.n, &out, mask, sb, ss), TVO_ERR_ARG);
+    tvo_relpose_config_default(&bad);
+    bad.refine_iters = 1000;
+    assert_int_equal(tvo_relpose_estimate(&bad, sc.x1, sc.x2, sc.n, &out, mask, sb, ss), TVO_ERR_ARG);
+    /* NULL config means defaults */
+    assert_int_equal(tvo_relpose_estimate(NULL, sc.x1, sc.x2, sc.n, &out, mask, sb, ss), TVO_OK);
+    assert_true(tvo_la_rot_dist(out.R, sc.R) * DEG < 0.5);
+    /* NaN / Inf / huge coordinates */
+    tvo_point2d keep = sc.x1[10];
+    sc.x1[10].x = NAN;
+    assert_int_equal(tvo_relpose_estimate(NULL, sc.x1, sc.x2, sc.n, &out, mask, sb, ss), TVO_ERR_NOT_FINITE);
+    for (int i = 0; i < sc.n; ++i)
+        assert_int_equal(mask[i], 0);
+    sc.x1[10].x = INFINITY;
+    assert_int_equal(tvo_relpose_estimate(NULL, sc.x1, sc.x2, sc.n, &out, mask, sb, ss), TVO_ERR_NOT_FINITE);
+    sc.x1[10].x = 1e300;
+    assert_int_equal(tvo_relpose_estimate(NULL, sc.x1, sc.x2, sc.n, &out, mask, sb, ss), TVO_ERR_RANGE);
+    sc.x1[10] = keep;
+    /* all points identical, collinear in one image */
+    tvo_point2d same[20], line[20], other[20];
+    for (int i = 0; i < 20; ++i) {
+        same[i].x = 0.1;
+        same[i].y = -0.2;
+        line[i].x = 0.01 * i;
+        line[i].y = 0.02 * i - 0.1;
+        other[i] = sc.x2[i];
+    }
+    assert_int_equal(tvo_relpose_estimate(NULL, same, other, 20, &out, mask, sb, ss), TVO_ERR_DEGENERATE);
+    assert_int_equal(tvo_relpose_estimate(NULL, line, other, 20, &out, mask, sb, ss), TVO_ERR_DEGENERATE);
+    assert_int_equal(tvo_relpose_estimate(NULL, other, line, 20, &out, mask, sb, ss), TVO_ERR_DEGENERATE);
+    /* minimal-solver bad input */
+    double E[10][9], a[5][2] = {{0}}, b[5][2] = {{0}};
+    assert_int_equal(tvo_essential_5pt(NULL, (const double (*)[2])b, E), 0);
+    assert_int_equal(tvo_essential_5pt((const double (*)[2])a, (const double (*)[2])b, E), 0);
+    assert_int_equal(tvo_essential_8pt(NULL, NULL, 8, E[0]), 0);
+}
+
+/* inputs that are legal but nasty: duplicated points, only 5 distinct ones, pure noise. Any result
+ * is accepted as long as it is finite, bounded and flagged when not trustworthy. */
+static void test_nasty_input(void **state)
+{
+    (void)state;
+    tvo_relpose out;
+    uint8_t mask[600];
+    tvo_relpose_config cfg;
+    tvo_relpose_config_default(&cfg);
+    scene sc;
+    make_scene(&sc, 11, 300, 20.0, 1.0, 0.5, 0.0, 0);
+    /* 300 correspondences that are 6 distinct ones repeated */
+    tvo_point2d d1[300], d2[300];
+    for (int i = 0; i < 300; ++i) {
+        d1[i] = sc.x1[i % 6];
+        d2[i] = sc.x2[i % 6];
+    }
+    for (int method = 0; method < 2; ++method) {
+        cfg.method = (tvo_relpose_method)method;
+        tvo_status st = tvo_relpose_estimate(&cfg, d1, d2, 300, &out, mask, g_scratch, sizeof g_scratch);
+        assert_true(st == TVO_OK || st == TVO_ERR_DEGENERATE);
+        for (int k = 0; k < 9; ++k)
+            assert_true(isfinite(out.R[k]));
+        assert_true(out.iterations <= cfg.max_iters);
+        /* random matches: no structure at all */
+        uint64_t s = 99;
+        for (int i = 0; i < 300; ++i) {
+            d1[i].x = (2.0 * urand(&s) - 1.0) * HALF_W;
+            d1[i].y = (2.0 * urand(&s) - 1.0) * HALF_H;
+            d2[i].x = (2.0 * urand(&s) - 1.0) * HALF_W;
+            d2[i].y = (2.0 * urand(&s) - 1.0) * HALF_H;
+        }
+        st = tvo_relpose_estimate(&cfg, d1, d2, 300, &out, mask, g_scratch, sizeof g_scratch);
+        assert_int_equal(st, TVO_OK);
+        for (int k = 0; k < 9; ++k)
+            assert_true(isfinite(out.R[k]));
+        for (int k = 0; k < 3; ++k)
+            assert_true(isfinite(out.t[k]));
+        assert_true(out.iterations <= cfg.max_iters);
+        assert_true(isfinite(out.parallax_deg));
+    }
+}
+
+static void test_linalg(void **state)
+{
+    (void)state;
+    /* SVD reconstructs, poly roots of (t-1)(t-2)(t+3)(t^2+1) */
+    double A[9] = {1, 2, 3, 4, 5, 6, 7, 8, 10}, U[9], s[3], V[9], US[9], B[9];
+    tvo_la_svd3(A, U, s, V);
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            US[3 * i + j] = U[3 * i + j] * s[j];
+    tvo_la_mat3_mul_bt(US, V, B);
+    for (int k = 0; k < 9; ++k)
+        assert_true(fabs(A[k] - B[k]) < 1e-12);
+    assert_true(s[0] >= s[1] && s[1] >= s[2] && s[2] > 0);
+    /* (t-1)(t-2)(t+3) = t^3 - 7t + 6; times (t^2 + 1) = t^5 - 6t^3 + 6t^2 - 7t + 6 */
+    double c[6] = {6, -7, 6, -6, 0, 1}, r[5];
+    int nr = tvo_la_poly_real_roots(c, 5, r);
+    assert_int_equal(nr, 3);
+    assert_true(fabs(r[0] + 3) < 1e-12 && fabs(r[1] - 1) < 1e-12 && fabs(r[2] - 2) < 1e-12);
+    double z[3] = {0, 0, 0};
+    assert_int_equal(tvo_la_poly_real_roots(z, 2, r), 0);
+    double w[3] = {0.3, -0.2, 0.1}, R[9];
+    tvo_la_so3_exp(w, R);
+    assert_true(fabs(tvo_la_rot_angle(R) - sqrt(0.14)) < 1e-12);
+    assert_true(fabs(tvo_la_mat3_det(R) - 1.0) < 1e-12);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_linalg),
+        cmocka_unit_test(test_fivept_noise_free),
+        cmocka_unit_test(test_pipeline_noise_free),
+        cmocka_unit_test(test_pipeline_noise_outliers),
+        cmocka_unit_test(test_pure_rotation),
+        cmocka_unit_test(test_planar_scene),
+        cmocka_unit_test(test_deterministic),
+        cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_nasty_input),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
