@@ -1,0 +1,392 @@
+/* Pyramidal Lucas-Kanade: known shifts, forward-backward check, points outside, bad inputs. */
+#include <math.h>
+
+#include "tvo_test.h"
+#include "tinyvo/lk.h"
+
+#define W 160
+#define H 120
+#define NWAVES 6
+#define TWO_PI 6.283185307179586
+
+/* Smooth texture: sum of plane waves, content translated by (dx, dy). */
+static void render(uint8_t *img, int w, int h, double dx, double dy)
+{
+    static const double fx[NWAVES] = { 0.21, -0.13, 0.37, 0.05, -0.29, 0.11 };
+    static const double fy[NWAVES] = { 0.07, 0.31, -0.17, -0.41, 0.23, 0.19 };
+    static const double ph[NWAVES] = { 0.3, 1.1, 2.0, 4.2, 5.1, 0.7 };
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            double v = 128.0;
+            for (int k = 0; k < NWAVES; ++k)
+                v += 20.0 * sin(fx[k] * (x - dx) + fy[k] * (y - dy) + ph[k]);
+            img[y * w + x] = (uint8_t)floor(v + 0.5);
+        }
+}
+
+typedef struct fixture {
+    uint8_t a[W * H], b[W * H];
+    uint8_t mem_a[1 << 16], mem_b[1 << 16];
+    tvo_pyramid pa, pb;
+    tvo_lk_config cfg;
+    uint8_t scratch[1 << 15];
+} fixture;
+
+static fixture F;
+
+static void build(int levels, double dx, double dy)
+{
+    tvo_image ia = tvo_image_make(W, H, W, F.a), ib = tvo_image_make(W, H, W, F.b);
+    render(F.a, W, H, 0.0, 0.0);
+    render(F.b, W, H, dx, dy);
+    assert_true(tvo_pyramid_required_size(W, H, levels) <= sizeof(F.mem_a));
+    assert_int_equal(tvo_pyramid_init(&F.pa, W, H, levels, F.mem_a, sizeof(F.mem_a)), TVO_OK);
+    assert_int_equal(tvo_pyramid_init(&F.pb, W, H, levels, F.mem_b, sizeof(F.mem_b)), TVO_OK);
+    assert_int_equal(tvo_pyramid_build(&F.pa, &ia), TVO_OK);
+    assert_int_equal(tvo_pyramid_build(&F.pb, &ib), TVO_OK);
+    tvo_lk_config_default(&F.cfg);
+    F.cfg.max_level = levels - 1;
+    assert_true(tvo_lk_scratch_size(&F.cfg) <= sizeof(F.scratch));
+}
+
+static void grid_points(tvo_point2f *p, int *n)
+{
+    int k = 0;
+    for (int y = 30; y <= H - 30; y += 15)
+        for (int x = 30; x <= W - 30; x += 15)
+            p[k++] = (tvo_point2f){ (float)x + 0.3f, (float)y + 0.6f };
+    *n = k;
+}
+
+static void check_shift(double dx, double dy, int levels)
+{
+    tvo_point2f p0[64], p1[64];
+    uint8_t st[64];
+    float err[64];
+    int n, ok = 0, good = 0;
+    build(levels, dx, dy);
+    grid_points(p0, &n);
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, err, n, F.scratch, sizeof(F.scratch)),
+                     TVO_OK);
+    for (int i = 0; i < n; ++i) {
+        if (st[i] != TVO_LK_TRACKED)
+            continue;
+        ++ok;
+        if (fabs(p1[i].x - (p0[i].x + dx)) < 0.05 && fabs(p1[i].y - (p0[i].y + dy)) < 0.05)
+            ++good;
+        assert_true(err[i] >= 0.0f);
+        if (fabs(p1[i].x - (p0[i].x + dx)) < 0.05) /* a good match has a small error */
+            assert_true(err[i] < 2.0f);
+    }
+    /* all tracked, all within 0.05 px (at most one exception) */
+    assert_true(ok >= n - 1);
+    assert_true(good >= n - 1);
+}
+
+static void test_known_shifts(void **state)
+{
+    (void)state;
+    check_shift(0.0, 0.0, 1);
+    check_shift(0.4, -0.3, 1);
+    check_shift(1.7, 0.8, 2);
+    check_shift(-6.25, 3.5, 2);
+    check_shift(8.6, -5.2, 3);
+    check_shift(9.5, 6.5, 3);
+}
+
+static void test_identical_images_zero_motion(void **state)
+{
+    tvo_point2f p0[64], p1[64];
+    uint8_t st[64];
+    float err[64];
+    int n;
+    (void)state;
+    build(3, 0.0, 0.0);
+    grid_points(p0, &n);
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, err, n, F.scratch, sizeof(F.scratch)),
+                     TVO_OK);
+    for (int i = 0; i < n; ++i) {
+        assert_int_equal(st[i], TVO_LK_TRACKED);
+        assert_true(fabsf(p1[i].x - p0[i].x) < 1e-3f && fabsf(p1[i].y - p0[i].y) < 1e-3f);
+        assert_true(err[i] < 1e-3f);
+    }
+}
+
+static void test_initial_flow(void **state)
+{
+    tvo_point2f p0[64], p1[64];
+    uint8_t st[64];
+    int n;
+    (void)state;
+    build(1, 9.3, -4.1); /* too far for one level without a guess ... */
+    grid_points(p0, &n);
+    F.cfg.use_initial_flow = 1;
+    for (int i = 0; i < n; ++i)
+        p1[i] = (tvo_point2f){ p0[i].x + 9.0f, p0[i].y - 4.0f }; /* ... fine with one */
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, NULL, n, F.scratch, sizeof(F.scratch)),
+                     TVO_OK);
+    for (int i = 0; i < n; ++i) {
+        assert_int_equal(st[i], TVO_LK_TRACKED);
+        assert_true(fabs(p1[i].x - (p0[i].x + 9.3)) < 0.05 && fabs(p1[i].y - (p0[i].y - 4.1)) < 0.05);
+    }
+}
+
+/* A texture periodic in x (period 8 px): a guess one period off converges to the wrong copy. The
+ * backward track starts where the forward one ended and finds the nearest copy in prev, one period
+ * away from the start: the forward-backward check must reject it; a good guess passes. */
+static void test_fb_check_rejects_bad_track(void **state)
+{
+    tvo_point2f p0[2] = { { 80.0f, 60.0f }, { 80.0f, 60.0f } }, p1[2];
+    uint8_t st[2];
+    float err[2];
+    tvo_image ia = tvo_image_make(W, H, W, F.a), ib = tvo_image_make(W, H, W, F.b);
+    (void)state;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            double v0 = 128 + 60 * sin(TWO_PI * x / 8.0) + 40 * sin(TWO_PI * y / 23.0);
+            double v1 = 128 + 60 * sin(TWO_PI * (x - 3.0) / 8.0) + 40 * sin(TWO_PI * y / 23.0);
+            F.a[y * W + x] = (uint8_t)floor(v0 + 0.5);
+            F.b[y * W + x] = (uint8_t)floor(v1 + 0.5);
+        }
+    assert_int_equal(tvo_pyramid_init(&F.pa, W, H, 1, F.mem_a, sizeof(F.mem_a)), TVO_OK);
+    assert_int_equal(tvo_pyramid_init(&F.pb, W, H, 1, F.mem_b, sizeof(F.mem_b)), TVO_OK);
+    assert_int_equal(tvo_pyramid_build(&F.pa, &ia), TVO_OK);
+    assert_int_equal(tvo_pyramid_build(&F.pb, &ib), TVO_OK);
+    tvo_lk_config_default(&F.cfg);
+    F.cfg.max_level = 0;
+    F.cfg.use_initial_flow = 1;
+
+    /* without the check: both "tracked", the first one at the wrong copy (+3 + 8) */
+    p1[0] = (tvo_point2f){ 80.0f + 10.5f, 60.0f };
+    p1[1] = (tvo_point2f){ 80.0f + 2.5f, 60.0f };
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, err, 2, F.scratch, sizeof(F.scratch)),
+                     TVO_OK);
+    assert_int_equal(st[0], TVO_LK_TRACKED);
+    assert_int_equal(st[1], TVO_LK_TRACKED);
+    assert_true(fabsf(p1[0].x - 91.0f) < 0.1f);
+    assert_true(fabsf(p1[1].x - 83.0f) < 0.1f);
+
+    F.cfg.fb_check = 1;
+    F.cfg.fb_max_error = 1.0f;
+    p1[0] = (tvo_point2f){ 80.0f + 10.5f, 60.0f };
+    p1[1] = (tvo_point2f){ 80.0f + 2.5f, 60.0f };
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, err, 2, F.scratch, sizeof(F.scratch)),
+                     TVO_OK);
+    assert_int_equal(st[0], TVO_LK_LOST);
+    assert_true(err[0] == 0.0f);
+    assert_int_equal(st[1], TVO_LK_TRACKED);
+    assert_true(fabsf(p1[1].x - 83.0f) < 0.1f);
+}
+
+static void test_points_outside_and_at_borders(void **state)
+{
+    tvo_point2f p0[12] = { { -100.0f, 10.0f }, { 1e30f, 5.0f }, { 5.0f, -1e30f }, { W + 50.0f, H / 2.0f },
+                           { 0.0f, 0.0f },      { W - 1.0f, H - 1.0f }, { 0.5f, H / 2.0f }, { W / 2.0f, 0.2f },
+                           { -3.0f, -3.0f },    { W + 2.0f, H + 2.0f }, { 3e9f, 3e9f }, { -2e9f, 7.0f } };
+    tvo_point2f p1[12];
+    uint8_t st[12];
+    float err[12];
+    (void)state;
+    build(3, 4.2, -2.7);
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, err, 12, F.scratch, sizeof(F.scratch)),
+                     TVO_OK);
+    assert_int_equal(st[0], TVO_LK_LOST);
+    assert_int_equal(st[1], TVO_LK_LOST);
+    assert_int_equal(st[2], TVO_LK_LOST);
+    assert_int_equal(st[3], TVO_LK_LOST);
+    assert_int_equal(st[10], TVO_LK_LOST);
+    assert_int_equal(st[11], TVO_LK_LOST);
+    assert_true(err[0] == 0.0f);
+    for (int i = 0; i < 12; ++i) {
+        if (st[i] == TVO_LK_TRACKED) { /* tracked points end inside the image */
+            assert_true(p1[i].x >= 0.0f && p1[i].x <= W - 1.0f && p1[i].y >= 0.0f && p1[i].y <= H - 1.0f);
+        }
+    }
+    /* forward-backward on the same points exercises border windows in both directions */
+    F.cfg.fb_check = 1;
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, err, 12, F.scratch, sizeof(F.scratch)),
+                     TVO_OK);
+    assert_int_equal(st[0], TVO_LK_LOST);
+}
+
+static void test_random_points_everywhere(void **state)
+{
+    tvo_point2f p0[500], p1[500];
+    uint8_t st[500];
+    float err[500];
+    uint64_t seed = 4242;
+    int tracked = 0;
+    (void)state;
+    build(3, -3.3, 5.1);
+    for (int i = 0; i < 500; ++i) {
+        p0[i].x = (float)((double)(tvo_test_rand(&seed) >> 11) / 9007199254740992.0 * (W + 80) - 40);
+        p0[i].y = (float)((double)(tvo_test_rand(&seed) >> 11) / 9007199254740992.0 * (H + 80) - 40);
+    }
+    F.cfg.fb_check = 1;
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, err, 500, F.scratch, sizeof(F.scratch)),
+                     TVO_OK);
+    for (int i = 0; i < 500; ++i) {
+        assert_true(st[i] == TVO_LK_TRACKED || st[i] == TVO_LK_LOST);
+        if (st[i] == TVO_LK_TRACKED) {
+            ++tracked;
+            assert_true(isfinite(p1[i].x) && isfinite(p1[i].y) && isfinite(err[i]));
+        }
+    }
+    assert_true(tracked > 150);
+}
+
+static void test_small_image_skips_small_levels(void **state)
+{
+    /* 64x48 with 3 levels: level 2 (16x12) is not larger than the 21 px window and is not used */
+    static uint8_t a[64 * 48], b[64 * 48], ma[1 << 13], mb[1 << 13];
+    tvo_pyramid pa, pb;
+    tvo_lk_config cfg;
+    tvo_point2f p0[1] = { { 32.0f, 24.0f } }, p1[1];
+    uint8_t st[1];
+    tvo_image ia = tvo_image_make(64, 48, 64, a), ib = tvo_image_make(64, 48, 64, b);
+    (void)state;
+    render(a, 64, 48, 0.0, 0.0);
+    render(b, 64, 48, 2.5, 1.5);
+    assert_int_equal(tvo_pyramid_init(&pa, 64, 48, 3, ma, sizeof(ma)), TVO_OK);
+    assert_int_equal(tvo_pyramid_init(&pb, 64, 48, 3, mb, sizeof(mb)), TVO_OK);
+    assert_int_equal(tvo_pyramid_build(&pa, &ia), TVO_OK);
+    assert_int_equal(tvo_pyramid_build(&pb, &ib), TVO_OK);
+    tvo_lk_config_default(&cfg);
+    cfg.max_level = 2;
+    assert_int_equal(tvo_lk_track(&cfg, &pa, &pb, p0, p1, st, NULL, 1, F.scratch, sizeof(F.scratch)), TVO_OK);
+    assert_int_equal(st[0], TVO_LK_TRACKED);
+    assert_true(fabsf(p1[0].x - 34.5f) < 0.05f && fabsf(p1[0].y - 25.5f) < 0.05f);
+}
+
+static void test_bad_inputs(void **state)
+{
+    tvo_point2f p0[3] = { { 50.0f, 50.0f }, { 60.0f, 60.0f }, { 70.0f, 70.0f } }, p1[3];
+    uint8_t st[3];
+    float err[3];
+    tvo_lk_config c;
+    tvo_pyramid other;
+    static uint8_t mem[1 << 16], pix[162 * H];
+    void *s = F.scratch;
+    size_t ss = sizeof(F.scratch);
+    (void)state;
+    build(3, 1.0, 1.0);
+    c = F.cfg;
+    /* NULL pointers */
+    assert_int_equal(tvo_lk_track(NULL, &F.pa, &F.pb, p0, p1, st, err, 3, s, ss), TVO_ERR_NULL);
+    assert_int_equal(tvo_lk_track(&c, NULL, &F.pb, p0, p1, st, err, 3, s, ss), TVO_ERR_NULL);
+    assert_int_equal(tvo_lk_track(&c, &F.pa, NULL, p0, p1, st, err, 3, s, ss), TVO_ERR_NULL);
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, NULL, p1, st, err, 3, s, ss), TVO_ERR_NULL);
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, NULL, st, err, 3, s, ss), TVO_ERR_NULL);
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, NULL, err, 3, s, ss), TVO_ERR_NULL);
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, st, err, 3, NULL, ss), TVO_ERR_NULL);
+    /* err may be NULL, n may be 0 */
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, st, NULL, 3, s, ss), TVO_OK);
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, st, err, 0, s, ss), TVO_OK);
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, st, err, -1, s, ss), TVO_ERR_SIZE);
+    /* window size: even, too small, too big */
+    c.win_size = 20;
+    assert_int_equal(tvo_lk_config_check(&c), TVO_ERR_ARG);
+    assert_int_equal(tvo_lk_scratch_size(&c), 0);
+    memset(st, 7, sizeof(st));
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, st, err, 3, s, ss), TVO_ERR_ARG);
+    assert_int_equal(st[0], TVO_LK_LOST); /* status cleared on error */
+    c.win_size = 1;
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, st, err, 3, s, ss), TVO_ERR_ARG);
+    c.win_size = TVO_LK_MAX_WIN_SIZE + 2;
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, st, err, 3, s, ss), TVO_ERR_ARG);
+    c.win_size = TVO_LK_MAX_WIN_SIZE; /* largest allowed: fine, needs more scratch */
+    assert_true(tvo_lk_scratch_size(&c) > tvo_lk_scratch_size(&F.cfg));
+    /* other fields */
+    c = F.cfg;
+    c.max_iters = -1;
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, st, err, 3, s, ss), TVO_ERR_ARG);
+    c = F.cfg;
+    c.max_iters = TVO_LK_MAX_ITERS + 1;
+    assert_int_equal(tvo_lk_config_check(&c), TVO_ERR_ARG);
+    c = F.cfg;
+    c.epsilon = NAN;
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, st, err, 3, s, ss), TVO_ERR_NOT_FINITE);
+    c = F.cfg;
+    c.min_eig_threshold = -1.0f;
+    assert_int_equal(tvo_lk_config_check(&c), TVO_ERR_ARG);
+    c = F.cfg;
+    c.fb_check = 1;
+    c.fb_max_error = 0.0f;
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, st, err, 3, s, ss), TVO_ERR_ARG);
+    c.fb_max_error = INFINITY;
+    assert_int_equal(tvo_lk_config_check(&c), TVO_ERR_NOT_FINITE);
+    assert_int_equal(tvo_lk_config_check(NULL), TVO_ERR_NULL);
+    assert_int_equal(tvo_lk_scratch_size(NULL), 0);
+    /* not enough levels: pyramids have 3, max_level 3 needs 4 */
+    c = F.cfg;
+    c.max_level = 3;
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, st, err, 3, s, ss), TVO_ERR_ARG);
+    c.max_level = TVO_MAX_PYR_LEVELS;
+    assert_int_equal(tvo_lk_config_check(&c), TVO_ERR_ARG);
+    /* pyramid mismatch: next is 162 wide */
+    {
+        tvo_image img = tvo_image_make(162, H, 162, pix);
+        assert_int_equal(tvo_pyramid_init(&other, 162, H, 3, mem, sizeof(mem)), TVO_OK);
+        assert_int_equal(tvo_pyramid_build(&other, &img), TVO_OK);
+        assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &other, p0, p1, st, err, 3, s, ss), TVO_ERR_MISMATCH);
+    }
+    /* uninitialised / corrupted pyramids */
+    memset(&other, 0, sizeof(other));
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &other, p0, p1, st, err, 3, s, ss), TVO_ERR_SIZE);
+    other = F.pb;
+    other.data[1] = NULL;
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &other, p0, p1, st, err, 3, s, ss), TVO_ERR_NULL);
+    other = F.pb;
+    other.width[2] = 7;
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &other, p0, p1, st, err, 3, s, ss), TVO_ERR_SIZE);
+    /* scratch too small */
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, err, 3, s, tvo_lk_scratch_size(&F.cfg) - 1),
+                     TVO_ERR_NO_MEMORY);
+    /* NaN / infinite points */
+    p0[1].x = NAN;
+    memset(st, 1, sizeof(st));
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, err, 3, s, ss), TVO_ERR_NOT_FINITE);
+    assert_int_equal(st[0], TVO_LK_LOST);
+    assert_int_equal(st[2], TVO_LK_LOST);
+    p0[1].x = 60.0f;
+    p0[2].y = -INFINITY;
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, err, 3, s, ss), TVO_ERR_NOT_FINITE);
+    p0[2].y = 70.0f;
+    c = F.cfg;
+    c.use_initial_flow = 1;
+    p1[0] = p0[0];
+    p1[1] = p0[1];
+    p1[2] = (tvo_point2f){ NAN, 1.0f };
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, st, err, 3, s, ss), TVO_ERR_NOT_FINITE);
+    /* NaN guesses are fine when the guess is not used */
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, err, 3, s, ss), TVO_OK);
+}
+
+static void test_scratch_alignment_any(void **state)
+{
+    tvo_point2f p0[1] = { { 80.0f, 60.0f } }, p1[1], q1[1];
+    uint8_t st[1];
+    size_t need;
+    (void)state;
+    build(2, 1.25, 0.5);
+    need = tvo_lk_scratch_size(&F.cfg);
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, NULL, 1, F.scratch, need), TVO_OK);
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, q1, st, NULL, 1, F.scratch + 5, need), TVO_OK);
+    assert_memory_equal(p1, q1, sizeof(p1));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_known_shifts),
+        cmocka_unit_test(test_identical_images_zero_motion),
+        cmocka_unit_test(test_initial_flow),
+        cmocka_unit_test(test_fb_check_rejects_bad_track),
+        cmocka_unit_test(test_points_outside_and_at_borders),
+        cmocka_unit_test(test_random_points_everywhere),
+        cmocka_unit_test(test_small_image_skips_small_levels),
+        cmocka_unit_test(test_bad_inputs),
+        cmocka_unit_test(test_scratch_alignment_any),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
