@@ -335,7 +335,7 @@ def make_scene(positions, seed: int = 0, texture_size: int = 1024, texel_m: floa
     pmin, pmax = P.min(0), P.max(0)
     ext = pmax - pmin
     margin = np.maximum(2.0, 0.25 * ext[:2])
-    lo = np.array([pmin[0] - margin[0], pmin[1] - margin[1], pmin[2] - 0.7])
+    lo = np.array([pmin[0] - margin[0], pmin[1] - margin[1], min(pmin[2] - 0.7, 0.0)])  # z = 0 floor if it fits
     hi = np.array([pmax[0] + margin[0], pmax[1] + margin[1], pmax[2] + max(1.4, 0.3 * ext[2])])
     lo = lo + rng.uniform(-0.5, 0.0, 3) * [1, 1, 0]
     hi = hi + rng.uniform(0.0, 0.5, 3) * [1, 1, 0]
