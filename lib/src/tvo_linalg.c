@@ -405,12 +405,17 @@ static void sturm_build(sturm_chain *s, const double *a, int deg)
 
 static double refine_root(const double *a, int deg, double lo, double hi)
 {
-    double flo = tvo_la_poly_eval(a, deg, lo);
+    /* the root lies in (lo, hi] */
     double fhi = tvo_la_poly_eval(a, deg, hi);
-    if (flo == 0.0)
-        return lo;
     if (fhi == 0.0)
         return hi;
+    double flo = tvo_la_poly_eval(a, deg, lo);
+    if (flo == 0.0) { /* lo is a different root, excluded: step just inside */
+        lo += 1e-9 * (hi - lo);
+        flo = tvo_la_poly_eval(a, deg, lo);
+        if (flo == 0.0)
+            return lo;
+    }
     if ((flo > 0.0) == (fhi > 0.0))
         return 0.5 * (lo + hi); /* no sign change (even multiplicity): caller bisected already */
     double x = 0.5 * (lo + hi);

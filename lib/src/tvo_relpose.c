@@ -212,14 +212,15 @@ static int32_t decompose_essential(const double E[9], const tvo_point2d *x1, con
 
 /* ---- refinement: LM on the Sampson error over (R, unit t) ----------------------------------- */
 
+/* robust (Cauchy, scale c2 = c^2) Sampson cost over the mask */
 static double sampson_cost_pose(const double R[9], const double t[3], const tvo_point2d *x1,
-                                const tvo_point2d *x2, int32_t n, const uint8_t *mask)
+                                const tvo_point2d *x2, int32_t n, const uint8_t *mask, double c2)
 {
     double E[9], c = 0.0;
     essential_from_pose(R, t, E);
     for (int32_t i = 0; i < n; ++i)
         if (mask[i])
-            c += sampson2(E, &x1[i], &x2[i]);
+            c += log1p(sampson2(E, &x1[i], &x2[i]) / c2);
     return c;
 }
 
@@ -241,9 +242,9 @@ static void tangent_basis(const double t[3], double b1[3], double b2[3])
 }
 
 static void refine_pose(double R[9], double t[3], const tvo_point2d *x1, const tvo_point2d *x2,
-                        int32_t n, const uint8_t *mask, int iters)
+                        int32_t n, const uint8_t *mask, int iters, double c2)
 {
-    double cost = sampson_cost_pose(R, t, x1, x2, n, mask);
+    double cost = sampson_cost_pose(R, t, x1, x2, n, mask, c2);
     double lambda = 1e-4;
     for (int it = 0; it < iters; ++it) {
         double H[25] = {0}, g[5] = {0}, b1[3], b2[3];
@@ -264,7 +265,7 @@ static void refine_pose(double R[9], double t[3], const tvo_point2d *x1, const t
             if (!(d > 1e-300))
                 continue;
             double J[5] = {gw[0], gw[1], gw[2], dot3(b1, c), dot3(b2, c)};
-            double wgt = 1.0 / d;
+            double wgt = 1.0 / (d + e * e / c2); /* IRLS weight of the Cauchy loss */
             for (int p = 0; p < 5; ++p) {
                 g[p] += wgt * J[p] * e;
                 for (int q = p; q < 5; ++q)
@@ -295,7 +296,7 @@ static void refine_pose(double R[9], double t[3], const tvo_point2d *x1, const t
             tn[0] /= nt;
             tn[1] /= nt;
             tn[2] /= nt;
-            double cn = sampson_cost_pose(Rn, tn, x1, x2, n, mask);
+            double cn = sampson_cost_pose(Rn, tn, x1, x2, n, mask, c2);
             if (cn < cost && isfinite(cn)) {
                 double step = sqrt(dot3(dx, dx) + dx[3] * dx[3] + dx[4] * dx[4]);
                 double rel = (cost - cn) / (cost > 1e-300 ? cost : 1e-300);
@@ -823,12 +824,14 @@ static int32_t polish(const tvo_relpose_config *cfg, double R[9], double t[3], c
 {
     double E[9];
     int32_t cnt = 0;
+    /* refine on the points within 3 thresholds with a Cauchy loss of scale `threshold`: the hard
+     * RANSAC threshold would cut the tails of the inlier noise and bias the estimate */
     for (int round = 0; round < 2; ++round) {
         essential_from_pose(R, t, E);
-        cnt = mark_inliers(E, x1, x2, n, thr2, mask);
+        cnt = mark_inliers(E, x1, x2, n, 9.0 * thr2, mask);
         if (cnt < 6 || cfg->refine_iters == 0)
             break;
-        refine_pose(R, t, x1, x2, n, mask, cfg->refine_iters);
+        refine_pose(R, t, x1, x2, n, mask, cfg->refine_iters, thr2);
     }
     essential_from_pose(R, t, E);
     return mark_inliers(E, x1, x2, n, thr2, mask);
