@@ -1,0 +1,1185 @@
+/* tinyvo port: EuRoC / ASL folder reader (see tinyvo/port/euroc.h). */
+#include "tinyvo/port/euroc.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "tinyvo/port/png.h"
+
+#define TVO_EUROC_PATH 4096
+#define TVO_EUROC_MAX_FILE ((size_t)512 << 20)
+
+struct tvo_euroc {
+    char base[TVO_EUROC_PATH]; /* the mav0 folder */
+    char cam[64];
+    tvo_camera camera;
+    tvo_pose T_BS;
+    double rate_hz;
+    tvo_euroc_frame *frames;
+    int32_t nframes;
+    tvo_euroc_gt_row *gt;
+    int32_t ngt;
+};
+
+/* ---- small helpers ------------------------------------------------------------------------------ */
+
+static void tvo_set_err(char *err, size_t err_size, const char *fmt, ...)
+{
+    va_list ap;
+    if (err == NULL || err_size == 0)
+        return;
+    va_start(ap, fmt);
+    vsnprintf(err, err_size, fmt, ap);
+    va_end(ap);
+}
+
+/* err := prefix + ": " + err (the parser's message). */
+static void tvo_prefix_err(char *err, size_t err_size, const char *prefix)
+{
+    char tmp[512];
+    if (err == NULL || err_size == 0)
+        return;
+    snprintf(tmp, sizeof tmp, "%s", err);
+    snprintf(err, err_size, "%s: %s", prefix, tmp);
+}
+
+static int tvo_is_blank(char c)
+{
+    return c == ' ' || c == '\t' || c == '\r';
+}
+
+/* One line of a buffer: [*beg, *end) without the newline (and without a trailing '\r'). */
+typedef struct tvo_lines {
+    const char *p, *stop;
+    int line;
+} tvo_lines;
+
+static int tvo_next_line(tvo_lines *it, const char **beg, const char **end)
+{
+    const char *e;
+    if (it->p >= it->stop)
+        return 0;
+    *beg = it->p;
+    e = it->p;
+    while (e < it->stop && *e != '\n')
+        ++e;
+    it->p = (e < it->stop) ? e + 1 : e;
+    it->line++;
+    while (e > *beg && e[-1] == '\r')
+        --e;
+    *end = e;
+    return 1;
+}
+
+static void tvo_trim(const char **b, const char **e)
+{
+    while (*b < *e && tvo_is_blank(**b))
+        ++*b;
+    while (*e > *b && tvo_is_blank((*e)[-1]))
+        --*e;
+}
+
+/* A finite double from exactly the text [b, e). */
+static int tvo_parse_double(const char *b, const char *e, double *out)
+{
+    char buf[64];
+    char *end = NULL;
+    size_t n = (size_t)(e - b);
+    double v;
+    if (n == 0 || n >= sizeof buf)
+        return 0;
+    memcpy(buf, b, n);
+    buf[n] = '\0';
+    /* strtod accepts "inf", "nan", hex floats and leading blanks: allow only a plain decimal number. */
+    {
+        size_t i;
+        for (i = 0; i < n; ++i) {
+            char c = buf[i];
+            if (!((c >= '0' && c <= '9') || c == '.' || c == '-' || c == '+' || c == 'e' || c == 'E'))
+                return 0;
+        }
+    }
+    errno = 0;
+    v = strtod(buf, &end);
+    if (end != buf + n || !isfinite(v) || errno == ERANGE)
+        return 0;
+    *out = v;
+    return 1;
+}
+
+/* A non-negative int64 timestamp: digits, optionally '.' digits (rounded half up). */
+static int tvo_parse_time(const char *b, const char *e, int64_t *out)
+{
+    int64_t v = 0;
+    const char *p = b;
+    if (p == e)
+        return 0;
+    if (*p == '+')
+        ++p;
+    if (p == e || *p < '0' || *p > '9')
+        return 0;
+    for (; p < e && *p >= '0' && *p <= '9'; ++p) {
+        int d = *p - '0';
+        if (v > (INT64_MAX - d) / 10)
+            return 0;
+        v = v * 10 + d;
+    }
+    if (p < e && *p == '.') {
+        const char *f = ++p;
+        for (; p < e && *p >= '0' && *p <= '9'; ++p)
+            ;
+        if (p > f && *f >= '5') {
+            if (v == INT64_MAX)
+                return 0;
+            ++v;
+        }
+    }
+    if (p != e)
+        return 0;
+    *out = v;
+    return 1;
+}
+
+static int tvo_span_eq(const char *b, const char *e, const char *s)
+{
+    size_t n = strlen(s);
+    return (size_t)(e - b) == n && memcmp(b, s, n) == 0;
+}
+
+/* ---- sensor.yaml ------------------------------------------------------------------------------- */
+
+#define TVO_YAML_MAX_ENTRIES 64
+#define TVO_YAML_KEY 64
+#define TVO_YAML_VALUES 16384
+
+typedef struct tvo_yaml_entry {
+    char parent[TVO_YAML_KEY]; /* "" at top level */
+    char key[TVO_YAML_KEY];
+    size_t vbeg, vlen;         /* value text in tvo_yaml.values (comments stripped, lines joined) */
+    int line;
+} tvo_yaml_entry;
+
+typedef struct tvo_yaml {
+    tvo_yaml_entry e[TVO_YAML_MAX_ENTRIES];
+    int n;
+    char values[TVO_YAML_VALUES];
+    size_t used;
+} tvo_yaml;
+
+/* End of the non-comment part of a line: a '#' at the start or after a blank starts a comment
+ * (outside quotes). */
+static const char *tvo_yaml_uncomment(const char *b, const char *e)
+{
+    const char *p;
+    char quote = 0;
+    for (p = b; p < e; ++p) {
+        if (quote) {
+            if (*p == quote)
+                quote = 0;
+        } else if (*p == '"' || *p == '\'') {
+            quote = *p;
+        } else if (*p == '#' && (p == b || tvo_is_blank(p[-1]))) {
+            return p;
+        }
+    }
+    return e;
+}
+
+static int tvo_yaml_append(tvo_yaml *y, const char *b, const char *e)
+{
+    size_t n = (size_t)(e - b);
+    if (y->used + n + 1 > sizeof y->values)
+        return 0;
+    memcpy(y->values + y->used, b, n);
+    y->used += n;
+    return 1;
+}
+
+static tvo_status tvo_yaml_parse(tvo_yaml *y, const char *text, size_t len, char *err, size_t err_size)
+{
+    static const char tvo_space[] = " ";
+    tvo_lines it;
+    const char *b, *e;
+    char parent[TVO_YAML_KEY] = "";
+    int depth = 0;          /* '[' nesting of a flow sequence being collected */
+    tvo_yaml_entry *open = NULL;
+    y->n = 0;
+    y->used = 0;
+    it.p = text;
+    it.stop = text + len;
+    it.line = 0;
+    while (tvo_next_line(&it, &b, &e)) {
+        const char *p, *colon, *kb, *ke, *vb, *ve;
+        int indent = 0;
+        if (memchr(b, '\0', (size_t)(e - b)) != NULL) {
+            tvo_set_err(err, err_size, "line %d: NUL byte", it.line);
+            return TVO_ERR_FORMAT;
+        }
+        e = tvo_yaml_uncomment(b, e);
+        if (open != NULL) { /* continuation of a flow sequence */
+            for (p = b; p < e; ++p) {
+                if (*p == '[')
+                    ++depth;
+                else if (*p == ']' && --depth == 0)
+                    break;
+            }
+            if (p < e) { /* closed on this line */
+                const char *rest = p + 1;
+                tvo_trim(&rest, &e);
+                if (rest != e) {
+                    tvo_set_err(err, err_size, "line %d: text after ']'", it.line);
+                    return TVO_ERR_FORMAT;
+                }
+                e = p + 1;
+            }
+            if (!tvo_yaml_append(y, tvo_space, tvo_space + 1) || !tvo_yaml_append(y, b, e)) {
+                tvo_set_err(err, err_size, "line %d: values too long", it.line);
+                return TVO_ERR_FORMAT;
+            }
+            open->vlen = y->used - open->vbeg;
+            if (depth == 0)
+                open = NULL;
+            continue;
+        }
+        while (b + indent < e && b[indent] == ' ')
+            ++indent;
+        if (b + indent < e && b[indent] == '\t') {
+            tvo_set_err(err, err_size, "line %d: tab in indentation", it.line);
+            return TVO_ERR_FORMAT;
+        }
+        p = b + indent;
+        tvo_trim(&p, &e);
+        if (p == e || *p == '%' || tvo_span_eq(p, e, "---") || tvo_span_eq(p, e, "..."))
+            continue;
+        colon = NULL;
+        {
+            const char *q;
+            for (q = p; q < e; ++q)
+                if (*q == ':' && (q + 1 == e || tvo_is_blank(q[1]))) {
+                    colon = q;
+                    break;
+                }
+        }
+        if (colon == NULL) {
+            tvo_set_err(err, err_size, "line %d: expected 'key: value'", it.line);
+            return TVO_ERR_FORMAT;
+        }
+        kb = p;
+        ke = colon;
+        tvo_trim(&kb, &ke);
+        vb = colon + 1;
+        ve = e;
+        tvo_trim(&vb, &ve);
+        if (kb == ke || (size_t)(ke - kb) >= TVO_YAML_KEY || *kb == '-' || *kb == '[' || *kb == '{') {
+            tvo_set_err(err, err_size, "line %d: bad key", it.line);
+            return TVO_ERR_FORMAT;
+        }
+        if (indent == 0 && vb == ve) { /* a mapping: "T_BS:" */
+            memcpy(parent, kb, (size_t)(ke - kb));
+            parent[ke - kb] = '\0';
+        } else if (indent == 0) {
+            parent[0] = '\0';
+        } else if (parent[0] == '\0') {
+            tvo_set_err(err, err_size, "line %d: indented key outside a mapping", it.line);
+            return TVO_ERR_FORMAT;
+        }
+        if (vb == ve && indent == 0)
+            continue; /* the mapping's own line carries no value */
+        if (y->n >= TVO_YAML_MAX_ENTRIES) {
+            tvo_set_err(err, err_size, "line %d: too many keys", it.line);
+            return TVO_ERR_FORMAT;
+        }
+        {
+            tvo_yaml_entry *en = &y->e[y->n];
+            int k;
+            memcpy(en->key, kb, (size_t)(ke - kb));
+            en->key[ke - kb] = '\0';
+            strcpy(en->parent, indent > 0 ? parent : "");
+            for (k = 0; k < y->n; ++k)
+                if (strcmp(y->e[k].key, en->key) == 0 && strcmp(y->e[k].parent, en->parent) == 0) {
+                    tvo_set_err(err, err_size, "line %d: duplicate key '%s'", it.line, en->key);
+                    return TVO_ERR_FORMAT;
+                }
+            en->line = it.line;
+            /* strip matching quotes of a scalar */
+            if (ve - vb >= 2 && (*vb == '"' || *vb == '\'') && ve[-1] == *vb) {
+                ++vb;
+                --ve;
+            }
+            en->vbeg = y->used;
+            if (!tvo_yaml_append(y, vb, ve)) {
+                tvo_set_err(err, err_size, "line %d: values too long", it.line);
+                return TVO_ERR_FORMAT;
+            }
+            en->vlen = y->used - en->vbeg;
+            y->n++;
+            if (vb < ve && *vb == '[') {
+                depth = 0;
+                for (p = vb; p < ve; ++p) {
+                    if (*p == '[')
+                        ++depth;
+                    else if (*p == ']' && --depth == 0)
+                        break;
+                }
+                if (depth > 0) {
+                    open = en;
+                } else if (p + 1 != ve) {
+                    tvo_set_err(err, err_size, "line %d: text after ']'", it.line);
+                    return TVO_ERR_FORMAT;
+                }
+            }
+        }
+    }
+    if (open != NULL) {
+        tvo_set_err(err, err_size, "line %d: '[' of '%s' never closed", open->line, open->key);
+        return TVO_ERR_FORMAT;
+    }
+    return TVO_OK;
+}
+
+static const tvo_yaml_entry *tvo_yaml_find(const tvo_yaml *y, const char *parent, const char *key)
+{
+    int i;
+    for (i = 0; i < y->n; ++i)
+        if (strcmp(y->e[i].key, key) == 0 && strcmp(y->e[i].parent, parent) == 0)
+            return &y->e[i];
+    return NULL;
+}
+
+/* A flow sequence of numbers "[a, b, ...]" into out[0..max); *n = count. */
+static tvo_status tvo_yaml_numbers(const tvo_yaml *y, const tvo_yaml_entry *en, double *out, int max, int *n,
+                                   char *err, size_t err_size)
+{
+    const char *b = y->values + en->vbeg, *e = b + en->vlen, *p;
+    int count = 0;
+    tvo_trim(&b, &e);
+    if (e - b < 2 || *b != '[' || e[-1] != ']') {
+        tvo_set_err(err, err_size, "line %d: %s: expected a list [..]", en->line, en->key);
+        return TVO_ERR_FORMAT;
+    }
+    ++b;
+    --e;
+    tvo_trim(&b, &e);
+    if (b == e) {
+        *n = 0;
+        return TVO_OK;
+    }
+    for (p = b; p <= e;) {
+        const char *q = p, *tb, *te;
+        while (q < e && *q != ',')
+            ++q;
+        tb = p;
+        te = q;
+        tvo_trim(&tb, &te);
+        if (count >= max) {
+            tvo_set_err(err, err_size, "line %d: %s: more than %d values", en->line, en->key, max);
+            return TVO_ERR_FORMAT;
+        }
+        if (!tvo_parse_double(tb, te, &out[count])) {
+            tvo_set_err(err, err_size, "line %d: %s: bad number '%.*s'", en->line, en->key,
+                        (int)((te - tb) > 40 ? 40 : (te - tb)), tb);
+            return TVO_ERR_FORMAT;
+        }
+        ++count;
+        p = q + 1;
+    }
+    *n = count;
+    return TVO_OK;
+}
+
+static int tvo_yaml_is(const tvo_yaml *y, const tvo_yaml_entry *en, const char *s)
+{
+    const char *b = y->values + en->vbeg;
+    return tvo_span_eq(b, b + en->vlen, s);
+}
+
+tvo_status tvo_euroc_parse_sensor_yaml(const char *text, size_t len, tvo_camera *cam_out, tvo_pose *T_BS,
+                                       double *rate_hz, char *err, size_t err_size)
+{
+    tvo_yaml *y;
+    const tvo_yaml_entry *en;
+    tvo_camera cam;
+    tvo_pose T = tvo_pose_identity();
+    double v[16], rate = 0.0;
+    int n, i;
+    tvo_status st;
+    if (err != NULL && err_size > 0)
+        err[0] = '\0';
+    if ((text == NULL && len > 0) || cam_out == NULL) {
+        tvo_set_err(err, err_size, "NULL argument");
+        return TVO_ERR_NULL;
+    }
+    y = (tvo_yaml *)malloc(sizeof *y);
+    if (y == NULL) {
+        tvo_set_err(err, err_size, "out of memory");
+        return TVO_ERR_NO_MEMORY;
+    }
+    st = tvo_yaml_parse(y, text == NULL ? "" : text, len, err, err_size);
+    if (st != TVO_OK)
+        goto done;
+    memset(&cam, 0, sizeof cam);
+    st = TVO_ERR_FORMAT;
+
+    en = tvo_yaml_find(y, "", "camera_model");
+    if (en != NULL && !tvo_yaml_is(y, en, "pinhole")) {
+        tvo_set_err(err, err_size, "line %d: camera_model '%.*s' not supported (only pinhole)", en->line,
+                    (int)(en->vlen > 40 ? 40 : en->vlen), y->values + en->vbeg);
+        st = TVO_ERR_UNSUPPORTED;
+        goto done;
+    }
+    en = tvo_yaml_find(y, "", "intrinsics");
+    if (en == NULL) {
+        tvo_set_err(err, err_size, "missing key 'intrinsics'");
+        goto done;
+    }
+    if (tvo_yaml_numbers(y, en, v, 16, &n, err, err_size) != TVO_OK)
+        goto done;
+    if (n != 4) {
+        tvo_set_err(err, err_size, "line %d: intrinsics: expected 4 numbers [fu, fv, cu, cv], got %d", en->line, n);
+        goto done;
+    }
+    cam.fx = v[0];
+    cam.fy = v[1];
+    cam.cx = v[2];
+    cam.cy = v[3];
+
+    en = tvo_yaml_find(y, "", "resolution");
+    if (en == NULL) {
+        tvo_set_err(err, err_size, "missing key 'resolution'");
+        goto done;
+    }
+    if (tvo_yaml_numbers(y, en, v, 16, &n, err, err_size) != TVO_OK)
+        goto done;
+    if (n != 2 || v[0] != floor(v[0]) || v[1] != floor(v[1]) || v[0] < 1 || v[1] < 1 || v[0] > TVO_MAX_IMAGE_DIM ||
+        v[1] > TVO_MAX_IMAGE_DIM) {
+        tvo_set_err(err, err_size, "line %d: resolution: expected [width, height], integers in 1..%d", en->line,
+                    TVO_MAX_IMAGE_DIM);
+        goto done;
+    }
+    cam.width = (int32_t)v[0];
+    cam.height = (int32_t)v[1];
+
+    {
+        const tvo_yaml_entry *dm = tvo_yaml_find(y, "", "distortion_model");
+        const tvo_yaml_entry *dc = tvo_yaml_find(y, "", "distortion_coefficients");
+        n = 0;
+        if (dc != NULL && tvo_yaml_numbers(y, dc, v, 16, &n, err, err_size) != TVO_OK)
+            goto done;
+        if (dm == NULL) {
+            cam.model = (n > 0) ? TVO_DIST_RADTAN : TVO_DIST_NONE;
+        } else if (tvo_yaml_is(y, dm, "radial-tangential") || tvo_yaml_is(y, dm, "radtan") ||
+                   tvo_yaml_is(y, dm, "plumb_bob")) {
+            cam.model = TVO_DIST_RADTAN;
+        } else if (tvo_yaml_is(y, dm, "equidistant") || tvo_yaml_is(y, dm, "fisheye") || tvo_yaml_is(y, dm, "equi")) {
+            cam.model = TVO_DIST_EQUIDISTANT;
+        } else if (tvo_yaml_is(y, dm, "none")) {
+            cam.model = TVO_DIST_NONE;
+        } else {
+            tvo_set_err(err, err_size, "line %d: distortion_model '%.*s' not supported", dm->line,
+                        (int)(dm->vlen > 40 ? 40 : dm->vlen), y->values + dm->vbeg);
+            st = TVO_ERR_UNSUPPORTED;
+            goto done;
+        }
+        if (cam.model == TVO_DIST_RADTAN && n != 4 && n != 5) {
+            tvo_set_err(err, err_size, "line %d: radial-tangential needs 4 or 5 distortion_coefficients, got %d",
+                        dc ? dc->line : (dm ? dm->line : 0), n);
+            goto done;
+        }
+        if (cam.model == TVO_DIST_EQUIDISTANT && n != 4) {
+            tvo_set_err(err, err_size, "line %d: equidistant needs 4 distortion_coefficients, got %d",
+                        dc ? dc->line : dm->line, n);
+            goto done;
+        }
+        if (cam.model == TVO_DIST_NONE) {
+            for (i = 0; i < n; ++i)
+                if (v[i] != 0.0) {
+                    tvo_set_err(err, err_size, "line %d: distortion_model none with non-zero coefficients",
+                                dc->line);
+                    goto done;
+                }
+            n = 0;
+        }
+        for (i = 0; i < n; ++i)
+            cam.k[i] = v[i];
+    }
+
+    en = tvo_yaml_find(y, "", "rate_hz");
+    if (en != NULL) {
+        const char *b = y->values + en->vbeg;
+        if (!tvo_parse_double(b, b + en->vlen, &rate) || !(rate > 0.0)) {
+            tvo_set_err(err, err_size, "line %d: rate_hz: expected a positive number", en->line);
+            goto done;
+        }
+    }
+
+    en = tvo_yaml_find(y, "T_BS", "data");
+    if (en == NULL) {
+        tvo_set_err(err, err_size, "missing key 'T_BS' with 'data: [16 numbers]'");
+        goto done;
+    }
+    if (tvo_yaml_numbers(y, en, v, 16, &n, err, err_size) != TVO_OK)
+        goto done;
+    if (n != 16) {
+        tvo_set_err(err, err_size, "line %d: T_BS data: expected 16 numbers, got %d", en->line, n);
+        goto done;
+    }
+    {
+        const char *dims[2] = {"rows", "cols"};
+        for (i = 0; i < 2; ++i) {
+            const tvo_yaml_entry *d = tvo_yaml_find(y, "T_BS", dims[i]);
+            double dv;
+            if (d != NULL && (!tvo_parse_double(y->values + d->vbeg, y->values + d->vbeg + d->vlen, &dv) || dv != 4.0)) {
+                tvo_set_err(err, err_size, "line %d: T_BS %s must be 4", d->line, dims[i]);
+                goto done;
+            }
+        }
+    }
+    if (fabs(v[12]) > 1e-6 || fabs(v[13]) > 1e-6 || fabs(v[14]) > 1e-6 || fabs(v[15] - 1.0) > 1e-6) {
+        tvo_set_err(err, err_size, "line %d: T_BS: last row must be [0, 0, 0, 1]", en->line);
+        goto done;
+    }
+    T = tvo_pose_from_matrix(v);
+    {
+        double d = T.R[0] * (T.R[4] * T.R[8] - T.R[5] * T.R[7]) - T.R[1] * (T.R[3] * T.R[8] - T.R[5] * T.R[6]) +
+                   T.R[2] * (T.R[3] * T.R[7] - T.R[4] * T.R[6]);
+        if (!(tvo_rot_orthogonality_error(T.R) < 1e-3) || !(d > 0.0)) {
+            tvo_set_err(err, err_size, "line %d: T_BS: the rotation block is not a rotation", en->line);
+            goto done;
+        }
+    }
+    tvo_rot_orthonormalize(T.R);
+
+    st = tvo_camera_check(&cam);
+    if (st != TVO_OK) {
+        tvo_set_err(err, err_size, "invalid camera (%s): need fu, fv > 0 and finite values", tvo_status_str(st));
+        st = TVO_ERR_FORMAT;
+        goto done;
+    }
+    *cam_out = cam;
+    if (T_BS != NULL)
+        *T_BS = T;
+    if (rate_hz != NULL)
+        *rate_hz = rate;
+    st = TVO_OK;
+done:
+    free(y);
+    return st;
+}
+
+/* ---- csv files ----------------------------------------------------------------------------------- */
+
+tvo_status tvo_euroc_parse_frames_csv(const char *text, size_t len, tvo_euroc_frame *frames, int32_t capacity,
+                                      int32_t *count, char *err, size_t err_size)
+{
+    tvo_lines it;
+    const char *b, *e;
+    int32_t n = 0;
+    if (err != NULL && err_size > 0)
+        err[0] = '\0';
+    if (count == NULL || (text == NULL && len > 0)) {
+        tvo_set_err(err, err_size, "NULL argument");
+        return TVO_ERR_NULL;
+    }
+    *count = 0;
+    if (capacity < 0) {
+        tvo_set_err(err, err_size, "negative capacity");
+        return TVO_ERR_ARG;
+    }
+    it.p = text;
+    it.stop = text + len;
+    it.line = 0;
+    while (tvo_next_line(&it, &b, &e)) {
+        const char *c, *tb, *te, *fb, *fe;
+        int64_t t;
+        tvo_trim(&b, &e);
+        if (b == e || *b == '#')
+            continue;
+        if (memchr(b, '\0', (size_t)(e - b)) != NULL) {
+            tvo_set_err(err, err_size, "line %d: NUL byte", it.line);
+            return TVO_ERR_FORMAT;
+        }
+        c = (const char *)memchr(b, ',', (size_t)(e - b));
+        if (c == NULL) {
+            tvo_set_err(err, err_size, "line %d: expected 'timestamp,filename'", it.line);
+            return TVO_ERR_FORMAT;
+        }
+        tb = b;
+        te = c;
+        fb = c + 1;
+        fe = e;
+        tvo_trim(&tb, &te);
+        tvo_trim(&fb, &fe);
+        if (!tvo_parse_time(tb, te, &t) || memchr(tb, '.', (size_t)(te - tb)) != NULL) {
+            tvo_set_err(err, err_size, "line %d: bad timestamp '%.*s' (integer nanoseconds expected)", it.line,
+                        (int)((te - tb) > 40 ? 40 : (te - tb)), tb);
+            return TVO_ERR_FORMAT;
+        }
+        if (fb == fe || memchr(fb, ',', (size_t)(fe - fb)) != NULL || memchr(fb, '/', (size_t)(fe - fb)) != NULL ||
+            memchr(fb, '\\', (size_t)(fe - fb)) != NULL || tvo_span_eq(fb, fe, ".") || tvo_span_eq(fb, fe, "..")) {
+            tvo_set_err(err, err_size, "line %d: bad file name (empty, extra field, or a path)", it.line);
+            return TVO_ERR_FORMAT;
+        }
+        if ((size_t)(fe - fb) >= TVO_EUROC_MAX_NAME) {
+            tvo_set_err(err, err_size, "line %d: file name longer than %d bytes", it.line, TVO_EUROC_MAX_NAME - 1);
+            return TVO_ERR_FORMAT;
+        }
+        if (n == INT32_MAX) {
+            tvo_set_err(err, err_size, "line %d: too many frames", it.line);
+            return TVO_ERR_FORMAT;
+        }
+        if (frames != NULL && n < capacity) {
+            frames[n].t_ns = t;
+            memcpy(frames[n].file, fb, (size_t)(fe - fb));
+            frames[n].file[fe - fb] = '\0';
+        }
+        ++n;
+    }
+    *count = n;
+    if (frames != NULL && n > capacity) {
+        tvo_set_err(err, err_size, "%d frames do not fit in a capacity of %d", (int)n, (int)capacity);
+        return TVO_ERR_NO_MEMORY;
+    }
+    return TVO_OK;
+}
+
+/* Split a line into fields separated by ',' and/or blanks. Returns the field count (up to max), or
+ * -1 for an empty field ("a,,b", a trailing ','). */
+static int tvo_split_fields(const char *b, const char *e, const char **fb, const char **fe, int max)
+{
+    int n = 0;
+    const char *p = b;
+    while (p < e && tvo_is_blank(*p))
+        ++p;
+    while (p < e) {
+        const char *s = p;
+        if (*p == ',')
+            return -1;
+        while (p < e && *p != ',' && !tvo_is_blank(*p))
+            ++p;
+        if (n < max) {
+            fb[n] = s;
+            fe[n] = p;
+        }
+        ++n;
+        while (p < e && tvo_is_blank(*p))
+            ++p;
+        if (p < e && *p == ',') {
+            ++p;
+            while (p < e && tvo_is_blank(*p))
+                ++p;
+            if (p == e || *p == ',')
+                return -1;
+        }
+    }
+    return n;
+}
+
+tvo_status tvo_euroc_parse_groundtruth(const char *text, size_t len, tvo_euroc_gt_row *rows, int32_t capacity,
+                                       int32_t *count, char *err, size_t err_size)
+{
+    static const char *names[8] = {"timestamp", "p_x", "p_y", "p_z", "q_w", "q_x", "q_y", "q_z"};
+    tvo_lines it;
+    const char *b, *e;
+    int32_t n = 0;
+    int64_t last = -1;
+    if (err != NULL && err_size > 0)
+        err[0] = '\0';
+    if (count == NULL || (text == NULL && len > 0)) {
+        tvo_set_err(err, err_size, "NULL argument");
+        return TVO_ERR_NULL;
+    }
+    *count = 0;
+    if (capacity < 0) {
+        tvo_set_err(err, err_size, "negative capacity");
+        return TVO_ERR_ARG;
+    }
+    it.p = text;
+    it.stop = text + len;
+    it.line = 0;
+    while (tvo_next_line(&it, &b, &e)) {
+        const char *fb[8], *fe[8];
+        tvo_euroc_gt_row r;
+        double qn;
+        int nf, i;
+        tvo_trim(&b, &e);
+        if (b == e || *b == '#')
+            continue;
+        if (memchr(b, '\0', (size_t)(e - b)) != NULL) {
+            tvo_set_err(err, err_size, "line %d: NUL byte", it.line);
+            return TVO_ERR_FORMAT;
+        }
+        nf = tvo_split_fields(b, e, fb, fe, 8);
+        if (nf < 0) {
+            tvo_set_err(err, err_size, "line %d: empty field", it.line);
+            return TVO_ERR_FORMAT;
+        }
+        if (nf < 8) {
+            tvo_set_err(err, err_size, "line %d: %d fields, need at least 8 (t px py pz qw qx qy qz)", it.line, nf);
+            return TVO_ERR_FORMAT;
+        }
+        if (!tvo_parse_time(fb[0], fe[0], &r.t_ns)) {
+            tvo_set_err(err, err_size, "line %d: bad timestamp '%.*s' (nanoseconds expected)", it.line,
+                        (int)((fe[0] - fb[0]) > 40 ? 40 : (fe[0] - fb[0])), fb[0]);
+            return TVO_ERR_FORMAT;
+        }
+        for (i = 1; i < 8; ++i) {
+            double v;
+            if (!tvo_parse_double(fb[i], fe[i], &v)) {
+                tvo_set_err(err, err_size, "line %d: bad number in column %d (%s): '%.*s'", it.line, i + 1, names[i],
+                            (int)((fe[i] - fb[i]) > 40 ? 40 : (fe[i] - fb[i])), fb[i]);
+                return TVO_ERR_FORMAT;
+            }
+            if (i < 4)
+                r.p[i - 1] = v;
+            else
+                r.q_wxyz[i - 4] = v;
+        }
+        qn = sqrt(r.q_wxyz[0] * r.q_wxyz[0] + r.q_wxyz[1] * r.q_wxyz[1] + r.q_wxyz[2] * r.q_wxyz[2] +
+                  r.q_wxyz[3] * r.q_wxyz[3]);
+        if (!(fabs(qn - 1.0) <= 0.01)) {
+            tvo_set_err(err, err_size, "line %d: quaternion norm %g is not 1", it.line, qn);
+            return TVO_ERR_FORMAT;
+        }
+        for (i = 0; i < 4; ++i)
+            r.q_wxyz[i] /= qn;
+        if (r.t_ns <= last) {
+            tvo_set_err(err, err_size, "line %d: timestamp not increasing", it.line);
+            return TVO_ERR_FORMAT;
+        }
+        last = r.t_ns;
+        if (n == INT32_MAX) {
+            tvo_set_err(err, err_size, "line %d: too many rows", it.line);
+            return TVO_ERR_FORMAT;
+        }
+        if (rows != NULL && n < capacity)
+            rows[n] = r;
+        ++n;
+    }
+    *count = n;
+    if (rows != NULL && n > capacity) {
+        tvo_set_err(err, err_size, "%d rows do not fit in a capacity of %d", (int)n, (int)capacity);
+        return TVO_ERR_NO_MEMORY;
+    }
+    return TVO_OK;
+}
+
+/* ---- files -------------------------------------------------------------------------------------- */
+
+static tvo_status tvo_slurp(const char *path, char **data, size_t *size, char *err, size_t err_size)
+{
+    FILE *f;
+    char *buf = NULL;
+    size_t cap = 0, len = 0;
+    errno = 0;
+    f = fopen(path, "rb");
+    if (f == NULL) {
+        int e = errno;
+        tvo_set_err(err, err_size, "%s: %s", path, strerror(e));
+        return (e == ENOENT || e == ENOTDIR) ? TVO_ERR_NOT_FOUND : TVO_ERR_IO;
+    }
+    for (;;) {
+        size_t got;
+        if (len == cap) {
+            size_t ncap = cap == 0 ? (size_t)65536 : cap * 2;
+            char *nb;
+            if (cap >= TVO_EUROC_MAX_FILE) {
+                fclose(f);
+                free(buf);
+                tvo_set_err(err, err_size, "%s: file too large", path);
+                return TVO_ERR_FORMAT;
+            }
+            nb = (char *)realloc(buf, ncap);
+            if (nb == NULL) {
+                fclose(f);
+                free(buf);
+                tvo_set_err(err, err_size, "%s: out of memory", path);
+                return TVO_ERR_NO_MEMORY;
+            }
+            buf = nb;
+            cap = ncap;
+        }
+        got = fread(buf + len, 1, cap - len, f);
+        len += got;
+        if (got == 0) {
+            if (ferror(f)) {
+                fclose(f);
+                free(buf);
+                tvo_set_err(err, err_size, "%s: read error", path);
+                return TVO_ERR_IO;
+            }
+            break;
+        }
+    }
+    fclose(f);
+    *data = buf;
+    *size = len;
+    return TVO_OK;
+}
+
+static int tvo_file_exists(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (f == NULL)
+        return 0;
+    fclose(f);
+    return 1;
+}
+
+/* Parse a ground-truth file into a new malloc'ed array. */
+static tvo_status tvo_load_gt(const char *path, tvo_euroc_gt_row **rows, int32_t *count, char *err, size_t err_size)
+{
+    char *text = NULL;
+    size_t len = 0;
+    int32_t n = 0;
+    tvo_euroc_gt_row *r = NULL;
+    tvo_status st = tvo_slurp(path, &text, &len, err, err_size);
+    if (st != TVO_OK)
+        return st;
+    st = tvo_euroc_parse_groundtruth(text, len, NULL, 0, &n, err, err_size);
+    if (st == TVO_OK && n == 0) {
+        tvo_set_err(err, err_size, "no rows");
+        st = TVO_ERR_FORMAT;
+    }
+    if (st == TVO_OK) {
+        r = (tvo_euroc_gt_row *)malloc((size_t)n * sizeof *r);
+        if (r == NULL) {
+            tvo_set_err(err, err_size, "out of memory");
+            st = TVO_ERR_NO_MEMORY;
+        }
+    }
+    if (st == TVO_OK)
+        st = tvo_euroc_parse_groundtruth(text, len, r, n, &n, err, err_size);
+    free(text);
+    if (st != TVO_OK) {
+        free(r);
+        if (st == TVO_ERR_FORMAT)
+            tvo_prefix_err(err, err_size, path);
+        return st;
+    }
+    *rows = r;
+    *count = n;
+    return TVO_OK;
+}
+
+tvo_status tvo_euroc_open(tvo_euroc **out, const char *dir, const char *cam, char *err, size_t err_size)
+{
+    tvo_euroc *s;
+    char path[TVO_EUROC_PATH + 128];
+    char *text = NULL;
+    size_t len = 0;
+    int32_t n = 0;
+    tvo_status st;
+    if (err != NULL && err_size > 0)
+        err[0] = '\0';
+    if (out == NULL || dir == NULL) {
+        tvo_set_err(err, err_size, "NULL argument");
+        return TVO_ERR_NULL;
+    }
+    *out = NULL;
+    if (cam == NULL)
+        cam = "cam0";
+    if (cam[0] == '\0' || strlen(cam) >= sizeof s->cam || strchr(cam, '/') != NULL || strcmp(cam, "..") == 0 ||
+        strcmp(cam, ".") == 0) {
+        tvo_set_err(err, err_size, "bad camera name '%s'", cam);
+        return TVO_ERR_ARG;
+    }
+    if (strlen(dir) + 16 >= TVO_EUROC_PATH) {
+        tvo_set_err(err, err_size, "path too long");
+        return TVO_ERR_ARG;
+    }
+    s = (tvo_euroc *)calloc(1, sizeof *s);
+    if (s == NULL) {
+        tvo_set_err(err, err_size, "out of memory");
+        return TVO_ERR_NO_MEMORY;
+    }
+    strcpy(s->cam, cam);
+    /* DIR/mav0/<cam> or DIR/<cam> */
+    snprintf(path, sizeof path, "%s/mav0/%s/data.csv", dir, cam);
+    if (tvo_file_exists(path)) {
+        snprintf(s->base, sizeof s->base, "%s/mav0", dir);
+    } else {
+        snprintf(path, sizeof path, "%s/%s/data.csv", dir, cam);
+        if (!tvo_file_exists(path)) {
+            tvo_set_err(err, err_size, "%s: no mav0/%s/data.csv (or %s/data.csv) there", dir, cam, cam);
+            free(s);
+            return TVO_ERR_NOT_FOUND;
+        }
+        snprintf(s->base, sizeof s->base, "%s", dir);
+    }
+
+    snprintf(path, sizeof path, "%s/%s/sensor.yaml", s->base, cam);
+    st = tvo_slurp(path, &text, &len, err, err_size);
+    if (st == TVO_OK) {
+        st = tvo_euroc_parse_sensor_yaml(text, len, &s->camera, &s->T_BS, &s->rate_hz, err, err_size);
+        free(text);
+        text = NULL;
+        if (st != TVO_OK)
+            tvo_prefix_err(err, err_size, path);
+    }
+    if (st != TVO_OK)
+        goto fail;
+
+    snprintf(path, sizeof path, "%s/%s/data.csv", s->base, cam);
+    st = tvo_slurp(path, &text, &len, err, err_size);
+    if (st != TVO_OK)
+        goto fail;
+    st = tvo_euroc_parse_frames_csv(text, len, NULL, 0, &n, err, err_size);
+    if (st == TVO_OK && n == 0) {
+        tvo_set_err(err, err_size, "no frames");
+        st = TVO_ERR_FORMAT;
+    }
+    if (st == TVO_OK) {
+        s->frames = (tvo_euroc_frame *)malloc((size_t)n * sizeof *s->frames);
+        if (s->frames == NULL) {
+            tvo_set_err(err, err_size, "out of memory");
+            st = TVO_ERR_NO_MEMORY;
+        }
+    }
+    if (st == TVO_OK)
+        st = tvo_euroc_parse_frames_csv(text, len, s->frames, n, &s->nframes, err, err_size);
+    free(text);
+    text = NULL;
+    if (st != TVO_OK) {
+        tvo_prefix_err(err, err_size, path);
+        goto fail;
+    }
+
+    snprintf(path, sizeof path, "%s/state_groundtruth_estimate0/data.csv", s->base);
+    if (tvo_file_exists(path)) {
+        st = tvo_load_gt(path, &s->gt, &s->ngt, err, err_size);
+        if (st != TVO_OK)
+            goto fail;
+    }
+    *out = s;
+    return TVO_OK;
+fail:
+    tvo_euroc_close(s);
+    return st;
+}
+
+void tvo_euroc_close(tvo_euroc *seq)
+{
+    if (seq == NULL)
+        return;
+    free(seq->frames);
+    free(seq->gt);
+    free(seq);
+}
+
+tvo_status tvo_euroc_load_groundtruth_file(tvo_euroc *seq, const char *path, char *err, size_t err_size)
+{
+    tvo_euroc_gt_row *rows = NULL;
+    int32_t n = 0;
+    tvo_status st;
+    if (err != NULL && err_size > 0)
+        err[0] = '\0';
+    if (seq == NULL || path == NULL) {
+        tvo_set_err(err, err_size, "NULL argument");
+        return TVO_ERR_NULL;
+    }
+    st = tvo_load_gt(path, &rows, &n, err, err_size);
+    if (st != TVO_OK)
+        return st;
+    free(seq->gt);
+    seq->gt = rows;
+    seq->ngt = n;
+    return TVO_OK;
+}
+
+/* ---- queries ------------------------------------------------------------------------------------ */
+
+int32_t tvo_euroc_frame_count(const tvo_euroc *seq)
+{
+    return seq == NULL ? 0 : seq->nframes;
+}
+
+int64_t tvo_euroc_frame_time(const tvo_euroc *seq, int32_t i)
+{
+    if (seq == NULL || i < 0 || i >= seq->nframes)
+        return -1;
+    return seq->frames[i].t_ns;
+}
+
+const char *tvo_euroc_frame_file(const tvo_euroc *seq, int32_t i)
+{
+    if (seq == NULL || i < 0 || i >= seq->nframes)
+        return NULL;
+    return seq->frames[i].file;
+}
+
+tvo_status tvo_euroc_frame_path(const tvo_euroc *seq, int32_t i, char *path, size_t size)
+{
+    int w;
+    if (seq == NULL || path == NULL)
+        return TVO_ERR_NULL;
+    if (size == 0)
+        return TVO_ERR_NO_MEMORY;
+    path[0] = '\0';
+    if (i < 0 || i >= seq->nframes)
+        return TVO_ERR_RANGE;
+    w = snprintf(path, size, "%s/%s/data/%s", seq->base, seq->cam, seq->frames[i].file);
+    if (w < 0 || (size_t)w >= size) {
+        path[0] = '\0';
+        return TVO_ERR_NO_MEMORY;
+    }
+    return TVO_OK;
+}
+
+tvo_status tvo_euroc_read_frame(const tvo_euroc *seq, int32_t i, uint8_t *buf, size_t capacity)
+{
+    char path[TVO_EUROC_PATH + 2 * TVO_EUROC_MAX_NAME];
+    int32_t w = 0, h = 0;
+    tvo_status st;
+    if (seq == NULL || buf == NULL)
+        return TVO_ERR_NULL;
+    st = tvo_euroc_frame_path(seq, i, path, sizeof path);
+    if (st != TVO_OK)
+        return st;
+    if (capacity < (size_t)seq->camera.width * (size_t)seq->camera.height)
+        return TVO_ERR_NO_MEMORY;
+    st = tvo_png_size(path, &w, &h);
+    if (st != TVO_OK)
+        return st;
+    if (w != seq->camera.width || h != seq->camera.height)
+        return TVO_ERR_MISMATCH;
+    st = tvo_png_read_gray8(path, buf, capacity, &w, &h);
+    if (st == TVO_OK && (w != seq->camera.width || h != seq->camera.height))
+        return TVO_ERR_MISMATCH; /* the file changed between the two reads */
+    return st;
+}
+
+const tvo_camera *tvo_euroc_camera(const tvo_euroc *seq)
+{
+    return seq == NULL ? NULL : &seq->camera;
+}
+
+tvo_pose tvo_euroc_T_BS(const tvo_euroc *seq)
+{
+    return seq == NULL ? tvo_pose_identity() : seq->T_BS;
+}
+
+double tvo_euroc_rate_hz(const tvo_euroc *seq)
+{
+    return seq == NULL ? 0.0 : seq->rate_hz;
+}
+
+const char *tvo_euroc_base_dir(const tvo_euroc *seq)
+{
+    return seq == NULL ? NULL : seq->base;
+}
+
+int tvo_euroc_has_groundtruth(const tvo_euroc *seq)
+{
+    return seq != NULL && seq->ngt > 0;
+}
+
+int32_t tvo_euroc_groundtruth_count(const tvo_euroc *seq)
+{
+    return seq == NULL ? 0 : seq->ngt;
+}
+
+tvo_status tvo_euroc_groundtruth_row(const tvo_euroc *seq, int32_t i, tvo_euroc_gt_row *row)
+{
+    if (seq == NULL || row == NULL)
+        return TVO_ERR_NULL;
+    if (i < 0 || i >= seq->ngt)
+        return TVO_ERR_RANGE;
+    *row = seq->gt[i];
+    return TVO_OK;
+}
+
+/* First row with t >= t_ns (ngt if none). */
+static int32_t tvo_gt_lower_bound(const tvo_euroc *seq, int64_t t_ns)
+{
+    int32_t lo = 0, hi = seq->ngt;
+    while (lo < hi) {
+        int32_t mid = lo + (hi - lo) / 2;
+        if (seq->gt[mid].t_ns < t_ns)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* |a - b| without overflow, saturating. */
+static uint64_t tvo_absdiff(int64_t a, int64_t b)
+{
+    return a > b ? (uint64_t)a - (uint64_t)b : (uint64_t)b - (uint64_t)a;
+}
+
+tvo_status tvo_euroc_groundtruth(const tvo_euroc *seq, int64_t t_ns, int64_t tol_ns, tvo_pose *T_w_b)
+{
+    int32_t i, best;
+    if (seq == NULL || T_w_b == NULL)
+        return TVO_ERR_NULL;
+    if (tol_ns < 0)
+        return TVO_ERR_ARG;
+    if (seq->ngt == 0)
+        return TVO_ERR_STATE;
+    i = tvo_gt_lower_bound(seq, t_ns);
+    if (i == seq->ngt)
+        best = i - 1;
+    else if (i == 0)
+        best = 0;
+    else
+        best = tvo_absdiff(seq->gt[i].t_ns, t_ns) < tvo_absdiff(seq->gt[i - 1].t_ns, t_ns) ? i : i - 1;
+    if (tvo_absdiff(seq->gt[best].t_ns, t_ns) > (uint64_t)tol_ns)
+        return TVO_ERR_RANGE;
+    *T_w_b = tvo_pose_from_quat(seq->gt[best].q_wxyz, seq->gt[best].p);
+    return TVO_OK;
+}
+
+tvo_status tvo_euroc_groundtruth_interp(const tvo_euroc *seq, int64_t t_ns, int64_t max_gap_ns, tvo_pose *T_w_b)
+{
+    const tvo_euroc_gt_row *a, *b;
+    double q[4], qb[4], p[3], s, dot, wa, wb;
+    int32_t i;
+    int k;
+    if (seq == NULL || T_w_b == NULL)
+        return TVO_ERR_NULL;
+    if (max_gap_ns < 0)
+        return TVO_ERR_ARG;
+    if (seq->ngt == 0)
+        return TVO_ERR_STATE;
+    i = tvo_gt_lower_bound(seq, t_ns);
+    if (i < seq->ngt && seq->gt[i].t_ns == t_ns) {
+        *T_w_b = tvo_pose_from_quat(seq->gt[i].q_wxyz, seq->gt[i].p);
+        return TVO_OK;
+    }
+    if (i == 0 || i == seq->ngt)
+        return TVO_ERR_RANGE;
+    a = &seq->gt[i - 1];
+    b = &seq->gt[i];
+    if (tvo_absdiff(b->t_ns, a->t_ns) > (uint64_t)max_gap_ns)
+        return TVO_ERR_RANGE;
+    s = (double)(t_ns - a->t_ns) / (double)(b->t_ns - a->t_ns);
+    for (k = 0; k < 3; ++k)
+        p[k] = a->p[k] + s * (b->p[k] - a->p[k]);
+    dot = 0.0;
+    for (k = 0; k < 4; ++k) {
+        qb[k] = b->q_wxyz[k];
+        dot += a->q_wxyz[k] * qb[k];
+    }
+    if (dot < 0.0) {
+        dot = -dot;
+        for (k = 0; k < 4; ++k)
+            qb[k] = -qb[k];
+    }
+    if (dot > 0.9995) {
+        wa = 1.0 - s;
+        wb = s;
+    } else {
+        const double th = acos(dot), st = sin(th);
+        wa = sin((1.0 - s) * th) / st;
+        wb = sin(s * th) / st;
+    }
+    for (k = 0; k < 4; ++k)
+        q[k] = wa * a->q_wxyz[k] + wb * qb[k]; /* tvo_pose_from_quat normalises */
+    *T_w_b = tvo_pose_from_quat(q, p);
+    return TVO_OK;
+}
