@@ -69,14 +69,14 @@ def relative_motions(poses: np.ndarray) -> np.ndarray:
 
 
 def per_dof_errors(gt_poses: np.ndarray, est_poses: np.ndarray) -> np.ndarray:
-    """Per-frame relative-pose error per DoF, (N-1, 6): translation difference of the relative motions
-    (est - gt, m, in the camera frame of frame k) and the rotation vector of inv(R_gt_rel) R_est_rel (deg)."""
+    """Per-frame relative-pose error per DoF, (N-1, 6): the components of the RPE error transform
+    E_k = inv(G_k^-1 G_k+1) @ (P_k^-1 P_k+1) (the same transform evo's RPE takes the norm of):
+    translation tx ty tz in m and the rotation vector rx ry rz in deg."""
     g = relative_motions(gt_poses)
     e = relative_motions(est_poses)
-    dt = e[:, :3, 3] - g[:, :3, 3]
-    dR = np.swapaxes(g[:, :3, :3], 1, 2) @ e[:, :3, :3]
-    dr = np.degrees(Rotation.from_matrix(dR).as_rotvec())
-    return np.concatenate([dt, dr], axis=1)
+    E = trajio.inv_pose(g) @ e
+    dr = np.degrees(Rotation.from_matrix(E[:, :3, :3]).as_rotvec())
+    return np.concatenate([E[:, :3, 3], dr], axis=1)
 
 
 def paper_protocol_poses(gt_poses: np.ndarray, est_poses: np.ndarray) -> np.ndarray:
@@ -177,7 +177,7 @@ def evaluate(est: Trajectory, gt_body: Trajectory, T_BS=None, metric_scale: bool
             "rpe_frame": rpe(1, Unit.frames),
             "rpe_1m": rpe(1.0, Unit.meters),
             "rpe_per_dof": {
-                "units": "tx ty tz in m, rx ry rz in deg; per frame, est minus gt relative motion",
+                "units": "tx ty tz in m, rx ry rz in deg; per frame, components of inv(gt_rel) @ est_rel",
                 **{d: _stats(dof[:, i]) for i, d in enumerate(DOFS)}},
         },
         "paper_protocol": paper_protocol(gt_poses, est_raw),

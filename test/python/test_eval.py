@@ -1,0 +1,189 @@
+"""Tests of tinyvo_tools.eval: standard metrics (evo), per-DoF RPE, the paper protocol, T_BS, CLI."""
+import json
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from tinyvo_tools import eval as tev
+from tinyvo_tools import synth, trajio
+from tinyvo_tools.trajio import Trajectory, EUROC_CAM0_T_BS
+
+
+def gt_body(n=200, seed=0):
+    return synth.builtin_trajectory("handheld", n, seed=seed)
+
+
+def cam(traj):
+    return traj.to_camera(EUROC_CAM0_T_BS)
+
+
+def test_gt_against_itself_is_zero():
+    g = gt_body()
+    ev = tev.evaluate(cam(g), g)
+    s = ev.result["standard"]
+    assert s["ate_m"]["rmse"] < 1e-9 and s["ate_rotation_deg"]["rmse"] < 1e-6
+    assert s["rpe_frame"]["translation_m"]["rmse"] < 1e-9
+    assert s["rpe_1m"]["translation_m"]["rmse"] < 1e-9
+    for d in tev.DOFS:
+        assert s["rpe_per_dof"][d]["rmse"] < 1e-6
+    assert ev.result["paper_protocol"]["mean_translation_error_m"] < 1e-9
+    assert ev.result["poses"]["associated"] == 200
+    assert s["alignment"]["scale"] == pytest.approx(1.0, abs=1e-9)
+
+
+@pytest.mark.parametrize("metric", [False, True])
+def test_known_perturbation_gives_known_ate(metric):
+    # every pose twice; the copies are pushed +d and -d along world z: the offsets e have zero mean and
+    # no correlation with the positions g, so Umeyama's rotation is the identity; SE(3): ATE RMSE = d;
+    # Sim(3): scale s = var_g / (var_g + d^2), ATE^2 = (1 - s)^2 var_g + s^2 d^2
+    g = gt_body(150)
+    poses = np.repeat(g.poses, 2, axis=0)
+    t_ns = g.t_ns[0] + np.arange(len(poses), dtype=np.int64) * 25_000_000
+    gt = Trajectory(t_ns, poses)
+    est = cam(gt)
+    d = 0.05
+    est.poses[0::2, 2, 3] += d
+    est.poses[1::2, 2, 3] -= d
+    ev = tev.evaluate(est, gt, metric_scale=metric)
+    s = ev.result["standard"]
+    assert s["alignment"]["type"] == ("se3" if metric else "sim3")
+    gp = cam(gt).poses[:, :3, 3]
+    var_g = np.mean(np.sum((gp - gp.mean(0)) ** 2, axis=1))
+    sc = 1.0 if metric else var_g / (var_g + d * d)
+    assert s["alignment"]["scale"] == pytest.approx(sc, rel=1e-9)
+    assert s["ate_m"]["rmse"] == pytest.approx(np.sqrt((1 - sc) ** 2 * var_g + sc * sc * d * d), rel=1e-6)
+    if metric:
+        assert s["ate_m"]["rmse"] == pytest.approx(d, rel=1e-9) and s["ate_m"]["max"] == pytest.approx(d, rel=1e-9)
+
+
+def test_known_step_error_gives_known_rpe():
+    g = gt_body(120)
+    G = cam(g).poses
+    rel = trajio.inv_pose(G[:-1]) @ G[1:]
+    delta = np.eye(4)
+    delta[0, 3] = 0.01  # 1 cm extra along camera x every frame
+    E = [G[0]]
+    for r in rel:
+        E.append(E[-1] @ r @ delta)
+    est = Trajectory(g.t_ns, np.array(E))
+    ev = tev.evaluate(est, g, metric_scale=True)
+    s = ev.result["standard"]
+    assert s["rpe_frame"]["translation_m"]["rmse"] == pytest.approx(0.01, rel=1e-6)
+    assert s["rpe_frame"]["translation_m"]["min"] == pytest.approx(0.01, rel=1e-6)
+    assert s["rpe_frame"]["rotation_deg"]["rmse"] < 1e-6
+    dof = s["rpe_per_dof"]
+    assert dof["tx"]["rmse"] == pytest.approx(0.01, rel=1e-6) and dof["tx"]["mean"] == pytest.approx(0.01, rel=1e-6)
+    for d in ("ty", "tz", "rx", "ry", "rz"):
+        assert dof[d]["rmse"] < 1e-6
+    assert s["ate_m"]["rmse"] > 0.05  # the drift shows up in the ATE
+
+
+def test_per_dof_rotation_components():
+    g = gt_body(60)
+    G = cam(g).poses
+    rel = trajio.inv_pose(G[:-1]) @ G[1:]
+    dR = np.eye(4)
+    dR[:3, :3] = Rotation.from_rotvec(np.radians([0.0, 0.5, 0.0])).as_matrix()
+    E = [G[0]]
+    for r in rel:
+        E.append(E[-1] @ r @ dR)
+    err = tev.per_dof_errors(G, np.array(E))
+    assert np.allclose(err[:, 4], 0.5, atol=1e-9) and np.allclose(err[:, [0, 1, 2, 3, 5]], 0, atol=1e-9)
+
+
+def test_sim3_invariance_of_a_scaled_copy():
+    g = gt_body(200)
+    c = cam(g)
+    s, R, t = 3.7, Rotation.from_rotvec([0.3, -1.2, 0.5]).as_matrix(), np.array([5.0, -2.0, 1.0])
+    S = np.eye(4)
+    S[:3, :3], S[:3, 3] = R, t
+    P = S @ c.poses
+    P[:, :3, 3] = (R @ c.poses[:, :3, 3].T).T * s + t  # scaled positions, rotated orientations
+    est = Trajectory(g.t_ns, P)
+    sim = tev.evaluate(est, g).result["standard"]
+    assert sim["ate_m"]["rmse"] < 1e-8
+    assert sim["alignment"]["scale"] == pytest.approx(1.0 / s, rel=1e-9)
+    assert sim["rpe_frame"]["translation_m"]["rmse"] < 1e-8
+    se3 = tev.evaluate(est, g, metric_scale=True).result["standard"]
+    assert se3["ate_m"]["rmse"] > 0.5
+
+
+def test_paper_protocol_is_labelled_unaligned_and_known():
+    g = gt_body(101)
+    c = cam(g)
+    # a rigid copy far away: re-anchoring at the first gt pose removes it (no alignment needed)
+    S = np.eye(4)
+    S[:3, :3] = Rotation.from_rotvec([0, 0, 1.0]).as_matrix()
+    S[:3, 3] = [10, 0, 0]
+    pp = tev.evaluate(Trajectory(g.t_ns, S @ c.poses), g).result["paper_protocol"]
+    assert pp["mean_translation_error_m"] < 1e-9
+    # a world drift of k * delta per frame: mean error = |delta| * mean(k) = |delta| * (N - 1) / 2
+    P = c.poses.copy()
+    delta = np.array([0.002, -0.001, 0.0005])
+    P[:, :3, 3] += np.arange(101)[:, None] * delta
+    res = tev.evaluate(Trajectory(g.t_ns, P), g).result
+    pp = res["paper_protocol"]
+    assert pp["mean_translation_error_m"] == pytest.approx(np.linalg.norm(delta) * 50, rel=1e-9)
+    assert pp["aligned"] is False and "NO alignment" in pp["label"] and "first ground-truth pose" in pp["label"]
+    assert res["standard"]["ate_m"]["rmse"] < pp["mean_translation_error_m"]  # the aligned ATE differs
+    # no scale correction in the paper protocol
+    P = c.poses.copy()
+    P[:, :3, 3] *= 2.0
+    assert tev.evaluate(Trajectory(g.t_ns, P), g).result["paper_protocol"]["mean_translation_error_m"] > 0.1
+
+
+def test_tbs_is_applied():
+    g = gt_body(100)
+    est = cam(g)
+    assert tev.evaluate(est, g, T_BS=EUROC_CAM0_T_BS, metric_scale=True).result["standard"]["ate_m"]["rmse"] < 1e-9
+    off = tev.evaluate(est, g, T_BS=np.eye(4), metric_scale=True).result["standard"]
+    assert off["ate_m"]["rmse"] > 1e-3 or off["ate_rotation_deg"]["rmse"] > 1.0
+    body = tev.evaluate(g, g, frame="body").result["standard"]
+    assert body["ate_m"]["rmse"] < 1e-9
+
+
+def test_bad_inputs():
+    g = gt_body(50)
+    far = Trajectory(g.t_ns + 10_000_000_000_000, cam(g).poses)
+    with pytest.raises(ValueError):
+        tev.evaluate(far, g)
+    with pytest.raises(ValueError):
+        tev.evaluate(Trajectory(g.t_ns[:1], g.poses[:1]), g)
+    nan = cam(g)
+    nan.poses[3, 0, 3] = np.nan
+    with pytest.raises(ValueError):
+        tev.evaluate(nan, g)
+    with pytest.raises(ValueError):
+        tev.evaluate(cam(g), g, frame="world")
+
+
+def test_cli_writes_json_and_plots(tmp_path, capsys):
+    g = gt_body(120)
+    synth_dir = tmp_path / "seq"
+    (synth_dir / "mav0" / "state_groundtruth_estimate0").mkdir(parents=True)
+    (synth_dir / "mav0" / "cam0").mkdir(parents=True)
+    trajio.write_euroc_groundtruth(str(synth_dir / "mav0" / "state_groundtruth_estimate0" / "data.csv"), g)
+    trajio.write_sensor_yaml(str(synth_dir / "mav0" / "cam0" / "sensor.yaml"), trajio.CameraInfo())
+    est = cam(g)
+    est.poses[:, :3, 3] *= 0.5  # monocular scale
+    trajio.write_tum(str(tmp_path / "est.txt"), est)
+    out = tmp_path / "r" / "result.json"
+    rc = tev.main(["--est", str(tmp_path / "est.txt"), "--gt", str(synth_dir), "--out", str(out),
+                   "--plots", str(tmp_path / "plots")])
+    assert rc == 0
+    printed = capsys.readouterr().out
+    assert "ATE RMSE (sim3" in printed and "paper protocol" in printed
+    res = json.loads(out.read_text())
+    assert res["inputs"]["T_BS"].endswith("cam0/sensor.yaml")
+    assert res["standard"]["ate_m"]["rmse"] < 1e-8
+    assert res["standard"]["alignment"]["scale"] == pytest.approx(2.0)
+    for p in res["plots"]:
+        data = open(p, "rb").read()
+        assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 5000
+    # no overlap in time: a clear error and exit code 2
+    far = Trajectory(g.t_ns + 10**13, est.poses)
+    trajio.write_tum(str(tmp_path / "far.txt"), far)
+    assert tev.main(["--est", str(tmp_path / "far.txt"), "--gt", str(synth_dir), "--quiet"]) == 2
+    assert "association failed" in capsys.readouterr().err
+    assert tev.main(["--est", str(tmp_path / "missing.txt"), "--gt", str(synth_dir), "--quiet"]) == 2
