@@ -19,7 +19,7 @@ import numpy as np
 
 from . import nnfmt, quant
 
-GENERATOR_VERSION = 1
+GENERATOR_VERSION = 2
 GENERATOR = f"tinyvo_tools.nngolden {GENERATOR_VERSION}"
 BRANCH_ACTS = ["relu", "leaky_relu", "elu", "selu", "tanh", "sigmoid"]
 

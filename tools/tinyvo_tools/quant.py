@@ -119,9 +119,38 @@ def make_lut(act: str, in_scale: float, in_zp: int, out_scale: float, out_zp: in
     return np.clip(r, -128, 127).astype(np.int8)
 
 
-def quantize_branch(fb: FloatBranch, calib: np.ndarray) -> nnfmt.Branch:
+def equalise_inputs(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0) -> FloatBranch:
+    """The same float function with each normalised input re-scaled so that its calibration range maps
+    to [-1, 1]; the first layer absorbs the change (W' = W / a, b' = b - W' c). All inputs then share
+    one int8 scale without wasting resolution on inputs with a narrow range."""
+    z = fb.normalise(calib)
+    lo = np.percentile(z, pct, axis=0) if pct > 0 else z.min(axis=0)
+    hi = np.percentile(z, 100 - pct, axis=0) if pct > 0 else z.max(axis=0)
+    span = np.where(hi - lo > 1e-6, hi - lo, 1.0)
+    a = 2.0 / span                   # z' = a z + c
+    c = -1.0 - a * lo
+    ns = np.asarray(fb.norm_scale, np.float64) * a
+    no = np.asarray(fb.norm_offset, np.float64) * a + c
+    w0 = np.asarray(fb.weights[0], np.float64) / a[None, :]
+    b0 = np.asarray(fb.biases[0], np.float64) - w0 @ c
+    return FloatBranch(dof=fb.dof, feature_ids=list(fb.feature_ids), norm_scale=ns.astype(np.float32),
+                       norm_offset=no.astype(np.float32), weights=[w0, *fb.weights[1:]],
+                       biases=[b0, *fb.biases[1:]], activation=fb.activation, out_scale=fb.out_scale,
+                       out_offset=fb.out_offset)
+
+
+def _range(v: np.ndarray, pct: float):
+    if pct > 0:
+        return np.percentile(v, pct), np.percentile(v, 100 - pct)
+    return v.min(), v.max()
+
+
+def quantize_branch(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0, equalise: bool = True) -> nnfmt.Branch:
+    """pct: clip calibration ranges at the pct / 100-pct percentiles (0 = min/max)."""
+    if equalise:
+        fb = equalise_inputs(fb, calib, pct)
     trace = fb.forward_all(calib)
-    s_in, zp_in = asym_params(trace[0].min(), trace[0].max())
+    s_in, zp_in = asym_params(*_range(trace[0], pct))
     br = nnfmt.Branch(dof=fb.dof, feature_ids=list(fb.feature_ids),
                       norm_scale=np.asarray(fb.norm_scale, np.float32),
                       norm_offset=np.asarray(fb.norm_offset, np.float32),
@@ -141,7 +170,7 @@ def quantize_branch(fb: FloatBranch, calib: np.ndarray) -> nnfmt.Branch:
             L = nnfmt.Layer(w=wq, bias=bq, act="none", out_kind=nnfmt.OUT_F32, in_zp=zp_in, in_scale=s_in,
                             scale=acc_scale.astype(np.float32))
         else:
-            s_out, zp_out = asym_params(pre.min(), pre.max())
+            s_out, zp_out = asym_params(*_range(pre, pct))
             mult, shift = zip(*(quantize_multiplier(r) for r in acc_scale / s_out))
             L = nnfmt.Layer(w=wq, bias=bq, act=fb.activation, out_kind=nnfmt.OUT_S8, in_zp=zp_in,
                             out_zp=zp_out, in_scale=s_in, out_scale=s_out,
@@ -149,7 +178,7 @@ def quantize_branch(fb: FloatBranch, calib: np.ndarray) -> nnfmt.Branch:
             if fb.activation == "none":
                 L.act_zp, L.act_scale = zp_out, s_out
             else:
-                s_act, zp_act = asym_params(post.min(), post.max())
+                s_act, zp_act = asym_params(*_range(post, pct))
                 L.act_zp, L.act_scale = zp_act, s_act
                 L.lut = make_lut(fb.activation, s_out, zp_out, s_act, zp_act)
             s_in, zp_in = L.act_scale, L.act_zp
@@ -157,8 +186,9 @@ def quantize_branch(fb: FloatBranch, calib: np.ndarray) -> nnfmt.Branch:
     return br
 
 
-def quantize_model(branches: Sequence[FloatBranch], calib: np.ndarray) -> nnfmt.Model:
-    return nnfmt.Model(branches=[quantize_branch(b, np.atleast_2d(calib)) for b in branches])
+def quantize_model(branches: Sequence[FloatBranch], calib: np.ndarray, pct: float = 0.0,
+                   equalise: bool = True) -> nnfmt.Model:
+    return nnfmt.Model(branches=[quantize_branch(b, np.atleast_2d(calib), pct, equalise) for b in branches])
 
 
 def random_float_branch(rng: np.random.Generator, dof: int, activation: str, sizes=(256, 32, 32),
