@@ -180,7 +180,8 @@ static tvo_status check_caps(tvo_v4l2 *cam, const char *dev)
     char buf[96];
     memset(&cap, 0, sizeof cap);
     e = xioctl(cam, VIDIOC_QUERYCAP, &cap);
-    if (e == ENOTTY || e == EINVAL) {
+    /* ENOSYS: an emulator (qemu-user) that does not forward V4L2 ioctls */
+    if (e == ENOTTY || e == EINVAL || e == ENOSYS) {
         snprintf(buf, sizeof buf, "%s is not a V4L2 device (VIDIOC_QUERYCAP)", dev);
         set_msg(cam, buf, e);
         return TVO_ERR_UNSUPPORTED;
