@@ -13,6 +13,16 @@
 
 #include "tinyvo/arena.h"
 
+/* SSE2 kernel for the iteration (x86-64 always has SSE2). It computes exactly the same integers as
+ * the portable C kernel (exact integer sums), so results are bit-identical; cfg->force_portable
+ * selects the C kernel, and test_lk.c checks the two agree. Define TVO_LK_NO_SIMD to compile it out. */
+#if defined(__SSE2__) && !defined(TVO_LK_NO_SIMD)
+#include <emmintrin.h>
+#define LK_SSE2 1
+#else
+#define LK_SSE2 0
+#endif
+
 #define LK_W_BITS 14
 #define LK_ONE (1 << LK_W_BITS)
 /* Descale of the grey value (5 fractional bits kept): (v + 2^8) >> 9, v >= 0. */
@@ -44,6 +54,7 @@ typedef struct lk_params {
     int32_t max_iters;
     double eps2;
     float min_eig;
+    int simd; /* use the SIMD kernel (same results) */
 } lk_params;
 
 void tvo_lk_config_default(tvo_lk_config *cfg)
@@ -58,6 +69,7 @@ void tvo_lk_config_default(tvo_lk_config *cfg)
     cfg->use_initial_flow = 0;
     cfg->fb_check = 0;
     cfg->fb_max_error = 1.0f;
+    cfg->force_portable = 0;
 }
 
 tvo_status tvo_lk_config_check(const tvo_lk_config *cfg)
@@ -149,11 +161,20 @@ static int32_t lk_reflect101(int32_t i, int32_t n)
 /* Copy the size x size block whose top-left is (x0, y0) (may lie outside) into dst, reflecting. */
 static void lk_gather(const lk_level *lv, int32_t x0, int32_t y0, int32_t size, uint8_t *dst)
 {
-    int32_t r, c;
+    int32_t r, c, c_lo, c_hi;
+    /* columns c_lo..c_hi-1 are inside the image: copied as a run; the others reflected */
+    c_lo = x0 < 0 ? -x0 : 0;
+    c_hi = lv->w - x0 < size ? lv->w - x0 : size;
+    if (c_hi < c_lo)
+        c_hi = c_lo;
     for (r = 0; r < size; ++r) {
         const uint8_t *row = lv->data + (size_t)lk_reflect101(y0 + r, lv->h) * (size_t)lv->stride;
         uint8_t *out = dst + (size_t)r * (size_t)size;
-        for (c = 0; c < size; ++c)
+        for (c = 0; c < c_lo && c < size; ++c)
+            out[c] = row[lk_reflect101(x0 + c, lv->w)];
+        if (c_hi > c_lo)
+            memcpy(out + c_lo, row + x0 + c_lo, (size_t)(c_hi - c_lo));
+        for (c = c_hi > c_lo ? c_hi : (c_lo < size ? c_lo : size); c < size; ++c)
             out[c] = row[lk_reflect101(x0 + c, lv->w)];
     }
 }
@@ -178,10 +199,98 @@ static void lk_weights(float a, float b, int32_t w[4])
     w[3] = LK_ONE - w[0] - w[1] - w[2];
 }
 
+#if LK_SSE2
+/* Sum of the 4 int32 lanes. */
+static int32_t lk_hsum_epi32(__m128i v)
+{
+    v = _mm_add_epi32(v, _mm_shuffle_epi32(v, _MM_SHUFFLE(1, 0, 3, 2)));
+    v = _mm_add_epi32(v, _mm_shuffle_epi32(v, _MM_SHUFFLE(2, 3, 0, 1)));
+    return _mm_cvtsi128_si32(v);
+}
+
+/* 8 bilinear samples of an int16 grid (pairs x, x+1 of rows g0, g1), descaled by 2^14 with floor
+ * (= the biased shift of the C path), as int16. */
+static __m128i lk_interp8_s16(const int16_t *g0, const int16_t *g1, __m128i w01, __m128i w23, __m128i rnd)
+{
+    __m128i a0 = _mm_loadu_si128((const __m128i *)g0), a1 = _mm_loadu_si128((const __m128i *)(g0 + 1));
+    __m128i b0 = _mm_loadu_si128((const __m128i *)g1), b1 = _mm_loadu_si128((const __m128i *)(g1 + 1));
+    __m128i lo = _mm_add_epi32(_mm_madd_epi16(_mm_unpacklo_epi16(a0, a1), w01),
+                               _mm_madd_epi16(_mm_unpacklo_epi16(b0, b1), w23));
+    __m128i hi = _mm_add_epi32(_mm_madd_epi16(_mm_unpackhi_epi16(a0, a1), w01),
+                               _mm_madd_epi16(_mm_unpackhi_epi16(b0, b1), w23));
+    lo = _mm_srai_epi32(_mm_add_epi32(lo, rnd), LK_W_BITS);
+    hi = _mm_srai_epi32(_mm_add_epi32(hi, rnd), LK_W_BITS);
+    return _mm_packs_epi32(lo, hi);
+}
+
+/* SSE2 version of the window interpolation of lk_prev_window (win >= 8), same integers. s is the
+ * window's top-left pixel (patch offset +1, +1). The last 8-group of a row overlaps the previous one:
+ * stores are idempotent and the gradient sums mask the repeated lanes. */
+static void lk_prev_interp_sse2(const uint8_t *s, int32_t sstride, const int32_t wt[4], lk_work *wk,
+                                int64_t A[3])
+{
+    const int32_t win = wk->win, g = win + 1;
+    const int32_t full = win & ~7, tail = win - full, last = win - 8;
+    const __m128i w01 = _mm_set1_epi32((int32_t)((uint32_t)wt[0] | ((uint32_t)wt[1] << 16)));
+    const __m128i w23 = _mm_set1_epi32((int32_t)((uint32_t)wt[2] | ((uint32_t)wt[3] << 16)));
+    const __m128i rnd_i = _mm_set1_epi32(LK_I_ROUND);
+    const __m128i rnd_d = _mm_set1_epi32(1 << (LK_W_BITS - 1));
+    const __m128i lane = _mm_set_epi16(7, 6, 5, 4, 3, 2, 1, 0);
+    const __m128i mask = _mm_cmpgt_epi16(lane, _mm_set1_epi16((int16_t)(7 - tail)));
+    const __m128i z = _mm_setzero_si128();
+    int64_t a11 = 0, a12 = 0, a22 = 0;
+    int32_t x, y;
+    for (y = 0; y < win; ++y) {
+        const uint8_t *s0 = s + (size_t)y * (size_t)sstride, *s1 = s0 + sstride;
+        const int16_t *gx0 = wk->gx + (size_t)y * (size_t)g, *gy0 = wk->gy + (size_t)y * (size_t)g;
+        int16_t *iw = wk->iwin + (size_t)y * (size_t)win;
+        int16_t *ixw = wk->ixwin + (size_t)y * (size_t)win;
+        int16_t *iyw = wk->iywin + (size_t)y * (size_t)win;
+        __m128i c11 = z, c12 = z, c22 = z;
+        int32_t k;
+        for (k = 0; k < full || (k == full && tail > 0); k += 8) {
+            __m128i a0, a1, b0, b1, lo, hi, dx, dy;
+            x = k < full ? k : last;
+            a0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s0 + x)), z);
+            a1 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s0 + x + 1)), z);
+            b0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s1 + x)), z);
+            b1 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s1 + x + 1)), z);
+            lo = _mm_add_epi32(_mm_madd_epi16(_mm_unpacklo_epi16(a0, a1), w01),
+                               _mm_madd_epi16(_mm_unpacklo_epi16(b0, b1), w23));
+            hi = _mm_add_epi32(_mm_madd_epi16(_mm_unpackhi_epi16(a0, a1), w01),
+                               _mm_madd_epi16(_mm_unpackhi_epi16(b0, b1), w23));
+            dx = lk_interp8_s16(gx0 + x, gx0 + g + x, w01, w23, rnd_d);
+            dy = lk_interp8_s16(gy0 + x, gy0 + g + x, w01, w23, rnd_d);
+            lo = _mm_srai_epi32(_mm_add_epi32(lo, rnd_i), LK_I_SHIFT);
+            hi = _mm_srai_epi32(_mm_add_epi32(hi, rnd_i), LK_I_SHIFT);
+            _mm_storeu_si128((__m128i *)(iw + x), _mm_packs_epi32(lo, hi));
+            _mm_storeu_si128((__m128i *)(ixw + x), dx);
+            _mm_storeu_si128((__m128i *)(iyw + x), dy);
+            if (k == full) { /* overlapping tail group: count only the new lanes */
+                __m128i mx = _mm_and_si128(dx, mask);
+                c11 = _mm_add_epi32(c11, _mm_madd_epi16(mx, dx));
+                c12 = _mm_add_epi32(c12, _mm_madd_epi16(mx, dy));
+                c22 = _mm_add_epi32(c22, _mm_madd_epi16(_mm_and_si128(dy, mask), dy));
+            } else {
+                c11 = _mm_add_epi32(c11, _mm_madd_epi16(dx, dx));
+                c12 = _mm_add_epi32(c12, _mm_madd_epi16(dx, dy));
+                c22 = _mm_add_epi32(c22, _mm_madd_epi16(dy, dy));
+            }
+        }
+        a11 += lk_hsum_epi32(c11);
+        a12 += lk_hsum_epi32(c12);
+        a22 += lk_hsum_epi32(c22);
+    }
+    A[0] = a11;
+    A[1] = a12;
+    A[2] = a22;
+}
+#endif
+
 /* Previous-image window: grey values and interpolated Scharr derivatives at (ix + a, iy + b) + (x, y)
  * for x, y in 0..win-1, into wk->iwin / ixwin / iywin; the gradient sums into A[3]. */
 static void lk_prev_window(const lk_level *lv, int32_t ix, int32_t iy, const int32_t wt[4],
-                           lk_work *wk, int64_t A[3])
+                           lk_work *wk, int64_t A[3], int simd)
 {
     const int32_t win = wk->win, g = win + 1, p = win + 3;
     const uint8_t *src;
@@ -227,6 +336,12 @@ static void lk_prev_window(const lk_level *lv, int32_t ix, int32_t iy, const int
         }
     }
 
+#if LK_SSE2
+    if (simd) {
+        lk_prev_interp_sse2(src + sstride + 1, sstride, wt, wk, A);
+        return;
+    }
+#endif
     for (y = 0; y < win; ++y) {
         const uint8_t *s0 = src + (size_t)(y + 1) * (size_t)sstride + 1;
         const uint8_t *s1 = s0 + sstride;
@@ -283,6 +398,65 @@ static void lk_mismatch(const uint8_t *src, int32_t sstride, const int32_t wt[4]
     *b1 = s1;
     *b2 = s2;
 }
+
+#if LK_SSE2
+/* 8 pixels of a row: (J bilinear, 5 fractional bits) - I, as int16; loads 9 bytes of j0 and j1. */
+static __m128i lk_diff8_sse2(const uint8_t *j0, const uint8_t *j1, const int16_t *iw, __m128i w01,
+                             __m128i w23, __m128i rnd)
+{
+    const __m128i z = _mm_setzero_si128();
+    __m128i a0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)j0), z);
+    __m128i a1 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j0 + 1)), z);
+    __m128i b0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)j1), z);
+    __m128i b1 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j1 + 1)), z);
+    /* pairs (J[x], J[x+1]) times (w00, w01), plus (J'[x], J'[x+1]) times (w10, w11) */
+    __m128i lo = _mm_add_epi32(_mm_madd_epi16(_mm_unpacklo_epi16(a0, a1), w01),
+                               _mm_madd_epi16(_mm_unpacklo_epi16(b0, b1), w23));
+    __m128i hi = _mm_add_epi32(_mm_madd_epi16(_mm_unpackhi_epi16(a0, a1), w01),
+                               _mm_madd_epi16(_mm_unpackhi_epi16(b0, b1), w23));
+    lo = _mm_srai_epi32(_mm_add_epi32(lo, rnd), LK_I_SHIFT); /* non-negative: exact */
+    hi = _mm_srai_epi32(_mm_add_epi32(hi, rnd), LK_I_SHIFT);
+    return _mm_sub_epi16(_mm_packs_epi32(lo, hi), _mm_loadu_si128((const __m128i *)iw));
+}
+
+/* Same sums as lk_mismatch() for win >= 8; never reads outside the (win+1)^2 block: the last
+ * 8-pixel group of a row overlaps the previous one and its repeated lanes are masked out. */
+static void lk_mismatch_sse2(const uint8_t *src, int32_t sstride, const int32_t wt[4], const lk_work *wk,
+                             int64_t *b1, int64_t *b2)
+{
+    const int32_t win = wk->win;
+    const int32_t full = win & ~7, tail = win - full, last = win - 8;
+    const __m128i w01 = _mm_set1_epi32((int32_t)((uint32_t)wt[0] | ((uint32_t)wt[1] << 16)));
+    const __m128i w23 = _mm_set1_epi32((int32_t)((uint32_t)wt[2] | ((uint32_t)wt[3] << 16)));
+    const __m128i rnd = _mm_set1_epi32(LK_I_ROUND);
+    /* lanes 8 - tail .. 7 of the last group are new pixels */
+    const __m128i lane = _mm_set_epi16(7, 6, 5, 4, 3, 2, 1, 0);
+    const __m128i mask = _mm_cmpgt_epi16(lane, _mm_set1_epi16((int16_t)(7 - tail)));
+    int64_t s1 = 0, s2 = 0;
+    int32_t x, y;
+    for (y = 0; y < win; ++y) {
+        const uint8_t *j0 = src + (size_t)y * (size_t)sstride, *j1 = j0 + sstride;
+        const int16_t *iw = wk->iwin + (size_t)y * (size_t)win;
+        const int16_t *ixw = wk->ixwin + (size_t)y * (size_t)win;
+        const int16_t *iyw = wk->iywin + (size_t)y * (size_t)win;
+        __m128i acc1 = _mm_setzero_si128(), acc2 = _mm_setzero_si128();
+        for (x = 0; x < full; x += 8) {
+            __m128i d = lk_diff8_sse2(j0 + x, j1 + x, iw + x, w01, w23, rnd);
+            acc1 = _mm_add_epi32(acc1, _mm_madd_epi16(d, _mm_loadu_si128((const __m128i *)(ixw + x))));
+            acc2 = _mm_add_epi32(acc2, _mm_madd_epi16(d, _mm_loadu_si128((const __m128i *)(iyw + x))));
+        }
+        if (tail > 0) {
+            __m128i d = _mm_and_si128(lk_diff8_sse2(j0 + last, j1 + last, iw + last, w01, w23, rnd), mask);
+            acc1 = _mm_add_epi32(acc1, _mm_madd_epi16(d, _mm_loadu_si128((const __m128i *)(ixw + last))));
+            acc2 = _mm_add_epi32(acc2, _mm_madd_epi16(d, _mm_loadu_si128((const __m128i *)(iyw + last))));
+        }
+        s1 += lk_hsum_epi32(acc1);
+        s2 += lk_hsum_epi32(acc2);
+    }
+    *b1 = s1;
+    *b2 = s2;
+}
+#endif
 
 /* Sum of |J(window) - I| (OpenCV's error before scaling). */
 static int32_t lk_abs_error(const uint8_t *src, int32_t sstride, const int32_t wt[4], const lk_work *wk)
@@ -343,7 +517,7 @@ static int lk_track_level(const lk_params *prm, const lk_level *I, const lk_leve
     ix = (int32_t)floorf(px);
     iy = (int32_t)floorf(py);
     lk_weights(px - (float)ix, py - (float)iy, wt);
-    lk_prev_window(I, ix, iy, wt, wk, A);
+    lk_prev_window(I, ix, iy, wt, wk, A, prm->simd);
 
     a11 = (float)A[0] * LK_FLT_SCALE;
     a12 = (float)A[1] * LK_FLT_SCALE;
@@ -366,7 +540,12 @@ static int lk_track_level(const lk_params *prm, const lk_level *I, const lk_leve
         iy = (int32_t)floorf(cy);
         lk_weights(cx - (float)ix, cy - (float)iy, wt);
         blk = lk_next_block(J, ix, iy, wk, &sstride);
-        lk_mismatch(blk, sstride, wt, wk, &ib1, &ib2);
+#if LK_SSE2
+        if (prm->simd)
+            lk_mismatch_sse2(blk, sstride, wt, wk, &ib1, &ib2);
+        else
+#endif
+            lk_mismatch(blk, sstride, wt, wk, &ib1, &ib2);
         b1 = (float)ib1 * LK_FLT_SCALE;
         b2 = (float)ib2 * LK_FLT_SCALE;
         dx = (a12 * b2 - a22 * b1) * inv_det;
@@ -524,6 +703,7 @@ tvo_status tvo_lk_track(const tvo_lk_config *cfg, const tvo_pyramid *prev, const
     prm.max_iters = cfg->max_iters;
     prm.eps2 = (double)cfg->epsilon * (double)cfg->epsilon;
     prm.min_eig = cfg->min_eig_threshold;
+    prm.simd = !cfg->force_portable && prm.win >= 8;
 
     /* as OpenCV: levels whose size is <= the window are not used */
     top = cfg->max_level;

@@ -34,7 +34,8 @@ class LKConfig(ctypes.Structure):
     _fields_ = [("win_size", ctypes.c_int32), ("max_level", ctypes.c_int32),
                 ("max_iters", ctypes.c_int32), ("epsilon", ctypes.c_float),
                 ("min_eig_threshold", ctypes.c_float), ("use_initial_flow", ctypes.c_int32),
-                ("fb_check", ctypes.c_int32), ("fb_max_error", ctypes.c_float)]
+                ("fb_check", ctypes.c_int32), ("fb_max_error", ctypes.c_float),
+                ("force_portable", ctypes.c_int32)]
 
 
 def _image(arr):
@@ -83,11 +84,12 @@ class TvoLK:
         return buf.reshape(h, s)[:, :w].copy()
 
     def config(self, win=WIN, max_level=MAX_LEVEL, iters=ITERS, eps=EPS, fb=False, fb_max=1.0,
-               init_flow=False):
+               init_flow=False, portable=False):
         c = LKConfig()
         self.lib.tvo_lk_config_default(ctypes.byref(c))
         c.win_size, c.max_level, c.max_iters, c.epsilon = win, max_level, iters, eps
         c.fb_check, c.fb_max_error, c.use_initial_flow = int(fb), fb_max, int(init_flow)
+        c.force_portable = int(portable)
         return c
 
     def scratch(self, cfg):

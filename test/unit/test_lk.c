@@ -375,6 +375,39 @@ static void test_scratch_alignment_any(void **state)
     assert_memory_equal(p1, q1, sizeof(p1));
 }
 
+/* The SIMD kernels (when compiled in) and the portable C kernels give bit-identical results, for
+ * every tail length of the 8-pixel groups and with border windows. */
+static void test_portable_and_simd_identical(void **state)
+{
+    static tvo_point2f p0[300], p1[300], q1[300];
+    static uint8_t s1[300], s2[300];
+    static float e1[300], e2[300];
+    static uint8_t big_scratch[1 << 17];
+    static const int wins[] = { 3, 7, 9, 11, 13, 15, 17, 21, 23, 31, 63 };
+    uint64_t seed = 777;
+    (void)state;
+    build(3, 2.7, -1.9);
+    for (int i = 0; i < 300; ++i) {
+        p0[i].x = (float)((double)(tvo_test_rand(&seed) >> 11) / 9007199254740992.0 * (W + 20) - 10);
+        p0[i].y = (float)((double)(tvo_test_rand(&seed) >> 11) / 9007199254740992.0 * (H + 20) - 10);
+    }
+    for (size_t k = 0; k < sizeof(wins) / sizeof(wins[0]); ++k) {
+        tvo_lk_config c = F.cfg;
+        c.win_size = wins[k];
+        c.fb_check = 1;
+        assert_true(tvo_lk_scratch_size(&c) <= sizeof(big_scratch));
+        c.force_portable = 0;
+        assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, s1, e1, 300, big_scratch, sizeof(big_scratch)),
+                         TVO_OK);
+        c.force_portable = 1;
+        assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, q1, s2, e2, 300, big_scratch, sizeof(big_scratch)),
+                         TVO_OK);
+        assert_memory_equal(p1, q1, sizeof(p1));
+        assert_memory_equal(s1, s2, sizeof(s1));
+        assert_memory_equal(e1, e2, sizeof(e1));
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -387,6 +420,7 @@ int main(void)
         cmocka_unit_test(test_small_image_skips_small_levels),
         cmocka_unit_test(test_bad_inputs),
         cmocka_unit_test(test_scratch_alignment_any),
+        cmocka_unit_test(test_portable_and_simd_identical),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -54,6 +54,8 @@ typedef struct tvo_lk_config {
     int32_t use_initial_flow;/* nonzero: next_pts holds the initial guess (level-0 px) */
     int32_t fb_check;        /* nonzero: forward-backward check (doubles the cost) */
     float fb_max_error;      /* px, > 0, largest accepted forward-backward distance; default 1.0 */
+    int32_t force_portable;  /* nonzero: only the portable C kernels, no SIMD; the results are
+                                bit-identical either way (all window sums are exact integers); default 0 */
 } tvo_lk_config;
 
 /* The defaults above (OpenCV's defaults for win 21, 3 levels, fb check off). */
