@@ -42,7 +42,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->pose_threshold_px = 1.0;
     /* rotation-only below 0.15 deg of rotation-compensated parallax: about 4x the noise floor of
        0.3 px tracking noise at f = 460 px; pure rotation measures ~0.005 deg in test_vo */
-    cfg->relpose.min_parallax_deg = 0.15;
+    cfg->relpose.min_parallax_deg = 0.02;
     cfg->clock = NULL;
     cfg->clock_user = NULL;
 }
@@ -302,6 +302,14 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
         const double f = 0.5 * (vo->cfg.camera.fx + vo->cfg.camera.fy);
         rc.threshold = vo->cfg.pose_threshold_px / f;
         st = tvo_relpose_estimate(&rc, vo->x1, vo->x2, m, &rp, vo->mask, vo->scratch, vo->scratch_size);
+        if (st == TVO_OK && (rp.flags & TVO_RELPOSE_FLAG_HOMOGRAPHY) &&
+            (rp.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE) && rc.use_homography) {
+            /* the homography won the model selection but none of its decompositions held up: the
+               epipolar model still may, so ask for it alone before calling the frame lost */
+            rc.use_homography = 0;
+            st = tvo_relpose_estimate(&rc, vo->x1, vo->x2, m, &rp, vo->mask, vo->scratch, vo->scratch_size);
+        }
+        res->pose_status = st;
         if (st != TVO_OK || (rp.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE)) {
             /* keep the tracks, but report no motion we could trust */
             res->state = TVO_VO_LOST;

@@ -68,6 +68,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
 typedef struct tvo_vo_result {
     tvo_vo_state state;
     int32_t relpose_flags;     /* TVO_RELPOSE_FLAG_* of this frame's estimate (0 when none ran) */
+    tvo_status pose_status;    /* status of this frame's relative-pose estimate (TVO_OK when none ran) */
     tvo_pose T_prev_cur;       /* raw relative pose: p_prev = R p_cur + t, |t| = 1 or t = 0 */
     int32_t tracked;           /* tracks that survived LK + forward-backward into this frame */
     int32_t inliers;           /* pose inliers among them */

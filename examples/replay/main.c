@@ -1,0 +1,514 @@
+/* tvo_replay: replay an EuRoC/ASL sequence through the tinyvo VO and write the trajectory.
+ *
+ *   tvo_replay --euroc DIR [--cam cam0|cam1] --out TRAJ.txt [--scale gt|model|none] [--model FILE]
+ *              [--frame camera|body] [--stats STATS.json] [--max-frames N] [--strict] [--quiet]
+ *
+ * The trajectory is written in TUM format (t tx ty tz qx qy qz qw, seconds). Bad frames (missing,
+ * corrupt, wrong size, non-increasing timestamps) are reported, counted in the stats and skipped; the
+ * tracker re-initialises after them and after gaps longer than 1.5 frame periods. --strict turns
+ * each of them into a non-zero exit instead.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "tinyvo/nn.h"
+#include "tinyvo/port/clock.h"
+#include "tinyvo/port/euroc.h"
+#include "tinyvo/port/png.h"
+#include "tinyvo/vo.h"
+
+enum scale_mode { SCALE_NONE, SCALE_GT, SCALE_MODEL };
+enum skip_kind { SKIP_MISSING, SKIP_CORRUPT, SKIP_SIZE, SKIP_TIMESTAMP, SKIP_COUNT };
+static const char *const skip_names[SKIP_COUNT] = { "missing", "corrupt", "wrong_size", "timestamp" };
+static const char *const state_names[TVO_VO_STATE_COUNT] = { "ok", "initialising", "rotation_only",
+                                                              "lost" };
+static const char *const feature_names[TVO_FEAT_COUNT] = {
+    "rx", "ry", "rz", "tx", "ty", "tz", "inlier_ratio", "parallax_deg", "tracks_k", "dt", "rot_only"
+};
+static const char *const stage_names[TVO_STAGE_COUNT] = { "pyramid", "track", "undistort",
+                                                           "pose", "detect", "total" };
+
+typedef struct options {
+    const char *euroc, *cam, *out, *model, *stats, *features;
+    enum scale_mode scale;
+    int body_frame, strict, quiet, print_memory;
+    long max_frames;
+} options;
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: tvo_replay --euroc DIR --out TRAJ.txt [options]\n"
+            "  --euroc DIR          EuRoC/ASL sequence (folder holding mav0/)\n"
+            "  --cam cam0|cam1      camera to replay (default cam0)\n"
+            "  --out FILE           trajectory in TUM format (t tx ty tz qx qy qz qw)\n"
+            "  --scale gt|model|none  per-step scale: ground-truth step length, the per-DoF\n"
+            "                       networks (--model), or unit steps (default none)\n"
+            "  --model FILE         tinyvo weights file (needed by --scale model)\n"
+            "  --frame camera|body  pose written: camera (default) or body (through T_BS)\n"
+            "  --stats FILE         JSON with frame counts, status counts and stage timings\n"
+            "  --features FILE      CSV of the per-frame front-end features (nn.h layout), for\n"
+            "                       the dataset builder: t_ns,state,relpose_flags,\n"
+            "                       pose_status,inliers,<feature names>\n"
+            "  --max-frames N       stop after N frames\n"
+            "  --strict             exit non-zero at the first bad frame instead of skipping it\n"
+            "  --quiet              no progress line\n"
+            "  --print-memory       print the VO working-memory size for the sequence and exit\n");
+}
+
+static int parse_args(int argc, char **argv, options *o)
+{
+    memset(o, 0, sizeof(*o));
+    o->cam = "cam0";
+    o->scale = SCALE_NONE;
+    o->max_frames = -1;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+#define NEED_VALUE()                                                              \
+    do {                                                                          \
+        if (v == NULL) {                                                          \
+            fprintf(stderr, "tvo_replay: %s needs a value\n", a);                 \
+            return -1;                                                            \
+        }                                                                         \
+        ++i;                                                                      \
+    } while (0)
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            usage(stdout);
+            exit(0);
+        } else if (!strcmp(a, "--euroc")) {
+            NEED_VALUE();
+            o->euroc = v;
+        } else if (!strcmp(a, "--cam")) {
+            NEED_VALUE();
+            o->cam = v;
+        } else if (!strcmp(a, "--out")) {
+            NEED_VALUE();
+            o->out = v;
+        } else if (!strcmp(a, "--model")) {
+            NEED_VALUE();
+            o->model = v;
+        } else if (!strcmp(a, "--features")) {
+            NEED_VALUE();
+            o->features = v;
+        } else if (!strcmp(a, "--stats")) {
+            NEED_VALUE();
+            o->stats = v;
+        } else if (!strcmp(a, "--scale")) {
+            NEED_VALUE();
+            if (!strcmp(v, "gt"))
+                o->scale = SCALE_GT;
+            else if (!strcmp(v, "model"))
+                o->scale = SCALE_MODEL;
+            else if (!strcmp(v, "none"))
+                o->scale = SCALE_NONE;
+            else {
+                fprintf(stderr, "tvo_replay: --scale must be gt, model or none (got '%s')\n", v);
+                return -1;
+            }
+        } else if (!strcmp(a, "--frame")) {
+            NEED_VALUE();
+            if (!strcmp(v, "body"))
+                o->body_frame = 1;
+            else if (!strcmp(v, "camera"))
+                o->body_frame = 0;
+            else {
+                fprintf(stderr, "tvo_replay: --frame must be camera or body (got '%s')\n", v);
+                return -1;
+            }
+        } else if (!strcmp(a, "--max-frames")) {
+            char *end = NULL;
+            NEED_VALUE();
+            o->max_frames = strtol(v, &end, 10);
+            if (end == v || *end != '\0' || o->max_frames < 0) {
+                fprintf(stderr, "tvo_replay: --max-frames needs a non-negative integer (got '%s')\n", v);
+                return -1;
+            }
+        } else if (!strcmp(a, "--strict")) {
+            o->strict = 1;
+        } else if (!strcmp(a, "--quiet")) {
+            o->quiet = 1;
+        } else if (!strcmp(a, "--print-memory")) {
+            o->print_memory = 1;
+        } else {
+            fprintf(stderr, "tvo_replay: unknown argument '%s' (see --help)\n", a);
+            return -1;
+        }
+#undef NEED_VALUE
+    }
+    if (o->euroc == NULL || (o->out == NULL && !o->print_memory)) {
+        fprintf(stderr, "tvo_replay: --euroc and --out are required (see --help)\n");
+        return -1;
+    }
+    if (o->scale == SCALE_MODEL && o->model == NULL) {
+        fprintf(stderr, "tvo_replay: --scale model needs --model FILE\n");
+        return -1;
+    }
+    return 0;
+}
+
+static int64_t clock_cb(void *user)
+{
+    (void)user;
+    return tvo_clock_now_ns();
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* median and 90th percentile (nearest rank) of v[0..n), sorting v in place */
+static void percentiles(double *v, long n, double *median, double *p90)
+{
+    if (n <= 0) {
+        *median = *p90 = 0.0;
+        return;
+    }
+    qsort(v, (size_t)n, sizeof(double), cmp_double);
+    *median = (n % 2) ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+    *p90 = v[(long)ceil(0.9 * (double)n) - 1];
+}
+
+static void write_pose(FILE *f, int64_t t_ns, const tvo_pose *T)
+{
+    double q[4];
+    tvo_rot_to_quat(T->R, q);
+    fprintf(f, "%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", (double)t_ns * 1e-9, T->t[0], T->t[1],
+            T->t[2], q[1], q[2], q[3], q[0]);
+}
+
+static void *read_file(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    void *buf = NULL;
+    long n;
+    if (f == NULL)
+        return NULL;
+    if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0) {
+        buf = malloc(n > 0 ? (size_t)n : 1);
+        if (buf != NULL && fread(buf, 1, (size_t)n, f) != (size_t)n) {
+            free(buf);
+            buf = NULL;
+        }
+        *size = (size_t)n;
+    }
+    fclose(f);
+    return buf;
+}
+
+int main(int argc, char **argv)
+{
+    options o;
+    char err[512] = "";
+    tvo_euroc *seq = NULL;
+    tvo_vo_config cfg;
+    tvo_vo *vo = NULL;
+    tvo_traj traj;
+    tvo_pose T_bs, T_sb;
+    void *vo_mem = NULL, *nn_file = NULL, *nn_mem = NULL;
+    tvo_nn *nn = NULL;
+    uint8_t *frame = NULL;
+    double *timing[TVO_STAGE_COUNT + 1] = { 0 };
+    long counts_state[TVO_VO_STATE_COUNT] = { 0 }, counts_skip[SKIP_COUNT] = { 0 };
+    long n_frames, processed = 0, gaps = 0, gt_missing = 0, timed = 0;
+    int64_t t_last = INT64_MIN, period_ns;
+    int have_gt, have_prev_gt = 0, rc = 1, tty;
+    size_t vo_size, frame_cap;
+    tvo_pose T_w_b_prev;
+    FILE *out = NULL, *feat = NULL;
+    double t_start;
+    tvo_status st;
+
+    if (parse_args(argc, argv, &o) != 0)
+        return 2;
+    tty = !o.quiet && isatty(STDERR_FILENO);
+
+    st = tvo_euroc_open(&seq, o.euroc, o.cam, err, sizeof(err));
+    if (st != TVO_OK) {
+        fprintf(stderr, "tvo_replay: cannot open %s (%s): %s\n", o.euroc, tvo_status_str(st), err);
+        return 1;
+    }
+    have_gt = tvo_euroc_has_groundtruth(seq);
+    if (o.scale == SCALE_GT && !have_gt) {
+        fprintf(stderr, "tvo_replay: --scale gt needs ground truth, and %s has none\n", o.euroc);
+        goto cleanup;
+    }
+    T_bs = tvo_euroc_T_BS(seq);
+    T_sb = tvo_pose_inverse(&T_bs);
+    period_ns = (int64_t)llround(1e9 / (tvo_euroc_rate_hz(seq) > 0 ? tvo_euroc_rate_hz(seq) : 20.0));
+
+    tvo_vo_config_default(&cfg, tvo_euroc_camera(seq));
+    cfg.clock = clock_cb;
+    vo_size = tvo_vo_required_size(&cfg);
+    if (vo_size == 0) {
+        fprintf(stderr, "tvo_replay: the camera of %s is not usable (check sensor.yaml)\n", o.euroc);
+        goto cleanup;
+    }
+    if (o.print_memory) {
+        printf("VO working memory for %dx%d: %zu bytes\n", (int)cfg.camera.width, (int)cfg.camera.height,
+               vo_size);
+        rc = 0;
+        goto cleanup;
+    }
+    vo_mem = malloc(vo_size);
+    frame_cap = (size_t)cfg.camera.width * (size_t)cfg.camera.height;
+    frame = (uint8_t *)malloc(frame_cap);
+    n_frames = tvo_euroc_frame_count(seq);
+    if (o.max_frames >= 0 && o.max_frames < n_frames)
+        n_frames = o.max_frames;
+    for (int s = 0; s <= TVO_STAGE_COUNT; ++s)
+        timing[s] = (double *)calloc((size_t)(n_frames > 0 ? n_frames : 1), sizeof(double));
+    if (vo_mem == NULL || frame == NULL || timing[TVO_STAGE_COUNT] == NULL || timing[0] == NULL) {
+        fprintf(stderr, "tvo_replay: out of memory\n");
+        goto cleanup;
+    }
+    for (int s = 1; s < TVO_STAGE_COUNT; ++s)
+        if (timing[s] == NULL) {
+            fprintf(stderr, "tvo_replay: out of memory\n");
+            goto cleanup;
+        }
+    st = tvo_vo_init(&vo, &cfg, vo_mem, vo_size);
+    if (st != TVO_OK) {
+        fprintf(stderr, "tvo_replay: VO init failed: %s\n", tvo_status_str(st));
+        goto cleanup;
+    }
+    if (o.model != NULL) {
+        size_t fsize = 0, need = 0;
+        nn_file = read_file(o.model, &fsize);
+        if (nn_file == NULL) {
+            fprintf(stderr, "tvo_replay: cannot read model %s\n", o.model);
+            goto cleanup;
+        }
+        st = tvo_nn_required_size(nn_file, fsize, &need);
+        if (st == TVO_OK) {
+            nn_mem = malloc(need > 0 ? need : 1);
+            st = nn_mem != NULL ? tvo_nn_load(&nn, nn_file, fsize, nn_mem, need) : TVO_ERR_NO_MEMORY;
+        }
+        if (st != TVO_OK) {
+            fprintf(stderr, "tvo_replay: model %s refused: %s\n", o.model, tvo_status_str(st));
+            goto cleanup;
+        }
+    }
+    out = fopen(o.out, "w");
+    if (out == NULL) {
+        fprintf(stderr, "tvo_replay: cannot write %s\n", o.out);
+        goto cleanup;
+    }
+
+    if (o.features != NULL) {
+        feat = fopen(o.features, "w");
+        if (feat == NULL) {
+            fprintf(stderr, "tvo_replay: cannot write %s\n", o.features);
+            goto cleanup;
+        }
+        fprintf(feat, "t_ns,state,relpose_flags,pose_status,inliers");
+        for (int k = 0; k < TVO_FEAT_COUNT; ++k)
+            fprintf(feat, ",%s", feature_names[k]);
+        fprintf(feat, "\n");
+    }
+    t_start = (double)tvo_clock_now_ns() * 1e-9;
+    for (long i = 0; i < n_frames; ++i) {
+        char path[1024];
+        int32_t w = 0, h = 0;
+        const int64_t t_ns = tvo_euroc_frame_time(seq, (int32_t)i);
+        int64_t t_dec;
+        tvo_vo_result res;
+        tvo_pose step, T_w_b;
+        int skip = -1;
+
+        t_dec = tvo_clock_now_ns();
+        if (t_ns <= t_last) {
+            skip = SKIP_TIMESTAMP;
+        } else if (tvo_euroc_frame_path(seq, (int32_t)i, path, sizeof(path)) != TVO_OK) {
+            skip = SKIP_MISSING;
+        } else {
+            st = tvo_png_read_gray8(path, frame, frame_cap, &w, &h);
+            if (st == TVO_ERR_NOT_FOUND || st == TVO_ERR_IO)
+                skip = SKIP_MISSING;
+            else if (st == TVO_ERR_NO_MEMORY || st == TVO_ERR_SIZE ||
+                     (st == TVO_OK && (w != cfg.camera.width || h != cfg.camera.height)))
+                skip = SKIP_SIZE;
+            else if (st != TVO_OK)
+                skip = SKIP_CORRUPT;
+        }
+        if (skip >= 0) {
+            counts_skip[skip]++;
+            if (tty)
+                fputc('\n', stderr);
+            fprintf(stderr, "tvo_replay: frame %ld (t=%lld): %s, skipped%s\n", i, (long long)t_ns,
+                    skip_names[skip], o.strict ? " (--strict: stopping)" : "");
+            if (o.strict)
+                goto cleanup;
+            if (skip != SKIP_TIMESTAMP)
+                tvo_vo_reset(vo); /* the next good frame starts new tracks */
+            continue;
+        }
+        t_dec = tvo_clock_now_ns() - t_dec;
+        if (t_last != INT64_MIN && t_ns - t_last > period_ns + period_ns / 2) {
+            gaps++;
+            fprintf(stderr, "%stvo_replay: gap of %.3f s before frame %ld: re-initialising%s\n",
+                    tty ? "\n" : "", (double)(t_ns - t_last) * 1e-9, i, o.strict ? " (--strict: stopping)" : "");
+            if (o.strict)
+                goto cleanup;
+            tvo_vo_reset(vo);
+        }
+        t_last = t_ns;
+
+        {
+            const tvo_image img = tvo_image_make(w, h, w, frame);
+            st = tvo_vo_process(vo, &img, t_ns, &res);
+        }
+        if (st != TVO_OK) {
+            counts_skip[SKIP_CORRUPT]++;
+            fprintf(stderr, "tvo_replay: frame %ld: VO refused it: %s\n", i, tvo_status_str(st));
+            if (o.strict)
+                goto cleanup;
+            continue;
+        }
+        counts_state[res.state]++;
+        if (feat != NULL) {
+            fprintf(feat, "%lld,%d,%d,%d,%d", (long long)t_ns, (int)res.state, (int)res.relpose_flags,
+                    (int)res.pose_status, (int)res.inliers);
+            for (int k = 0; k < TVO_FEAT_COUNT; ++k)
+                fprintf(feat, ",%.9g", (double)res.features[k]);
+            fputc('\n', feat);
+        }
+        for (int s = 0; s < TVO_STAGE_COUNT; ++s)
+            timing[s][timed] = (double)res.stage_ns[s] * 1e-3;
+        timing[TVO_STAGE_COUNT][timed] = (double)t_dec * 1e-3;
+        timed++;
+
+        /* the first frame anchors the trajectory at the ground-truth camera pose when there is one */
+        T_w_b = tvo_pose_identity();
+        {
+            int gt_ok = have_gt && tvo_euroc_groundtruth_interp(seq, t_ns, 100000000, &T_w_b) == TVO_OK;
+            if (!gt_ok)
+                gt_missing += have_gt;
+            if (processed == 0) {
+                tvo_pose T_w_c0 = gt_ok ? tvo_pose_compose(&T_w_b, &T_bs) : tvo_pose_identity();
+                tvo_traj_init(&traj, &T_w_c0);
+            }
+            step = res.T_prev_cur;
+            if (res.state == TVO_VO_OK || res.state == TVO_VO_ROTATION_ONLY) {
+                double scale = 1.0;
+                if (o.scale == SCALE_GT) {
+                    scale = 0.0;
+                    if (gt_ok && have_prev_gt) {
+                        tvo_pose rel = tvo_pose_body_to_camera_relative(&T_w_b_prev, &T_w_b, &T_bs);
+                        scale = sqrt(rel.t[0] * rel.t[0] + rel.t[1] * rel.t[1] + rel.t[2] * rel.t[2]);
+                    }
+                } else if (o.scale == SCALE_MODEL) {
+                    float y[6];
+                    if (tvo_nn_run(nn, res.features, y) == TVO_OK) {
+                        const int32_t mask = tvo_nn_output_mask(nn);
+                        if ((mask & 0x38) == 0x38) {
+                            double v[3] = { y[3], y[4], y[5] };
+                            tvo_rotvec_to_rot(v, step.R);
+                        }
+                        if ((mask & 0x7) == 0x7) {
+                            step.t[0] = y[0];
+                            step.t[1] = y[1];
+                            step.t[2] = y[2];
+                        }
+                    } else {
+                        scale = 0.0;
+                    }
+                }
+                if (tvo_traj_step(&traj, &step, scale) != TVO_OK)
+                    counts_state[TVO_VO_LOST]++;
+            }
+            have_prev_gt = gt_ok;
+            if (gt_ok)
+                T_w_b_prev = T_w_b;
+        }
+        if (o.body_frame) {
+            tvo_pose Twb = tvo_pose_compose(&traj.T_w_c, &T_sb);
+            write_pose(out, t_ns, &Twb);
+        } else {
+            write_pose(out, t_ns, &traj.T_w_c);
+        }
+        processed++;
+        if (tty && (processed % 10 == 0 || i + 1 == n_frames)) {
+            const double el = (double)tvo_clock_now_ns() * 1e-9 - t_start;
+            fprintf(stderr, "\rframe %ld/%ld  %.1f frames/s  %-13s tracks %4d inliers %4d", i + 1, n_frames,
+                    el > 0 ? (double)processed / el : 0.0, state_names[res.state], (int)res.tracks,
+                    (int)res.inliers);
+        }
+    }
+    if (tty)
+        fputc('\n', stderr);
+    if (fclose(out) != 0) {
+        out = NULL;
+        fprintf(stderr, "tvo_replay: error writing %s\n", o.out);
+        goto cleanup;
+    }
+    out = NULL;
+
+    {
+        long skipped = 0;
+        for (int k = 0; k < SKIP_COUNT; ++k)
+            skipped += counts_skip[k];
+        if (!o.quiet)
+            fprintf(stderr,
+                    "tvo_replay: %ld frames processed (%ld ok, %ld rotation-only, %ld lost), %ld skipped, "
+                    "%ld gaps -> %s\n",
+                    processed, counts_state[TVO_VO_OK], counts_state[TVO_VO_ROTATION_ONLY],
+                    counts_state[TVO_VO_LOST], skipped, gaps, o.out);
+        if (o.stats != NULL) {
+            FILE *js = fopen(o.stats, "w");
+            if (js == NULL) {
+                fprintf(stderr, "tvo_replay: cannot write %s\n", o.stats);
+                goto cleanup;
+            }
+            fprintf(js, "{\n  \"sequence\": \"%s\",\n  \"camera\": \"%s\",\n", o.euroc, o.cam);
+            fprintf(js, "  \"width\": %d,\n  \"height\": %d,\n  \"vo_memory_bytes\": %zu,\n",
+                    (int)cfg.camera.width, (int)cfg.camera.height, vo_size);
+            fprintf(js, "  \"frames\": {\"total\": %ld, \"processed\": %ld, \"skipped\": %ld, \"lost\": %ld},\n",
+                    n_frames, processed, skipped, counts_state[TVO_VO_LOST]);
+            fprintf(js, "  \"skipped\": {");
+            for (int k = 0; k < SKIP_COUNT; ++k)
+                fprintf(js, "%s\"%s\": %ld", k ? ", " : "", skip_names[k], counts_skip[k]);
+            fprintf(js, "},\n  \"gaps\": %ld,\n  \"groundtruth_missing\": %ld,\n  \"status\": {", gaps,
+                    gt_missing);
+            for (int k = 0; k < TVO_VO_STATE_COUNT; ++k)
+                fprintf(js, "%s\"%s\": %ld", k ? ", " : "", state_names[k], counts_state[k]);
+            fprintf(js, "},\n  \"timing_us\": {\n");
+            for (int s = 0; s <= TVO_STAGE_COUNT; ++s) {
+                double med, p90;
+                percentiles(timing[s], timed, &med, &p90);
+                fprintf(js, "    \"%s\": {\"median\": %.1f, \"p90\": %.1f}%s\n",
+                        s < TVO_STAGE_COUNT ? stage_names[s] : "png_decode", med, p90,
+                        s < TVO_STAGE_COUNT ? "," : "");
+            }
+            fprintf(js, "  }\n}\n");
+            if (fclose(js) != 0) {
+                fprintf(stderr, "tvo_replay: error writing %s\n", o.stats);
+                goto cleanup;
+            }
+        }
+        rc = 0;
+    }
+
+cleanup:
+    if (out != NULL)
+        fclose(out);
+    if (feat != NULL && fclose(feat) != 0) {
+        fprintf(stderr, "tvo_replay: error writing %s\n", o.features);
+        rc = 1;
+    }
+    for (int s = 0; s <= TVO_STAGE_COUNT; ++s)
+        free(timing[s]);
+    free(frame);
+    free(vo_mem);
+    free(nn_mem);
+    free(nn_file);
+    tvo_euroc_close(seq);
+    return rc;
+}

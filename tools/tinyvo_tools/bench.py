@@ -1,0 +1,150 @@
+"""Side-by-side benchmark: tinyvo's replay against an OpenCV pipeline doing the same job.
+
+    python -m tinyvo_tools.bench --euroc DIR [--frames N] [--replay build/release/examples/replay/tvo_replay]
+                                 [--out OUTDIR]
+
+Both run on the same frames, single thread, in one session, with ground-truth step lengths:
+  tinyvo : tvo_replay --scale gt (its per-stage timings come from --stats: median and p90 per frame)
+  OpenCV : goodFeaturesToTrack (300 corners, re-detect below 200, min distance 10 px), calcOpticalFlowPyrLK
+           (21x21, maxLevel 3, 30 iterations / 0.01) with a forward-backward check (1 px),
+           undistortPoints, findEssentialMat (RANSAC, p = 0.999, 1 px) and recoverPose.
+Per-frame times exclude PNG decoding for both. Accuracy of both trajectories comes from
+tinyvo_tools.eval (evo). OpenCV is a test/benchmark dependency only; the library never uses it.
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+from . import trajio
+
+
+def _rot_to_quat_xyzw(R):
+    from scipy.spatial.transform import Rotation
+    return Rotation.from_matrix(R).as_quat()
+
+
+def opencv_pipeline(seq_dir, cam="cam0", max_frames=None, max_corners=300, min_tracks=200):
+    """Run the OpenCV pipeline over a EuRoC folder. Returns (t_ns, poses T_W_C (N,4,4), per-frame ms)."""
+    import cv2
+    cv2.setNumThreads(1)
+    camdir = os.path.join(seq_dir, "mav0", cam)
+    info = trajio.read_sensor_yaml(os.path.join(camdir, "sensor.yaml"))
+    fx, fy, cx, cy = info.intrinsics
+    K = np.array([[fx, 0, cx], [0, fy, cy], [0, 0, 1]], dtype=np.float64)
+    D = np.array(list(info.distortion) + [0.0] * (5 - len(info.distortion)), dtype=np.float64)
+    rows = [ln.split(",") for ln in open(os.path.join(camdir, "data.csv")) if ln[:1].isdigit()]
+    if max_frames:
+        rows = rows[:max_frames]
+    gt = trajio.read_euroc_groundtruth(os.path.join(seq_dir, "mav0", "state_groundtruth_estimate0",
+                                                    "data.csv")).to_camera(info.T_BS)
+    t_ns = np.array([int(r[0]) for r in rows], dtype=np.int64)
+    gt_at = trajio.interpolate_poses(gt.t_ns, gt.poses, t_ns)
+    lk = dict(winSize=(21, 21), maxLevel=3,
+              criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 30, 0.01))
+    f = 0.5 * (fx + fy)
+    poses, times = [], []
+    T = gt_at[0].copy()
+    prev, pts = None, None
+    for i, r in enumerate(rows):
+        img = cv2.imread(os.path.join(camdir, "data", r[1].strip()), cv2.IMREAD_GRAYSCALE)
+        t0 = time.perf_counter()
+        if prev is not None and pts is not None and len(pts) >= 8:
+            nxt, st, _ = cv2.calcOpticalFlowPyrLK(prev, img, pts, None, **lk)
+            back, st2, _ = cv2.calcOpticalFlowPyrLK(img, prev, nxt, None, **lk)
+            good = (st[:, 0] == 1) & (st2[:, 0] == 1) & (np.linalg.norm(back - pts, axis=2)[:, 0] < 1.0)
+            p0, p1 = pts[good], nxt[good]
+            pts = p1
+            if len(p0) >= 8:
+                u0 = cv2.undistortPoints(p0, K, D)
+                u1 = cv2.undistortPoints(p1, K, D)
+                E, mask = cv2.findEssentialMat(u0, u1, np.eye(3), method=cv2.RANSAC, prob=0.999,
+                                               threshold=1.0 / f)
+                if E is not None and E.shape == (3, 3):
+                    _, R, t, mask = cv2.recoverPose(E, u0, u1, np.eye(3), mask=mask)
+                    # X1 = R X0 + t  ->  T_prev_cur = inv([R|t])
+                    Tc = np.eye(4)
+                    Tc[:3, :3] = R.T
+                    Tc[:3, 3] = (-R.T @ t).ravel()
+                    rel = trajio.inv_pose(gt_at[i - 1]) @ gt_at[i]
+                    Tc[:3, 3] *= np.linalg.norm(rel[:3, 3])
+                    T = T @ Tc
+                    pts = p1[mask.ravel() > 0] if mask is not None else p1
+        if pts is None or len(pts) < min_tracks:
+            m = np.full(img.shape, 255, np.uint8)
+            if pts is not None:
+                for p in pts.reshape(-1, 2):
+                    cv2.circle(m, (int(p[0]), int(p[1])), 10, 0, -1)
+            want = max_corners - (0 if pts is None else len(pts))
+            new = cv2.goodFeaturesToTrack(img, want, 0.01, 10, mask=m) if want > 0 else None
+            if new is not None:
+                new = new.astype(np.float32)
+                pts = new if pts is None or len(pts) == 0 else np.vstack([pts.reshape(-1, 1, 2), new])
+        times.append((time.perf_counter() - t0) * 1e3)
+        poses.append(T.copy())
+        prev = img
+    return t_ns, np.array(poses), np.array(times)
+
+
+def _eval(traj_path, seq_dir, out_json):
+    subprocess.run([sys.executable, "-m", "tinyvo_tools.eval", "--est", traj_path, "--gt", seq_dir,
+                    "--out", out_json], check=True, stdout=subprocess.DEVNULL)
+    with open(out_json) as fh:
+        return json.load(fh)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--euroc", required=True, help="EuRoC/ASL folder (holding mav0/)")
+    ap.add_argument("--frames", type=int, default=0, help="frames to use (0 = all)")
+    ap.add_argument("--replay", default=os.path.join("build", "release", "examples", "replay", "tvo_replay"))
+    ap.add_argument("--out", default=os.path.join("out", "bench"))
+    a = ap.parse_args(argv)
+    os.makedirs(a.out, exist_ok=True)
+
+    tvo_traj = os.path.join(a.out, "tinyvo.txt")
+    stats_path = os.path.join(a.out, "tinyvo_stats.json")
+    cmd = [a.replay, "--euroc", a.euroc, "--out", tvo_traj, "--scale", "gt", "--stats", stats_path, "--quiet"]
+    if a.frames:
+        cmd += ["--max-frames", str(a.frames)]
+    subprocess.run(cmd, check=True)
+    with open(stats_path) as fh:
+        stats = json.load(fh)
+
+    t_ns, poses, ms = opencv_pipeline(a.euroc, max_frames=a.frames or None)
+    cv_traj = os.path.join(a.out, "opencv.txt")
+    trajio.write_tum(cv_traj, trajio.Trajectory(t_ns, poses, "camera"))
+
+    ev_t = _eval(tvo_traj, a.euroc, os.path.join(a.out, "tinyvo_eval.json"))
+    ev_c = _eval(cv_traj, a.euroc, os.path.join(a.out, "opencv_eval.json"))
+    tv_med = stats["timing_us"]["total"]["median"] / 1e3
+    tv_p90 = stats["timing_us"]["total"]["p90"] / 1e3
+    cv_med, cv_p90 = float(np.median(ms[1:])), float(np.percentile(ms[1:], 90))
+    result = {
+        "frames": int(len(t_ns)),
+        "tinyvo": {"median_ms": tv_med, "p90_ms": tv_p90, "eval": ev_t, "stats": stats},
+        "opencv": {"median_ms": cv_med, "p90_ms": cv_p90, "eval": ev_c},
+        "ratio_median_tinyvo_over_opencv": tv_med / cv_med if cv_med > 0 else None,
+    }
+    with open(os.path.join(a.out, "bench.json"), "w") as fh:
+        json.dump(result, fh, indent=2)
+
+    def row(name, med, p90, ev):
+        ate = ev.get("ate", {}).get("rmse")
+        rpe = ev.get("rpe_frame", {}).get("trans_rmse")
+        return f"{name:8s} {med:9.3f} {p90:9.3f}   ATE {ate}   RPE/frame {rpe}"
+    print(f"frames: {len(t_ns)} ({a.euroc})")
+    print(f"{'':8s} {'median ms':>9s} {'p90 ms':>9s}")
+    print(row("tinyvo", tv_med, tv_p90, ev_t))
+    print(row("opencv", cv_med, cv_p90, ev_c))
+    print(f"ratio tinyvo/opencv (median per frame): {result['ratio_median_tinyvo_over_opencv']:.3f}")
+    print(f"written: {os.path.join(a.out, 'bench.json')}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
