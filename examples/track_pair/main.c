@@ -47,6 +47,17 @@ static int parse_int(const char *s, long lo, long hi, int32_t *out)
     return 1;
 }
 
+/* A hint for the usual ways an input file is wrong. */
+static const char *hint(tvo_status st)
+{
+    switch (st) {
+    case TVO_ERR_FORMAT: return " (not a PNG, or a corrupt / truncated one)";
+    case TVO_ERR_SIZE: return " (image larger than TVO_MAX_IMAGE_DIM)";
+    case TVO_ERR_NOT_FOUND: return " (no such file)";
+    default: return "";
+    }
+}
+
 static int cmp_float(const void *a, const void *b)
 {
     const float x = *(const float *)a, y = *(const float *)b;
@@ -126,12 +137,12 @@ int main(int argc, char **argv)
     /* ---- sizes, then every allocation, once --------------------------------------------------- */
     st = tvo_png_size(path_a, &wa, &ha);
     if (st != TVO_OK) {
-        fprintf(stderr, "tvo_track_pair: cannot read %s: %s\n", path_a, tvo_status_str(st));
+        fprintf(stderr, "tvo_track_pair: cannot read %s: %s%s\n", path_a, tvo_status_str(st), hint(st));
         return 2;
     }
     st = tvo_png_size(path_b, &wb, &hb);
     if (st != TVO_OK) {
-        fprintf(stderr, "tvo_track_pair: cannot read %s: %s\n", path_b, tvo_status_str(st));
+        fprintf(stderr, "tvo_track_pair: cannot read %s: %s%s\n", path_b, tvo_status_str(st), hint(st));
         return 2;
     }
     if (wa != wb || ha != hb) {
@@ -180,7 +191,7 @@ int main(int argc, char **argv)
     if (st == TVO_OK && (wa != wb || ha != hb))
         st = TVO_ERR_MISMATCH; /* a file changed since its size was read */
     if (st != TVO_OK) {
-        fprintf(stderr, "tvo_track_pair: cannot decode the images: %s\n", tvo_status_str(st));
+        fprintf(stderr, "tvo_track_pair: cannot decode the images: %s%s\n", tvo_status_str(st), hint(st));
         goto done;
     }
 
