@@ -298,6 +298,7 @@ static void lk_prev_window(const lk_level *lv, int32_t ix, int32_t iy, const int
     int inside = ix >= 1 && iy >= 1 && ix + win + 1 <= lv->w - 1 && iy + win + 1 <= lv->h - 1;
     const int32_t w00 = wt[0], w01 = wt[1], w10 = wt[2], w11 = wt[3];
     int64_t a11 = 0, a12 = 0, a22 = 0;
+    (void)simd; /* unused without SIMD kernels */
 
     if (inside) {
         src = lv->data + (size_t)(iy - 1) * (size_t)lv->stride + (size_t)(ix - 1);

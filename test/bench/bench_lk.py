@@ -29,13 +29,16 @@ from test_lk_oracle import TvoLK, corners, CRIT  # noqa: E402
 WIN, LEVEL = 21, 3
 
 
-def median_ms(fn, reps):
-    ts = []
+def median_ms(fns, reps):
+    """Median ms of each function; the functions are called alternately, rep by rep, so that load
+    changes on a shared machine hit all of them alike."""
+    ts = [[] for _ in fns]
     for _ in range(reps):
-        t0 = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t0)
-    return 1e3 * float(np.median(ts))
+        for k, fn in enumerate(fns):
+            t0 = time.perf_counter()
+            fn()
+            ts[k].append(time.perf_counter() - t0)
+    return [1e3 * float(np.median(t)) for t in ts]
 
 
 def main():
@@ -72,12 +75,13 @@ def main():
         p = pts.reshape(-1, 1, 2)
         lk.build(pa, a)
         lk.build(pb, b)
-        t_pyr_tvo = median_ms(lambda: lk.build(pa, a), args.reps)
-        t_pyr_cv = median_ms(lambda: cv2.buildOpticalFlowPyramid(a, (WIN, WIN), LEVEL, withDerivatives=False),
-                             args.reps)
-        t_trk_tvo = median_ms(lambda: lk.track(cfg, pa, pb, pts, scratch=scratch), args.reps)
-        t_all_cv = median_ms(lambda: cv2.calcOpticalFlowPyrLK(a, b, p, None, winSize=(WIN, WIN),
-                                                              maxLevel=LEVEL, criteria=CRIT), args.reps)
+        t_pyr_tvo, t_pyr_cv = median_ms(
+            [lambda: lk.build(pa, a),
+             lambda: cv2.buildOpticalFlowPyramid(a, (WIN, WIN), LEVEL, withDerivatives=False)], args.reps)
+        t_trk_tvo, t_all_cv = median_ms(
+            [lambda: lk.track(cfg, pa, pb, pts, scratch=scratch),
+             lambda: cv2.calcOpticalFlowPyrLK(a, b, p, None, winSize=(WIN, WIN), maxLevel=LEVEL,
+                                              criteria=CRIT)], args.reps)
         _, st, _ = lk.track(cfg, pa, pb, pts, scratch=scratch)
         _, rst, _ = cv2.calcOpticalFlowPyrLK(a, b, p, None, winSize=(WIN, WIN), maxLevel=LEVEL, criteria=CRIT)
         t_trk_cv = t_all_cv - 2 * t_pyr_cv
