@@ -5,7 +5,6 @@
 #include "tinyvo/arena.h"
 
 #include <math.h>
-#include <stdlib.h>
 #include <string.h>
 
 #define DET_BAND 48             /* rows per FAST band */
@@ -199,25 +198,62 @@ static void det_heap_push(det_cand *h, int32_t *n, int32_t cap, const det_cand *
     }
 }
 
-static int det_cmp_cand(const void *pa, const void *pb)
+/* a before b in the ranking: stronger first, then raster order (a total order: keys are unique) */
+static int det_cand_before(const det_cand *a, const det_cand *b)
 {
-    const det_cand *a = (const det_cand *)pa, *b = (const det_cand *)pb;
     if (a->score != b->score)
-        return a->score > b->score ? -1 : 1;
-    return a->order < b->order ? -1 : (a->order > b->order ? 1 : 0);
+        return a->score > b->score;
+    return a->order < b->order;
 }
 
-static int det_cmp_pick(const void *pa, const void *pb)
+/* a before b in the output: by rank within the cell, stronger first, then cell, then raster order */
+static int det_pick_before(const det_pick *a, const det_pick *b)
 {
-    const det_pick *a = (const det_pick *)pa, *b = (const det_pick *)pb;
     if (a->rank != b->rank)
-        return a->rank < b->rank ? -1 : 1;
+        return a->rank < b->rank;
     if (a->score != b->score)
-        return a->score > b->score ? -1 : 1;
+        return a->score > b->score;
     if (a->cell != b->cell)
-        return a->cell < b->cell ? -1 : 1;
-    return a->order < b->order ? -1 : (a->order > b->order ? 1 : 0);
+        return a->cell < b->cell;
+    return a->order < b->order;
 }
+
+/* in-place heapsorts (no allocation, unlike qsort on some libcs; deterministic as the orders are total) */
+#define DET_HEAPSORT(name, type, before)                                           \
+    static void name(type *v, int32_t n)                                           \
+    {                                                                              \
+        int32_t start, end;                                                        \
+        for (start = n / 2 - 1; start >= 0; --start)                               \
+            name##_sift(v, start, n);                                              \
+        for (end = n - 1; end > 0; --end) {                                        \
+            type t = v[0];                                                         \
+            v[0] = v[end];                                                         \
+            v[end] = t;                                                            \
+            name##_sift(v, 0, end);                                                \
+        }                                                                          \
+    }
+#define DET_SIFT(name, type, before)                                               \
+    static void name##_sift(type *v, int32_t i, int32_t n)                         \
+    {                                                                              \
+        for (;;) {                                                                 \
+            int32_t l = 2 * i + 1, r = l + 1, m = i;                               \
+            type t;                                                                \
+            if (l < n && before(&v[m], &v[l]))                                     \
+                m = l;                                                             \
+            if (r < n && before(&v[m], &v[r]))                                     \
+                m = r;                                                             \
+            if (m == i)                                                            \
+                return;                                                            \
+            t = v[i];                                                              \
+            v[i] = v[m];                                                           \
+            v[m] = t;                                                              \
+            i = m;                                                                 \
+        }                                                                          \
+    }
+DET_SIFT(det_sort_cands, det_cand, det_cand_before)
+DET_HEAPSORT(det_sort_cands, det_cand, det_cand_before)
+DET_SIFT(det_sort_picks, det_pick, det_pick_before)
+DET_HEAPSORT(det_sort_picks, det_pick, det_pick_before)
 
 static int32_t det_clampi(int32_t v, int32_t lo, int32_t hi)
 {
@@ -411,7 +447,7 @@ tvo_status tvo_detect(const tvo_detect_config *cfg, const tvo_image *img,
             for (k = 0; k < n; ++k)
                 h[k].score = tvo_corner_score_at(img, h[k].x, h[k].y, cfg->score, cfg->block_size,
                                                  cfg->harris_k);
-        qsort(h, (size_t)n, sizeof(det_cand), det_cmp_cand);
+        det_sort_cands(h, n);
         for (k = 0; k < n && taken_n[c] < q; ++k)
             det_try_take(grid, &L, md2, &h[k], c, &taken_n[c], picks, &npicks);
         cursor[c] = k;
@@ -436,8 +472,7 @@ tvo_status tvo_detect(const tvo_detect_config *cfg, const tvo_image *img,
             break;
     }
 
-    if (npicks > 1)
-        qsort(picks, (size_t)npicks, sizeof(det_pick), det_cmp_pick);
+    det_sort_picks(picks, npicks);
     if (npicks > limit)
         npicks = limit;
     for (i = 0; i < npicks; ++i) {
