@@ -11,5 +11,13 @@
 #include "tinyvo/types.h"
 #include "tinyvo/image.h"
 #include "tinyvo/arena.h"
+#include "tinyvo/pyramid.h"
+#include "tinyvo/corners.h"
+#include "tinyvo/lk.h"
+#include "tinyvo/camera.h"
+#include "tinyvo/se3.h"
+#include "tinyvo/relpose.h"
+#include "tinyvo/nn.h"
+#include "tinyvo/vo.h"
 
 #endif
