@@ -12,6 +12,7 @@
 #define RP_CHI2_1DOF 3.841
 #define RP_CHI2_2DOF 5.991
 #define RP_MAX_COORD 1e6
+#define RP_ROT_MAX_ITERS 64
 #define RP_H_RATIO 0.40 /* ORB-SLAM2's homography / (homography + epipolar) score ratio */
 
 /* ---- deterministic generator ---------------------------------------------------------------- */
@@ -210,6 +211,8 @@ static int32_t decompose_essential(const double E[9], const tvo_point2d *x1, con
     return best;
 }
 
+static double select_kth(double *a, int32_t n, int32_t k);
+
 /* ---- refinement: LM on the Sampson error over (R, unit t) ----------------------------------- */
 
 /* robust (Cauchy, scale c2 = c^2) Sampson cost over the mask */
@@ -378,9 +381,12 @@ static int32_t rotation_ransac(const tvo_relpose_config *cfg, const tvo_point2d 
 {
     rp_rng rng;
     rng_seed(&rng, cfg->seed ^ 0x526F74ULL);
-    int32_t best = -1, need = cfg->max_iters;
+    /* the rotation model only matters when it explains most points (low parallax), where a
+     * 2-point RANSAC converges in a few iterations: bounded by RP_ROT_MAX_ITERS */
+    int32_t cap = cfg->max_iters < RP_ROT_MAX_ITERS ? cfg->max_iters : RP_ROT_MAX_ITERS;
+    int32_t best = -1, need = cap;
     double Rb[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-    for (int32_t it = 0; it < need && it < cfg->max_iters; ++it) {
+    for (int32_t it = 0; it < need && it < cap; ++it) {
         int32_t idx[2];
         double Rc[9];
         rng_sample(&rng, n, 2, idx);
@@ -389,7 +395,7 @@ static int32_t rotation_ransac(const tvo_relpose_config *cfg, const tvo_point2d 
         if (c > best) {
             best = c;
             memcpy(Rb, Rc, sizeof Rc);
-            need = ransac_needed(cfg->confidence, best, n, 2, cfg->max_iters);
+            need = ransac_needed(cfg->confidence, best, n, 2, cap);
         }
     }
     int32_t cnt = rot_inliers(Rb, x1, x2, n, thr2, mask);
@@ -818,20 +824,33 @@ static int32_t essential_ransac(const tvo_relpose_config *cfg, const tvo_point2d
     return best_inl;
 }
 
-/* re-select inliers of (R, t) and refine, twice; returns the final inlier count in mask */
+/* re-select inliers of (R, t) and refine, twice; returns the final inlier count in mask.
+ * The refinement uses the points within 3 thresholds with a Cauchy loss whose scale follows the
+ * robust spread of their residuals (2.5 * 1.4826 * median |r|, at most the threshold): the hard
+ * RANSAC threshold would cut the tails of the inlier noise, and a fixed scale would let the few
+ * outliers that fall near an epipolar line bias noise-free data. buf: n doubles. */
 static int32_t polish(const tvo_relpose_config *cfg, double R[9], double t[3], const tvo_point2d *x1,
-                      const tvo_point2d *x2, int32_t n, double thr2, uint8_t *mask)
+                      const tvo_point2d *x2, int32_t n, double thr2, uint8_t *mask, double *buf)
 {
     double E[9];
-    int32_t cnt = 0;
-    /* refine on the points within 3 thresholds with a Cauchy loss of scale `threshold`: the hard
-     * RANSAC threshold would cut the tails of the inlier noise and bias the estimate */
     for (int round = 0; round < 2; ++round) {
         essential_from_pose(R, t, E);
-        cnt = mark_inliers(E, x1, x2, n, 9.0 * thr2, mask);
-        if (cnt < 6 || cfg->refine_iters == 0)
+        int32_t m = 0;
+        for (int32_t i = 0; i < n; ++i) {
+            double r2 = sampson2(E, &x1[i], &x2[i]);
+            mask[i] = (uint8_t)(r2 < 9.0 * thr2);
+            if (mask[i])
+                buf[m++] = r2;
+        }
+        if (m < 6 || cfg->refine_iters == 0)
             break;
-        refine_pose(R, t, x1, x2, n, mask, cfg->refine_iters, thr2);
+        double med = select_kth(buf, m, m / 2);
+        double c2 = 2.5 * 2.5 * 1.4826 * 1.4826 * med;
+        if (c2 > thr2)
+            c2 = thr2;
+        if (!(c2 > 1e-24))
+            c2 = 1e-24;
+        refine_pose(R, t, x1, x2, n, mask, cfg->refine_iters, c2);
     }
     essential_from_pose(R, t, E);
     return mark_inliers(E, x1, x2, n, thr2, mask);
@@ -930,7 +949,7 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
     /* 3. pose from the epipolar model, refined */
     double R[9], t[3];
     decompose_essential(E, x1, x2, n, mask_e, R, t);
-    int32_t inl = polish(&cfg, R, t, x1, x2, n, thr2, mask_e);
+    int32_t inl = polish(&cfg, R, t, x1, x2, n, thr2, mask_e, buf);
     int32_t good = good_count(R, t, x1, x2, n, thr2, mask_e);
     int use_h = 0, ambiguous = 0;
 
@@ -939,8 +958,11 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
         rp_rng rng;
         rng_seed(&rng, cfg.seed ^ 0x486F6DULL);
         double inv_s2 = 1.0 / thr2, Hb[9], best = -1.0;
-        int32_t need = cfg.max_iters, h_inl = 0;
-        for (int32_t it = 0; it < need && it < cfg.max_iters; ++it) {
+        /* a homography can only win when it explains about as many points as the epipolar model:
+         * run as many iterations as a 4-point sample needs at the epipolar inlier ratio */
+        int32_t cap = ransac_needed(cfg.confidence, inl, n, 4, cfg.max_iters);
+        int32_t need = cap, h_inl = 0;
+        for (int32_t it = 0; it < need && it < cap; ++it) {
             int32_t idx[4];
             double H[9], Hi[9];
             rng_sample(&rng, n, 4, idx);
@@ -953,7 +975,7 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
                 best = sc;
                 h_inl = c;
                 memcpy(Hb, H, sizeof H);
-                need = ransac_needed(cfg.confidence, h_inl, n, 4, cfg.max_iters);
+                need = ransac_needed(cfg.confidence, h_inl, n, 4, cap);
             }
         }
         if (best > 0.0) {
@@ -993,12 +1015,12 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
                     double Rh[9], th[3], R2[9], t2[3];
                     memcpy(Rh, Rs[kb], sizeof Rh);
                     memcpy(th, ts[kb], sizeof th);
-                    int32_t inl_h = polish(&cfg, Rh, th, x1, x2, n, thr2, mask_c);
+                    int32_t inl_h = polish(&cfg, Rh, th, x1, x2, n, thr2, mask_c, buf);
                     int32_t good_h = good_count(Rh, th, x1, x2, n, thr2, mask_c);
                     if (kb2 >= 0 && gk[kb2] >= 5) {
                         memcpy(R2, Rs[kb2], sizeof R2);
                         memcpy(t2, ts[kb2], sizeof t2);
-                        int32_t inl_2 = polish(&cfg, R2, t2, x1, x2, n, thr2, mask_h);
+                        int32_t inl_2 = polish(&cfg, R2, t2, x1, x2, n, thr2, mask_h, buf);
                         int32_t good_2 = good_count(R2, t2, x1, x2, n, thr2, mask_h);
                         if (poses_differ(R2, t2, Rh, th) && (double)good_2 >= 0.85 * good_h &&
                             (double)good_h >= 0.85 * good_2)
