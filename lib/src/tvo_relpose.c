@@ -996,8 +996,12 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
                     homography_score(Hb, Hri, x1, x2, n, inv_s2, -1.0, mask_h, &h_inl);
                 }
             }
+            /* The homography's decompositions are always tried (a plane's twin solution can win
+             * the epipolar RANSAC); they replace the epipolar pose when they put more points in
+             * front of both cameras, or as many when the homography explains the data (ratio). */
             double ratio = best / (best + se);
-            if (ratio > RP_H_RATIO) {
+            int h_wins = ratio > RP_H_RATIO;
+            if (h_inl >= 8) {
                 double Rs[16][9], ts[16][3];
                 int nc = decompose_homography(Hb, Rs, ts);
                 int32_t gk[16];
@@ -1023,7 +1027,7 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
                         int32_t inl_2 = polish(&cfg, R2, t2, x1, x2, n, thr2, mask_h, buf);
                         int32_t good_2 = good_count(R2, t2, x1, x2, n, thr2, mask_h);
                         if (poses_differ(R2, t2, Rh, th) && (double)good_2 >= 0.85 * good_h &&
-                            (double)good_h >= 0.85 * good_2)
+                            (double)good_h >= 0.85 * good_2 && (double)good_2 >= 0.85 * good)
                             ambiguous = 1;
                         if (good_2 > good_h && pose_finite(R2, t2)) {
                             memcpy(Rh, R2, sizeof R2);
@@ -1033,7 +1037,7 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
                             good_h = good_2;
                         }
                     }
-                    if (good_h >= good && pose_finite(Rh, th)) {
+                    if ((good_h > good || (h_wins && good_h >= good)) && pose_finite(Rh, th)) {
                         memcpy(R, Rh, sizeof Rh);
                         memcpy(t, th, sizeof th);
                         memcpy(mask_e, mask_c, (size_t)n);
