@@ -93,7 +93,7 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
 int tvo_essential_8pt(const double (*x1)[2], const double (*x2)[2], int32_t n, double E[9]);
 
 /* Bytes of scratch memory tvo_relpose_estimate needs for up to max_points correspondences
- * (saturates at SIZE_MAX; about 66 bytes per point plus a small constant). */
+ * (saturates at SIZE_MAX; 12 bytes per point plus 80). */
 size_t tvo_relpose_scratch_size(int32_t max_points);
 
 /* Estimate the relative pose of frame 2 with respect to frame 1.
