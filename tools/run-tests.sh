@@ -17,7 +17,7 @@ ctest --test-dir build/release -j$JOBS --output-on-failure
 
 echo "== oracle tests (OpenCV)"
 TVO_BUILD_DIR="$ROOT/build/release" "$ROOT/.venv/bin/python" -m pytest -q -rs test/oracle
-"$ROOT/.venv/bin/python" -m pytest -q test/python
+TVO_BUILD_DIR="$ROOT/build/release" "$ROOT/.venv/bin/python" -m pytest -q test/python
 
 echo "== ASan + UBSan build + unit tests"
 cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DTVO_SANITIZE=ON -DTVO_WERROR=ON \

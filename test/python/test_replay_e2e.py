@@ -1,0 +1,56 @@
+"""End to end: render a short synthetic sequence, replay it through tvo_replay with ground-truth step
+lengths, evaluate with evo, and check the accuracy against a threshold the current code meets with
+margin (measured: ATE 0.039 m Sim(3), 114/120 frames ok, 3 lost on this seed; threshold 0.15 m)."""
+import json
+import math
+import os
+import pathlib
+import subprocess
+import sys
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+REPLAY = pathlib.Path(os.environ.get("TVO_BUILD_DIR", ROOT / "build" / "release")) / "examples" / "replay" / "tvo_replay"
+
+
+@pytest.fixture(scope="module")
+def replayed(tmp_path_factory):
+    if not REPLAY.exists():
+        pytest.fail(f"{REPLAY} not built (set TVO_BUILD_DIR)")
+    d = tmp_path_factory.mktemp("e2e")
+    seq = d / "seq"
+    subprocess.run([sys.executable, "-m", "tinyvo_tools.synth", "--out", str(seq), "--builtin", "handheld",
+                    "--frames", "120", "--seed", "1", "--quiet"], check=True)
+    traj, stats = d / "traj.txt", d / "stats.json"
+    subprocess.run([str(REPLAY), "--euroc", str(seq), "--out", str(traj), "--scale", "gt",
+                    "--stats", str(stats), "--quiet"], check=True)
+    ev = d / "eval.json"
+    subprocess.run([sys.executable, "-m", "tinyvo_tools.eval", "--est", str(traj), "--gt", str(seq),
+                    "--out", str(ev)], check=True, stdout=subprocess.DEVNULL)
+    return traj, json.loads(stats.read_text()), json.loads(ev.read_text())
+
+
+def test_replay_accuracy(replayed):
+    _, stats, ev = replayed
+    assert stats["frames"]["processed"] == 120
+    assert stats["frames"]["skipped"] == 0
+    assert stats["status"]["ok"] >= 100
+    assert ev["standard"]["ate_m"]["rmse"] < 0.15
+    # frames reported LOST (3 here: the hand-held camera turns ~8-10 deg between two frames and LK
+    # loses the tracks) integrate an identity step, so their rotation error is the whole turn; the RMSE
+    # over all frames is bounded instead (measured 1.18 deg)
+    assert stats["status"]["lost"] <= 6
+    assert ev["standard"]["rpe_frame"]["rotation_deg"]["rmse"] < 2.5
+
+
+def test_replay_trajectory_is_finite_tum(replayed):
+    traj, _, _ = replayed
+    rows = [ln.split() for ln in traj.read_text().splitlines()]
+    assert len(rows) == 120
+    for r in rows:
+        assert len(r) == 8
+        vals = [float(x) for x in r]
+        assert all(math.isfinite(v) for v in vals)
+        assert all(abs(v) < 1e3 for v in vals[1:4])            # metres, inside the rendered room
+        assert abs(sum(q * q for q in vals[4:]) - 1.0) < 1e-6  # unit quaternion
