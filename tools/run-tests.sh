@@ -26,4 +26,7 @@ cmake --build build/asan -j$JOBS
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build/asan -j$JOBS --output-on-failure
 
+echo "== ARM cross builds, unit tests under qemu-user (aarch64, armhf; ~7 min)"
+bash tools/run-cross.sh
+
 echo "== all tests passed"
