@@ -31,13 +31,15 @@ static void fast_offsets(int32_t ofs[16], int32_t stride)
         ofs[k] = (int32_t)fast_circle[k][0] + (int32_t)fast_circle[k][1] * stride;
 }
 
-/* index of the lowest set bit of v != 0 (portable de Bruijn multiply) */
+#if TVO_FAST_SSE2
+/* index of the lowest set bit of v != 0 (portable de Bruijn multiply); only the SSE2 screen uses it */
 static int fast_ctz(uint32_t v)
 {
     static const uint8_t tab[32] = { 0, 1, 28, 2, 29, 14, 24, 3, 30, 22, 20, 15, 25, 17, 4, 8,
                                      31, 27, 13, 23, 21, 19, 16, 7, 26, 12, 18, 6, 11, 5, 10, 9 };
     return tab[(uint32_t)((v & (0u - v)) * 0x077CB531u) >> 27];
 }
+#endif
 
 /* 1 when the circular 16-bit mask m has a run of at least 9 set bits. */
 static int fast_has_run9(uint32_t m)
@@ -100,6 +102,7 @@ static int32_t fast_row(const uint8_t *row, int32_t width, const int32_t ofs[16]
     int32_t n = 0, x = 3;
     const int32_t o0 = ofs[0], o4 = ofs[4], o8 = ofs[8], o12 = ofs[12];
     memset(score_row, 0, (size_t)width);
+    (void)threshold; /* read by the SSE2 screen only; the portable path works from ttab */
 #if TVO_FAST_SSE2
     {
         const __m128i zero = _mm_setzero_si128();
