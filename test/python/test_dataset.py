@@ -134,3 +134,28 @@ def test_end_to_end_on_tiny_render(tmp_path):
         u = data["features"][ok, 3:6]
         gdir = data["targets"][ok, :3] / np.linalg.norm(data["targets"][ok, :3], axis=1, keepdims=True)
         assert np.median(np.sum(u * gdir, axis=1)) > 0.8
+
+
+def test_speedup_sequence(tmp_path):
+    src = str(tmp_path / "SEQ")
+    g = write_sequence(src, n=40)
+    cam = os.path.join(src, "mav0", "cam0")
+    os.makedirs(os.path.join(cam, "data"), exist_ok=True)
+    t = g.t_ns[:30]
+    with open(os.path.join(cam, "data.csv"), "w") as f:
+        f.write("#timestamp [ns],filename\n")
+        for x in t:
+            f.write(f"{x},{x}.png\n")
+    dst = ds.speedup_sequence(src, str(tmp_path / "SEQ_x2"), 2)
+    rows = [ln.strip().split(",") for ln in open(os.path.join(dst, "mav0/cam0/data.csv")) if not ln.startswith("#")]
+    assert len(rows) == 15 and rows[1][1] == f"{t[2]}.png"
+    t2 = np.array([int(r[0]) for r in rows])
+    assert np.all(np.diff(t2) == (t[2] - t[0]) // 2)           # same frame rate as the source
+    g2 = trajio.read_euroc_groundtruth(os.path.join(dst, "mav0/state_groundtruth_estimate0/data.csv"))
+    p_src = trajio.interpolate_poses(g.t_ns, g.poses, t[::2])
+    p_dst = trajio.interpolate_poses(g2.t_ns, g2.poses, t2)
+    np.testing.assert_allclose(p_dst, p_src, atol=1e-6)          # same poses, twice as fast
+    assert os.path.isdir(os.path.join(dst, "mav0/cam0/data"))
+    np.testing.assert_allclose(trajio.read_sensor_yaml(os.path.join(dst, "mav0/cam0/sensor.yaml")).T_BS, T_BS)
+    with pytest.raises(ValueError):
+        ds.speedup_sequence(src, str(tmp_path / "bad"), 1)

@@ -125,6 +125,47 @@ def sequence_paths(seq_dir: str):
     return gt, yml
 
 
+def speedup_sequence(src: str, dst: str, factor: int) -> str:
+    """Speed augmentation for TRAINING sequences: a EuRoC folder ``dst`` holding every ``factor``-th
+    frame of ``src`` with image and ground-truth timestamps compressed in time by ``factor`` about the
+    first frame: the same path flown ``factor`` times faster at the same frame rate (the images are
+    not re-rendered: ``dst/mav0/cam0/data`` links to the source frames). Returns dst."""
+    if factor < 2:
+        raise ValueError("speed-up factor must be >= 2")
+    gt_path, yml = sequence_paths(src)
+    cam_src = os.path.dirname(yml) if yml else os.path.join(src, "mav0", "cam0")
+    rows = []
+    with open(os.path.join(cam_src, "data.csv"), "r", encoding="utf-8") as f:
+        for line in f:
+            line = line.strip()
+            if line and not line.startswith("#"):
+                t, name = line.split(",")
+                rows.append((int(t), name.strip()))
+    rows = rows[::factor]
+    if len(rows) < 2:
+        raise ValueError(f"{src}: too few frames for a x{factor} speed-up")
+    t0 = rows[0][0]
+    cam_dst = os.path.join(dst, "mav0", "cam0")
+    gt_dst = os.path.join(dst, "mav0", "state_groundtruth_estimate0")
+    os.makedirs(cam_dst, exist_ok=True)
+    os.makedirs(gt_dst, exist_ok=True)
+    link = os.path.join(cam_dst, "data")
+    if os.path.islink(link):
+        os.remove(link)
+    os.symlink(os.path.abspath(os.path.join(cam_src, "data")), link)
+    with open(os.path.join(cam_dst, "data.csv"), "w", encoding="utf-8", newline="\n") as f:
+        f.write("#timestamp [ns],filename\n")
+        for t, name in rows:
+            f.write(f"{t0 + (t - t0) // factor},{name}\n")
+    if yml:
+        with open(yml, "r", encoding="utf-8") as fi, open(os.path.join(cam_dst, "sensor.yaml"), "w") as fo:
+            fo.write(fi.read())
+    gt = trajio.read_euroc_groundtruth(gt_path)
+    trajio.write_euroc_groundtruth(os.path.join(gt_dst, "data.csv"), trajio.Trajectory(
+        t0 + (gt.t_ns - t0) // factor, gt.poses, "body"))
+    return dst
+
+
 def build(seqs: Sequence[str], work_dir: str, replay: Optional[str] = None, names: Optional[Dict[str, str]] = None,
           states=(STATE_OK, STATE_ROT_ONLY), log=print) -> Dict[str, np.ndarray]:
     """seqs: folders, or 'FOLDER:FEATURES.csv' to reuse a features csv. Returns the dataset dict."""
@@ -174,11 +215,21 @@ def main(argv=None) -> int:
     ap.add_argument("-o", "--out", required=True, help="dataset .npz to write")
     ap.add_argument("--replay", default=None, help="tvo_replay binary (default: $TVO_REPLAY or build/*/...)")
     ap.add_argument("--work", default=None, help="folder for the features csv files (default: next to --out)")
+    ap.add_argument("--speedup", default="", help="speed augmentation factors, e.g. 2,3: each sequence "
+                    "named in --speedup-seqs is also added as NAME_x<k> (every k-th frame, k times faster)")
+    ap.add_argument("--speedup-seqs", default="", help="comma-separated sequence names to augment (training only!)")
     ap.add_argument("--states", default="0,2", help="VO states kept (0 ok, 1 init, 2 rotation-only, 3 lost)")
     a = ap.parse_args(argv)
     work = a.work or os.path.join(os.path.dirname(os.path.abspath(a.out)), "features")
+    seqs = list(a.sequences)
     try:
-        data = build(a.sequences, work, a.replay or default_replay(),
+        aug = set(x for x in a.speedup_seqs.split(",") if x)
+        for k in (int(x) for x in a.speedup.split(",") if x):
+            for spec in a.sequences:
+                d = spec.split(":")[0].rstrip("/")
+                if os.path.basename(d) in aug:
+                    seqs.append(speedup_sequence(d, os.path.join(work, "speedup", f"{os.path.basename(d)}_x{k}"), k))
+        data = build(seqs, work, a.replay or default_replay(),
                      states=tuple(int(s) for s in a.states.split(",") if s))
     except (OSError, ValueError, RuntimeError) as e:
         print(f"dataset: error: {e}", file=sys.stderr)
