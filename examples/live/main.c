@@ -285,23 +285,8 @@ int main(int argc, char **argv)
         if (res.state == TVO_VO_OK || res.state == TVO_VO_ROTATION_ONLY) {
             tvo_pose step = res.T_prev_cur;
             double scale = 1.0;
-            if (nn != NULL) {
-                float y[6];
-                if (tvo_nn_run(nn, res.features, y) == TVO_OK) {
-                    const int32_t mask = tvo_nn_output_mask(nn);
-                    if ((mask & 0x38) == 0x38) {
-                        double v[3] = {y[3], y[4], y[5]};
-                        tvo_rotvec_to_rot(v, step.R);
-                    }
-                    if ((mask & 0x7) == 0x7) {
-                        step.t[0] = y[0];
-                        step.t[1] = y[1];
-                        step.t[2] = y[2];
-                    }
-                } else {
-                    scale = 0.0;
-                }
-            }
+            if (nn != NULL && tvo_vo_refine(nn, &res, &step) != TVO_OK)
+                scale = 0.0;
             (void)tvo_traj_step(&traj, &step, scale);
         }
         tvo_rot_to_quat(traj.T_w_c.R, q);

@@ -405,21 +405,8 @@ int main(int argc, char **argv)
                         scale = sqrt(rel.t[0] * rel.t[0] + rel.t[1] * rel.t[1] + rel.t[2] * rel.t[2]);
                     }
                 } else if (o.scale == SCALE_MODEL) {
-                    float y[6];
-                    if (tvo_nn_run(nn, res.features, y) == TVO_OK) {
-                        const int32_t mask = tvo_nn_output_mask(nn);
-                        if ((mask & 0x38) == 0x38) {
-                            double v[3] = { y[3], y[4], y[5] };
-                            tvo_rotvec_to_rot(v, step.R);
-                        }
-                        if ((mask & 0x7) == 0x7) {
-                            step.t[0] = y[0];
-                            step.t[1] = y[1];
-                            step.t[2] = y[2];
-                        }
-                    } else {
+                    if (tvo_vo_refine(nn, &res, &step) != TVO_OK)
                         scale = 0.0;
-                    }
                 }
                 if (tvo_traj_step(&traj, &step, scale) != TVO_OK)
                     counts_state[TVO_VO_LOST]++;

@@ -358,6 +358,30 @@ done:
     return TVO_OK;
 }
 
+tvo_status tvo_vo_refine(const tvo_nn *nn, const tvo_vo_result *res, tvo_pose *step)
+{
+    float y[TVO_NN_DOF_COUNT];
+    int32_t mask;
+    tvo_status st;
+    if (nn == NULL || res == NULL || step == NULL)
+        return TVO_ERR_NULL;
+    *step = res->T_prev_cur;
+    st = tvo_nn_run(nn, res->features, y);
+    if (st != TVO_OK)
+        return st;
+    mask = tvo_nn_output_mask(nn);
+    if ((mask & 0x38) == 0x38) {
+        const double v[3] = { y[TVO_NN_RX], y[TVO_NN_RY], y[TVO_NN_RZ] };
+        tvo_rotvec_to_rot(v, step->R);
+    }
+    if ((mask & 0x7) == 0x7) {
+        step->t[0] = y[TVO_NN_TX];
+        step->t[1] = y[TVO_NN_TY];
+        step->t[2] = y[TVO_NN_TZ];
+    }
+    return TVO_OK;
+}
+
 void tvo_traj_init(tvo_traj *traj, const tvo_pose *T_w_c0)
 {
     if (traj == NULL)
