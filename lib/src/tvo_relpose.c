@@ -717,6 +717,7 @@ static void set_identity_result(tvo_relpose *out)
 {
     memset(out, 0, sizeof *out);
     out->R[0] = out->R[4] = out->R[8] = 1.0;
+    out->R_alt[0] = out->R_alt[4] = out->R_alt[8] = 1.0;
     out->flags = TVO_RELPOSE_FLAG_LOW_CONFIDENCE;
 }
 
@@ -934,6 +935,7 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
         if (!pose_finite(Rrot, out->t))
             return TVO_OK; /* identity + LOW_CONFIDENCE already set */
         memcpy(out->R, Rrot, sizeof Rrot);
+        memcpy(out->R_alt, Rrot, sizeof Rrot);
         out->t[0] = out->t[1] = out->t[2] = 0.0;
         out->inliers = r_inl;
         out->flags = TVO_RELPOSE_FLAG_ROTATION_ONLY;
@@ -952,6 +954,7 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
     int32_t inl = polish(&cfg, R, t, x1, x2, n, thr2, mask_e, buf);
     int32_t good = good_count(R, t, x1, x2, n, thr2, mask_e);
     int use_h = 0, ambiguous = 0;
+    double Rtw[2][9], ttw[2][3]; /* the plane's two twin poses, polished, when ambiguous */
 
     /* 4. homography model selection (dominant plane) */
     if (cfg.use_homography) {
@@ -1027,8 +1030,13 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
                         int32_t inl_2 = polish(&cfg, R2, t2, x1, x2, n, thr2, mask_h, buf);
                         int32_t good_2 = good_count(R2, t2, x1, x2, n, thr2, mask_h);
                         if (poses_differ(R2, t2, Rh, th) && (double)good_2 >= 0.85 * good_h &&
-                            (double)good_h >= 0.85 * good_2 && (double)good_2 >= 0.85 * good)
+                            (double)good_h >= 0.85 * good_2 && (double)good_2 >= 0.85 * good) {
                             ambiguous = 1;
+                            memcpy(Rtw[0], Rh, sizeof Rh);
+                            memcpy(ttw[0], th, sizeof th);
+                            memcpy(Rtw[1], R2, sizeof R2);
+                            memcpy(ttw[1], t2, sizeof t2);
+                        }
                         if (good_2 > good_h && pose_finite(R2, t2)) {
                             memcpy(Rh, R2, sizeof R2);
                             memcpy(th, t2, sizeof t2);
@@ -1061,8 +1069,22 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
     out->t[2] = t[2] / nt;
     out->inliers = inl;
     out->flags = use_h ? TVO_RELPOSE_FLAG_HOMOGRAPHY : 0;
-    if (inl < cfg.min_inliers || inl < 5 || good < inl / 2 || ambiguous)
+    memcpy(out->R_alt, out->R, sizeof out->R);
+    memcpy(out->t_alt, out->t, sizeof out->t);
+    if (inl < cfg.min_inliers || inl < 5 || good < inl / 2) {
         out->flags |= TVO_RELPOSE_FLAG_LOW_CONFIDENCE;
+    } else if (ambiguous) {
+        /* the twin that is not the chosen pose (the chosen one may be the epipolar pose) */
+        int k = poses_differ(Rtw[0], ttw[0], R, t) ? 0 : 1;
+        double na = sqrt(dot3(ttw[k], ttw[k]));
+        out->flags |= TVO_RELPOSE_FLAG_LOW_CONFIDENCE;
+        if (na > 0.0 && pose_finite(Rtw[k], ttw[k]) && poses_differ(Rtw[k], ttw[k], R, t)) {
+            out->flags |= TVO_RELPOSE_FLAG_AMBIGUOUS;
+            memcpy(out->R_alt, Rtw[k], sizeof out->R_alt);
+            for (int j = 0; j < 3; ++j)
+                out->t_alt[j] = ttw[k][j] / na;
+        }
+    }
     if (inlier_mask != NULL)
         memcpy(inlier_mask, mask_e, (size_t)n);
     return TVO_OK;

@@ -13,6 +13,8 @@ struct tvo_vo {
     int32_t cur;              /* index of the pyramid that receives the next frame */
     int32_t has_prev;         /* a previous frame with tracks exists */
     int64_t t_prev;
+    double t_dir[3];          /* unit translation (X_cur = R X_prev + t) of the last frame that had one */
+    int32_t t_dir_age;        /* frames since then; > TVO_VO_PRIOR_FRAMES: no motion prior */
     int32_t n;                /* tracks in pts (positions in the previous frame) */
     tvo_point2f *pts;         /* [max_tracks] */
     tvo_point2f *next;        /* [max_tracks] */
@@ -24,6 +26,11 @@ struct tvo_vo {
     void *scratch;
     size_t scratch_size;
 };
+
+/* A translation direction older than this many frames is not used to resolve an ambiguous pose. */
+#define TVO_VO_PRIOR_FRAMES 3
+/* ...and an ambiguous pose is resolved only when the chosen candidate is within this angle of it. */
+#define TVO_VO_PRIOR_COS 0.7071067811865476 /* cos 45 deg */
 
 void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
 {
@@ -140,6 +147,7 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg, void *mem, size_t
     vo->x1 = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
     vo->x2 = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
     vo->corners = (tvo_corner *)tvo_arena_alloc(&a, n * sizeof(tvo_corner));
+    vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
     vo->scratch_size = scratch_need(cfg);
     vo->scratch = tvo_arena_alloc(&a, vo->scratch_size);
     if (vo->pts == NULL || vo->next == NULL || vo->st == NULL || vo->ok1 == NULL || vo->ok2 == NULL ||
@@ -156,6 +164,7 @@ void tvo_vo_reset(tvo_vo *vo)
         return;
     vo->has_prev = 0;
     vo->n = 0;
+    vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
 }
 
 static int64_t now_ns(const tvo_vo *vo)
@@ -191,6 +200,29 @@ static int32_t redetect(tvo_vo *vo, const tvo_pyramid *pyr)
     }
     vo->n += got;
     return got;
+}
+
+/* A plane seen with a small baseline has two poses that explain the tracks equally well (relpose
+ * flags AMBIGUOUS). Pick the twin whose translation continues the recent motion (frames at camera
+ * rate move smoothly); without a recent direction, or when neither twin is within 45 degrees of it,
+ * keep only the rotation (the twins' rotations differ by about the parallax, which is small here).
+ * Returns the resulting state and writes the pose to use into rp->R, rp->t. */
+static tvo_vo_state resolve_ambiguous(const tvo_vo *vo, tvo_relpose *rp)
+{
+    if (vo->t_dir_age <= TVO_VO_PRIOR_FRAMES) {
+        const double *d = vo->t_dir;
+        double c0 = rp->t[0] * d[0] + rp->t[1] * d[1] + rp->t[2] * d[2];
+        double c1 = rp->t_alt[0] * d[0] + rp->t_alt[1] * d[1] + rp->t_alt[2] * d[2];
+        if (c1 > c0) {
+            memcpy(rp->R, rp->R_alt, sizeof(rp->R));
+            memcpy(rp->t, rp->t_alt, sizeof(rp->t));
+            c0 = c1;
+        }
+        if (c0 >= TVO_VO_PRIOR_COS)
+            return TVO_VO_OK;
+    }
+    rp->t[0] = rp->t[1] = rp->t[2] = 0.0;
+    return TVO_VO_ROTATION_ONLY;
 }
 
 static void fill_features(const tvo_vo_result *res, float f[TVO_FEAT_COUNT])
@@ -309,8 +341,19 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
             rc.use_homography = 0;
             st = tvo_relpose_estimate(&rc, vo->x1, vo->x2, m, &rp, vo->mask, vo->scratch, vo->scratch_size);
         }
+        if (st == TVO_OK && (rp.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE) &&
+            !(rp.flags & (TVO_RELPOSE_FLAG_AMBIGUOUS | TVO_RELPOSE_FLAG_ROTATION_ONLY))) {
+            /* no epipolar pose we can trust (too few cheirality-consistent inliers): the rotation
+               usually still is, so ask for the rotation-only model alone rather than lose the frame */
+            tvo_relpose rr;
+            rc.min_parallax_deg = 180.0; /* every parallax is below it */
+            if (tvo_relpose_estimate(&rc, vo->x1, vo->x2, m, &rr, vo->mask, vo->scratch, vo->scratch_size) ==
+                    TVO_OK && !(rr.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE))
+                rp = rr;
+        }
         res->pose_status = st;
-        if (st != TVO_OK || (rp.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE)) {
+        int ambiguous = st == TVO_OK && (rp.flags & TVO_RELPOSE_FLAG_AMBIGUOUS);
+        if (st != TVO_OK || ((rp.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE) && !ambiguous)) {
             /* keep the tracks, but report no motion we could trust */
             res->state = TVO_VO_LOST;
             res->relpose_flags = st == TVO_OK ? rp.flags : 0;
@@ -320,15 +363,20 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
         } else {
             /* rp: X_cur = R X_prev + t, i.e. T_cur_prev; report T_prev_cur */
             tvo_pose T_cur_prev;
+            if (ambiguous)
+                res->state = resolve_ambiguous(vo, &rp);
+            else
+                res->state = (rp.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY) ? TVO_VO_ROTATION_ONLY : TVO_VO_OK;
             memcpy(T_cur_prev.R, rp.R, sizeof(rp.R));
             memcpy(T_cur_prev.t, rp.t, sizeof(rp.t));
             res->T_prev_cur = tvo_pose_inverse(&T_cur_prev);
             res->relpose_flags = rp.flags;
             res->inliers = rp.inliers;
             res->parallax_deg = rp.parallax_deg;
-            res->state = (rp.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY) ? TVO_VO_ROTATION_ONLY : TVO_VO_OK;
             if (res->state == TVO_VO_ROTATION_ONLY)
                 res->T_prev_cur.t[0] = res->T_prev_cur.t[1] = res->T_prev_cur.t[2] = 0.0;
+            else
+                memcpy(vo->t_dir, rp.t, sizeof(vo->t_dir));
             /* carry the inliers (the outliers are bad tracks) */
             m = compact(vo, m, vo->mask);
             for (int32_t i = 0; i < m; ++i)
@@ -349,6 +397,10 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
     res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
 
 done:
+    if (res->state == TVO_VO_OK)
+        vo->t_dir_age = 0;
+    else if (vo->t_dir_age <= TVO_VO_PRIOR_FRAMES)
+        vo->t_dir_age++;
     res->tracks = vo->n;
     vo->has_prev = 1;
     vo->t_prev = t_ns;

@@ -66,7 +66,12 @@ enum {
     TVO_RELPOSE_FLAG_LOW_PARALLAX = 1,   /* parallax below cfg->min_parallax_deg */
     TVO_RELPOSE_FLAG_ROTATION_ONLY = 2,  /* t is zero; R from the rotation-only model */
     TVO_RELPOSE_FLAG_HOMOGRAPHY = 4,     /* a homography (dominant plane) chose the pose */
-    TVO_RELPOSE_FLAG_LOW_CONFIDENCE = 8  /* too few inliers / cheirality-consistent points */
+    TVO_RELPOSE_FLAG_LOW_CONFIDENCE = 8, /* too few inliers / cheirality-consistent points, or AMBIGUOUS */
+    TVO_RELPOSE_FLAG_AMBIGUOUS = 16      /* two clearly different poses (a plane's twin solutions) explain
+                                            the data about equally well and nothing else is wrong: R, t has
+                                            the more cheirality-consistent points, R_alt, t_alt is the twin.
+                                            LOW_CONFIDENCE is set too: choose with outside knowledge (e.g.
+                                            the previous motion, as tvo_vo does) or use neither */
 };
 
 typedef struct tvo_relpose {
@@ -77,6 +82,8 @@ typedef struct tvo_relpose {
     double parallax_deg;/* median rotation-compensated parallax angle of the inliers (degrees),
                            compensated with the best rotation-only model */
     int32_t iterations; /* RANSAC iterations run (epipolar model) */
+    double R_alt[9];    /* with TVO_RELPOSE_FLAG_AMBIGUOUS: the twin pose (unit t_alt); else a copy of R, t */
+    double t_alt[3];
 } tvo_relpose;
 
 /* Minimal 5-point solver (Nister's formulation: null space of the 5x9 epipolar system,

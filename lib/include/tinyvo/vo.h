@@ -28,9 +28,13 @@ extern "C" {
 
 /* What the VO made of a frame. */
 typedef enum tvo_vo_state {
-    TVO_VO_OK = 0,             /* relative pose with a translation direction */
+    TVO_VO_OK = 0,             /* relative pose with a translation direction (relpose_flags AMBIGUOUS:
+                                  one of a plane's twin poses, chosen as the one that continues the
+                                  translation of the last 3 frames within 45 degrees) */
     TVO_VO_INITIALISING = 1,   /* first frame (or first after a reset): corners detected, identity pose */
-    TVO_VO_ROTATION_ONLY = 2,  /* low parallax: rotation estimated, translation reported as zero */
+    TVO_VO_ROTATION_ONLY = 2,  /* low parallax, or no translation we could trust (too few cheirality-
+                                  consistent inliers; a plane's twin poses that the recent motion does not
+                                  resolve): rotation estimated, translation reported as zero */
     TVO_VO_LOST = 3,           /* too few tracks or no trustworthy model: identity pose, tracker re-initialised */
     TVO_VO_STATE_COUNT = 4
 } tvo_vo_state;
