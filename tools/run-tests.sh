@@ -3,6 +3,7 @@
 #   1. Release build with -Werror, all cmocka unit tests (ctest -j2)
 #   2. the OpenCV oracle tests (pytest, test/oracle) against that build
 #   3. an ASan+UBSan build running the unit tests again
+#   4. cppcheck + clang-tidy with the checked-in configuration (tools/run-static.sh)
 # Tests that need ../shared/data skip with a message when it is absent.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -25,6 +26,9 @@ cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DTVO_SANITIZE=ON -DT
 cmake --build build/asan -j$JOBS
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build/asan -j$JOBS --output-on-failure
+
+echo "== static analysis (cppcheck + clang-tidy, tools/run-static.sh; ~3 min)"
+bash tools/run-static.sh
 
 echo "== ARM cross builds, unit tests under qemu-user (aarch64, armhf; ~7 min)"
 bash tools/run-cross.sh

@@ -17,6 +17,8 @@
 #include "tinyvo/tinyvo.h"
 #include "tinyvo/vo.h"
 
+#include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -43,6 +45,19 @@ static void usage(void)
             "  --fps N           requested frame rate (default 30)\n"
             "  --frames N        stop after N frames (default: until Ctrl-C)\n"
             "  --timeout-ms N    give up when no frame arrives for N ms (default 2000)\n");
+}
+
+/* Whole-string decimal integer in [lo, hi] (atoi/sscanf accept "5x" and overflow is undefined). */
+static int parse_long(const char *s, long lo, long hi, long *out)
+{
+    char *end = NULL;
+    long v;
+    errno = 0;
+    v = strtol(s, &end, 10);
+    if (errno != 0 || end == s || *end != '\0' || v < lo || v > hi)
+        return 0;
+    *out = v;
+    return 1;
 }
 
 static char *read_file(const char *path, size_t *size)
@@ -115,32 +130,40 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--model")) {
             model = v;
         } else if (!strcmp(a, "--size")) {
-            int w, h;
-            if (sscanf(v, "%dx%d", &w, &h) != 2 || w < 1 || h < 1 || w > TVO_MAX_IMAGE_DIM ||
-                h > TVO_MAX_IMAGE_DIM) {
+            char wbuf[16];
+            const char *x = strchr(v, 'x');
+            long w = 0, h = 0;
+            if (x == NULL || (size_t)(x - v) >= sizeof wbuf) {
                 fprintf(stderr, "tvo_live: --size must be WxH (got '%s')\n", v);
                 return 1;
             }
-            width = w;
-            height = h;
+            memcpy(wbuf, v, (size_t)(x - v));
+            wbuf[x - v] = '\0';
+            if (!parse_long(wbuf, 1, TVO_MAX_IMAGE_DIM, &w) || !parse_long(x + 1, 1, TVO_MAX_IMAGE_DIM, &h)) {
+                fprintf(stderr, "tvo_live: --size must be WxH (got '%s')\n", v);
+                return 1;
+            }
+            width = (int32_t)w;
+            height = (int32_t)h;
         } else if (!strcmp(a, "--fps")) {
-            fps = (int32_t)atoi(v);
-            if (fps < 1 || fps > 1000) {
+            long l = 0;
+            if (!parse_long(v, 1, 1000, &l)) {
                 fprintf(stderr, "tvo_live: --fps must be 1..1000\n");
                 return 1;
             }
+            fps = (int32_t)l;
         } else if (!strcmp(a, "--frames")) {
-            frames_max = atol(v);
-            if (frames_max < 1) {
+            if (!parse_long(v, 1, LONG_MAX, &frames_max)) {
                 fprintf(stderr, "tvo_live: --frames must be >= 1\n");
                 return 1;
             }
         } else if (!strcmp(a, "--timeout-ms")) {
-            timeout_ms = (int32_t)atoi(v);
-            if (timeout_ms < 1 || timeout_ms > 600000) {
+            long l = 0;
+            if (!parse_long(v, 1, 600000, &l)) {
                 fprintf(stderr, "tvo_live: --timeout-ms must be 1..600000\n");
                 return 1;
             }
+            timeout_ms = (int32_t)l;
         } else {
             fprintf(stderr, "tvo_live: unknown option %s\n", a);
             usage();
@@ -239,7 +262,7 @@ int main(int argc, char **argv)
         }
         st = tvo_nn_required_size(nn_file, fsize, &need);
         if (st == TVO_OK) {
-            nn_mem = malloc(need);
+            nn_mem = need > 0 ? malloc(need) : NULL;
             st = nn_mem != NULL ? tvo_nn_load(&nn, nn_file, fsize, nn_mem, need) : TVO_ERR_NO_MEMORY;
         }
         if (st != TVO_OK) {
@@ -248,7 +271,7 @@ int main(int argc, char **argv)
             goto done;
         }
     }
-    grey = (uint8_t *)malloc((size_t)fmt->width * (size_t)fmt->height);
+    grey = fmt->width > 0 && fmt->height > 0 ? (uint8_t *)malloc((size_t)fmt->width * (size_t)fmt->height) : NULL;
     if (grey == NULL) {
         fprintf(stderr, "tvo_live: out of memory\n");
         rc = 4;

@@ -219,6 +219,7 @@ static int det_pick_before(const det_pick *a, const det_pick *b)
 }
 
 /* in-place heapsorts (no allocation, unlike qsort on some libcs; deterministic as the orders are total) */
+/* NOLINTBEGIN(bugprone-macro-parentheses): `type` is a type name, which cannot be parenthesised */
 #define DET_HEAPSORT(name, type, before)                                           \
     static void name(type *v, int32_t n)                                           \
     {                                                                              \
@@ -254,6 +255,7 @@ DET_SIFT(det_sort_cands, det_cand, det_cand_before)
 DET_HEAPSORT(det_sort_cands, det_cand, det_cand_before)
 DET_SIFT(det_sort_picks, det_pick, det_pick_before)
 DET_HEAPSORT(det_sort_picks, det_pick, det_pick_before)
+/* NOLINTEND(bugprone-macro-parentheses) */
 
 static int32_t det_clampi(int32_t v, int32_t lo, int32_t hi)
 {

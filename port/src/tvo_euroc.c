@@ -298,6 +298,7 @@ static tvo_status tvo_yaml_parse(tvo_yaml *y, const char *text, size_t len, char
             int k;
             memcpy(en->key, kb, (size_t)(ke - kb));
             en->key[ke - kb] = '\0';
+            /* NOLINTNEXTLINE(clang-analyzer-security.insecureAPI.strcpy): both buffers are TVO_YAML_KEY */
             strcpy(en->parent, indent > 0 ? parent : "");
             for (k = 0; k < y->n; ++k)
                 if (strcmp(y->e[k].key, en->key) == 0 && strcmp(y->e[k].parent, en->parent) == 0) {
@@ -403,7 +404,7 @@ tvo_status tvo_euroc_parse_sensor_yaml(const char *text, size_t len, tvo_camera 
     tvo_yaml *y;
     const tvo_yaml_entry *en;
     tvo_camera cam;
-    tvo_pose T = tvo_pose_identity();
+    tvo_pose T;
     double v[16], rate = 0.0;
     int n, i;
     tvo_status st;
@@ -896,6 +897,7 @@ tvo_status tvo_euroc_open(tvo_euroc **out, const char *dir, const char *cam, cha
         tvo_set_err(err, err_size, "out of memory");
         return TVO_ERR_NO_MEMORY;
     }
+    /* NOLINTNEXTLINE(clang-analyzer-security.insecureAPI.strcpy): strlen(cam) < sizeof s->cam checked above */
     strcpy(s->cam, cam);
     /* DIR/mav0/<cam> or DIR/<cam> */
     snprintf(path, sizeof path, "%s/mav0/%s/data.csv", dir, cam);
