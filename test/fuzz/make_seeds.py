@@ -1,0 +1,215 @@
+"""Writes the seed inputs of test/fuzz/corpus/<name>/ (seed-*; crash inputs found by the fuzzer are kept
+beside them as crash-* / leak-* / timeout-* files, never regenerated). Deterministic.
+
+    .venv/bin/python test/fuzz/make_seeds.py [--data ../shared/data]
+
+Sources: exporter output (tinyvo_tools.nnfmt / nngolden: micro models written here, plus a copy of
+test/data/nn/tiny.tvonn), a few rows and the sensor.yaml of the shared EuRoC samples (V1_01_easy_head),
+small PNGs made from a crop of one EuRoC frame (never a whole frame), and hand-made edge cases.
+Without the shared data folder the EuRoC-derived seeds are skipped (the others are still written).
+"""
+from __future__ import annotations
+
+import argparse
+import io
+import pathlib
+import struct
+import zlib
+
+import numpy as np
+
+HERE = pathlib.Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+
+
+def put(d: pathlib.Path, name: str, data: bytes) -> None:
+    d.mkdir(parents=True, exist_ok=True)
+    (d / f"seed-{name}").write_bytes(data)
+
+
+# ---- nn -------------------------------------------------------------------------------------------
+def seeds_nn(out: pathlib.Path) -> None:
+    from tinyvo_tools import nnfmt, nngolden
+
+    rng = np.random.default_rng(7)
+    tiny = (ROOT / "test" / "data" / "nn" / "tiny.tvonn").read_bytes()
+    put(out, "tiny.tvonn", tiny)
+    # micro models: one per activation, one hidden layer of 4 units (exporter output, ~1 kB each)
+    for act in nngolden.BRANCH_ACTS:
+        m, _, _ = nngolden.make_model(rng, (4,), acts=[act], calib_n=200)
+        put(out, f"micro_{act}.tvonn", nnfmt.write(m))
+    m, _, _ = nngolden.make_model(rng, (3, 2), acts=["relu", "tanh", "sigmoid"], calib_n=200)
+    good = nnfmt.write(m)
+    put(out, "three_branches.tvonn", good)
+    # an extreme output scale: finite in the file, overflows float when the model runs
+    m, _, _ = nngolden.make_model(rng, (4,), acts=["relu"], calib_n=200)
+    m.branches[0].out_scale = 3.0e38
+    put(out, "huge_out_scale.tvonn", nnfmt.write(m))
+    # hand-made edge cases
+    put(out, "empty", b"")
+    put(out, "header_only", good[:64])
+    bad = bytearray(good)
+    bad[12] ^= 1  # wrong CRC
+    put(out, "bad_crc.tvonn", bytes(bad))
+    put(out, "truncated.tvonn", good[: len(good) - 7])
+    bad = bytearray(good)
+    bad[4] = 2  # major version 2
+    nnfmt.fix_crc(bad)
+    put(out, "major2.tvonn", bytes(bad))
+
+
+# ---- csv ------------------------------------------------------------------------------------------
+def seeds_csv(out: pathlib.Path, data: pathlib.Path | None) -> None:
+    if data is not None:
+        head = data / "euroc" / "V1_01_easy_head" / "mav0"
+        lines = (head / "cam0" / "data.csv").read_text().splitlines(keepends=True)
+        put(out, "cam0_data.csv", "".join(lines[:5]).encode())
+        lines = (head / "state_groundtruth_estimate0" / "data.csv").read_text().splitlines(keepends=True)
+        put(out, "groundtruth.csv", "".join(lines[:4]).encode())
+        lines = (data / "euroc" / "groundtruth" / "MH_01_easy.txt").read_text().splitlines(keepends=True)
+        put(out, "groundtruth.txt", "".join(lines[:4]).encode())
+    put(out, "crlf.csv", b"#timestamp [ns],filename\r\n100,a.png\r\n200 , b.png \r\n")
+    put(out, "gt_fraction.txt", b"1.5 0 0 0 1 0 0 0\n2.49,1e3,-2,3.5,0,1,0,0,9,9\n3 1 2 3 0.7071068 0.7071068 0 0\n")
+    put(out, "gt_wide_gap.txt", b"0 0 0 0 1 0 0 0\n9223372036854775806 1 1 1 0 0 0 1\n")
+    put(out, "bad_rows.csv", b"123\n,x.png\n-5,a.png\n7,../x.png\n8,a,b\n")
+    put(out, "gt_not_unit.txt", b"1 0 0 0 2 0 0 0\n")
+
+
+# ---- yaml -----------------------------------------------------------------------------------------
+YAML_EQUI = b"""%YAML:1.0
+camera_model: pinhole
+intrinsics: [190.97, 190.97, 254.93, 256.90]
+resolution: [512, 512]
+distortion_model: equidistant
+distortion_coefficients: [0.0034, 0.0007, -0.0020, 0.0002]
+T_BS:
+  rows: 4
+  cols: 4
+  data: [1, 0, 0, 0.1,
+         0, 1, 0, 0,
+         0, 0, 1, 0,
+         0, 0, 0, 1]
+rate_hz: 20
+"""
+
+
+def seeds_yaml(out: pathlib.Path, data: pathlib.Path | None) -> None:
+    if data is not None:
+        head = data / "euroc" / "V1_01_easy_head" / "mav0"
+        put(out, "cam0_sensor.yaml", (head / "cam0" / "sensor.yaml").read_bytes())
+        put(out, "cam1_sensor.yaml", (head / "cam1" / "sensor.yaml").read_bytes())
+    put(out, "equidistant.yaml", YAML_EQUI)
+    put(out, "radtan5.yaml", b"intrinsics: [700, 700, 640, 360]\nresolution: [1280, 720]\n"
+        b"distortion_coefficients: [-0.3, 0.1, 0.001, -0.001, -0.02]\n"
+        b"T_BS:\n  data: [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]\n")
+    put(out, "unclosed.yaml", b"intrinsics: [1, 2, 3, 4\nresolution: [1, 1]\n")
+    put(out, "strong_distortion.yaml", b"intrinsics: [100, 100, 50, 50]\nresolution: [100, 100]\n"
+        b"distortion_model: radtan\ndistortion_coefficients: [5, -40, 0.5, 0.5, 100]\n"
+        b"T_BS:\n  data: [0,-1,0,0, 1,0,0,0, 0,0,1,0, 0,0,0,1]\n")
+
+
+# ---- png ------------------------------------------------------------------------------------------
+def png_chunk(kind: bytes, body: bytes) -> bytes:
+    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
+
+
+def seeds_png(out: pathlib.Path, data: pathlib.Path | None) -> None:
+    from PIL import Image
+
+    if data is not None:
+        frames = sorted((data / "euroc" / "V1_01_easy_head" / "mav0" / "cam0" / "data").glob("*.png"))
+        full = Image.open(frames[0]).convert("L")
+        crop = full.crop((300, 200, 332, 224))  # 32 x 24 px of a real frame
+    else:
+        crop = Image.fromarray((np.arange(32 * 24).reshape(24, 32) * 7 % 256).astype(np.uint8), "L")
+
+    def save(name, img, **kw):
+        b = io.BytesIO()
+        img.save(b, format="PNG", **kw)
+        put(out, name, b.getvalue())
+
+    save("gray8.png", crop)
+    save("gray1.png", crop.convert("1"))
+    save("gray16.png", Image.fromarray(np.asarray(crop).astype(np.uint16) * 257))
+    rgb = Image.merge("RGB", (crop, crop.transpose(Image.FLIP_LEFT_RIGHT), crop.transpose(Image.FLIP_TOP_BOTTOM)))
+    save("rgb8.png", rgb)
+    save("rgba8.png", rgb.convert("RGBA"))
+    save("palette.png", rgb.convert("P", palette=Image.ADAPTIVE, colors=16))
+    save("gray_alpha.png", crop.convert("LA"))
+    save("downscale.png", crop.resize((8, 6)))
+    # hand-made: 2-bit grey and an Adam7-interlaced 4x4 grey 8-bit image, written byte by byte
+    sig = b"\x89PNG\r\n\x1a\n"
+
+    def raw_png(w, h, depth, color, interlace, raw):
+        ihdr = struct.pack(">IIBBBBB", w, h, depth, color, 0, 0, interlace)
+        return sig + png_chunk(b"IHDR", ihdr) + png_chunk(b"IDAT", zlib.compress(raw)) + png_chunk(b"IEND", b"")
+
+    put(out, "gray2.png", raw_png(4, 2, 2, 0, 0, b"\x00\x1b\x00\xe4"))
+    # an Adam7-interlaced 1x1 image: a single pass
+    put(out, "interlaced_1x1.png", raw_png(1, 1, 8, 0, 1, b"\x00\x80"))
+    g8 = (out / "seed-gray8.png").read_bytes()
+    put(out, "truncated.png", g8[: len(g8) // 2])
+    put(out, "huge_dims.png", raw_png(8193, 1, 8, 0, 0, b"\x00" * 8194))
+    put(out, "zero_width.png", raw_png(0, 1, 8, 0, 0, b"\x00"))
+
+
+# ---- vo -------------------------------------------------------------------------------------------
+def vo_header(w, h, dist, fx_code, strength, max_tracks, level, fast, seed, win, portable=0, grid=5):
+    return bytes([(w - 16) % 81, (h - 16) % 81, (fx_code << 2) | dist, strength & 0xFF, max_tracks - 16,
+                  (fast << 2) | level, seed, win | (portable << 3) | (grid << 4)])
+
+
+def seeds_vo(out: pathlib.Path, data: pathlib.Path | None) -> None:
+    # moving texture: 8 frames translating 0.5 px/frame (kind 1), +50 ms each
+    h = vo_header(64, 48, 0, 50, 0, 200, 2, 5, 11, 4)
+    frames = b"".join(bytes([1, (8 * k) & 0xFF, (4 * k) & 0xFF, 0]) for k in range(8))
+    put(out, "texture_pan", h + frames)
+    # zoom (forward motion) with radtan distortion and 3 levels
+    h = vo_header(80, 64, 1, 55, -60, 150, 3, 3, 3, 3)
+    frames = b"".join(bytes([1, 0, 0, (6 * k) & 0xFF]) for k in range(8))
+    put(out, "texture_zoom_radtan", h + frames)
+    # equidistant, timestamps: repeat, back in time, raw int64 extremes, reset
+    h = vo_header(48, 48, 2, 20, 90, 100, 1, 4, 7, 2)
+    frames = (bytes([1, 0, 0, 0]) + bytes([1 | 4, 8, 0, 0, 0, 0]) + bytes([1 | 12, 16, 0, 0, 5, 0])
+              + bytes([1 | 8, 24, 0, 0]) + struct.pack("<q", -(2 ** 63)) + bytes([1 | 8, 32, 0, 0])
+              + struct.pack("<q", 2 ** 63 - 1) + bytes([1 | 16, 40, 0, 0]))
+    put(out, "timestamps", h + frames)
+    # flat frames and patched frames (no corners, single bright pixels), row stride padding
+    h = vo_header(32, 32, 0, 10, 0, 16, 0, 0, 1, 1)
+    frames = bytes([3, 128, 2 | (3 << 5), 2, 0, 1, 255, 100, 0, 0, 3, 0, 1, 0, 0, 0])
+    put(out, "flat_patched", h + frames)
+    # raw bytes: two 64x48 crops of real EuRoC frames (1 px apart), then the same crop again
+    if data is not None:
+        from PIL import Image
+
+        fr = sorted((data / "euroc" / "V1_01_easy_keyframes" / "mav0" / "cam0" / "data").glob("*.png"))
+        a = np.asarray(Image.open(fr[0]).convert("L"))
+        c0 = a[200:248, 320:384].tobytes()
+        c1 = a[201:249, 321:385].tobytes()
+        h = vo_header(64, 48, 1, 50, -70, 120, 2, 4, 0, 4)
+        put(out, "euroc_crops_raw", h + bytes([0]) + c0 + bytes([0]) + c1 + bytes([0]) + c0)
+    put(out, "empty", b"")
+    put(out, "header_only", vo_header(16, 16, 0, 0, 0, 16, 3, 0, 0, 0))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--data", type=pathlib.Path, default=ROOT.parent / "shared" / "data")
+    args = ap.parse_args()
+    data = args.data if (args.data / "euroc").is_dir() else None
+    if data is None:
+        print(f"make_seeds: {args.data} absent: EuRoC-derived seeds skipped")
+    corpus = HERE / "corpus"
+    for old in corpus.glob("*/seed-*"):
+        old.unlink()
+    seeds_nn(corpus / "nn")
+    seeds_csv(corpus / "csv", data)
+    seeds_yaml(corpus / "yaml", data)
+    seeds_png(corpus / "png", data)
+    seeds_vo(corpus / "vo", data)
+    total = sum(p.stat().st_size for p in corpus.rglob("*") if p.is_file())
+    print(f"make_seeds: {sum(1 for p in corpus.rglob('seed-*'))} seeds, corpus {total} bytes")
+
+
+if __name__ == "__main__":
+    main()
