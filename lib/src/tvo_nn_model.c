@@ -395,7 +395,14 @@ tvo_status tvo_nn_run(const tvo_nn *nn, const float features[TVO_FEAT_COUNT], fl
             y = t;
         }
         v = r * br->out_scale;
-        out[br->dof] = v + br->out_offset;
+        v = v + br->out_offset;
+        if (!is_finite_f(v)) {
+            /* finite weights and scales can still overflow float (a huge out_scale): no output then */
+            for (d = 0; d < TVO_NN_DOF_COUNT; ++d)
+                out[d] = NAN;
+            return TVO_ERR_NOT_FINITE;
+        }
+        out[br->dof] = v;
     }
     return TVO_OK;
 }

@@ -115,7 +115,9 @@ tvo_status tvo_nn_load(tvo_nn **nn, const void *file, size_t file_size, void *me
  * rz for the DoFs in tvo_nn_output_mask(); the others are set to NaN. No allocation; uses scratch
  * space inside the model's memory, so one tvo_nn must not run on two threads at once.
  * TVO_ERR_NULL for NULL pointers; TVO_ERR_NOT_FINITE if a feature that some branch reads is NaN or
- * infinite (out is then all NaN). Cost: sum over layers of n_in * n_out MACs (tvo_nn_macs()). */
+ * infinite, or if an output overflows float (possible with extreme but finite scales in the file);
+ * out is then all NaN. On TVO_OK every provided output is finite.
+ * Cost: sum over layers of n_in * n_out MACs (tvo_nn_macs()). */
 tvo_status tvo_nn_run(const tvo_nn *nn, const float features[TVO_FEAT_COUNT], float out[6]);
 
 /* Bit d (0..5) set when the model provides DoF d. 0 for NULL. */
