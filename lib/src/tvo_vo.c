@@ -295,7 +295,11 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
         res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
         goto done;
     }
-    res->dt_ns = t_ns - vo->t_prev;
+    {
+        /* t_ns > t_prev here, but the difference of two int64 timestamps can exceed INT64_MAX: saturate */
+        const uint64_t dt = (uint64_t)t_ns - (uint64_t)vo->t_prev;
+        res->dt_ns = dt > (uint64_t)INT64_MAX ? INT64_MAX : (int64_t)dt;
+    }
 
     /* 1. track */
     t1 = now_ns(vo);

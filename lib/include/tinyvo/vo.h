@@ -79,7 +79,7 @@ typedef struct tvo_vo_result {
     int32_t new_corners;       /* corners added by re-detection in this frame */
     int32_t tracks;            /* tracks carried to the next frame */
     double parallax_deg;       /* median rotation-compensated parallax of the inliers */
-    int64_t dt_ns;             /* time since the previous frame (0 on the first) */
+    int64_t dt_ns;             /* time since the previous frame (0 on the first; at most INT64_MAX) */
     float features[TVO_FEAT_COUNT]; /* front-end features for the per-DoF networks (nn.h layout) */
     int64_t stage_ns[TVO_STAGE_COUNT];
 } tvo_vo_result;
