@@ -18,19 +18,6 @@
  *                 10 xz^2, 11 xz, 12 x, 13 yz^2, 14 yz, 15 y, 16 z^3, 17 z^2, 18 z, 19 1
  * quadratic order: 0 xx, 1 xy, 2 xz, 3 yy, 4 yz, 5 zz, 6 x, 7 y, 8 z, 9 1
  * linear order: 0 x, 1 y, 2 z, 3 1 */
-static const unsigned char k_mul_ql[10][4] = {
-    {0, 2, 4, 5},     /* xx * (x y z 1) */
-    {2, 3, 8, 9},     /* xy */
-    {4, 8, 10, 11},   /* xz */
-    {3, 1, 6, 7},     /* yy */
-    {8, 6, 13, 14},   /* yz */
-    {10, 13, 16, 17}, /* zz */
-    {5, 9, 11, 12},   /* x */
-    {9, 7, 14, 15},   /* y */
-    {11, 14, 17, 18}, /* z */
-    {12, 15, 18, 19}, /* 1 */
-};
-
 static void mul_ll(const double a[4], const double b[4], double q[10])
 {
     q[0] = a[0] * b[0];
@@ -45,15 +32,29 @@ static void mul_ll(const double a[4], const double b[4], double q[10])
     q[9] = a[3] * b[3];
 }
 
-/* c += q * l */
+/* c += q * l (quadratic times linear, cubic monomial order above), written out */
 static void mul_ql_acc(const double q[10], const double l[4], double c[20])
 {
-    for (int i = 0; i < 10; ++i) {
-        if (q[i] == 0.0)
-            continue;
-        for (int j = 0; j < 4; ++j)
-            c[k_mul_ql[i][j]] += q[i] * l[j];
-    }
+    c[0] += q[0] * l[0];
+    c[1] += q[3] * l[1];
+    c[2] += q[0] * l[1] + q[1] * l[0];
+    c[3] += q[1] * l[1] + q[3] * l[0];
+    c[4] += q[0] * l[2] + q[2] * l[0];
+    c[5] += q[0] * l[3] + q[6] * l[0];
+    c[6] += q[3] * l[2] + q[4] * l[1];
+    c[7] += q[3] * l[3] + q[7] * l[1];
+    c[8] += q[1] * l[2] + q[2] * l[1] + q[4] * l[0];
+    c[9] += q[1] * l[3] + q[6] * l[1] + q[7] * l[0];
+    c[10] += q[2] * l[2] + q[5] * l[0];
+    c[11] += q[2] * l[3] + q[6] * l[2] + q[8] * l[0];
+    c[12] += q[6] * l[3] + q[9] * l[0];
+    c[13] += q[4] * l[2] + q[5] * l[1];
+    c[14] += q[4] * l[3] + q[7] * l[2] + q[8] * l[1];
+    c[15] += q[7] * l[3] + q[9] * l[1];
+    c[16] += q[5] * l[2];
+    c[17] += q[5] * l[3] + q[8] * l[2];
+    c[18] += q[8] * l[3] + q[9] * l[2];
+    c[19] += q[9] * l[3];
 }
 
 /* ascending-coefficient polynomial product: r (deg da+db) = a * b */
@@ -194,30 +195,50 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
         mul_ql_acc(c1, L[1], M[9]);
         mul_ql_acc(c2, L[2], M[9]);
     }
-    /* Gauss-Jordan on the first 10 columns, partial pivoting */
+    /* Elimination of the first 10 monomials: LU with partial pivoting (row swaps keep the
+     * monomial order of the unknowns), then back-substitution for the last 6 rows only: B(z)
+     * needs the reduced rows of x^2z, x^2, y^2z, y^2, xyz, xy (indices 4..9), and back-
+     * substitution from the bottom never needs rows 0..3. */
+    double scale = 0.0;
+    for (int r = 0; r < 10; ++r)
+        for (int k = 0; k < 10; ++k)
+            if (fabs(M[r][k]) > scale)
+                scale = fabs(M[r][k]);
+    if (!(scale > 1e-300) || !isfinite(scale))
+        return 0;
     for (int c = 0; c < 10; ++c) {
         int p = c;
         for (int r = c + 1; r < 10; ++r)
             if (fabs(M[r][c]) > fabs(M[p][c]))
                 p = r;
-        if (!(fabs(M[p][c]) > 1e-300))
+        if (!(fabs(M[p][c]) > 1e-14 * scale))
             return 0;
         if (p != c)
-            for (int k = 0; k < 20; ++k) {
+            for (int k = c; k < 20; ++k) {
                 double t = M[c][k];
                 M[c][k] = M[p][k];
                 M[p][k] = t;
             }
         double inv = 1.0 / M[c][c];
-        for (int k = c; k < 20; ++k)
-            M[c][k] *= inv;
-        for (int r = 0; r < 10; ++r) {
-            if (r == c || M[r][c] == 0.0)
+        for (int r = c + 1; r < 10; ++r) {
+            double f = M[r][c] * inv;
+            if (f == 0.0)
                 continue;
-            double f = M[r][c];
-            for (int k = c; k < 20; ++k)
+            for (int k = c + 1; k < 20; ++k)
                 M[r][k] -= f * M[c][k];
         }
+    }
+    for (int r = 9; r >= 4; --r) {
+        double inv = 1.0 / M[r][r];
+        for (int k = 10; k < 20; ++k) {
+            double v = M[r][k];
+            for (int j = r + 1; j < 10; ++j)
+                v -= M[r][j] * M[j][k];
+            M[r][k] = v * inv;
+        }
+        for (int j = r + 1; j < 10; ++j)
+            M[r][j] = 0.0;
+        M[r][r] = 1.0;
     }
     /* B(z): rows from (x^2z, x^2), (y^2z, y^2), (xyz, xy); ascending coefficients in z */
     double B[3][3][5];
