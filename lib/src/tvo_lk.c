@@ -223,6 +223,45 @@ static __m128i lk_interp8_s16(const int16_t *g0, const int16_t *g1, __m128i w01,
     return _mm_packs_epi32(lo, hi);
 }
 
+/* SSE2 version of the Scharr rows of lk_prev_window (win >= 8), same integers: for each of the g grid
+ * rows, the vertical pass over p = win + 3 columns and the horizontal pass over g = win + 1 columns, in
+ * 8-lane groups; the last group of a row overlaps the previous one (idempotent stores). */
+static void lk_scharr_sse2(const uint8_t *src, int32_t sstride, lk_work *wk)
+{
+    const int32_t win = wk->win, g = win + 1, p = win + 3;
+    const __m128i z = _mm_setzero_si128(), k3 = _mm_set1_epi16(3), k10 = _mm_set1_epi16(10);
+    int16_t *t0 = wk->tv0, *t1 = wk->tv1;
+    int32_t r, k, x;
+    for (r = 0; r < g; ++r) {
+        const uint8_t *s0 = src + (size_t)r * (size_t)sstride;
+        const uint8_t *s1 = s0 + sstride;
+        const uint8_t *s2 = s1 + sstride;
+        int16_t *dx = wk->gx + (size_t)r * (size_t)g, *dy = wk->gy + (size_t)r * (size_t)g;
+        for (k = 0; k < p; k += 8) {
+            __m128i a, b, c;
+            x = k + 8 <= p ? k : p - 8;
+            a = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s0 + x)), z);
+            b = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s1 + x)), z);
+            c = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s2 + x)), z);
+            _mm_storeu_si128((__m128i *)(t0 + x),
+                             _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(a, c), k3), _mm_mullo_epi16(b, k10)));
+            _mm_storeu_si128((__m128i *)(t1 + x), _mm_sub_epi16(c, a));
+        }
+        for (k = 0; k < g; k += 8) {
+            __m128i l0, l2, m0, m1, m2;
+            x = k + 8 <= g ? k : g - 8;
+            l0 = _mm_loadu_si128((const __m128i *)(t0 + x));
+            l2 = _mm_loadu_si128((const __m128i *)(t0 + x + 2));
+            m0 = _mm_loadu_si128((const __m128i *)(t1 + x));
+            m1 = _mm_loadu_si128((const __m128i *)(t1 + x + 1));
+            m2 = _mm_loadu_si128((const __m128i *)(t1 + x + 2));
+            _mm_storeu_si128((__m128i *)(dx + x), _mm_sub_epi16(l2, l0));
+            _mm_storeu_si128((__m128i *)(dy + x),
+                             _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(m0, m2), k3), _mm_mullo_epi16(m1, k10)));
+        }
+    }
+}
+
 /* SSE2 version of the window interpolation of lk_prev_window (win >= 8), same integers. s is the
  * window's top-left pixel (patch offset +1, +1). The last 8-group of a row overlaps the previous one:
  * stores are idempotent and the gradient sums mask the repeated lanes. */
@@ -310,6 +349,11 @@ static void lk_prev_window(const lk_level *lv, int32_t ix, int32_t iy, const int
     }
 
     /* Scharr derivatives on the (win+1)^2 integer grid whose top-left is (ix, iy) */
+#if LK_SSE2
+    if (simd)
+        lk_scharr_sse2(src, sstride, wk);
+    else
+#endif
     for (r = 0; r < g; ++r) {
         const uint8_t *s0 = src + (size_t)r * (size_t)sstride;
         const uint8_t *s1 = s0 + sstride;
