@@ -138,7 +138,7 @@ def main(argv=None):
         ate = std["ate_m"]["rmse"]
         rpe_t = std["rpe_frame"]["translation_m"]["rmse"]
         rpe_r = std["rpe_frame"]["rotation_deg"]["rmse"]
-        return (f"{name:8s} {med:9.3f} {p90:9.3f}   ATE({std['alignment']}) {ate:.4f} m   "
+        return (f"{name:8s} {med:9.3f} {p90:9.3f}   ATE({std['alignment']['type']}) {ate:.4f} m   "
                 f"RPE/frame {rpe_t:.5f} m {rpe_r:.3f} deg")
     print(f"frames: {len(t_ns)} ({a.euroc})")
     print(f"{'':8s} {'median ms':>9s} {'p90 ms':>9s}")
