@@ -386,6 +386,48 @@ static void test_kernels(void **state)
     assert_int_equal(tvo_nn_crc32(0, "123456789", 9), 0xCBF43926u);
 }
 
+/* Finite but extreme de-normalisation (out_scale, out_offset at +-FLT_MAX) passes validation, but the
+ * output overflows float: the run must say TVO_ERR_NOT_FINITE with all outputs NaN, never return inf
+ * (found by test/fuzz/fuzz_nn). With +FLT_MAX and -FLT_MAX scales one of the two overflows unless the
+ * branch's raw output is exactly 0. */
+static void test_output_overflow(void **state)
+{
+    static const float sign[2] = {1.0f, -1.0f};
+    blob m = read_file("tiny.tvonn");
+    int overflowed = 0;
+    (void)state;
+    assert_non_null(m.data);
+    for (int k = 0; k < 2; ++k) {
+        float feat[TVO_FEAT_COUNT], out[6];
+        size_t need = 0;
+        void *mem;
+        tvo_nn *nn = NULL;
+        tvo_status st;
+        for (int i = 0; i < TVO_FEAT_COUNT; ++i)
+            feat[i] = 0.5f;
+        putf(branch_entry(m.data, 0) + 28, sign[k] * 3.4028235e38f);
+        putf(branch_entry(m.data, 0) + 32, 3.4028235e38f);
+        fix_crc(m.data, m.size);
+        assert_int_equal(tvo_nn_required_size(m.data, m.size, &need), TVO_OK);
+        mem = malloc(need);
+        assert_non_null(mem);
+        assert_int_equal(tvo_nn_load(&nn, m.data, m.size, mem, need), TVO_OK);
+        st = tvo_nn_run(nn, feat, out);
+        if (st == TVO_OK) {
+            for (int d = 0; d < 6; ++d)
+                assert_true(isfinite(out[d]));
+        } else {
+            assert_int_equal(st, TVO_ERR_NOT_FINITE);
+            for (int d = 0; d < 6; ++d)
+                assert_true(isnan(out[d]));
+            ++overflowed;
+        }
+        free(mem);
+    }
+    assert_true(overflowed >= 1);
+    free(m.data);
+}
+
 static void test_input_quantisation(void **state)
 {
     const float feat[TVO_FEAT_COUNT] = {0.25f, -0.25f, 1.0f, 1e30f, -1e30f, 0.75f, 0, 0, 0, 0, 0};
@@ -412,6 +454,7 @@ int main(void)
         cmocka_unit_test(test_bad_files),
         cmocka_unit_test(test_kernels),
         cmocka_unit_test(test_input_quantisation),
+        cmocka_unit_test(test_output_overflow),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
