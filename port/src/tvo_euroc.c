@@ -543,6 +543,11 @@ tvo_status tvo_euroc_parse_sensor_yaml(const char *text, size_t len, tvo_camera 
         tvo_set_err(err, err_size, "line %d: T_BS: last row must be [0, 0, 0, 1]", en->line);
         goto done;
     }
+    if (!(fabs(v[3]) <= TVO_EUROC_MAX_COORD && fabs(v[7]) <= TVO_EUROC_MAX_COORD &&
+          fabs(v[11]) <= TVO_EUROC_MAX_COORD)) {
+        tvo_set_err(err, err_size, "line %d: T_BS: translation beyond +-%g m", en->line, TVO_EUROC_MAX_COORD);
+        goto done;
+    }
     T = tvo_pose_from_matrix(v);
     {
         double d = T.R[0] * (T.R[4] * T.R[8] - T.R[5] * T.R[7]) - T.R[1] * (T.R[3] * T.R[8] - T.R[5] * T.R[6]) +
@@ -732,6 +737,11 @@ tvo_status tvo_euroc_parse_groundtruth(const char *text, size_t len, tvo_euroc_g
             if (!tvo_parse_double(fb[i], fe[i], &v)) {
                 tvo_set_err(err, err_size, "line %d: bad number in column %d (%s): '%.*s'", it.line, i + 1, names[i],
                             (int)((fe[i] - fb[i]) > 40 ? 40 : (fe[i] - fb[i])), fb[i]);
+                return TVO_ERR_FORMAT;
+            }
+            if (i < 4 && !(fabs(v) <= TVO_EUROC_MAX_COORD)) {
+                tvo_set_err(err, err_size, "line %d: position %s = %g m beyond +-%g m", it.line, names[i], v,
+                            TVO_EUROC_MAX_COORD);
                 return TVO_ERR_FORMAT;
             }
             if (i < 4)

@@ -37,6 +37,11 @@ extern "C" {
 /* Longest accepted frame file name, bytes including the terminator. */
 #define TVO_EUROC_MAX_NAME 256
 
+/* Largest accepted |coordinate| of a ground-truth position or of the T_BS translation, metres. Larger
+ * (finite) values are refused with TVO_ERR_FORMAT: interpolating or composing poses near DBL_MAX
+ * overflowed to infinite poses. */
+#define TVO_EUROC_MAX_COORD 1e9
+
 typedef struct tvo_euroc_frame {
     int64_t t_ns;                     /* timestamp, nanoseconds */
     char file[TVO_EUROC_MAX_NAME];    /* file name inside <cam>/data/ (no '/' or '\\', not "." or "..") */
@@ -110,7 +115,8 @@ tvo_status tvo_euroc_load_groundtruth_file(tvo_euroc *seq, const char *path, cha
 /* A camera sensor.yaml (the subset of YAML that ASL/Kalibr files use: "key: value" lines, one level of
  * nested mappings, flow sequences "[a, b, ...]" that may span lines, '#' comments, "%YAML" directives).
  * Required: intrinsics [fu, fv, cu, cv], resolution [w, h], T_BS with data of 16 numbers (rows/cols
- * 4 if given, last row 0 0 0 1, a rotation block orthonormal to 1e-3). distortion_model:
+ * 4 if given, last row 0 0 0 1, a rotation block orthonormal to 1e-3, a translation within
+ * +-TVO_EUROC_MAX_COORD). distortion_model:
  * radial-tangential (alias radtan, plumb_bob; 4 or 5 coefficients k1 k2 p1 p2 [k3]), equidistant
  * (alias fisheye, equi; 4 coefficients) or none; absent with coefficients present means
  * radial-tangential; absent without coefficients means none. camera_model must be pinhole if given.
@@ -127,8 +133,8 @@ tvo_status tvo_euroc_parse_frames_csv(const char *text, size_t len, tvo_euroc_fr
 
 /* A ground-truth table: fields separated by ',' and/or blanks; the first 8 fields t_ns px py pz qw qx
  * qy qz are required (t an integer number of ns, optionally with a fractional part that is rounded),
- * further fields ignored. Quaternions must have norm 1 +- 0.01 (they are normalised). Timestamps must
- * be strictly increasing. frames == NULL / capacity semantics as tvo_euroc_parse_frames_csv. */
+ * further fields ignored. Positions within +-TVO_EUROC_MAX_COORD. Quaternions must have norm 1 +- 0.01
+ * (they are normalised). Timestamps must be strictly increasing. frames == NULL / capacity semantics as tvo_euroc_parse_frames_csv. */
 tvo_status tvo_euroc_parse_groundtruth(const char *text, size_t len, tvo_euroc_gt_row *rows, int32_t capacity,
                                        int32_t *count, char *err, size_t err_size);
 
