@@ -1,5 +1,6 @@
 /* tinyvo: pinhole camera models with radial-tangential or equidistant distortion (see camera.h). */
 #include "tinyvo/camera.h"
+#include "tinyvo/dmath.h"
 
 #include <float.h>
 #include <math.h>
@@ -135,7 +136,7 @@ static void tvo_equi_distort(const double *k, double x, double y, double *xd, do
     double s = 1.0;
     if (r > 1e-8) {
         double thd;
-        tvo_equi_theta(k, atan(r), &thd, NULL);
+        tvo_equi_theta(k, tvo_dm_atan(r), &thd, NULL);
         s = thd / r;
     }
     *xd = x * s;
@@ -181,7 +182,7 @@ static tvo_status tvo_equi_undistort(const double *k, double xd, double yd, doub
     }
     if (!(err <= TVO_CAMERA_UNDISTORT_TOL) || !(dg > 0.0) || !(th < TVO_HALF_PI))
         return TVO_ERR_NO_CONVERGENCE;
-    r = tan(th);
+    r = tvo_dm_tan(th);
     if (!tvo_finite(r))
         return TVO_ERR_NO_CONVERGENCE;
     *xo = xd * (r / thd);

@@ -1,6 +1,7 @@
 /* Small dense linear algebra for the geometry: 3x3 helpers, 3x3 SVD (one-sided Jacobi), symmetric
  * Jacobi eigen-decomposition, Gaussian elimination and Sturm-sequence polynomial root finding. */
 #include "tinyvo/linalg.h"
+#include "tinyvo/dmath.h"
 
 #include <math.h>
 #include <string.h>
@@ -69,8 +70,8 @@ void tvo_la_so3_exp(const double w[3], double R[9])
         b = 0.5 - th2 / 24.0;
     } else {
         double th = sqrt(th2);
-        a = sin(th) / th;
-        b = (1.0 - cos(th)) / th2;
+        a = tvo_dm_sin(th) / th;
+        b = (1.0 - tvo_dm_cos(th)) / th2;
     }
     /* R = I + a [w] + b [w]^2, [w]^2 = w w^T - th2 I */
     R[0] = 1.0 + b * (w[0] * w[0] - th2);
@@ -93,7 +94,7 @@ double tvo_la_rot_angle(const double R[9])
         c = 1.0;
     if (c < -1.0)
         c = -1.0;
-    return atan2(s, c);
+    return tvo_dm_atan2(s, c);
 }
 
 double tvo_la_rot_dist(const double Ra[9], const double Rb[9])

@@ -2,6 +2,7 @@
  * model for low parallax, homography model selection for dominant planes, LM refinement on the
  * (R, unit t) manifold and cheirality-based decomposition. See tinyvo/relpose.h. */
 #include "tinyvo/relpose.h"
+#include "tinyvo/dmath.h"
 #include "tinyvo/arena.h"
 #include "tinyvo/linalg.h"
 
@@ -76,11 +77,13 @@ static int32_t ransac_needed(double confidence, int32_t inliers, int32_t n, int 
     double w = (double)inliers / (double)n;
     if (w >= 1.0)
         return 1;
-    double ws = pow(w, (double)s);
-    double denom = log1p(-ws);
+    double ws = w; /* w^s by multiplication: no libm pow (determinism across targets) */
+    for (int k = 1; k < s; ++k)
+        ws *= w;
+    double denom = tvo_dm_log1p(-ws);
     if (!(denom < 0.0))
         return max_iters;
-    double need = ceil(log1p(-confidence) / denom);
+    double need = ceil(tvo_dm_log1p(-confidence) / denom);
     if (!(need < (double)max_iters))
         return max_iters;
     return need < 1.0 ? 1 : (int32_t)need;
@@ -223,7 +226,7 @@ static double sampson_cost_pose(const double R[9], const double t[3], const tvo_
     essential_from_pose(R, t, E);
     for (int32_t i = 0; i < n; ++i)
         if (mask[i])
-            c += log1p(sampson2(E, &x1[i], &x2[i]) / c2);
+            c += tvo_dm_log1p(sampson2(E, &x1[i], &x2[i]) / c2);
     return c;
 }
 
@@ -534,8 +537,8 @@ static int homography_dlt(const tvo_point2d *x1, const tvo_point2d *x2, int32_t 
     c1x /= m; c1y /= m; c2x /= m; c2y /= m;
     for (int32_t i = 0; i < n; ++i)
         if (mask[i]) {
-            s1 += hypot(x1[i].x - c1x, x1[i].y - c1y);
-            s2 += hypot(x2[i].x - c2x, x2[i].y - c2y);
+            s1 += tvo_dm_hypot(x1[i].x - c1x, x1[i].y - c1y);
+            s2 += tvo_dm_hypot(x2[i].x - c2x, x2[i].y - c2y);
         }
     if (!(s1 > 1e-12) || !(s2 > 1e-12))
         return 0;
@@ -652,7 +655,7 @@ static int32_t good_count(const double R[9], const double t[3], const tvo_point2
 static int poses_differ(const double Ra[9], const double ta[3], const double Rb[9], const double tb[3])
 {
     double c = dot3(ta, tb);
-    return tvo_la_rot_dist(Ra, Rb) > 0.5 * RP_PI / 180.0 || c < cos(2.0 * RP_PI / 180.0);
+    return tvo_la_rot_dist(Ra, Rb) > 0.5 * RP_PI / 180.0 || c < tvo_dm_cos(2.0 * RP_PI / 180.0);
 }
 
 /* ---- median --------------------------------------------------------------------------------- */
@@ -926,7 +929,7 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
         bearing(&x2[i], f2);
         tvo_la_mat3_vec(Rrot, f1, u);
         tvo_la_cross(u, f2, c);
-        buf[m++] = atan2(sqrt(dot3(c, c)), dot3(u, f2));
+        buf[m++] = tvo_dm_atan2(sqrt(dot3(c, c)), dot3(u, f2));
     }
     double parallax = m > 0 ? select_kth(buf, m, m / 2) * (180.0 / RP_PI) : 0.0;
     out->parallax_deg = parallax;

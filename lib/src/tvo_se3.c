@@ -1,5 +1,6 @@
 /* tinyvo: SE(3) / SO(3) helpers (see se3.h). */
 #include "tinyvo/se3.h"
+#include "tinyvo/dmath.h"
 
 #include <math.h>
 
@@ -228,8 +229,8 @@ void tvo_rotvec_to_rot(const double v[3], double R[9])
         a = 1.0 - th2 / 6.0;
         b = 0.5 - th2 / 24.0;
     } else {
-        const double h = sin(0.5 * th) / (0.5 * th);
-        a = sin(th) / th;
+        const double h = tvo_dm_sin(0.5 * th) / (0.5 * th);
+        a = tvo_dm_sin(th) / th;
         b = 0.5 * h * h; /* (1 - cos th) / th^2 without cancellation */
     }
     K[0] = 0.0;
@@ -255,7 +256,7 @@ void tvo_rot_to_rotvec(const double R[9], double v[3])
         v[0] = v[1] = v[2] = 0.0;
         return;
     }
-    f = 2.0 * atan2(s, q[0]) / s;
+    f = 2.0 * tvo_dm_atan2(s, q[0]) / s;
     v[0] = f * q[1];
     v[1] = f * q[2];
     v[2] = f * q[3];
@@ -265,7 +266,7 @@ double tvo_rot_angle(const double R[9])
 {
     double q[4];
     tvo_rot_to_quat(R, q);
-    return 2.0 * atan2(sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3]), fabs(q[0]));
+    return 2.0 * tvo_dm_atan2(sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3]), fabs(q[0]));
 }
 
 double tvo_rot_distance(const double A[9], const double B[9])
@@ -286,7 +287,7 @@ double tvo_translation_angle(const double a[3], const double b[3])
     c[1] = a[2] * b[0] - a[0] * b[2];
     c[2] = a[0] * b[1] - a[1] * b[0];
     d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    return atan2(sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]), d);
+    return tvo_dm_atan2(sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]), d);
 }
 
 double tvo_rot_orthogonality_error(const double R[9])

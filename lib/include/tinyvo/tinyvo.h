@@ -11,6 +11,7 @@
 #include "tinyvo/types.h"
 #include "tinyvo/image.h"
 #include "tinyvo/arena.h"
+#include "tinyvo/dmath.h"
 #include "tinyvo/pyramid.h"
 #include "tinyvo/corners.h"
 #include "tinyvo/lk.h"
