@@ -5,6 +5,7 @@
 #include <math.h>
 
 #include "tinyvo/vo.h"
+#include "tvo_room.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -13,71 +14,10 @@
 #define H 240
 #define FOCAL 250.0
 
-/* ---- a tiny ray caster: camera inside a box room, every wall textured with value noise ---------- */
-
-static double hash2(int32_t x, int32_t y, uint32_t seed)
-{
-    uint32_t h = (uint32_t)x * 374761393u + (uint32_t)y * 668265263u + seed * 2246822519u;
-    h = (h ^ (h >> 13)) * 1274126177u;
-    h ^= h >> 16;
-    return (double)(h & 0xffffu) / 65535.0;
-}
-
-static double value_noise(double u, double v, uint32_t seed)
-{
-    const double fu = floor(u), fv = floor(v);
-    const int32_t iu = (int32_t)fu, iv = (int32_t)fv;
-    const double a = u - fu, b = v - fv;
-    const double sa = a * a * (3 - 2 * a), sb = b * b * (3 - 2 * b);
-    const double h00 = hash2(iu, iv, seed), h10 = hash2(iu + 1, iv, seed);
-    const double h01 = hash2(iu, iv + 1, seed), h11 = hash2(iu + 1, iv + 1, seed);
-    return (h00 * (1 - sa) + h10 * sa) * (1 - sb) + (h01 * (1 - sa) + h11 * sa) * sb;
-}
-
-static double texture(double u, double v, uint32_t wall)
-{
-    double s = 0.0, amp = 0.5, freq = 3.0;
-    for (int o = 0; o < 4; ++o) {
-        s += amp * value_noise(u * freq, v * freq, wall * 17u + (uint32_t)o);
-        amp *= 0.5;
-        freq *= 2.0;
-    }
-    return s;
-}
-
-/* Room: x in [-3, 3], y in [-1.5, 1.5], z in [-2, 6]. */
+/* the textured box room of test/common/tvo_room.h */
 static void render(const tvo_pose *T_w_c, uint8_t *img)
 {
-    static const double lo[3] = { -3.0, -1.5, -2.0 }, hi[3] = { 3.0, 1.5, 6.0 };
-    for (int y = 0; y < H; ++y) {
-        for (int x = 0; x < W; ++x) {
-            const double dc[3] = { (x - (W - 1) / 2.0) / FOCAL, (y - (H - 1) / 2.0) / FOCAL, 1.0 };
-            double d[3], best = 1e30, u = 0, v = 0;
-            uint32_t wall = 0;
-            for (int i = 0; i < 3; ++i)
-                d[i] = T_w_c->R[3 * i] * dc[0] + T_w_c->R[3 * i + 1] * dc[1] + T_w_c->R[3 * i + 2] * dc[2];
-            for (int ax = 0; ax < 3; ++ax) {
-                for (int side = 0; side < 2; ++side) {
-                    const double plane = side ? hi[ax] : lo[ax];
-                    double tt;
-                    if (fabs(d[ax]) < 1e-12)
-                        continue;
-                    tt = (plane - T_w_c->t[ax]) / d[ax];
-                    if (tt > 0 && tt < best) {
-                        const int a1 = (ax + 1) % 3, a2 = (ax + 2) % 3;
-                        best = tt;
-                        u = T_w_c->t[a1] + tt * d[a1];
-                        v = T_w_c->t[a2] + tt * d[a2];
-                        wall = (uint32_t)(ax * 2 + side);
-                    }
-                }
-            }
-            {
-                const double g = 128.0 + 420.0 * (texture(u, v, wall) - 0.47);
-                img[y * W + x] = (uint8_t)(g < 0.0 ? 0.0 : (g > 255.0 ? 255.0 : g));
-            }
-        }
-    }
+    tvo_room_render(T_w_c, W, H, FOCAL, img);
 }
 
 static tvo_camera test_camera(void)
