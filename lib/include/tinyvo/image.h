@@ -2,8 +2,9 @@
  *
  * A view does not own its pixels. width, height and stride are const: a view is made once with
  * tvo_image_make() (or an initialiser) and its geometry never changes afterwards. Pixel (x, y) is
- * data[y * stride + x]. Valid views have 1 <= width, height <= TVO_MAX_IMAGE_DIM, stride >= width
- * and data != NULL; tvo_image_check() tells. */
+ * data[y * stride + x]. Valid views have 1 <= width, height <= TVO_MAX_IMAGE_DIM,
+ * width <= stride <= TVO_IMAGE_MAX_STRIDE, (height - 1) * stride + width <= PTRDIFF_MAX (the view's
+ * extent fits the address space; matters on 32-bit targets) and data != NULL; tvo_image_check() tells. */
 #ifndef TINYVO_IMAGE_H
 #define TINYVO_IMAGE_H
 
@@ -12,6 +13,9 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* Largest accepted stride in bytes: keeps pixel offsets like 3 * stride inside int32. */
+#define TVO_IMAGE_MAX_STRIDE (INT32_MAX / 4)
 
 typedef struct tvo_image {
     const int32_t width;   /* pixels */
