@@ -4,6 +4,9 @@
  * input ran; a harness whose invariant breaks aborts (and a sanitizer reports its own errors).
  * Usage: fuzz_<name> PATH... */
 #define _POSIX_C_SOURCE 200809L
+/* 64-bit off_t/ino_t on 32-bit targets: without it readdir() fails with EOVERFLOW on ext4 (64-bit
+ * directory offsets), e.g. armhf under qemu-arm on a 64-bit host, and no corpus file is found. */
+#define _FILE_OFFSET_BITS 64
 #include <dirent.h>
 #include <stdint.h>
 #include <stdio.h>
