@@ -2,11 +2,16 @@
 # Cross builds for ARM Linux, unit tests run under qemu-user:
 #   tools/run-cross.sh [aarch64-linux-gnu] [arm-linux-gnueabihf]      (default: both)
 # For each target: configures build/<triple> with cmake/toolchains/<triple>.cmake (core library,
-# V4L2 port, unit tests; the PNG port and examples are off because libspng is not installed for
-# the target), builds it, and runs ctest: CMAKE_CROSSCOMPILING_EMULATOR makes ctest start every
-# test under qemu-aarch64 / qemu-arm -L /usr/<triple>.
+# PNG + EuRoC port, V4L2 port, unit and port tests incl. test_determinism; examples and benchmarks
+# off), builds it, and runs ctest: CMAKE_CROSSCOMPILING_EMULATOR makes ctest start every test under
+# qemu-aarch64 / qemu-arm -L /usr/<triple>.
 # Installs what it needs when run as root (apt-get update first): the Debian cross compilers,
-# qemu-user, and cmocka for the target through Debian multiarch (libcmocka-dev:arm64/armhf).
+# qemu-user, cmocka for the target through Debian multiarch (libcmocka-dev:arm64/armhf), and the
+# target's libspng runtime (libspng0:arm64/armhf). Not libspng-dev:<arch>: it pulls zlib1g-dev and
+# libc6-dev for the target, whose Multi-Arch: same versions must equal the host's exactly (linux-libc-dev,
+# libssl3), which a host with newer security updates than the mirror's arm lists cannot satisfy. The
+# header comes from the host's libspng-dev (identical for every architecture) and the library is linked
+# as /usr/lib/<triple>/libspng.so.0.
 # Environment: TVO_WERROR=OFF to let warnings pass (default ON, as in CI); JOBS (default 2).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -26,11 +31,12 @@ debarch() {
 installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
 
 need=()
-for p in cmake ninja-build qemu-user; do installed "$p" || need+=("$p"); done
+for p in cmake ninja-build qemu-user libspng-dev; do installed "$p" || need+=("$p"); done
 for t in "${TARGETS[@]}"; do
   a=$(debarch "$t")
   installed "gcc-$t" || need+=("gcc-$t")
   installed "libcmocka-dev:$a" || need+=("libcmocka-dev:$a")
+  installed "libspng0:$a" || need+=("libspng0:$a")
 done
 if [ ${#need[@]} -gt 0 ]; then
   if [ "$(id -u)" -ne 0 ]; then
@@ -53,7 +59,8 @@ for t in "${TARGETS[@]}"; do
   echo "== $t: build"
   cmake -S . -B "build/$t" -G Ninja --toolchain "cmake/toolchains/$t.cmake" \
         -DCMAKE_BUILD_TYPE=Release -DTVO_WERROR="${TVO_WERROR:-ON}" \
-        -DTVO_BUILD_PORT=OFF -DTVO_BUILD_EXAMPLES=OFF -DTVO_BUILD_BENCH=OFF >/dev/null
+        -DTVO_BUILD_PORT=ON -DSPNG_INCLUDE_DIR=/usr/include -DSPNG_LIBRARY="/usr/lib/$t/libspng.so.0" \
+        -DTVO_BUILD_EXAMPLES=OFF -DTVO_BUILD_BENCH=OFF >/dev/null
   cmake --build "build/$t" -j"$JOBS"
   echo "== $t: unit tests under $(grep -o 'qemu-[a-z0-9]*' "cmake/toolchains/$t.cmake" | head -1)"
   ctest --test-dir "build/$t" -j"$JOBS" --output-on-failure
