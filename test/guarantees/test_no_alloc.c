@@ -232,13 +232,13 @@ static void run_euroc(const char *name, int max_frames)
 static void test_euroc_keyframes(void **state)
 {
     (void)state;
-    run_euroc("V1_01_easy_keyframes", 40);
+    run_euroc("V1_01_easy_keyframes", TVO_G_SLOW_BUILD ? 10 : 40);
 }
 
 static void test_euroc_head(void **state)
 {
     (void)state;
-    run_euroc("V1_01_easy_head", 40);
+    run_euroc("V1_01_easy_head", TVO_G_SLOW_BUILD ? 10 : 40);
 }
 
 int main(void)

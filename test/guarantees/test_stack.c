@@ -161,7 +161,7 @@ static void test_synthetic_752(void **state)
 {
     (void)state;
     if (TVO_G_SLOW_BUILD) {
-        TVO_SKIP("sanitizer or -O0 build: the 320x240 run covers the loose bound");
+        TVO_SKIP("slow build (sanitizer, -O0 or qemu): the 320x240 and widest runs measure");
         return;
     }
     synthetic(752, 480, 460.0);
@@ -185,7 +185,7 @@ static void test_euroc_keyframes(void **state)
     int32_t n;
     (void)state;
     if (TVO_G_SLOW_BUILD) {
-        TVO_SKIP("sanitizer or -O0 build: the 320x240 run covers the loose bound");
+        TVO_SKIP("slow build (sanitizer, -O0 or qemu): the 320x240 and widest runs measure");
         return;
     }
     if (data == NULL) {

@@ -14,8 +14,9 @@
 
 #include "tinyvo/tinyvo.h"
 
-/* 1 in ASan/UBSan or unoptimised builds, which run the VO 10-50x slower: the tests use fewer frames. */
-#if defined(__SANITIZE_ADDRESS__) || !defined(__OPTIMIZE__)
+/* 1 in ASan/UBSan or unoptimised builds and cross builds run under qemu (TVO_G_EMULATED), which run the
+ * VO 10-50x slower: the tests use fewer frames. */
+#if defined(__SANITIZE_ADDRESS__) || !defined(__OPTIMIZE__) || defined(TVO_G_EMULATED)
 #define TVO_G_SLOW_BUILD 1
 #else
 #define TVO_G_SLOW_BUILD 0
