@@ -14,7 +14,11 @@
 #define RP_CHI2_2DOF 5.991
 #define RP_MAX_COORD 1e6
 #define RP_ROT_MAX_ITERS 64
+#define RP_BAIL_STEP 20 /* points between two bail-out tests (msac_cost, homography_score) */
+#define RP_BAIL_Z 3.0    /* bail-out margin in standard deviations */
+#define RP_H_SHARE 0.5   /* a plane must hold this share of the epipolar inliers to matter */
 #define RP_H_RATIO 0.40 /* ORB-SLAM2's homography / (homography + epipolar) score ratio */
+#define RP_H_MIN_ITERS 16 /* homography samples at least */
 
 /* ---- deterministic generator ---------------------------------------------------------------- */
 
@@ -118,23 +122,59 @@ static void essential_from_pose(const double R[9], const double t[3], double E[9
     tvo_la_mat3_mul(S, R, E);
 }
 
-/* MSAC cost of E, with early exit once it exceeds `bound`; *inl gets the inlier count when the
- * pass completed */
+/* Order in which the scoring visits the points: i = k * stride mod n with a prime stride that does
+ * not divide n (so every point is visited once). Trackers emit points grouped by image region; the
+ * stride spreads any prefix of the visit over the whole input, which the bail-out test needs. */
+static int32_t visit_stride(int32_t n)
+{
+    static const int32_t primes[] = {97, 89, 83, 79, 73, 71, 67, 61, 59, 53, 47, 43, 41, 37, 31, 29, 23, 19, 17,
+                                     13, 11, 7, 5, 3, 2};
+    for (size_t k = 0; k < sizeof primes / sizeof primes[0]; ++k)
+        if (primes[k] < n && n % primes[k] != 0)
+            return primes[k];
+    return 1;
+}
+
+/* MSAC cost of E (truncated Sampson error) with two early exits:
+ * - exact: the cost so far exceeds `bound` (the best cost: this E cannot win);
+ * - statistical bail-out (Capel, "An effective bail-out test for RANSAC consensus scoring", BMVC
+ *   2005): every RP_BAIL_STEP points, reject when the inlier count is more than RP_BAIL_Z standard
+ *   deviations below what a model with the best model's inlier ratio `eps` would show. A random
+ *   hypothesis has few inliers and is dropped after ~20 points instead of ~half the data.
+ * Returns INFINITY for a rejected E; *inl gets the inlier count when the pass completed. */
 static double msac_cost(const double E[9], const tvo_point2d *x1, const tvo_point2d *x2, int32_t n,
-                        double thr2, double bound, int32_t *inl)
+                        int32_t stride, double thr2, double bound, double eps, int32_t *inl)
 {
     double cost = 0.0;
-    int32_t cnt = 0;
-    for (int32_t i = 0; i < n; ++i) {
-        double r2 = sampson2(E, &x1[i], &x2[i]);
-        if (r2 < thr2) {
-            cost += r2;
+    int32_t cnt = 0, i = 0, check = RP_BAIL_STEP;
+    const double sd = eps > 0.0 && eps < 1.0 ? RP_BAIL_Z * sqrt(eps * (1.0 - eps)) : 0.0;
+    for (int32_t k = 0; k < n; ++k) {
+        double a0 = x1[i].x, a1 = x1[i].y, b0 = x2[i].x, b1 = x2[i].y;
+        double ex0 = E[0] * a0 + E[1] * a1 + E[2];
+        double ex1 = E[3] * a0 + E[4] * a1 + E[5];
+        double ex2 = E[6] * a0 + E[7] * a1 + E[8];
+        double et0 = E[0] * b0 + E[3] * b1 + E[6];
+        double et1 = E[1] * b0 + E[4] * b1 + E[7];
+        double e = b0 * ex0 + b1 * ex1 + ex2;
+        double d = ex0 * ex0 + ex1 * ex1 + et0 * et0 + et1 * et1;
+        double e2 = e * e;
+        if (e2 < thr2 * d) { /* Sampson e^2 / d < thr2 without dividing for outliers */
+            cost += e2 / d;
             ++cnt;
         } else {
             cost += thr2;
         }
         if (cost > bound)
-            return cost;
+            return INFINITY;
+        if (--check == 0) {
+            check = RP_BAIL_STEP;
+            double m = (double)(k + 1);
+            if (sd > 0.0 && (double)cnt < m * eps - sd * sqrt(m))
+                return INFINITY;
+        }
+        i += stride;
+        if (i >= n)
+            i -= n;
     }
     *inl = cnt;
     return cost;
@@ -215,20 +255,9 @@ static int32_t decompose_essential(const double E[9], const tvo_point2d *x1, con
 }
 
 static double select_kth(double *a, int32_t n, int32_t k);
+static int pose_finite(const double R[9], const double t[3]);
 
 /* ---- refinement: LM on the Sampson error over (R, unit t) ----------------------------------- */
-
-/* robust (Cauchy, scale c2 = c^2) Sampson cost over the mask */
-static double sampson_cost_pose(const double R[9], const double t[3], const tvo_point2d *x1,
-                                const tvo_point2d *x2, int32_t n, const uint8_t *mask, double c2)
-{
-    double E[9], c = 0.0;
-    essential_from_pose(R, t, E);
-    for (int32_t i = 0; i < n; ++i)
-        if (mask[i])
-            c += tvo_dm_log1p(sampson2(E, &x1[i], &x2[i]) / c2);
-    return c;
-}
 
 static void tangent_basis(const double t[3], double b1[3], double b2[3])
 {
@@ -247,78 +276,126 @@ static void tangent_basis(const double t[3], double b1[3], double b2[3])
     tvo_la_cross(t, b1, b2);
 }
 
+/* One pass over the masked points at the pose (R, t): the Gauss-Newton normal equations H dx = -g
+ * of the IRLS-weighted Sampson error (Cauchy loss of scale c2 = c^2) in the 5 parameters (rotation
+ * increment, two tangent directions b1, b2 of t), and the robust cost sum log(1 + r^2 / c2) when
+ * want_cost (else 0). Residual e = t . (R f1 x f2), Sampson r^2 = e^2 / d. */
+static double lm_pass(const double R[9], const double t[3], const double b1[3], const double b2[3],
+                      const tvo_point2d *x1, const tvo_point2d *x2, int32_t n, const uint8_t *mask, double c2,
+                      int want_cost, double H[25], double g[5])
+{
+    double cost = 0.0;
+    for (int p = 0; p < 25; ++p)
+        H[p] = 0.0;
+    for (int p = 0; p < 5; ++p)
+        g[p] = 0.0;
+    for (int32_t i = 0; i < n; ++i) {
+        if (!mask[i])
+            continue;
+        double f1[3] = {x1[i].x, x1[i].y, 1.0}, f2[3] = {x2[i].x, x2[i].y, 1.0}, u[3];
+        tvo_la_mat3_vec(R, f1, u);
+        double c[3], f2t[3], gw[3], ex[3], et[3];
+        tvo_la_cross(u, f2, c); /* e = t . (u x f2) */
+        double e = dot3(t, c);
+        tvo_la_cross(f2, t, f2t);
+        tvo_la_cross(u, f2t, gw);     /* de/dw */
+        tvo_la_cross(t, u, ex);       /* E f1 */
+        tvo_la_mat3_tvec(R, f2t, et); /* E^T f2 */
+        double d = ex[0] * ex[0] + ex[1] * ex[1] + et[0] * et[0] + et[1] * et[1];
+        if (!(d > 1e-300))
+            continue;
+        double e2 = e * e;
+        if (want_cost)
+            cost += tvo_dm_log1p(e2 / (d * c2));
+        double J[5] = {gw[0], gw[1], gw[2], dot3(b1, c), dot3(b2, c)};
+        double wgt = 1.0 / (d + e2 / c2); /* IRLS weight of the Cauchy loss on r = e / sqrt(d) */
+        for (int p = 0; p < 5; ++p) {
+            double wj = wgt * J[p];
+            g[p] += wj * e;
+            for (int q = p; q < 5; ++q)
+                H[5 * p + q] += wj * J[q];
+        }
+    }
+    for (int p = 0; p < 5; ++p)
+        for (int q = 0; q < p; ++q)
+            H[5 * p + q] = H[5 * q + p];
+    return cost;
+}
+
+/* (R, t) moved by dx = (rotation increment, tangent steps along b1, b2); 0 when not finite */
+static int apply_step(const double R[9], const double t[3], const double b1[3], const double b2[3],
+                      const double dx[5], double Rn[9], double tn[3])
+{
+    double dR[9];
+    tvo_la_so3_exp(dx, dR);
+    tvo_la_mat3_mul(dR, R, Rn);
+    for (int k = 0; k < 3; ++k)
+        tn[k] = t[k] + dx[3] * b1[k] + dx[4] * b2[k];
+    double nt = sqrt(dot3(tn, tn));
+    if (!(nt > 0.0) || !isfinite(nt))
+        return 0;
+    tn[0] /= nt;
+    tn[1] /= nt;
+    tn[2] /= nt;
+    return 1;
+}
+
+static int solve_damped(const double H[25], const double g[5], double lambda, double dx[5])
+{
+    double A[25], rhs[5];
+    memcpy(A, H, sizeof A);
+    for (int p = 0; p < 5; ++p) {
+        A[6 * p] += lambda * (H[6 * p] > 1e-12 ? H[6 * p] : 1e-12);
+        rhs[p] = -g[p];
+    }
+    return tvo_la_solve(A, rhs, 5, dx) == TVO_OK;
+}
+
+/* Levenberg-Marquardt on the robust Sampson cost over the masked points. One pass per iteration:
+ * the pass at a trial pose gives both its cost (accept / reject) and, when accepted, the normal
+ * equations of the next step. */
 static void refine_pose(double R[9], double t[3], const tvo_point2d *x1, const tvo_point2d *x2,
                         int32_t n, const uint8_t *mask, int iters, double c2)
 {
-    double cost = sampson_cost_pose(R, t, x1, x2, n, mask, c2);
+    double H[25], g[5], b1[3], b2[3];
+    tangent_basis(t, b1, b2);
+    double cost = lm_pass(R, t, b1, b2, x1, x2, n, mask, c2, 1, H, g);
     double lambda = 1e-4;
-    for (int it = 0; it < iters; ++it) {
-        double H[25] = {0}, g[5] = {0}, b1[3], b2[3];
-        tangent_basis(t, b1, b2);
-        for (int32_t i = 0; i < n; ++i) {
-            if (!mask[i])
-                continue;
-            double f1[3] = {x1[i].x, x1[i].y, 1.0}, f2[3] = {x2[i].x, x2[i].y, 1.0}, u[3];
-            tvo_la_mat3_vec(R, f1, u);
-            double c[3], f2t[3], gw[3], ex[3], et[3];
-            tvo_la_cross(u, f2, c);         /* e = t . (u x f2) */
-            double e = dot3(t, c);
-            tvo_la_cross(f2, t, f2t);
-            tvo_la_cross(u, f2t, gw);       /* de/dw */
-            tvo_la_cross(t, u, ex);         /* E f1 */
-            tvo_la_mat3_tvec(R, f2t, et);   /* E^T f2 */
-            double d = ex[0] * ex[0] + ex[1] * ex[1] + et[0] * et[0] + et[1] * et[1];
-            if (!(d > 1e-300))
-                continue;
-            double J[5] = {gw[0], gw[1], gw[2], dot3(b1, c), dot3(b2, c)};
-            double wgt = 1.0 / (d + e * e / c2); /* IRLS weight of the Cauchy loss */
-            for (int p = 0; p < 5; ++p) {
-                g[p] += wgt * J[p] * e;
-                for (int q = p; q < 5; ++q)
-                    H[5 * p + q] += wgt * J[p] * J[q];
-            }
-        }
-        for (int p = 0; p < 5; ++p)
-            for (int q = 0; q < p; ++q)
-                H[5 * p + q] = H[5 * q + p];
-        int improved = 0;
-        for (int attempt = 0; attempt < 6 && !improved; ++attempt) {
-            double A[25], rhs[5], dx[5];
-            memcpy(A, H, sizeof A);
-            for (int p = 0; p < 5; ++p) {
-                A[6 * p] += lambda * (H[6 * p] > 1e-12 ? H[6 * p] : 1e-12);
-                rhs[p] = -g[p];
-            }
-            if (tvo_la_solve(A, rhs, 5, dx) != TVO_OK)
-                return;
-            double dR[9], Rn[9], tn[3];
-            tvo_la_so3_exp(dx, dR);
-            tvo_la_mat3_mul(dR, R, Rn);
-            for (int k = 0; k < 3; ++k)
-                tn[k] = t[k] + dx[3] * b1[k] + dx[4] * b2[k];
-            double nt = sqrt(dot3(tn, tn));
-            if (!(nt > 0.0) || !isfinite(nt))
-                return;
-            tn[0] /= nt;
-            tn[1] /= nt;
-            tn[2] /= nt;
-            double cn = sampson_cost_pose(Rn, tn, x1, x2, n, mask, c2);
-            if (cn < cost && isfinite(cn)) {
-                double step = sqrt(dot3(dx, dx) + dx[3] * dx[3] + dx[4] * dx[4]);
-                double rel = (cost - cn) / (cost > 1e-300 ? cost : 1e-300);
-                memcpy(R, Rn, sizeof Rn);
-                memcpy(t, tn, sizeof tn);
-                cost = cn;
-                lambda = lambda * 0.1 > 1e-10 ? lambda * 0.1 : 1e-10;
-                improved = 1;
-                if (step < 1e-12 || rel < 1e-10)
-                    it = iters;
-            } else {
-                lambda *= 10.0;
-            }
-        }
-        if (!improved)
+    /* `iters` accepted steps at most; rejected trials (lambda x 10) do not count. Three rejections
+     * in a row end it: the normal equations treat the Sampson denominator as constant, so close to
+     * the optimum their step is not an exact descent direction of the cost, and further damping
+     * only buys changes far below the noise. */
+    for (int it = 0, rejected = 0; it < iters && rejected < 3;) {
+        double dx[5], Rn[9], tn[3], Hn[25], gn[5], nb1[3], nb2[3];
+        if (!solve_damped(H, g, lambda, dx))
             break;
+        /* converged: a step below 1e-10 (radians / unit-vector tangent) changes nothing that
+         * matters, and trial costs at that scale differ only by rounding */
+        if (dot3(dx, dx) + dx[3] * dx[3] + dx[4] * dx[4] < 1e-20)
+            break;
+        if (!apply_step(R, t, b1, b2, dx, Rn, tn))
+            break;
+        tangent_basis(tn, nb1, nb2);
+        double cn = lm_pass(Rn, tn, nb1, nb2, x1, x2, n, mask, c2, 1, Hn, gn);
+        if (cn < cost && isfinite(cn)) {
+            double step = sqrt(dot3(dx, dx) + dx[3] * dx[3] + dx[4] * dx[4]);
+            double rel = (cost - cn) / (cost > 1e-300 ? cost : 1e-300);
+            memcpy(R, Rn, sizeof Rn);
+            memcpy(t, tn, sizeof tn);
+            memcpy(H, Hn, sizeof Hn);
+            memcpy(g, gn, sizeof gn);
+            memcpy(b1, nb1, sizeof nb1);
+            memcpy(b2, nb2, sizeof nb2);
+            cost = cn;
+            lambda = lambda * 0.1 > 1e-10 ? lambda * 0.1 : 1e-10;
+            ++it;
+            rejected = 0;
+            if (step < 1e-10 || (rel < 1e-10 && step < 1e-8))
+                break;
+        } else {
+            lambda *= 10.0;
+            ++rejected;
+        }
     }
     /* keep R exactly orthonormal */
     double Ro[9];
@@ -417,6 +494,64 @@ static int32_t rotation_ransac(const tvo_relpose_config *cfg, const tvo_point2d 
     return cnt;
 }
 
+/* Rotation-only model seeded by the epipolar inliers: with little parallax every point that fits
+ * the rotation also fits the epipolar model (x2 ~ R x1 satisfies x2 . (t x R x1) = 0 for any t), so
+ * a least-squares rotation on the epipolar inliers followed by re-selection of the rotation
+ * inliers (threshold thr2 on the chord between bearings) and refits converges to the rotation
+ * model's consensus set without a separate RANSAC. With real parallax the rotation explains few
+ * points and the parallax test below rejects it anyway. */
+static int32_t rotation_from_inliers(const double E[9], const tvo_point2d *x1, const tvo_point2d *x2, int32_t n,
+                                     double thr2, const uint8_t *mask_e, double R[9], uint8_t *mask)
+{
+    /* seeds: the least-squares rotation of the epipolar inliers (biased by the few outliers that
+     * happen to lie on their epipolar lines), and the two rotations of E's decompositions (one of
+     * them is the rotation itself when the parallax is small); the one with most rotation inliers
+     * starts the refits */
+    double Rb[9], seeds[3][9];
+    int ns = 1;
+    kabsch(x1, x2, n, mask_e, NULL, 0, seeds[0]);
+    {
+        double U[9], sv[3], V[9], UW[9];
+        tvo_la_svd3(E, U, sv, V);
+        if (tvo_la_mat3_det(U) < 0.0)
+            for (int i = 0; i < 9; ++i)
+                U[i] = -U[i];
+        if (tvo_la_mat3_det(V) < 0.0)
+            for (int i = 0; i < 9; ++i)
+                V[i] = -V[i];
+        static const double W[9] = {0, -1, 0, 1, 0, 0, 0, 0, 1};
+        tvo_la_mat3_mul(U, W, UW);
+        tvo_la_mat3_mul_bt(UW, V, seeds[1]);
+        tvo_la_mat3_mul_bt(U, W, UW);
+        tvo_la_mat3_mul_bt(UW, V, seeds[2]);
+        if (pose_finite(seeds[1], sv) && pose_finite(seeds[2], sv))
+            ns = 3;
+    }
+    int32_t cnt = -1;
+    for (int k = 0; k < ns; ++k) {
+        int32_t c = rot_inliers(seeds[k], x1, x2, n, thr2, NULL);
+        if (c > cnt) {
+            cnt = c;
+            memcpy(Rb, seeds[k], sizeof Rb);
+        }
+    }
+    cnt = rot_inliers(Rb, x1, x2, n, thr2, mask);
+    for (int round = 0; round < 3 && cnt >= 2; ++round) {
+        double Rc[9];
+        kabsch(x1, x2, n, mask, NULL, 0, Rc);
+        int32_t c2 = rot_inliers(Rc, x1, x2, n, thr2, NULL);
+        if (c2 < 2)
+            break;
+        memcpy(Rb, Rc, sizeof Rc);
+        int32_t prev = cnt;
+        cnt = rot_inliers(Rb, x1, x2, n, thr2, mask);
+        if (cnt == prev && round > 0)
+            break;
+    }
+    memcpy(R, Rb, sizeof Rb);
+    return cnt;
+}
+
 /* ---- homography ----------------------------------------------------------------------------- */
 
 static int homography_4pt(const tvo_point2d *x1, const tvo_point2d *x2, const int32_t *idx, double H[9])
@@ -464,14 +599,22 @@ static double transfer2(const double H[9], const tvo_point2d *a, const tvo_point
     return u * u + v * v;
 }
 
-/* ORB-SLAM style score of H (both transfer directions, chi-square 2 dof gate) */
+/* ORB-SLAM style score of H (both transfer directions, chi-square 2 dof gate). Without a mask the
+ * points are visited in stride order with two early exits (returning -1): the score cannot reach
+ * `best` any more, or the inlier count is RP_BAIL_Z deviations below a model with inlier ratio eps
+ * (the bail-out test of msac_cost). With a mask every point is scored in index order. */
 static double homography_score(const double H[9], const double Hi[9], const tvo_point2d *x1,
                                const tvo_point2d *x2, int32_t n, double inv_s2, double best, uint8_t *mask,
-                               int32_t *inl)
+                               int32_t *inl, int32_t stride, double eps)
 {
     double score = 0.0, remaining = 2.0 * RP_CHI2_2DOF * (double)n;
-    int32_t cnt = 0;
-    for (int32_t i = 0; i < n; ++i) {
+    int32_t cnt = 0, i = 0, check = RP_BAIL_STEP;
+    if (mask != NULL) {
+        stride = 1;
+        eps = 0.0;
+    }
+    const double sd = eps > 0.0 && eps < 1.0 ? RP_BAIL_Z * sqrt(eps * (1.0 - eps)) : 0.0;
+    for (int32_t k = 0; k < n; ++k) {
         double c1 = transfer2(H, &x1[i], &x2[i]) * inv_s2;
         double c2 = transfer2(Hi, &x2[i], &x1[i]) * inv_s2;
         int in = 1;
@@ -487,8 +630,19 @@ static double homography_score(const double H[9], const double Hi[9], const tvo_
             mask[i] = (uint8_t)in;
         cnt += in;
         remaining -= 2.0 * RP_CHI2_2DOF;
-        if (mask == NULL && score + remaining < best)
-            return -1.0;
+        if (mask == NULL) {
+            if (score + remaining < best)
+                return -1.0;
+            if (--check == 0) {
+                check = RP_BAIL_STEP;
+                double m = (double)(k + 1);
+                if (sd > 0.0 && (double)cnt < m * eps - sd * sqrt(m))
+                    return -1.0;
+            }
+        }
+        i += stride;
+        if (i >= n)
+            i -= n;
     }
     *inl = cnt;
     return score;
@@ -778,15 +932,73 @@ static int collinear(const tvo_point2d *x, int32_t n)
     return lmin <= 1e-12 * tr;
 }
 
-/* epipolar RANSAC; returns the best E's inlier count (0 when no model) */
+/* Any one (R, t) with [t]x R = E up to scale (no cheirality: all four give the same Sampson error) */
+static int pose_any(const double E[9], double R[9], double t[3])
+{
+    double U[9], s[3], V[9];
+    tvo_la_svd3(E, U, s, V);
+    if (tvo_la_mat3_det(U) < 0.0)
+        for (int i = 0; i < 9; ++i)
+            U[i] = -U[i];
+    if (tvo_la_mat3_det(V) < 0.0)
+        for (int i = 0; i < 9; ++i)
+            V[i] = -V[i];
+    static const double W[9] = {0, -1, 0, 1, 0, 0, 0, 0, 1};
+    double UW[9];
+    tvo_la_mat3_mul(U, W, UW);
+    tvo_la_mat3_mul_bt(UW, V, R);
+    t[0] = U[2];
+    t[1] = U[5];
+    t[2] = U[8];
+    return pose_finite(R, t);
+}
+
+/* Local optimisation of a new best hypothesis (LO-RANSAC, Chum, Matas & Kittler 2003): two
+ * rounds of inlier selection and two Gauss-Newton steps of the Cauchy-weighted Sampson error. A model fitted to 5
+ * noisy points under-counts the inliers of the true model, so the adaptive stopping criterion
+ * would run far more iterations than the real inlier ratio needs; the refined model counts them
+ * (and seeds the final refinement better). mask: n bytes of scratch. Returns 0 on failure. */
+static int lo_refine(const double E[9], const tvo_point2d *x1, const tvo_point2d *x2, int32_t n, double thr2,
+                     uint8_t *mask, double Eout[9])
+{
+    double R[9], t[3];
+    if (!pose_any(E, R, t))
+        return 0;
+    /* two rounds: inliers within 2 thresholds (a model fitted to 5 noisy points is often off by
+     * more than the threshold over part of the image), then within the threshold of the improved
+     * model; two Cauchy-weighted Gauss-Newton steps each */
+    essential_from_pose(R, t, Eout);
+    for (int round = 0; round < 2; ++round) {
+        int32_t m = mark_inliers(Eout, x1, x2, n, round == 0 ? 4.0 * thr2 : thr2, mask);
+        if (m < 6)
+            return 0;
+        for (int it = 0; it < 2; ++it) {
+            double H[25], g[5], b1[3], b2[3], dx[5], Rn[9], tn[3];
+            tangent_basis(t, b1, b2);
+            lm_pass(R, t, b1, b2, x1, x2, n, mask, thr2, 0, H, g);
+            if (!solve_damped(H, g, 1e-6, dx) || !apply_step(R, t, b1, b2, dx, Rn, tn))
+                return 0;
+            memcpy(R, Rn, sizeof Rn);
+            memcpy(t, tn, sizeof tn);
+        }
+        essential_from_pose(R, t, Eout);
+    }
+    for (int k = 0; k < 9; ++k)
+        if (!isfinite(Eout[k]))
+            return 0;
+    return 1;
+}
+
+/* epipolar RANSAC; returns the best E's inlier count (0 when no model). mask: n bytes of scratch */
 static int32_t essential_ransac(const tvo_relpose_config *cfg, const tvo_point2d *x1, const tvo_point2d *x2,
-                                int32_t n, double thr2, double Ebest[9], int32_t *iters_out)
+                                int32_t n, double thr2, double Ebest[9], int32_t *iters_out, uint8_t *mask)
 {
     rp_rng rng;
     rng_seed(&rng, cfg->seed);
     int s = cfg->method == TVO_RELPOSE_8PT ? 8 : 5;
-    double best_cost = INFINITY;
+    double best_cost = INFINITY, eps = 0.0;
     int32_t best_inl = 0, need = cfg->max_iters, it;
+    const int32_t stride = visit_stride(n);
     double min_sep2 = 1e-6 * thr2;
     for (it = 0; it < need && it < cfg->max_iters; ++it) {
         int32_t idx[8];
@@ -815,13 +1027,24 @@ static int32_t essential_ransac(const tvo_relpose_config *cfg, const tvo_point2d
             ns = tvo_essential_8pt((const double (*)[2])a, (const double (*)[2])b, 8, Es[0]);
         for (int m = 0; m < ns; ++m) {
             int32_t inl = 0;
-            double c = msac_cost(Es[m], x1, x2, n, thr2, best_cost, &inl);
-            if (c < best_cost) {
-                best_cost = c;
-                best_inl = inl;
-                memcpy(Ebest, Es[m], 9 * sizeof(double));
-                need = ransac_needed(cfg->confidence, best_inl, n, s, cfg->max_iters);
+            double c = msac_cost(Es[m], x1, x2, n, stride, thr2, best_cost, eps, &inl);
+            if (!(c < best_cost))
+                continue;
+            best_cost = c;
+            best_inl = inl;
+            memcpy(Ebest, Es[m], 9 * sizeof(double));
+            double Elo[9];
+            if (best_inl >= 2 * s && lo_refine(Ebest, x1, x2, n, thr2, mask, Elo)) {
+                int32_t inl2 = 0;
+                double c2 = msac_cost(Elo, x1, x2, n, stride, thr2, best_cost, 0.0, &inl2);
+                if (c2 < best_cost) {
+                    best_cost = c2;
+                    best_inl = inl2;
+                    memcpy(Ebest, Elo, sizeof Elo);
+                }
             }
+            eps = (double)best_inl / (double)n;
+            need = ransac_needed(cfg->confidence, best_inl, n, s, cfg->max_iters);
         }
     }
     *iters_out = it;
@@ -836,8 +1059,10 @@ static int32_t essential_ransac(const tvo_relpose_config *cfg, const tvo_point2d
 static int32_t polish(const tvo_relpose_config *cfg, double R[9], double t[3], const tvo_point2d *x1,
                       const tvo_point2d *x2, int32_t n, double thr2, uint8_t *mask, double *buf)
 {
-    double E[9];
-    for (int round = 0; round < 2; ++round) {
+    double E[9], c2_prev = INFINITY;
+    /* two rounds; up to two more while the scale keeps collapsing (near noise-free data: the
+     * Cauchy weights leave the outliers of the 3-threshold band a pull proportional to c2) */
+    for (int round = 0; round < 4; ++round) {
         essential_from_pose(R, t, E);
         int32_t m = 0;
         for (int32_t i = 0; i < n; ++i) {
@@ -854,6 +1079,9 @@ static int32_t polish(const tvo_relpose_config *cfg, double R[9], double t[3], c
             c2 = thr2;
         if (!(c2 > 1e-24))
             c2 = 1e-24;
+        if (round >= 2 && !(c2 < 1e-2 * c2_prev))
+            break;
+        c2_prev = c2;
         refine_pose(R, t, x1, x2, n, mask, cfg->refine_iters, c2);
     }
     essential_from_pose(R, t, E);
@@ -909,7 +1137,7 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
     /* 1. epipolar RANSAC */
     double E[9];
     int32_t iters = 0;
-    int32_t e_inl = essential_ransac(&cfg, x1, x2, n, thr2, E, &iters);
+    int32_t e_inl = essential_ransac(&cfg, x1, x2, n, thr2, E, &iters, mask_c);
     out->iterations = iters;
     if (e_inl > 0)
         mark_inliers(E, x1, x2, n, thr2, mask_e);
@@ -918,7 +1146,8 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
 
     /* 2. rotation-only model and rotation-compensated parallax */
     double Rrot[9];
-    int32_t r_inl = rotation_ransac(&cfg, x1, x2, n, 4.0 * thr2, Rrot, mask_r);
+    int32_t r_inl = e_inl >= 5 ? rotation_from_inliers(E, x1, x2, n, 4.0 * thr2, mask_e, Rrot, mask_r)
+                               : rotation_ransac(&cfg, x1, x2, n, 4.0 * thr2, Rrot, mask_r);
     const uint8_t *pmask = e_inl >= 5 ? mask_e : mask_r;
     int32_t m = 0;
     for (int32_t i = 0; i < n; ++i) {
@@ -964,24 +1193,46 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
         rp_rng rng;
         rng_seed(&rng, cfg.seed ^ 0x486F6DULL);
         double inv_s2 = 1.0 / thr2, Hb[9], best = -1.0;
-        /* a homography can only win when it explains about as many points as the epipolar model:
-         * run as many iterations as a 4-point sample needs at the epipolar inlier ratio */
+        /* A plane matters only when it holds a large share (RP_H_SHARE) of the epipolar inliers:
+         * then either it is the dominant structure, or the epipolar RANSAC itself may have picked the
+         * plane's twin (whose inliers are the plane's points). Its points are epipolar inliers too,
+         * so the 4-point samples are drawn from the epipolar inliers (rejection sampling; the
+         * iteration bound is what a 4-point sample needs at the epipolar inlier ratio, and the
+         * adaptive count uses the plane's share of the epipolar inliers), and hypotheses are
+         * dropped by the bail-out test as soon as they fall clearly below that share. */
         int32_t cap = ransac_needed(cfg.confidence, inl, n, 4, cfg.max_iters);
+        /* all points epipolar inliers gives cap = 1, and one degenerate sample then missed the
+           plane (its twin, returned by the epipolar model, went out unflagged): a floor */
+        if (cap < RP_H_MIN_ITERS)
+            cap = RP_H_MIN_ITERS < cfg.max_iters ? RP_H_MIN_ITERS : cfg.max_iters;
         int32_t need = cap, h_inl = 0;
+        const int32_t stride = visit_stride(n);
+        const double eps_min = RP_H_SHARE * (double)inl / (double)n;
         for (int32_t it = 0; it < need && it < cap; ++it) {
             int32_t idx[4];
             double H[9], Hi[9];
             rng_sample(&rng, n, 4, idx);
+            for (int k = 0; k < 4; ++k) /* move each index to an epipolar inlier (bounded tries) */
+                for (int tries = 0; tries < 32 && !mask_e[idx[k]]; ++tries) {
+                    int32_t v = (int32_t)(((uint64_t)rng_next(&rng) * (uint64_t)n) >> 32);
+                    int dup = 0;
+                    for (int j = 0; j < 4; ++j)
+                        dup |= j != k && idx[j] == v;
+                    if (!dup)
+                        idx[k] = v;
+                }
             if (!homography_4pt(x1, x2, idx, H))
                 continue;
             adjugate3(H, Hi);
             int32_t c = 0;
-            double sc = homography_score(H, Hi, x1, x2, n, inv_s2, best, NULL, &c);
+            double eps = (double)h_inl / (double)n;
+            double sc = homography_score(H, Hi, x1, x2, n, inv_s2, best, NULL, &c, stride,
+                                         eps > eps_min ? eps : eps_min);
             if (sc > best) {
                 best = sc;
                 h_inl = c;
                 memcpy(Hb, H, sizeof H);
-                need = ransac_needed(cfg.confidence, h_inl, n, 4, cap);
+                need = ransac_needed(cfg.confidence, h_inl, inl > 0 ? inl : n, 4, cap);
             }
         }
         if (best > 0.0) {
@@ -989,17 +1240,17 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
             essential_from_pose(R, t, Ecur);
             double se = essential_score(Ecur, x1, x2, n, inv_s2);
             adjugate3(Hb, Hi);
-            homography_score(Hb, Hi, x1, x2, n, inv_s2, -1.0, mask_h, &h_inl);
+            homography_score(Hb, Hi, x1, x2, n, inv_s2, -1.0, mask_h, &h_inl, 1, 0.0);
             double Hr[9];
             if (homography_dlt(x1, x2, n, mask_h, Hr)) {
                 double Hri[9];
                 int32_t c2 = 0;
                 adjugate3(Hr, Hri);
-                double s2 = homography_score(Hr, Hri, x1, x2, n, inv_s2, -1.0, NULL, &c2);
+                double s2 = homography_score(Hr, Hri, x1, x2, n, inv_s2, -1.0, NULL, &c2, 1, 0.0);
                 if (s2 >= best) {
                     best = s2;
                     memcpy(Hb, Hr, sizeof Hr);
-                    homography_score(Hb, Hri, x1, x2, n, inv_s2, -1.0, mask_h, &h_inl);
+                    homography_score(Hb, Hri, x1, x2, n, inv_s2, -1.0, mask_h, &h_inl, 1, 0.0);
                 }
             }
             /* The homography's decompositions are always tried (a plane's twin solution can win
@@ -1007,7 +1258,7 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
              * front of both cameras, or as many when the homography explains the data (ratio). */
             double ratio = best / (best + se);
             int h_wins = ratio > RP_H_RATIO;
-            if (h_inl >= 8) {
+            if (h_inl >= 8 && (double)h_inl >= RP_H_SHARE * (double)inl) {
                 double Rs[16][9], ts[16][3];
                 int nc = decompose_homography(Hb, Rs, ts);
                 int32_t gk[16];

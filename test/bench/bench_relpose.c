@@ -6,12 +6,14 @@
  * 3. accuracy over `trials` seeded scenes: median rotation / translation-direction error and
  *    success rate (rotation < 1 deg and translation < 5 deg), noise-free rotation error, pure
  *    rotation (flag set, error <= 0.1 deg).
- * Single thread; the OpenCV ratio is measured by test/bench/bench_relpose.py in one process. */
+ * Single thread; the OpenCV ratio is measured by test/bench/bench_relpose.py in one process.
+ *   bench_relpose --callgrind   fixed work for instruction counts (see callgrind_mode). */
 #define _POSIX_C_SOURCE 199309L
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 #include "tinyvo/linalg.h"
 #include "tinyvo/relpose.h"
@@ -133,8 +135,42 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* Fixed work for instruction counts (valgrind --tool=callgrind --toggle-collect=...): 1000 minimal
+ * solves on one sample, then tvo_relpose_estimate with the default configuration on the 20 scenes
+ * 5000..5019 of the timing loop (300 points, 30 % outliers, 0.5 px). Divide the collected counts by
+ * 1000 and 20 respectively. */
+static int callgrind_mode(void)
+{
+    static scene sc;
+    double a[5][2], b[5][2], E[10][9];
+    make_scene(&sc, 1, 5, 20.0, 1.0, 0.0, 0.0, 0);
+    for (int i = 0; i < 5; ++i) {
+        a[i][0] = sc.x1[i].x;
+        a[i][1] = sc.x1[i].y;
+        b[i][0] = sc.x2[i].x;
+        b[i][1] = sc.x2[i].y;
+    }
+    int sink = 0;
+    for (int k = 0; k < 1000; ++k)
+        sink += tvo_essential_5pt((const double (*)[2])a, (const double (*)[2])b, E);
+    long iters = 0;
+    for (int k = 0; k < 20; ++k) {
+        tvo_relpose_config cfg;
+        tvo_relpose out;
+        tvo_relpose_config_default(&cfg);
+        cfg.seed = (uint64_t)k;
+        make_scene(&sc, 5000 + (uint64_t)k, 300, 20.0, 1.0, 0.5, 0.3, 0);
+        tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &out, NULL, g_scratch, sizeof g_scratch);
+        iters += out.iterations;
+    }
+    printf("callgrind mode: 1000 minimal solves, 20 RANSAC calls (mean %.1f iterations)\n", iters / 20.0);
+    return sink < 0;
+}
+
 int main(int argc, char **argv)
 {
+    if (argc > 1 && strcmp(argv[1], "--callgrind") == 0)
+        return callgrind_mode();
     int trials = argc > 1 ? atoi(argv[1]) : 1000;
     if (trials < 1 || trials > 100000)
         trials = 1000;
