@@ -46,6 +46,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->max_tracks = 300;
     cfg->min_tracks = 200;
     cfg->min_pose_tracks = 30;
+    cfg->fast_min_threshold = 7; /* as ORB-SLAM's second FAST pass (20 then 7) */
     cfg->pose_threshold_px = 1.0;
     /* rotation-only below 0.15 deg of rotation-compensated parallax: about 4x the noise floor of
        0.3 px tracking noise at f = 460 px; pure rotation measures ~0.005 deg in test_vo */
@@ -63,6 +64,8 @@ static int config_valid(const tvo_vo_config *cfg)
     if (cfg->min_tracks < 0 || cfg->min_tracks > cfg->max_tracks)
         return 0;
     if (cfg->min_pose_tracks < 8 || cfg->min_pose_tracks > cfg->max_tracks)
+        return 0;
+    if (cfg->fast_min_threshold < 0 || cfg->fast_min_threshold > 255)
         return 0;
     if (!(cfg->pose_threshold_px > 0.0) || !isfinite(cfg->pose_threshold_px))
         return 0;
@@ -179,8 +182,9 @@ static void result_clear(tvo_vo_result *res, tvo_vo_state state)
     res->T_prev_cur = tvo_pose_identity();
 }
 
-/* Detect corners on pyramid level 0 of `pyr`, avoiding the n current tracks, and append them. */
-static int32_t redetect(tvo_vo *vo, const tvo_pyramid *pyr)
+/* Detect corners on pyramid level 0 of `pyr` with FAST threshold `threshold`, avoiding the n current
+ * tracks, and append them. */
+static int32_t detect_append(tvo_vo *vo, const tvo_pyramid *pyr, int32_t threshold)
 {
     tvo_image img = tvo_pyramid_level(pyr, 0);
     tvo_detect_config dc = vo->cfg.detect;
@@ -189,6 +193,7 @@ static int32_t redetect(tvo_vo *vo, const tvo_pyramid *pyr)
     if (room <= 0)
         return 0;
     dc.max_corners = room;
+    dc.fast_threshold = threshold;
     st = tvo_detect(&dc, &img, vo->pts, vo->n, vo->corners, room, &got, vo->scratch, vo->scratch_size);
     if (st != TVO_OK && st != TVO_ERR_NO_MEMORY)
         return 0; /* a frame without corners is not an error: tracking just stays low */
@@ -199,6 +204,18 @@ static int32_t redetect(tvo_vo *vo, const tvo_pyramid *pyr)
         vo->pts[vo->n + i].y = vo->corners[i].y;
     }
     vo->n += got;
+    return got;
+}
+
+/* Re-detection: the configured threshold first; on a low-contrast frame (fewer than a quarter of the
+ * corners wanted) a second pass with fast_min_threshold fills the rest. */
+static int32_t redetect(tvo_vo *vo, const tvo_pyramid *pyr)
+{
+    const int32_t wanted = vo->cfg.max_tracks - vo->n;
+    int32_t got = detect_append(vo, pyr, vo->cfg.detect.fast_threshold);
+    if (got < wanted / 4 && vo->cfg.fast_min_threshold > 0 &&
+        vo->cfg.fast_min_threshold < vo->cfg.detect.fast_threshold)
+        got += detect_append(vo, pyr, vo->cfg.fast_min_threshold);
     return got;
 }
 
@@ -339,9 +356,12 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
         rc.threshold = vo->cfg.pose_threshold_px / f;
         st = tvo_relpose_estimate(&rc, vo->x1, vo->x2, m, &rp, vo->mask, vo->scratch, vo->scratch_size);
         if (st == TVO_OK && (rp.flags & TVO_RELPOSE_FLAG_HOMOGRAPHY) &&
-            (rp.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE) && rc.use_homography) {
+            (rp.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE) && !(rp.flags & TVO_RELPOSE_FLAG_AMBIGUOUS) &&
+            rc.use_homography) {
             /* the homography won the model selection but none of its decompositions held up: the
-               epipolar model still may, so ask for it alone before calling the frame lost */
+               epipolar model still may, so ask for it alone before calling the frame lost (not when
+               the plane's twins are both fine: the epipolar model alone would return one of them
+               unflagged, and they are resolved below) */
             rc.use_homography = 0;
             st = tvo_relpose_estimate(&rc, vo->x1, vo->x2, m, &rp, vo->mask, vo->scratch, vo->scratch_size);
         }
@@ -367,9 +387,22 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
         } else {
             /* rp: X_cur = R X_prev + t, i.e. T_cur_prev; report T_prev_cur */
             tvo_pose T_cur_prev;
-            if (ambiguous)
+            if (ambiguous) {
                 res->state = resolve_ambiguous(vo, &rp);
-            else
+                if (res->state == TVO_VO_ROTATION_ONLY) {
+                    /* no recent motion to choose with: the epipolar model alone, which also weighs
+                       the points off the plane, picks one (the frame keeps the AMBIGUOUS flag) */
+                    tvo_relpose re;
+                    rc.use_homography = 0;
+                    if (tvo_relpose_estimate(&rc, vo->x1, vo->x2, m, &re, vo->mask, vo->scratch,
+                                             vo->scratch_size) == TVO_OK &&
+                        !(re.flags & (TVO_RELPOSE_FLAG_LOW_CONFIDENCE | TVO_RELPOSE_FLAG_ROTATION_ONLY))) {
+                        re.flags |= rp.flags & (TVO_RELPOSE_FLAG_AMBIGUOUS | TVO_RELPOSE_FLAG_LOW_CONFIDENCE);
+                        rp = re;
+                        res->state = TVO_VO_OK;
+                    }
+                }
+            } else
                 res->state = (rp.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY) ? TVO_VO_ROTATION_ONLY : TVO_VO_OK;
             memcpy(T_cur_prev.R, rp.R, sizeof(rp.R));
             memcpy(T_cur_prev.t, rp.t, sizeof(rp.t));

@@ -30,11 +30,12 @@ extern "C" {
 typedef enum tvo_vo_state {
     TVO_VO_OK = 0,             /* relative pose with a translation direction (relpose_flags AMBIGUOUS:
                                   one of a plane's twin poses, chosen as the one that continues the
-                                  translation of the last 3 frames within 45 degrees) */
+                                  translation of the last 3 frames within 45 degrees, else the epipolar
+                                  model's choice without the homography: may be the wrong twin when the
+                                  scene is one plane only) */
     TVO_VO_INITIALISING = 1,   /* first frame (or first after a reset): corners detected, identity pose */
     TVO_VO_ROTATION_ONLY = 2,  /* low parallax, or no translation we could trust (too few cheirality-
-                                  consistent inliers; a plane's twin poses that the recent motion does not
-                                  resolve): rotation estimated, translation reported as zero */
+                                  consistent inliers): rotation estimated, translation reported as zero */
     TVO_VO_LOST = 3,           /* too few tracks or no trustworthy model: identity pose, tracker re-initialised */
     TVO_VO_STATE_COUNT = 4
 } tvo_vo_state;
@@ -61,6 +62,9 @@ typedef struct tvo_vo_config {
     int32_t max_tracks;         /* capacity of the track list, >= 16; default 300 */
     int32_t min_tracks;         /* re-detect when fewer tracks survive; default 200 */
     int32_t min_pose_tracks;    /* fewer tracked points than this -> LOST; default 30 */
+    int32_t fast_min_threshold; /* low-contrast fallback: when a detection finds fewer than a quarter of the
+                                   corners wanted, it is repeated with this FAST threshold (if it is lower
+                                   than detect.fast_threshold); [0, 255], 0 disables; default 7 */
     double pose_threshold_px;   /* RANSAC inlier threshold in pixels, converted with the focal length; default 1.0 */
     tvo_clock_fn clock;         /* optional (NULL: no timings) */
     void *clock_user;
