@@ -293,16 +293,21 @@ static double lm_pass(const double R[9], const double t[3], const double b1[3], 
     for (int32_t i = 0; i < n; ++i) {
         if (!mask[i])
             continue;
-        double f1[3] = {x1[i].x, x1[i].y, 1.0}, f2[3] = {x2[i].x, x2[i].y, 1.0}, u[3];
-        tvo_la_mat3_vec(R, f1, u);
-        double c[3], f2t[3], gw[3], ex[3], et[3];
-        tvo_la_cross(u, f2, c); /* e = t . (u x f2) */
-        double e = dot3(t, c);
-        tvo_la_cross(f2, t, f2t);
-        tvo_la_cross(u, f2t, gw);     /* de/dw */
-        tvo_la_cross(t, u, ex);       /* E f1 */
-        tvo_la_mat3_tvec(R, f2t, et); /* E^T f2 */
-        double d = ex[0] * ex[0] + ex[1] * ex[1] + et[0] * et[0] + et[1] * et[1];
+        /* written out (the linalg helpers live in another translation unit and would not be
+         * inlined): u = R f1, c = u x f2, e = t . c, f2t = f2 x t, de/dw = u x f2t,
+         * E f1 = t x u, E^T f2 = R^T f2t (first two components) */
+        const double a0 = x1[i].x, a1 = x1[i].y, q0 = x2[i].x, q1 = x2[i].y;
+        const double u0 = R[0] * a0 + R[1] * a1 + R[2];
+        const double u1 = R[3] * a0 + R[4] * a1 + R[5];
+        const double u2 = R[6] * a0 + R[7] * a1 + R[8];
+        const double c[3] = {u1 - u2 * q1, u2 * q0 - u0, u0 * q1 - u1 * q0};
+        const double e = dot3(t, c);
+        const double f2t0 = q1 * t[2] - t[1], f2t1 = t[0] - q0 * t[2], f2t2 = q0 * t[1] - q1 * t[0];
+        const double gw[3] = {u1 * f2t2 - u2 * f2t1, u2 * f2t0 - u0 * f2t2, u0 * f2t1 - u1 * f2t0};
+        const double ex0 = t[1] * u2 - t[2] * u1, ex1 = t[2] * u0 - t[0] * u2;
+        const double et0 = R[0] * f2t0 + R[3] * f2t1 + R[6] * f2t2;
+        const double et1 = R[1] * f2t0 + R[4] * f2t1 + R[7] * f2t2;
+        double d = ex0 * ex0 + ex1 * ex1 + et0 * et0 + et1 * et1;
         if (!(d > 1e-300))
             continue;
         double e2 = e * e;
