@@ -49,3 +49,53 @@ def test_parse_activations():
     assert train.parse_activations("rz=elu")[5] == "elu"
     with pytest.raises(ValueError):
         train.parse_activations("swish")
+
+
+def test_input_domain_clamp(tvo, tmp_path):
+    """train(input_clip=p): the model clamps each normalised input to its training percentile range
+    (+margin); the int8 input stage maps exactly that range, so a heavy-tailed input (a few huge outliers)
+    no longer coarsens every row's int8 step, and float and int8 agree on out-of-domain inputs too."""
+    rng = np.random.default_rng(1)
+    f, t, seq = train.synthetic_dataset(rng, 600, sequences=("A", "B", "V"))
+    f[::97, 0] *= 60.0  # rare outliers on rx (twisted-pair-like rotations)
+    tr, _ = train.split_rows(seq, ["V"])
+    acts = train.parse_activations("sigmoid")
+    kw = dict(sizes=(16, 8), epochs=3, joint_epochs=1, batch=64, lr=1e-3, seed=2, progress=False)
+    plain = train.train(f[tr], t[tr], acts, **kw)
+    dom = train.train(f[tr], t[tr], acts, input_clip=1.0, input_clip_margin=0.25, **kw)
+    b = dom[3]
+    assert b.clip_lo is not None and (b.clip_lo < b.clip_hi).all()
+    z = plain[3].normalise(f[tr])  # unclamped normalised training inputs (same normalisation)
+    lo, hi = np.percentile(z, [1, 99], axis=0)
+    np.testing.assert_allclose(b.clip_lo, lo - 0.25 * (hi - lo), rtol=1e-5, atol=1e-6)
+    assert z[:, 0].max() > b.clip_hi[0]  # the outliers lie outside the domain ...
+    far = f[:8].copy()
+    far[:, 0] = 1e3
+    edge = f[:8].copy()
+    edge[:, 0] = (b.clip_hi[0] - b.norm_offset[0]) / b.norm_scale[0] + 1.0
+    np.testing.assert_allclose(b.forward(far), b.forward(edge), rtol=0, atol=1e-12)  # ... and are clamped
+    ck = tmp_path / "d.ckpt.npz"
+    quant.save_checkpoint(ck, dom, {"seed": 2})
+    loaded, _ = quant.load_checkpoint(ck)
+    np.testing.assert_array_equal(loaded[3].clip_lo, b.clip_lo)
+    np.testing.assert_allclose(quant.float_run(loaded, far), quant.float_run(dom, far), rtol=1e-6, atol=1e-7)
+    gap, step = {}, {}
+    for name, br in (("plain", plain), ("domain", dom)):
+        model = quant.quantize_model(br, f[tr])
+        q = nnfmt.reference_run(model, f).astype(np.float64)
+        fl = quant.float_run(br, f)
+        gap[name] = np.sqrt(np.mean((q - fl) ** 2, axis=0)) / t.std(axis=0)
+        step[name] = model.branches[3].in_scale / model.branches[3].norm_scale[0]  # int8 step of rx, rad
+        if name == "domain":
+            s_in, zp = model.branches[3].in_scale, model.branches[3].in_zp
+            assert abs(s_in - 2 / 255) < 1e-7  # the domain, equalised to [-1, 1], is the int8 input range
+            assert (-128 - zp) * s_in <= -1 + s_in and (127 - zp) * s_in >= 1 - s_in
+            data = nnfmt.write(model)
+            y, st = CModel(tvo, data).run(np.vstack([f, far]))
+            assert (st == 0).all()
+            assert_bits_equal(y, nnfmt.reference_run(nnfmt.read(data), np.vstack([f, far])))
+            qf = nnfmt.reference_run(model, far).astype(np.float64)
+            assert (np.abs(qf - quant.float_run(dom, far)) / t.std(axis=0)).max() < 0.05
+    # the outliers set the plain model's int8 step of rx; the domain's step is many times finer
+    assert step["domain"] < step["plain"] / 10, step
+    assert gap["domain"].max() < 0.02, gap

@@ -56,10 +56,17 @@ class FloatBranch:
     activation: str
     out_scale: float = 1.0
     out_offset: float = 0.0
+    # optional input domain (normalised units, per input): the model clamps its normalised inputs to
+    # [clip_lo, clip_hi] (train.py --input-clip); the int8 input stage then implements the same clamp
+    clip_lo: np.ndarray = None
+    clip_hi: np.ndarray = None
 
     def normalise(self, features: np.ndarray) -> np.ndarray:
         f = np.asarray(features, np.float32)[:, self.feature_ids]
-        return (f * np.asarray(self.norm_scale, np.float32) + np.asarray(self.norm_offset, np.float32)).astype(np.float64)
+        z = (f * np.asarray(self.norm_scale, np.float32) + np.asarray(self.norm_offset, np.float32)).astype(np.float64)
+        if self.clip_lo is not None:
+            z = np.clip(z, np.asarray(self.clip_lo, np.float64), np.asarray(self.clip_hi, np.float64))
+        return z
 
     def forward_all(self, features: np.ndarray):
         """Normalised inputs, then (pre, post) activations of every layer, float64."""
@@ -122,10 +129,14 @@ def make_lut(act: str, in_scale: float, in_zp: int, out_scale: float, out_zp: in
 def equalise_inputs(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0) -> FloatBranch:
     """The same float function with each normalised input re-scaled so that its calibration range maps
     to [-1, 1]; the first layer absorbs the change (W' = W / a, b' = b - W' c). All inputs then share
-    one int8 scale without wasting resolution on inputs with a narrow range."""
+    one int8 scale without wasting resolution on inputs with a narrow range. The range is the model's
+    input domain (clip_lo/clip_hi) when it has one, else the calibration min/max (or pct percentiles)."""
     z = fb.normalise(calib)
-    lo = np.percentile(z, pct, axis=0) if pct > 0 else z.min(axis=0)
-    hi = np.percentile(z, 100 - pct, axis=0) if pct > 0 else z.max(axis=0)
+    if fb.clip_lo is not None:  # the model's own input domain: map it to [-1, 1] exactly
+        lo, hi = np.asarray(fb.clip_lo, np.float64), np.asarray(fb.clip_hi, np.float64)
+    else:
+        lo = np.percentile(z, pct, axis=0) if pct > 0 else z.min(axis=0)
+        hi = np.percentile(z, 100 - pct, axis=0) if pct > 0 else z.max(axis=0)
     span = np.where(hi - lo > 1e-6, hi - lo, 1.0)
     a = 2.0 / span                   # z' = a z + c
     c = -1.0 - a * lo
@@ -136,7 +147,9 @@ def equalise_inputs(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0) -> Flo
     return FloatBranch(dof=fb.dof, feature_ids=list(fb.feature_ids), norm_scale=ns.astype(np.float32),
                        norm_offset=no.astype(np.float32), weights=[w0, *fb.weights[1:]],
                        biases=[b0, *fb.biases[1:]], activation=fb.activation, out_scale=fb.out_scale,
-                       out_offset=fb.out_offset)
+                       out_offset=fb.out_offset,
+                       clip_lo=None if fb.clip_lo is None else -np.ones(len(ns)),
+                       clip_hi=None if fb.clip_hi is None else np.ones(len(ns)))
 
 
 def _range(v: np.ndarray, pct: float):
@@ -146,11 +159,15 @@ def _range(v: np.ndarray, pct: float):
 
 
 def quantize_branch(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0, equalise: bool = True) -> nnfmt.Branch:
-    """pct: clip calibration ranges at the pct / 100-pct percentiles (0 = min/max)."""
+    """pct: clip calibration ranges at the pct / 100-pct percentiles (0 = min/max). A branch with an
+    input domain (clip_lo/clip_hi) gets it as its int8 input range (equalised to [-1, 1]): the int8
+    input stage's clamp is then the model's own clamp."""
+    if fb.clip_lo is not None and not equalise:
+        raise ValueError("a branch with an input domain is quantised with equalise=True")
     if equalise:
         fb = equalise_inputs(fb, calib, pct)
     trace = fb.forward_all(calib)
-    s_in, zp_in = asym_params(*_range(trace[0], pct))
+    s_in, zp_in = asym_params(*((-1.0, 1.0) if fb.clip_lo is not None else _range(trace[0], pct)))
     br = nnfmt.Branch(dof=fb.dof, feature_ids=list(fb.feature_ids),
                       norm_scale=np.asarray(fb.norm_scale, np.float32),
                       norm_offset=np.asarray(fb.norm_offset, np.float32),
@@ -236,6 +253,9 @@ def save_checkpoint(path, branches: Sequence[FloatBranch], meta: dict) -> None:
             arrays[f"b{i}_b{k}"] = np.asarray(bb, np.float32)
         arrays[f"b{i}_norm_scale"] = np.asarray(b.norm_scale, np.float32)
         arrays[f"b{i}_norm_offset"] = np.asarray(b.norm_offset, np.float32)
+        if b.clip_lo is not None:
+            arrays[f"b{i}_clip_lo"] = np.asarray(b.clip_lo, np.float64)
+            arrays[f"b{i}_clip_hi"] = np.asarray(b.clip_hi, np.float64)
         meta["branches"].append({"dof": int(b.dof), "feature_ids": [int(x) for x in b.feature_ids],
                                  "activation": b.activation, "n_layers": len(b.weights),
                                  "out_scale": float(b.out_scale), "out_offset": float(b.out_offset)})
@@ -256,5 +276,7 @@ def load_checkpoint(path):
             norm_offset=z[f"b{i}_norm_offset"],
             weights=[z[f"b{i}_w{k}"].astype(np.float64) for k in range(m["n_layers"])],
             biases=[z[f"b{i}_b{k}"].astype(np.float64) for k in range(m["n_layers"])],
-            activation=m["activation"], out_scale=m["out_scale"], out_offset=m["out_offset"]))
+            activation=m["activation"], out_scale=m["out_scale"], out_offset=m["out_offset"],
+            clip_lo=z[f"b{i}_clip_lo"] if f"b{i}_clip_lo" in z else None,
+            clip_hi=z[f"b{i}_clip_hi"] if f"b{i}_clip_hi" in z else None))
     return branches, meta

@@ -189,6 +189,9 @@ def main(argv=None) -> int:
     ap.add_argument("--lr", type=float, default=1e-3)
     ap.add_argument("--sizes", default="256,32,32")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--input-clip", type=float, default=0.5,
+                    help="input domain: training [p, 100-p] percentiles + margin (train.train; 0: off)")
+    ap.add_argument("--input-clip-margin", type=float, default=0.25)
     ap.add_argument("--replay", default=None)
     ap.add_argument("--features-dir", default=None,
                     help="tvo_replay features csv per sequence (default: the dataset builder's, next to --dataset)")
@@ -222,7 +225,7 @@ def main(argv=None) -> int:
            "train_rows": int(tr.sum()), "val_rows": int(va.sum()), "const_step_m": const_step,
            "const_step_sequences": prior_names, "const_step_all_training_m": const_all,
            "settings": {"epochs": a.epochs, "joint_epochs": a.joint_epochs, "lr": a.lr, "sizes": list(sizes),
-                        "seed": a.seed}, "models": {}, "sequences": {}, "step_level": {}}
+                        "seed": a.seed, "input_clip": a.input_clip, "input_clip_margin": a.input_clip_margin}, "models": {}, "sequences": {}, "step_level": {}}
 
     # ---- train + export one model per activation -----------------------------------------------
     branches_by_act = {}
@@ -231,11 +234,13 @@ def main(argv=None) -> int:
         nnf = os.path.join(a.out, "models", f"{act}.tvonn")
         meta = {"dataset": os.path.abspath(a.dataset), "val_sequences": va_names, "train_sequences": tr_names,
                 "sizes": list(sizes), "epochs": a.epochs, "joint_epochs": a.joint_epochs, "lr": a.lr,
-                "seed": a.seed, "feature_layout_id": nnfmt.FEAT_LAYOUT_ID}
+                "seed": a.seed, "input_clip": a.input_clip, "input_clip_margin": a.input_clip_margin,
+                "feature_layout_id": nnfmt.FEAT_LAYOUT_ID}
         t0 = time.time()
         if a.retrain or not os.path.isfile(ck):
             br = train.train(f[tr], t[tr], train.parse_activations(act), sizes=sizes, epochs=a.epochs,
-                             joint_epochs=a.joint_epochs, lr=a.lr, seed=a.seed, progress=not a.quiet)
+                             joint_epochs=a.joint_epochs, lr=a.lr, seed=a.seed, progress=not a.quiet,
+                             input_clip=a.input_clip, input_clip_margin=a.input_clip_margin)
             quant.save_checkpoint(ck, br, meta)
         br, meta = quant.load_checkpoint(ck)
         train_s = time.time() - t0

@@ -93,8 +93,15 @@ def synthetic_dataset(rng: np.random.Generator, n: int, sequences=("SYN_A", "SYN
 def train(features: np.ndarray, targets: np.ndarray, activations: Dict[int, str], *,
           sizes=DEFAULT_SIZES, epochs: int = 100, joint_epochs: int = 20, batch: int = 256,
           lr: float = 2e-4, joint_lr: Optional[float] = None, seed: int = 0, feature_ids=None,
-          dofs: Sequence[int] = range(6), progress: bool = True, huber_delta: float = 1.0):
-    """Returns a list of quant.FloatBranch (one per DoF in `dofs`)."""
+          dofs: Sequence[int] = range(6), progress: bool = True, huber_delta: float = 1.0,
+          input_clip: float = 0.0, input_clip_margin: float = 0.25):
+    """Returns a list of quant.FloatBranch (one per DoF in `dofs`).
+
+    input_clip > 0: the model's input domain. Each normalised input is clamped to its training
+    [input_clip, 100 - input_clip] percentile range widened by input_clip_margin of its width on each side
+    (room for faster motion than in training), in training and in the model (FloatBranch.clip_lo/hi).
+    The int8 input stage maps exactly that range to its 256 levels, so rare outliers (a 30 deg
+    twisted-pair rotation among 0.5 deg ones) no longer set the int8 step of every other row."""
     torch = _torch()
     from tqdm import tqdm
     torch.manual_seed(seed)
@@ -106,7 +113,14 @@ def train(features: np.ndarray, targets: np.ndarray, activations: Dict[int, str]
     std = np.where(std > 1e-6, std, 1.0)
     norm_scale = (1.0 / std).astype(np.float32)
     norm_offset = (-mean / std).astype(np.float32)
-    xn = torch.from_numpy((x.astype(np.float32) * norm_scale + norm_offset).astype(np.float32))
+    xn_np = (x.astype(np.float32) * norm_scale + norm_offset).astype(np.float32)
+    clip_lo = clip_hi = None
+    if input_clip > 0:
+        plo, phi = np.percentile(xn_np.astype(np.float64), [input_clip, 100 - input_clip], axis=0)
+        w = np.where(phi - plo > 1e-6, phi - plo, 1.0)  # a constant input (dt of a fixed-rate camera)
+        clip_lo, clip_hi = plo - input_clip_margin * w, phi + input_clip_margin * w
+        xn_np = np.clip(xn_np, clip_lo, clip_hi).astype(np.float32)
+    xn = torch.from_numpy(xn_np)
     t_mean, t_std = targets.mean(axis=0), targets.std(axis=0)
     t_std = np.where(t_std > 1e-9, t_std, 1.0)
     yn = torch.from_numpy(((targets - t_mean) / t_std).astype(np.float32))
@@ -152,7 +166,8 @@ def train(features: np.ndarray, targets: np.ndarray, activations: Dict[int, str]
             dof=d, feature_ids=ids, norm_scale=norm_scale, norm_offset=norm_offset,
             weights=[m.weight.detach().numpy().astype(np.float64) for m in lin],
             biases=[m.bias.detach().numpy().astype(np.float64) for m in lin],
-            activation=activations[d], out_scale=float(t_std[d]), out_offset=float(t_mean[d])))
+            activation=activations[d], out_scale=float(t_std[d]), out_offset=float(t_mean[d]),
+            clip_lo=clip_lo, clip_hi=clip_hi))
     return branches
 
 
@@ -168,6 +183,9 @@ def main(argv=None):
     ap.add_argument("--lr", type=float, default=2e-4)
     ap.add_argument("--sizes", default="256,32,32", help="hidden layer sizes")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--input-clip", type=float, default=0.0,
+                    help="input domain: clamp each input to its training [p, 100-p] percentiles (+margin); 0: off")
+    ap.add_argument("--input-clip-margin", type=float, default=0.25)
     args = ap.parse_args(argv)
     if args.dataset == "synthetic":
         f, t, seq = synthetic_dataset(np.random.default_rng(args.seed), 20000)
@@ -178,11 +196,14 @@ def main(argv=None):
     sizes = tuple(int(s) for s in args.sizes.split(","))
     acts = parse_activations(args.act)
     branches = train(f[tr], t[tr], acts, sizes=sizes, epochs=args.epochs, joint_epochs=args.joint_epochs,
-                     batch=args.batch, lr=args.lr, seed=args.seed)
+                     batch=args.batch, lr=args.lr, seed=args.seed,
+                     input_clip=args.input_clip, input_clip_margin=args.input_clip_margin)
     quant.save_checkpoint(args.out, branches, {
         "tinyvo_tools": __version__, "dataset": args.dataset, "val_sequences": val,
         "train_sequences": sorted(set(seq[tr].tolist())), "sizes": list(sizes), "epochs": args.epochs,
         "joint_epochs": args.joint_epochs, "lr": args.lr, "batch": args.batch, "seed": args.seed,
+        "input_clip": args.input_clip,
+        "input_clip_margin": args.input_clip_margin,
         "feature_layout_id": nnfmt.FEAT_LAYOUT_ID})
     print(f"wrote {args.out}: {len(branches)} branches, trained on {int(tr.sum())} rows")
 
