@@ -19,7 +19,6 @@ struct tvo_vo {
     tvo_point2f *pts;         /* [max_tracks] */
     tvo_point2f *next;        /* [max_tracks] */
     uint8_t *st;              /* [max_tracks] */
-    float *err;               /* [max_tracks] */
     tvo_point2d *x1, *x2;     /* [max_tracks] normalised prev / cur */
     uint8_t *ok1, *ok2, *mask;/* [max_tracks] */
     tvo_corner *corners;      /* [max_tracks] */
@@ -95,7 +94,6 @@ static size_t layout_size(const tvo_vo_config *cfg)
     s = tvo_size_add(s, tvo_size_mul(2, tvo_arena_round(pyr)));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2f))) * 2);
     s = tvo_size_add(s, tvo_arena_round(n) * 4);                        /* st ok1 ok2 mask */
-    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(float))));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))) * 2);
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_corner))));
     s = tvo_size_add(s, tvo_arena_round(scratch_need(cfg)));
@@ -146,7 +144,6 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg, void *mem, size_t
     vo->ok1 = (uint8_t *)tvo_arena_alloc(&a, n);
     vo->ok2 = (uint8_t *)tvo_arena_alloc(&a, n);
     vo->mask = (uint8_t *)tvo_arena_alloc(&a, n);
-    vo->err = (float *)tvo_arena_alloc(&a, n * sizeof(float));
     vo->x1 = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
     vo->x2 = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
     vo->corners = (tvo_corner *)tvo_arena_alloc(&a, n * sizeof(tvo_corner));
@@ -154,7 +151,7 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg, void *mem, size_t
     vo->scratch_size = scratch_need(cfg);
     vo->scratch = tvo_arena_alloc(&a, vo->scratch_size);
     if (vo->pts == NULL || vo->next == NULL || vo->st == NULL || vo->ok1 == NULL || vo->ok2 == NULL ||
-        vo->mask == NULL || vo->err == NULL || vo->x1 == NULL || vo->x2 == NULL || vo->corners == NULL ||
+        vo->mask == NULL || vo->x1 == NULL || vo->x2 == NULL || vo->corners == NULL ||
         vo->scratch == NULL)
         return TVO_ERR_NO_MEMORY;
     *out = vo;
@@ -320,7 +317,7 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
 
     /* 1. track */
     t1 = now_ns(vo);
-    st = tvo_lk_track(&vo->cfg.lk, pp, pc, vo->pts, vo->next, vo->st, vo->err, vo->n, vo->scratch,
+    st = tvo_lk_track(&vo->cfg.lk, pp, pc, vo->pts, vo->next, vo->st, NULL, vo->n, vo->scratch,
                       vo->scratch_size);
     if (st != TVO_OK)
         memset(vo->st, 0, (size_t)vo->n);
