@@ -3,8 +3,9 @@
 1. Synthetic scenes (f = 460, 752x480, 0.5 px noise, 30 % outliers): tinyvo is at least as accurate
    as OpenCV on the same input.
 2. EuRoC V1_01_easy_head cam0 -> cam1 pairs (exactly known T_cam1_cam0 from the sensor.yaml files),
-   correspondences from OpenCV (goodFeaturesToTrack 500, LK 21x21 3 levels, undistortPoints) until
-   the team's front end lands: median rotation / translation-direction errors of both.
+   the issue's reference correspondences (OpenCV goodFeaturesToTrack 500, LK 21x21 3 levels,
+   undistortPoints) and a forward-backward-checked variant: median rotation / translation-direction
+   errors of both pipelines, rotation-only results, share of tracks consistent with the true pose.
 3. V1_01_easy_keyframes consecutive pairs (ground truth + T_BS of cam0): failures (> 10 deg).
 The figures are printed (pytest -s) and the module's helpers are reused by test/bench/bench_relpose.py.
 """
@@ -154,11 +155,16 @@ def read_frames(cam_dir):
     return rows
 
 
-def track_opencv(img1, img2, K1, D1, K2, D2):
-    """goodFeaturesToTrack 500 + LK 21x21 3 levels + undistortPoints -> normalised x1, x2."""
+def track_opencv(img1, img2, K1, D1, K2, D2, fb_px=None, max_level=2):
+    """goodFeaturesToTrack 500 + LK 21x21 (max_level + 1 levels) + undistortPoints -> normalised
+    x1, x2; with fb_px, tracks whose backward track misses the start by more than fb_px are dropped
+    (tinyvo's LK matches OpenCV's to 0.00000 px, so this stands for tinyvo's fb-checked front end)."""
     p1 = cv2.goodFeaturesToTrack(img1, 500, 0.01, 10)
-    p2, st, _ = cv2.calcOpticalFlowPyrLK(img1, img2, p1, None, winSize=(21, 21), maxLevel=2)
+    p2, st, _ = cv2.calcOpticalFlowPyrLK(img1, img2, p1, None, winSize=(21, 21), maxLevel=max_level)
     ok = st.ravel() == 1
+    if fb_px is not None:
+        pb, st2, _ = cv2.calcOpticalFlowPyrLK(img2, img1, p2, None, winSize=(21, 21), maxLevel=max_level)
+        ok &= (st2.ravel() == 1) & (np.linalg.norm((pb - p1).reshape(-1, 2), axis=1) < fb_px)
     p1, p2 = p1[ok], p2[ok]
     n1 = cv2.undistortPoints(p1, K1, D1).reshape(-1, 2)
     n2 = cv2.undistortPoints(p2, K2, D2).reshape(-1, 2)
@@ -188,8 +194,23 @@ def gt_pose(ts_arr, data, ts, tol_ns=2_000_000):
     return T
 
 
-def euroc_stereo_errors(tvo_rp, data_dir):
-    """Per-pair (rot, t) errors of tinyvo and OpenCV on the V1_01_easy_head cam0 -> cam1 pairs."""
+def skew(t):
+    return np.array([[0.0, -t[2], t[1]], [t[2], 0.0, -t[0]], [-t[1], t[0], 0.0]])
+
+
+def sampson_px(R, t, x1, x2, f):
+    """|Sampson error| in pixels of normalised correspondences under the pose (R, t)."""
+    E = skew(np.asarray(t, np.float64) / max(np.linalg.norm(t), 1e-300)) @ R
+    a = np.column_stack([x1, np.ones(len(x1))])
+    b = np.column_stack([x2, np.ones(len(x2))])
+    Ex, Etb = a @ E.T, b @ E
+    d = np.sqrt(Ex[:, 0] ** 2 + Ex[:, 1] ** 2 + Etb[:, 0] ** 2 + Etb[:, 1] ** 2)
+    return np.abs(np.sum(b * Ex, 1)) / np.maximum(d, 1e-300) * f
+
+
+def euroc_stereo_errors(tvo_rp, data_dir, fb_px=None, max_level=2, step=1):
+    """Per-pair (rot, t) errors of tinyvo and OpenCV on the V1_01_easy_head cam0 -> cam1 pairs, the
+    flags, and the share of correspondences within 1 px of their true epipolar lines."""
     root = data_dir / "euroc" / "V1_01_easy_head" / "mav0"
     T0, K0, D0 = read_sensor_yaml(root / "cam0" / "sensor.yaml")
     T1, K1, D1 = read_sensor_yaml(root / "cam1" / "sensor.yaml")
@@ -200,15 +221,20 @@ def euroc_stereo_errors(tvo_rp, data_dir):
     thr = 1.0 / K0[0, 0]
     cfg = tvo_rp.config(threshold=thr, seed=1)
     res = []
-    for ts, path0 in f0:
+    for ts, path0 in f0[::step]:
         if ts not in f1:
             continue
         a = cv2.imread(str(path0), cv2.IMREAD_GRAYSCALE)
         b = cv2.imread(str(f1[ts]), cv2.IMREAD_GRAYSCALE)
-        x1, x2 = track_opencv(a, b, K0, D0, K1, D1)
-        st, R, t, out, _ = tvo_rp.estimate(x1, x2, cfg)
+        x1, x2 = track_opencv(a, b, K0, D0, K1, D1, fb_px=fb_px, max_level=max_level)
+        st, R, t, out, mask = tvo_rp.estimate(x1, x2, cfg)
         Ro, to = opencv_pose(x1, x2, thr)
-        res.append((rot_err_deg(R, Rg), t_err_deg(t, tg), rot_err_deg(Ro, Rg), t_err_deg(to, tg), out.flags))
+        good = float(np.mean(sampson_px(Rg, tg, x1, x2, K0[0, 0]) < 1.0))
+        m = mask.astype(bool)
+        rms = lambda Rx, tx: float(np.sqrt(np.mean(sampson_px(Rx, tx, x1[m], x2[m], K0[0, 0]) ** 2)))  # noqa: E731
+        fit = (rms(R, t), rms(Rg, tg)) if m.sum() >= 5 and np.linalg.norm(t) > 0 else (np.nan, np.nan)
+        res.append((rot_err_deg(R, Rg), t_err_deg(t, tg), rot_err_deg(Ro, Rg), t_err_deg(to, tg), out.flags,
+                    good) + fit)
     return np.array(res)
 
 
@@ -231,8 +257,9 @@ def euroc_keyframe_errors(tvo_rp, data_dir):
         b = cv2.imread(str(pb), cv2.IMREAD_GRAYSCALE)
         x1, x2 = track_opencv(a, b, K, D, K, D)
         if len(x1) < 8:
-            res.append((180.0, 180.0, 180.0, 180.0, -1))
+            res.append((180.0, 180.0, 180.0, 180.0, -1, 0.0))
             continue
+        good = float(np.mean(sampson_px(Tba[:3, :3], Tba[:3, 3], x1, x2, K[0, 0]) < 1.0))
         st, R, t, out, _ = tvo_rp.estimate(x1, x2, cfg)
         if st != 0:
             R, t, flags = np.eye(3), np.zeros(3), -1
@@ -240,7 +267,7 @@ def euroc_keyframe_errors(tvo_rp, data_dir):
             flags = out.flags
         Ro, to = opencv_pose(x1, x2, thr)
         res.append((rot_err_deg(R, Tba[:3, :3]), t_err_deg(t, Tba[:3, 3]), rot_err_deg(Ro, Tba[:3, :3]),
-                    t_err_deg(to, Tba[:3, 3]), flags))
+                    t_err_deg(to, Tba[:3, 3]), flags, good))
     return np.array(res)
 
 
@@ -288,12 +315,28 @@ def test_euroc_stereo(rp, data_dir):
     res = euroc_stereo_errors(rp, data_dir)
     assert len(res) > 50
     med = np.median(res[:, :4], axis=0)
+    rot_only = int(np.sum((res[:, 4].astype(int) & FLAG_ROTATION_ONLY) != 0))
     print(f"\nEuRoC V1_01_easy_head cam0->cam1 ({len(res)} pairs): median rot/t error "
-          f"tinyvo {med[0]:.3f}/{med[1]:.2f} deg, OpenCV {med[2]:.3f}/{med[3]:.2f} deg")
-    # issue 3 targets 0.3 deg / 5 deg; measured 0.33 / 7.6 with these OpenCV correspondences (see
-    # docs/geometry.md), so the test asserts what holds: at least as good as the plain OpenCV pipeline
+          f"tinyvo {med[0]:.3f}/{med[1]:.2f} deg, OpenCV {med[2]:.3f}/{med[3]:.2f} deg; rotation-only {rot_only}; "
+          f"correspondences within 1 px of the true epipolar line: {np.median(res[:, 5]):.2f}")
+    # issue 3 targets 0.3 deg / 5 deg, met with these (reference) correspondences; docs/geometry.md
+    # explains why the translation direction has no large margin on this single static scene
     assert med[0] <= med[2] and med[1] <= med[3]
-    assert med[0] <= 0.4 and med[1] <= 9.0
+    assert med[0] <= 0.3 and med[1] <= 5.0
+    assert rot_only == 0  # an 11 cm baseline is a real translation
+    # cleaner, forward-backward-checked tracks (as tinyvo's front end): the rotation model must not
+    # absorb the baseline (it did on 18 of 19 pairs before the rotation-only rule required the
+    # rotation to explain half of the epipolar inliers)
+    for fb_px, max_level in ((1.0, 2), (0.5, 3)):
+        fb = euroc_stereo_errors(rp, data_dir, fb_px=fb_px, max_level=max_level, step=5)
+        fb_rot_only = int(np.sum((fb[:, 4].astype(int) & FLAG_ROTATION_ONLY) != 0))
+        fmed = np.median(fb[:, :4], axis=0)
+        print(f"{fb_px} px forward-backward check, {max_level + 1} levels ({len(fb)} pairs): tinyvo "
+              f"{fmed[0]:.3f}/{fmed[1]:.2f} deg, OpenCV {fmed[2]:.3f}/{fmed[3]:.2f} deg; rotation-only "
+              f"{fb_rot_only}; within 1 px of the true epipolar line: {np.median(fb[:, 5]):.2f}; RMS Sampson "
+              f"error of tinyvo's inliers under its pose {np.nanmedian(fb[:, 6]):.3f} px, under the true pose "
+              f"{np.nanmedian(fb[:, 7]):.3f} px")
+        assert fb_rot_only == 0 and fmed[0] <= 1.0 and fmed[0] <= fmed[2]
 
 
 def test_euroc_keyframes(rp, data_dir):
@@ -311,6 +354,10 @@ def test_euroc_keyframes(rp, data_dir):
     rot_fail_t = int(np.sum(res[:, 0] > 10))
     rot_fail_o = int(np.sum(res[:, 2] > 10))
     print(f"rotation > 10 deg: tinyvo {rot_fail_t}, OpenCV {rot_fail_o}")
+    failed = res[:, 0] > 10
+    print(f"LK tracks within 1 px of the true epipolar line, median share: {np.median(res[failed, 5]):.2f} on "
+          f"the failed pairs, {np.median(res[~failed, 5]):.2f} on the others; failed pairs among the "
+          f"{int(np.sum(res[:, 5] < 0.2))} pairs with < 20 %: {int(np.sum(failed & (res[:, 5] < 0.2)))}")
     assert len(res) >= 80
     # LK 21x21 cannot follow most of these wide-baseline pairs, so both pipelines fail often; tinyvo
     # must not be worse on rotation (its rotation-only results have t = 0 and count as t failures)
