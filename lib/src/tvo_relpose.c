@@ -1067,14 +1067,18 @@ static int32_t polish(const tvo_relpose_config *cfg, double R[9], double t[3], c
 {
     double E[9], c2_prev = INFINITY;
     /* two rounds; up to two more while the scale keeps collapsing (near noise-free data: the
-     * Cauchy weights leave the outliers of the 3-threshold band a pull proportional to c2) */
+     * Cauchy weights leave the outliers of the 3-threshold band a pull proportional to c2). A
+     * round whose point set is unchanged and whose scale moved by less than 10 % would solve the
+     * problem just solved: it is skipped. */
     for (int round = 0; round < 4; ++round) {
         essential_from_pose(R, t, E);
-        int32_t m = 0;
+        int32_t m = 0, changed = 0;
         for (int32_t i = 0; i < n; ++i) {
             double r2 = sampson2(E, &x1[i], &x2[i]);
-            mask[i] = (uint8_t)(r2 < 9.0 * thr2);
-            if (mask[i])
+            uint8_t in = (uint8_t)(r2 < 9.0 * thr2);
+            changed += round > 0 && in != mask[i];
+            mask[i] = in;
+            if (in)
                 buf[m++] = r2;
         }
         if (m < 6 || cfg->refine_iters == 0)
@@ -1086,6 +1090,8 @@ static int32_t polish(const tvo_relpose_config *cfg, double R[9], double t[3], c
         if (!(c2 > 1e-24))
             c2 = 1e-24;
         if (round >= 2 && !(c2 < 1e-2 * c2_prev))
+            break;
+        if (round == 1 && changed == 0 && c2 > 0.9 * c2_prev && c2 < 1.1 * c2_prev)
             break;
         c2_prev = c2;
         refine_pose(R, t, x1, x2, n, mask, cfg->refine_iters, c2);
