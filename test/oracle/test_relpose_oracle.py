@@ -326,7 +326,7 @@ def test_euroc_stereo(rp, data_dir):
     assert rot_only == 0  # an 11 cm baseline is a real translation
     # cleaner, forward-backward-checked tracks (as tinyvo's front end): the rotation model must not
     # absorb the baseline (it did on 18 of 19 pairs before the rotation-only rule required the
-    # rotation to explain half of the epipolar inliers)
+    # rotation to explain most of the epipolar inliers)
     for fb_px, max_level in ((1.0, 2), (0.5, 3)):
         fb = euroc_stereo_errors(rp, data_dir, fb_px=fb_px, max_level=max_level, step=5)
         fb_rot_only = int(np.sum((fb[:, 4].astype(int) & FLAG_ROTATION_ONLY) != 0))

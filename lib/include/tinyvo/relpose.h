@@ -18,7 +18,7 @@
  *   3. a rotation-only model (Kabsch on bearing vectors, seeded by the epipolar inliers; a 2-point
  *      RANSAC when the epipolar model failed): the median angle between R_rot * f1 and f2 over the
  *      epipolar inliers is the rotation-compensated parallax; below cfg->min_parallax_deg, when
- *      the rotation also explains at least half of the epipolar inliers, the result is
+ *      the rotation also explains at least 80 % of the epipolar inliers, the result is
  *      rotation-only (t = 0, R from the rotation model) with LOW_PARALLAX | ROTATION_ONLY: no
  *      translation is made up and no twisted pair can come out;
  *   4. otherwise a homography RANSAC (4-point DLT, samples from the epipolar inliers) is scored
