@@ -34,32 +34,6 @@ static void write_file(const char *path, const void *data, size_t size)
     TVO_FUZZ_CHECK(fclose(f) == 0);
 }
 
-static void cleanup(void)
-{
-    tvo_euroc_close(g_seq);
-    g_seq = NULL;
-    if (g_gt_path[0] != '\0') {
-        char p[300];
-        char *slash;
-        remove(g_gt_path);
-        snprintf(p, sizeof p, "%s", g_gt_path);
-        slash = strrchr(p, '/');
-        *slash = '\0'; /* <tmp> */
-        {
-            char q[400];
-            snprintf(q, sizeof q, "%s/mav0/cam0/sensor.yaml", p);
-            remove(q);
-            snprintf(q, sizeof q, "%s/mav0/cam0/data.csv", p);
-            remove(q);
-            snprintf(q, sizeof q, "%s/mav0/cam0", p);
-            rmdir(q);
-            snprintf(q, sizeof q, "%s/mav0", p);
-            rmdir(q);
-        }
-        rmdir(p);
-    }
-}
-
 /* A minimal valid sequence folder in a fresh temporary directory, opened once. */
 static void setup(void)
 {
@@ -79,12 +53,21 @@ static void setup(void)
     write_file(p, yaml, sizeof yaml - 1);
     snprintf(p, sizeof p, "%s/mav0/cam0/data.csv", dir);
     write_file(p, csv, sizeof csv - 1);
-    snprintf(g_gt_path, sizeof g_gt_path, "%s/gt.txt", dir);
     if (tvo_euroc_open(&g_seq, dir, "cam0", err, sizeof err) != TVO_OK) {
         fprintf(stderr, "fuzz_csv: cannot open the scratch sequence: %s\n", err);
         abort();
     }
-    atexit(cleanup);
+    /* the sequence read everything at open: the folder can go (libFuzzer may exit without atexit) */
+    snprintf(p, sizeof p, "%s/mav0/cam0/sensor.yaml", dir);
+    remove(p);
+    snprintf(p, sizeof p, "%s/mav0/cam0/data.csv", dir);
+    remove(p);
+    snprintf(p, sizeof p, "%s/mav0/cam0", dir);
+    rmdir(p);
+    snprintf(p, sizeof p, "%s/mav0", dir);
+    rmdir(p);
+    rmdir(dir);
+    snprintf(g_gt_path, sizeof g_gt_path, "/tmp/tvo_fuzz_csv_gt_%ld.txt", (long)getpid());
 }
 
 static void check_pose(const tvo_pose *T)
@@ -179,6 +162,7 @@ static void fuzz_groundtruth(const char *text, size_t len)
         setup();
     write_file(g_gt_path, text, len);
     st = tvo_euroc_load_groundtruth_file(g_seq, g_gt_path, err, sizeof err);
+    remove(g_gt_path);
     TVO_FUZZ_CHECK(st == TVO_OK);
     TVO_FUZZ_CHECK(tvo_euroc_has_groundtruth(g_seq) && tvo_euroc_groundtruth_count(g_seq) == n);
     query(INT64_MIN);

@@ -22,12 +22,6 @@
 
 static char g_path[64];
 
-static void cleanup(void)
-{
-    if (g_path[0] != '\0')
-        remove(g_path);
-}
-
 static int status_expected(tvo_status st)
 {
     return st == TVO_OK || st == TVO_ERR_FORMAT || st == TVO_ERR_SIZE || st == TVO_ERR_NO_MEMORY;
@@ -117,10 +111,8 @@ static void decode_one(const uint8_t *data, size_t size)
         uint8_t *buf2 = (uint8_t *)malloc(npix);
         FILE *f;
         int32_t w3 = -1, h3 = -1;
-        if (g_path[0] == '\0') {
+        if (g_path[0] == '\0')
             snprintf(g_path, sizeof g_path, "/tmp/tvo_fuzz_png_%ld.png", (long)getpid());
-            atexit(cleanup);
-        }
         f = fopen(g_path, "wb");
         TVO_FUZZ_CHECK(f != NULL && buf2 != NULL);
         TVO_FUZZ_CHECK(fwrite(data, 1, size, f) == size);
@@ -129,6 +121,7 @@ static void decode_one(const uint8_t *data, size_t size)
         st = tvo_png_read_gray8(g_path, buf2, npix, &w3, &h3);
         TVO_FUZZ_CHECK(st == TVO_OK && w3 == w && h3 == h);
         TVO_FUZZ_CHECK(memcmp(buf, buf2, npix) == 0);
+        remove(g_path);
         free(buf2);
     }
     free(buf);
