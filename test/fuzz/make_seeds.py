@@ -1,12 +1,12 @@
 """Writes the seed inputs of test/fuzz/corpus/<name>/ (seed-*; crash inputs found by the fuzzer are kept
 beside them as crash-* / leak-* / timeout-* files, never regenerated). Deterministic.
 
-    .venv/bin/python test/fuzz/make_seeds.py [--data ../shared/data]
+    .venv/bin/python test/fuzz/make_seeds.py
 
 Sources: exporter output (tinyvo_tools.nnfmt / nngolden: micro models written here, plus a copy of
-test/data/nn/tiny.tvonn), a few rows and the sensor.yaml of the shared EuRoC samples (V1_01_easy_head),
-small PNGs made from a crop of one EuRoC frame (never a whole frame), and hand-made edge cases.
-Without the shared data folder the EuRoC-derived seeds are skipped (the others are still written).
+test/data/nn/tiny.tvonn), files in the EuRoC/ASL formats written here by tinyvo_tools.trajio (the writer
+the synth tool uses) with made-up values, small PNGs of a procedural texture, and hand-made edge cases.
+Nothing comes from ../shared/data: its files must not be copied into the repository, not even in part.
 """
 from __future__ import annotations
 
@@ -59,15 +59,26 @@ def seeds_nn(out: pathlib.Path) -> None:
 
 
 # ---- csv ------------------------------------------------------------------------------------------
-def seeds_csv(out: pathlib.Path, data: pathlib.Path | None) -> None:
-    if data is not None:
-        head = data / "euroc" / "V1_01_easy_head" / "mav0"
-        lines = (head / "cam0" / "data.csv").read_text().splitlines(keepends=True)
-        put(out, "cam0_data.csv", "".join(lines[:5]).encode())
-        lines = (head / "state_groundtruth_estimate0" / "data.csv").read_text().splitlines(keepends=True)
-        put(out, "groundtruth.csv", "".join(lines[:4]).encode())
-        lines = (data / "euroc" / "groundtruth" / "MH_01_easy.txt").read_text().splitlines(keepends=True)
-        put(out, "groundtruth.txt", "".join(lines[:4]).encode())
+def seeds_csv(out: pathlib.Path) -> None:
+    from tinyvo_tools import trajio
+
+    # EuRoC layout, made-up values: cam data.csv, a ground-truth csv (17 columns) and an 8-column txt
+    t0 = 1_400_000_000_000_000_000
+    put(out, "cam0_data.csv", ("#timestamp [ns],filename\n" +
+                               "".join(f"{t0 + k * 50_000_000},{t0 + k * 50_000_000}.png\n" for k in range(4))).encode())
+    rng = np.random.default_rng(3)
+    poses = np.stack([trajio.pose_from_pq(rng.normal(size=3), q / np.linalg.norm(q))
+                      for q in rng.normal(size=(3, 4))])
+    traj = trajio.Trajectory(np.array([t0 + k * 5_000_000 for k in range(3)], dtype=np.int64), poses)
+    tmp = out / "tmp-gt.csv"
+    out.mkdir(parents=True, exist_ok=True)
+    trajio.write_euroc_groundtruth(str(tmp), traj)
+    put(out, "groundtruth.csv", tmp.read_bytes())
+    tmp.unlink()
+    pos, quat = trajio.pq_from_pose(poses)
+    put(out, "groundtruth.txt", "".join(
+        f"{t} {' '.join(f'{v:.6f}' for v in p)} {' '.join(f'{v:.7f}' for v in q)}\n"
+        for t, p, q in zip(traj.t_ns, pos, quat)).encode())
     put(out, "crlf.csv", b"#timestamp [ns],filename\r\n100,a.png\r\n200 , b.png \r\n")
     put(out, "gt_fraction.txt", b"1.5 0 0 0 1 0 0 0\n2.49,1e3,-2,3.5,0,1,0,0,9,9\n3 1 2 3 0.7071068 0.7071068 0 0\n")
     put(out, "gt_wide_gap.txt", b"0 0 0 0 1 0 0 0\n9223372036854775806 1 1 1 0 0 0 1\n")
@@ -93,11 +104,20 @@ rate_hz: 20
 """
 
 
-def seeds_yaml(out: pathlib.Path, data: pathlib.Path | None) -> None:
-    if data is not None:
-        head = data / "euroc" / "V1_01_easy_head" / "mav0"
-        put(out, "cam0_sensor.yaml", (head / "cam0" / "sensor.yaml").read_bytes())
-        put(out, "cam1_sensor.yaml", (head / "cam1" / "sensor.yaml").read_bytes())
+def seeds_yaml(out: pathlib.Path) -> None:
+    from tinyvo_tools import trajio
+
+    # the ASL sensor.yaml layout as the synth tool writes it (made-up calibration, 4 and 5 coefficients)
+    out.mkdir(parents=True, exist_ok=True)
+    tmp = out / "tmp-sensor.yaml"
+    for name, dist in (("radtan4_sensor.yaml", (-0.25, 0.07, 0.0002, 0.00002)),
+                       ("radtan5_sensor.yaml", (-0.3, 0.1, 0.001, -0.001, -0.02))):
+        T_BS = np.array([[0.0, -1.0, 0.0, -0.02], [1.0, 0.0, 0.0, -0.06], [0.0, 0.0, 1.0, 0.01], [0, 0, 0, 1.0]])
+        cam = trajio.CameraInfo(width=640, height=480, intrinsics=(450.0, 451.0, 321.5, 239.5), distortion=dist,
+                                T_BS=T_BS, comment="fuzz seed")
+        trajio.write_sensor_yaml(str(tmp), cam)
+        put(out, name, tmp.read_bytes())
+    tmp.unlink()
     put(out, "equidistant.yaml", YAML_EQUI)
     put(out, "radtan5.yaml", b"intrinsics: [700, 700, 640, 360]\nresolution: [1280, 720]\n"
         b"distortion_coefficients: [-0.3, 0.1, 0.001, -0.001, -0.02]\n"
@@ -113,15 +133,13 @@ def png_chunk(kind: bytes, body: bytes) -> bytes:
     return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
 
 
-def seeds_png(out: pathlib.Path, data: pathlib.Path | None) -> None:
+def seeds_png(out: pathlib.Path) -> None:
     from PIL import Image
 
-    if data is not None:
-        frames = sorted((data / "euroc" / "V1_01_easy_head" / "mav0" / "cam0" / "data").glob("*.png"))
-        full = Image.open(frames[0]).convert("L")
-        crop = full.crop((300, 200, 332, 224))  # 32 x 24 px of a real frame
-    else:
-        crop = Image.fromarray((np.arange(32 * 24).reshape(24, 32) * 7 % 256).astype(np.uint8), "L")
+    # 32 x 24 px of a procedural texture (smooth blobs plus fine grain), not a real frame
+    yy, xx = np.mgrid[0:24, 0:32]
+    tex = 128 + 60 * np.sin(xx * 0.45) * np.cos(yy * 0.6) + 30 * np.sin(xx * yy * 0.05)
+    crop = Image.fromarray(np.clip(tex, 0, 255).astype(np.uint8), "L")
 
     def save(name, img, **kw):
         b = io.BytesIO()
@@ -159,7 +177,7 @@ def vo_header(w, h, dist, fx_code, strength, max_tracks, level, fast, seed, win,
                   (fast << 2) | level, seed, win | (portable << 3) | (grid << 4)])
 
 
-def seeds_vo(out: pathlib.Path, data: pathlib.Path | None) -> None:
+def seeds_vo(out: pathlib.Path) -> None:
     # moving texture: 8 frames translating 0.5 px/frame (kind 1), +50 ms each
     h = vo_header(64, 48, 0, 50, 0, 200, 2, 5, 11, 4)
     frames = b"".join(bytes([1, (8 * k) & 0xFF, (4 * k) & 0xFF, 0]) for k in range(8))
@@ -178,35 +196,29 @@ def seeds_vo(out: pathlib.Path, data: pathlib.Path | None) -> None:
     h = vo_header(32, 32, 0, 10, 0, 16, 0, 0, 1, 1)
     frames = bytes([3, 128, 2 | (3 << 5), 2, 0, 1, 255, 100, 0, 0, 3, 0, 1, 0, 0, 0])
     put(out, "flat_patched", h + frames)
-    # raw bytes: two 64x48 crops of real EuRoC frames (1 px apart), then the same crop again
-    if data is not None:
-        from PIL import Image
-
-        fr = sorted((data / "euroc" / "V1_01_easy_keyframes" / "mav0" / "cam0" / "data").glob("*.png"))
-        a = np.asarray(Image.open(fr[0]).convert("L"))
-        c0 = a[200:248, 320:384].tobytes()
-        c1 = a[201:249, 321:385].tobytes()
-        h = vo_header(64, 48, 1, 50, -70, 120, 2, 4, 0, 4)
-        put(out, "euroc_crops_raw", h + bytes([0]) + c0 + bytes([0]) + c1 + bytes([0]) + c0)
+    # raw bytes: two 64x48 windows of a procedural texture 1 px apart, then the first again
+    yy, xx = np.mgrid[0:49, 0:65]
+    tex = np.clip(128 + 70 * np.sin(xx * 0.7 + np.sin(yy * 0.3)) * np.cos(yy * 0.5) + 25 * np.cos(xx * yy * 0.11),
+                  0, 255).astype(np.uint8)
+    c0 = tex[0:48, 0:64].tobytes()
+    c1 = tex[1:49, 1:65].tobytes()
+    h = vo_header(64, 48, 1, 50, -70, 120, 2, 4, 0, 4)
+    put(out, "texture_crops_raw", h + bytes([0]) + c0 + bytes([0]) + c1 + bytes([0]) + c0)
     put(out, "empty", b"")
     put(out, "header_only", vo_header(16, 16, 0, 0, 0, 16, 3, 0, 0, 0))
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--data", type=pathlib.Path, default=ROOT.parent / "shared" / "data")
-    args = ap.parse_args()
-    data = args.data if (args.data / "euroc").is_dir() else None
-    if data is None:
-        print(f"make_seeds: {args.data} absent: EuRoC-derived seeds skipped")
+    ap.parse_args()
     corpus = HERE / "corpus"
     for old in corpus.glob("*/seed-*"):
         old.unlink()
     seeds_nn(corpus / "nn")
-    seeds_csv(corpus / "csv", data)
-    seeds_yaml(corpus / "yaml", data)
-    seeds_png(corpus / "png", data)
-    seeds_vo(corpus / "vo", data)
+    seeds_csv(corpus / "csv")
+    seeds_yaml(corpus / "yaml")
+    seeds_png(corpus / "png")
+    seeds_vo(corpus / "vo")
     total = sum(p.stat().st_size for p in corpus.rglob("*") if p.is_file())
     print(f"make_seeds: {sum(1 for p in corpus.rglob('seed-*'))} seeds, corpus {total} bytes")
 
