@@ -12,20 +12,8 @@ APT_PACKAGES=(
   python3 python3-venv python3-pip python3-torch
   valgrind
 )
-missing=()
-for p in "${APT_PACKAGES[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  if [ "$(id -u)" -eq 0 ]; then
-    echo "[install-deps] apt-get install ${missing[*]}"
-    apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-  else
-    echo "[install-deps] missing Debian packages (run as root to install): ${missing[*]}" >&2
-    exit 1
-  fi
-fi
+. "$ROOT/tools/apt-lib.sh"
+tvo_apt_ensure install-deps "${APT_PACKAGES[@]}" || exit 1
 
 VENV="$ROOT/.venv"
 STAMP="$VENV/.tvo-requirements"

@@ -28,7 +28,8 @@ debarch() {
   esac
 }
 
-installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
+. "$ROOT/tools/apt-lib.sh"
+installed() { tvo_deb_installed "$1"; }
 
 need=()
 for p in cmake ninja-build qemu-user libspng-dev; do installed "$p" || need+=("$p"); done

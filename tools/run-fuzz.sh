@@ -31,20 +31,8 @@ HARNESSES=("$@")
 declare -A MAX_LEN=([nn]=16384 [csv]=4096 [yaml]=4096 [png]=16384 [vo]=32768)
 
 # ---- tools ----------------------------------------------------------------------------------------
-need=()
-for p in clang libclang-rt-14-dev cmake ninja-build libspng-dev; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || need+=("$p")
-done
-if [ ${#need[@]} -gt 0 ]; then
-  if [ "$(id -u)" -eq 0 ]; then
-    echo "[run-fuzz] apt-get install ${need[*]}"
-    apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${need[@]}" >/dev/null
-  else
-    echo "[run-fuzz] missing Debian packages (run as root to install): ${need[*]}" >&2
-    exit 1
-  fi
-fi
+. "$ROOT/tools/apt-lib.sh"
+tvo_apt_ensure run-fuzz clang libclang-rt-14-dev cmake ninja-build libspng-dev || exit 1
 
 # ---- build ----------------------------------------------------------------------------------------
 BUILD="$ROOT/build/fuzz"

@@ -10,20 +10,8 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
 JOBS="${JOBS:-2}"
 
-need=()
-command -v cppcheck >/dev/null || need+=(cppcheck)
-command -v clang-tidy >/dev/null || need+=(clang-tidy)
-command -v run-clang-tidy >/dev/null || need+=(clang-tidy)
-if [ ${#need[@]} -gt 0 ]; then
-  if [ "$(id -u)" -eq 0 ]; then
-    echo "[run-static] apt-get install ${need[*]}"
-    apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${need[@]}" >/dev/null
-  else
-    echo "[run-static] missing (run as root to install): ${need[*]}" >&2
-    exit 1
-  fi
-fi
+. "$ROOT/tools/apt-lib.sh"
+tvo_apt_ensure run-static cppcheck clang-tidy || exit 1   # clang-tidy brings run-clang-tidy
 
 BUILD=build/static
 cmake -S . -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_EXPORT_COMPILE_COMMANDS=ON \

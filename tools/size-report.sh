@@ -17,19 +17,8 @@ CORES=("$@")
 [ ${#CORES[@]} -eq 0 ] && CORES=(m7 m4)
 LIMIT_M7=$((64 * 1024))
 
-need=()
-for p in gcc-arm-none-eabi libnewlib-arm-none-eabi cmake ninja-build; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || need+=("$p")
-done
-if [ ${#need[@]} -gt 0 ]; then
-  if [ "$(id -u)" -eq 0 ]; then
-    apt-get update -qq || true
-    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${need[@]}" >/dev/null
-  else
-    echo "[size-report] missing packages (run as root to install): ${need[*]}" >&2
-    exit 1
-  fi
-fi
+. "$ROOT/tools/apt-lib.sh"
+tvo_apt_ensure size-report gcc-arm-none-eabi libnewlib-arm-none-eabi cmake ninja-build || exit 1
 
 status=0
 echo "tinyvo core size report, commit $(git rev-parse --short HEAD 2>/dev/null || echo '?'), $(date -u +%Y-%m-%d)"
