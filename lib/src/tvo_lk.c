@@ -47,7 +47,15 @@ typedef struct lk_work {
     int16_t *iwin;    /* win^2 window grey values, 5 fractional bits */
     int16_t *ixwin;   /* win^2 interpolated d/dx */
     int16_t *iywin;   /* win^2 interpolated d/dy */
+    uint8_t *jpatch;  /* (win+1+2*LK_JPATCH_MARGIN)^2 gathered next-image pixels near borders, kept while
+                         the iterations stay inside it (same bytes as gathering each block anew) */
+    const uint8_t *jp_data; /* level the jpatch was gathered from (NULL: none) */
+    int32_t jp_x0, jp_y0;   /* its top-left in that level */
 } lk_work;
+
+/* Pixels gathered around a border block beyond the (win+1)^2 it needs: Gauss-Newton steps after the
+ * first are mostly well under this, so one gather serves the whole level. */
+#define LK_JPATCH_MARGIN 4
 
 typedef struct lk_params {
     int32_t win;
@@ -93,10 +101,12 @@ tvo_status tvo_lk_config_check(const tvo_lk_config *cfg)
     return TVO_OK;
 }
 
+#define LK_NBLOCKS 9
 /* Block sizes of the scratch, in the order they are carved. */
-static void lk_blocks(int32_t win, size_t sz[8])
+static void lk_blocks(int32_t win, size_t sz[LK_NBLOCKS])
 {
     size_t p = (size_t)win + 3u, g = (size_t)win + 1u, w = (size_t)win;
+    size_t q = (size_t)win + 1u + 2u * LK_JPATCH_MARGIN;
     sz[0] = p * p;
     sz[1] = p * sizeof(int16_t);
     sz[2] = p * sizeof(int16_t);
@@ -105,29 +115,30 @@ static void lk_blocks(int32_t win, size_t sz[8])
     sz[5] = w * w * sizeof(int16_t);
     sz[6] = w * w * sizeof(int16_t);
     sz[7] = w * w * sizeof(int16_t);
+    sz[8] = q * q;
 }
 
 size_t tvo_lk_scratch_size(const tvo_lk_config *cfg)
 {
-    size_t sz[8], total = TVO_ARENA_ALIGN - 1u;
+    size_t sz[LK_NBLOCKS], total = TVO_ARENA_ALIGN - 1u;
     int i;
     if (tvo_lk_config_check(cfg) != TVO_OK)
         return 0;
     lk_blocks(cfg->win_size, sz);
-    for (i = 0; i < 8; ++i)
+    for (i = 0; i < LK_NBLOCKS; ++i)
         total = tvo_size_add(total, tvo_arena_round(sz[i]));
     return total;
 }
 
 static tvo_status lk_work_init(lk_work *wk, int32_t win, void *scratch, size_t scratch_size)
 {
-    size_t sz[8];
-    void *b[8];
+    size_t sz[LK_NBLOCKS];
+    void *b[LK_NBLOCKS];
     tvo_arena arena;
     int i;
     lk_blocks(win, sz);
     tvo_arena_init(&arena, scratch, scratch_size);
-    for (i = 0; i < 8; ++i) {
+    for (i = 0; i < LK_NBLOCKS; ++i) {
         b[i] = tvo_arena_alloc(&arena, sz[i]);
         if (b[i] == NULL)
             return TVO_ERR_NO_MEMORY;
@@ -141,6 +152,9 @@ static tvo_status lk_work_init(lk_work *wk, int32_t win, void *scratch, size_t s
     wk->iwin = (int16_t *)b[5];
     wk->ixwin = (int16_t *)b[6];
     wk->iywin = (int16_t *)b[7];
+    wk->jpatch = (uint8_t *)b[8];
+    wk->jp_data = NULL; /* the images may have changed since the last call */
+    wk->jp_x0 = wk->jp_y0 = 0;
     return TVO_OK;
 }
 
@@ -535,9 +549,18 @@ static const uint8_t *lk_next_block(const lk_level *lv, int32_t jx, int32_t jy, 
         *sstride = lv->stride;
         return lv->data + (size_t)jy * (size_t)lv->stride + (size_t)jx;
     }
-    lk_gather(lv, jx, jy, win + 1, wk->patch);
-    *sstride = win + 1;
-    return wk->patch;
+    {
+        const int32_t q = win + 1 + 2 * LK_JPATCH_MARGIN;
+        if (wk->jp_data != lv->data || jx < wk->jp_x0 || jy < wk->jp_y0 || jx + win + 1 > wk->jp_x0 + q ||
+            jy + win + 1 > wk->jp_y0 + q) {
+            wk->jp_x0 = jx - LK_JPATCH_MARGIN;
+            wk->jp_y0 = jy - LK_JPATCH_MARGIN;
+            wk->jp_data = lv->data;
+            lk_gather(lv, wk->jp_x0, wk->jp_y0, q, wk->jpatch);
+        }
+        *sstride = q;
+        return wk->jpatch + (size_t)(jy - wk->jp_y0) * (size_t)q + (size_t)(jx - wk->jp_x0);
+    }
 }
 
 /* One level of one point. (px, py): point in prev at this level; (*nx, *ny): in = guess, out =
