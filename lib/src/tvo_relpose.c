@@ -881,6 +881,7 @@ static void set_identity_result(tvo_relpose *out)
     memset(out, 0, sizeof *out);
     out->R[0] = out->R[4] = out->R[8] = 1.0;
     out->R_alt[0] = out->R_alt[4] = out->R_alt[8] = 1.0;
+    out->R_rot[0] = out->R_rot[4] = out->R_rot[8] = 1.0;
     out->flags = TVO_RELPOSE_FLAG_LOW_CONFIDENCE;
 }
 
@@ -1174,6 +1175,8 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
     }
     double parallax = m > 0 ? select_kth(buf, m, m / 2) * (180.0 / RP_PI) : 0.0;
     out->parallax_deg = parallax;
+    if (pose_finite(Rrot, out->t))
+        memcpy(out->R_rot, Rrot, sizeof Rrot);
 
     /* Rotation-only when the rotation-compensated parallax is low AND the rotation model explains
      * most of the epipolar inliers (at twice the threshold). The median parallax alone is not

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "tinyvo/arena.h"
+#include "tinyvo/linalg.h"
 #include "tinyvo/pyramid.h"
 
 struct tvo_vo {
@@ -30,6 +31,14 @@ struct tvo_vo {
 #define TVO_VO_PRIOR_FRAMES 3
 /* ...and an ambiguous pose is resolved only when the chosen candidate is within this angle of it. */
 #define TVO_VO_PRIOR_COS 0.7071067811865476 /* cos 45 deg */
+/* A pose with a translation whose rotation is further than this many times the rotation-compensated
+ * parallax, and more than TVO_VO_ROT_CHECK_MIN_DEG, from the rotation-only model of the same points is not
+ * trusted (the frame becomes rotation-only with that model's rotation): at low parallax the rotation-only
+ * model is near the true rotation, so such a pose is a wrong epipolar minimum or twin (synthetic MH_03:
+ * frames at 40-1400x the parallax had 3-46 deg of rotation error). The floor keeps sideways motion in
+ * front of a plane, where the rotation-only model absorbs ~1 deg of translation flow, untouched. */
+#define TVO_VO_ROT_CHECK_RATIO 10.0
+#define TVO_VO_ROT_CHECK_MIN_DEG 2.0
 
 void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
 {
@@ -401,6 +410,15 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
                 }
             } else
                 res->state = (rp.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY) ? TVO_VO_ROTATION_ONLY : TVO_VO_OK;
+            if (res->state == TVO_VO_OK) {
+                const double d = tvo_la_rot_dist(rp.R, rp.R_rot) * (180.0 / 3.14159265358979323846);
+                const double lim = TVO_VO_ROT_CHECK_RATIO * rp.parallax_deg;
+                if (d > (lim > TVO_VO_ROT_CHECK_MIN_DEG ? lim : TVO_VO_ROT_CHECK_MIN_DEG)) {
+                    memcpy(rp.R, rp.R_rot, sizeof(rp.R));
+                    rp.t[0] = rp.t[1] = rp.t[2] = 0.0;
+                    res->state = TVO_VO_ROTATION_ONLY;
+                }
+            }
             memcpy(T_cur_prev.R, rp.R, sizeof(rp.R));
             memcpy(T_cur_prev.t, rp.t, sizeof(rp.t));
             res->T_prev_cur = tvo_pose_inverse(&T_cur_prev);

@@ -28,7 +28,7 @@ class RelposeConfig(ctypes.Structure):
 class Relpose(ctypes.Structure):
     _fields_ = [("R", ctypes.c_double * 9), ("t", ctypes.c_double * 3), ("inliers", ctypes.c_int32),
                 ("flags", ctypes.c_int32), ("parallax_deg", ctypes.c_double), ("iterations", ctypes.c_int32),
-                ("R_alt", ctypes.c_double * 9), ("t_alt", ctypes.c_double * 3)]
+                ("R_alt", ctypes.c_double * 9), ("t_alt", ctypes.c_double * 3), ("R_rot", ctypes.c_double * 9)]
 
 
 FLAG_LOW_PARALLAX, FLAG_ROTATION_ONLY, FLAG_HOMOGRAPHY, FLAG_LOW_CONFIDENCE, FLAG_AMBIGUOUS = 1, 2, 4, 8, 16

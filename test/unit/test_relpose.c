@@ -164,6 +164,8 @@ static void test_pipeline_noise_free(void **state)
             assert_true(tvo_la_rot_dist(out.R, sc.R) < 1e-6);
             assert_true(t_err_deg(out.t, sc.t) < 1e-4);
             assert_int_equal(out.flags & (TVO_RELPOSE_FLAG_ROTATION_ONLY | TVO_RELPOSE_FLAG_LOW_CONFIDENCE), 0);
+            /* the rotation-only reference is reported too, and is a rotation */
+            assert_true(fabs(tvo_la_mat3_det(out.R_rot) - 1.0) < 1e-9);
             assert_int_equal(out.inliers, sc.n);
         }
     }
@@ -231,6 +233,7 @@ static void test_pure_rotation(void **state)
         assert_true(out.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY);
         assert_true(out.t[0] == 0.0 && out.t[1] == 0.0 && out.t[2] == 0.0);
         assert_true(out.parallax_deg < cfg.min_parallax_deg);
+        assert_memory_equal(out.R_rot, out.R, sizeof out.R); /* the rotation-only model is the result */
     }
 }
 

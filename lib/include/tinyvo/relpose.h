@@ -88,6 +88,8 @@ typedef struct tvo_relpose {
     int32_t iterations; /* RANSAC iterations run (epipolar model) */
     double R_alt[9];    /* with TVO_RELPOSE_FLAG_AMBIGUOUS: the twin pose (unit t_alt); else a copy of R, t */
     double t_alt[3];
+    double R_rot[9];    /* the rotation-only model fitted on the same points (identity when none): a
+                           sanity reference for R at low parallax, whatever model was chosen */
 } tvo_relpose;
 
 /* Minimal 5-point solver (Nister's formulation: null space of the 5x9 epipolar system,

@@ -35,7 +35,9 @@ typedef enum tvo_vo_state {
                                   scene is one plane only) */
     TVO_VO_INITIALISING = 1,   /* first frame (or first after a reset): corners detected, identity pose */
     TVO_VO_ROTATION_ONLY = 2,  /* low parallax, or no translation we could trust (too few cheirality-
-                                  consistent inliers): rotation estimated, translation reported as zero */
+                                  consistent inliers, or a pose whose rotation is > 2 deg and > 10x the
+                                  parallax away from the rotation-only model): rotation estimated,
+                                  translation reported as zero */
     TVO_VO_LOST = 3,           /* too few tracks or no trustworthy model: identity pose, tracker re-initialised */
     TVO_VO_STATE_COUNT = 4
 } tvo_vo_state;
