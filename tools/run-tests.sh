@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The test command (README, .ci/run): installs what is needed, then builds and runs every test:
-#   1. Release build with -Werror, all cmocka unit tests (ctest -j2)
-#   2. the OpenCV oracle tests (pytest, test/oracle) against that build
-#   3. an ASan+UBSan build running the unit tests again
+#   1. Release build with -Werror, all ctest tests (unit, port, guarantees, fuzz-corpus replays; -j2)
+#   2. the OpenCV oracle tests (pytest, test/oracle) and the Python tool tests (test/python) against it
+#   3. an ASan+UBSan build running the ctest tests again
 #   4. cppcheck + clang-tidy with the checked-in configuration (tools/run-static.sh)
+#   5. aarch64 / armhf cross builds, their tests under qemu-user (tools/run-cross.sh)
 # Tests that need ../shared/data skip with a message when it is absent.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
