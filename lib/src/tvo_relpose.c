@@ -396,7 +396,9 @@ static void refine_pose(double R[9], double t[3], const tvo_point2d *x1, const t
             lambda = lambda * 0.1 > 1e-10 ? lambda * 0.1 : 1e-10;
             ++it;
             rejected = 0;
-            if (step < 1e-10 || (rel < 1e-10 && step < 1e-8))
+            /* converged for every purpose: a relative cost change below 1e-6 moves the pose by
+               orders of magnitude less than the noise (0.04 deg median error at 0.5 px) */
+            if (step < 1e-10 || rel < 1e-6)
                 break;
         } else {
             lambda *= 10.0;
