@@ -6,23 +6,10 @@
  * (1 / (4 * block_size * 255))^2 and the formula are applied in double at the end, then rounded to float.
  * The dense map and the single-pixel version therefore give identical values. */
 #include "tinyvo/corners.h"
+#include "tvo_border.h"
 
 #include <math.h>
 #include <string.h>
-
-/* reflect-101 index into [0, n) */
-static int32_t cr_reflect(int32_t i, int32_t n)
-{
-    if (n == 1)
-        return 0;
-    while (i < 0 || i >= n) {
-        if (i < 0)
-            i = -i;
-        else
-            i = 2 * n - 2 - i;
-    }
-    return i;
-}
 
 static int cr_kind_ok(tvo_score_kind kind)
 {
@@ -97,9 +84,9 @@ static void cr_products(const tvo_image *img, int32_t r, const int32_t *xm, cons
                         int32_t *pa, int32_t *pb, int32_t *pc)
 {
     int32_t H = img->height, W = img->width, x;
-    const uint8_t *r0 = img->data + (size_t)cr_reflect(r - 1, H) * (size_t)img->stride;
+    const uint8_t *r0 = img->data + (size_t)tvo_reflect101(r - 1, H) * (size_t)img->stride;
     const uint8_t *r1 = img->data + (size_t)r * (size_t)img->stride;
-    const uint8_t *r2 = img->data + (size_t)cr_reflect(r + 1, H) * (size_t)img->stride;
+    const uint8_t *r2 = img->data + (size_t)tvo_reflect101(r + 1, H) * (size_t)img->stride;
     for (x = 0; x < W; ++x) {
         int32_t l = xm[x], rr = xp[x];
         int32_t gx = ((int32_t)r0[rr] - r0[l]) + 2 * ((int32_t)r1[rr] - r1[l]) + ((int32_t)r2[rr] - r2[l]);
@@ -151,8 +138,8 @@ tvo_status tvo_corner_response(const tvo_image *img, tvo_score_kind kind, int32_
     xm = vc + (w + (size_t)bs);                   /* reflected x-1 */
     xp = xm + w;                                  /* reflected x+1 */
     for (x = 0; x < W; ++x) {
-        xm[x] = cr_reflect(x - 1, W);
-        xp[x] = cr_reflect(x + 1, W);
+        xm[x] = tvo_reflect101(x - 1, W);
+        xp[x] = tvo_reflect101(x + 1, W);
     }
     memset(va, 0, w * sizeof(int32_t));
     memset(vb, 0, w * sizeof(int32_t));
@@ -162,7 +149,7 @@ tvo_status tvo_corner_response(const tvo_image *img, tvo_score_kind kind, int32_
      * Column sums for output row y cover virtual rows y-lo .. y+hi. */
     for (t = -lo; t < hi; ++t) {
         int32_t *pa = ring + (size_t)((t + lo) % bs) * 3u * w, *pb = pa + w, *pc = pb + w;
-        cr_products(img, cr_reflect(t, H), xm, xp, pa, pb, pc);
+        cr_products(img, tvo_reflect101(t, H), xm, xp, pa, pb, pc);
         for (x = 0; x < W; ++x) {
             va[x] += pa[x];
             vb[x] += pb[x];
@@ -182,7 +169,7 @@ tvo_status tvo_corner_response(const tvo_image *img, tvo_score_kind kind, int32_
                 vc[x] -= pc[x];
             }
         }
-        cr_products(img, cr_reflect(tn, H), xm, xp, pa, pb, pc);
+        cr_products(img, tvo_reflect101(tn, H), xm, xp, pa, pb, pc);
         for (x = 0; x < W; ++x) {
             va[x] += pa[x];
             vb[x] += pb[x];
@@ -191,7 +178,7 @@ tvo_status tvo_corner_response(const tvo_image *img, tvo_score_kind kind, int32_
         /* horizontal window sums with reflected columns: running sum over x */
         sa = sb = sc = 0;
         for (i = -lo; i <= hi; ++i) {
-            int32_t j = cr_reflect(i, W);
+            int32_t j = tvo_reflect101(i, W);
             sa += va[j];
             sb += vb[j];
             sc += vc[j];
@@ -201,8 +188,8 @@ tvo_status tvo_corner_response(const tvo_image *img, tvo_score_kind kind, int32_
             o[x] = cr_response(sa, sb, sc, s2, kind, (double)harris_k);
             if (x + 1 >= W)
                 break;
-            jo = cr_reflect(x - lo, W);
-            jn = cr_reflect(x + hi + 1, W);
+            jo = tvo_reflect101(x - lo, W);
+            jn = tvo_reflect101(x + hi + 1, W);
             sa += va[jn] - va[jo];
             sb += vb[jn] - vb[jo];
             sc += vc[jn] - vc[jo];

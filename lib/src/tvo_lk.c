@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "tinyvo/arena.h"
+#include "tvo_border.h"
 
 /* SSE2 kernel for the iteration (x86-64 always has SSE2). It computes exactly the same integers as
  * the portable C kernel (exact integer sums), so results are bit-identical; cfg->force_portable
@@ -158,20 +159,6 @@ static tvo_status lk_work_init(lk_work *wk, int32_t win, void *scratch, size_t s
     return TVO_OK;
 }
 
-/* BORDER_REFLECT_101 index for any i; n >= 1. */
-static int32_t lk_reflect101(int32_t i, int32_t n)
-{
-    if (n == 1)
-        return 0;
-    while (i < 0 || i >= n) {
-        if (i < 0)
-            i = -i;
-        else
-            i = 2 * n - 2 - i;
-    }
-    return i;
-}
-
 /* Copy the size x size block whose top-left is (x0, y0) (may lie outside) into dst, reflecting. */
 static void lk_gather(const lk_level *lv, int32_t x0, int32_t y0, int32_t size, uint8_t *dst)
 {
@@ -182,14 +169,14 @@ static void lk_gather(const lk_level *lv, int32_t x0, int32_t y0, int32_t size, 
     if (c_hi < c_lo)
         c_hi = c_lo;
     for (r = 0; r < size; ++r) {
-        const uint8_t *row = lv->data + (size_t)lk_reflect101(y0 + r, lv->h) * (size_t)lv->stride;
+        const uint8_t *row = lv->data + (size_t)tvo_reflect101(y0 + r, lv->h) * (size_t)lv->stride;
         uint8_t *out = dst + (size_t)r * (size_t)size;
         for (c = 0; c < c_lo && c < size; ++c)
-            out[c] = row[lk_reflect101(x0 + c, lv->w)];
+            out[c] = row[tvo_reflect101(x0 + c, lv->w)];
         if (c_hi > c_lo)
             memcpy(out + c_lo, row + x0 + c_lo, (size_t)(c_hi - c_lo));
         for (c = c_hi > c_lo ? c_hi : (c_lo < size ? c_lo : size); c < size; ++c)
-            out[c] = row[lk_reflect101(x0 + c, lv->w)];
+            out[c] = row[tvo_reflect101(x0 + c, lv->w)];
     }
 }
 

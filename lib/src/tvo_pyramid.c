@@ -4,25 +4,12 @@
 #include <string.h>
 
 #include "tinyvo/arena.h"
+#include "tvo_border.h"
 
 /* Row stride of a level: width rounded up to 16 bytes (keeps every row 16-byte aligned). */
 static int32_t pyr_stride(int32_t width)
 {
     return (width + 15) & ~15;
-}
-
-/* BORDER_REFLECT_101 index (..., 2, 1 | 0, 1, 2, ..., n-1 | n-2, ...) for any i; n >= 1. */
-static int32_t reflect101(int32_t i, int32_t n)
-{
-    if (n == 1)
-        return 0;
-    while (i < 0 || i >= n) {
-        if (i < 0)
-            i = -i;
-        else
-            i = 2 * n - 2 - i;
-    }
-    return i;
 }
 
 /* Fills w[] and h[] for the geometry; TVO_OK or the error of tvo_pyramid_init(). */
@@ -97,9 +84,9 @@ tvo_status tvo_pyramid_init(tvo_pyramid *p, int32_t width, int32_t height, int32
 static uint8_t pyr_down_border(const uint16_t *tmp, int32_t w, int32_t x)
 {
     int32_t c = 2 * x;
-    uint32_t s = (uint32_t)tmp[reflect101(c - 2, w)] + tmp[reflect101(c + 2, w)] +
-                 4u * ((uint32_t)tmp[reflect101(c - 1, w)] + tmp[reflect101(c + 1, w)]) +
-                 6u * tmp[reflect101(c, w)];
+    uint32_t s = (uint32_t)tmp[tvo_reflect101(c - 2, w)] + tmp[tvo_reflect101(c + 2, w)] +
+                 4u * ((uint32_t)tmp[tvo_reflect101(c - 1, w)] + tmp[tvo_reflect101(c + 1, w)]) +
+                 6u * tmp[tvo_reflect101(c, w)];
     return (uint8_t)((s + 128u) >> 8);
 }
 
@@ -143,11 +130,11 @@ static void pyr_down_raw(const uint8_t *src, int32_t w, int32_t h, int32_t sstri
             r3 = r2 + sstride;
             r4 = r3 + sstride;
         } else {
-            r0 = src + (size_t)reflect101(c - 2, h) * (size_t)sstride;
-            r1 = src + (size_t)reflect101(c - 1, h) * (size_t)sstride;
-            r2 = src + (size_t)reflect101(c, h) * (size_t)sstride;
-            r3 = src + (size_t)reflect101(c + 1, h) * (size_t)sstride;
-            r4 = src + (size_t)reflect101(c + 2, h) * (size_t)sstride;
+            r0 = src + (size_t)tvo_reflect101(c - 2, h) * (size_t)sstride;
+            r1 = src + (size_t)tvo_reflect101(c - 1, h) * (size_t)sstride;
+            r2 = src + (size_t)tvo_reflect101(c, h) * (size_t)sstride;
+            r3 = src + (size_t)tvo_reflect101(c + 1, h) * (size_t)sstride;
+            r4 = src + (size_t)tvo_reflect101(c + 2, h) * (size_t)sstride;
         }
         pyr_down_row(r0, r1, r2, r3, r4, w, dst + (size_t)y * (size_t)dstride, dw, tmp);
     }
