@@ -25,15 +25,6 @@ static inline const char *tvo_test_data_dir(void)
         skip();                                                                   \
     } while (0)
 
-/* Deterministic xorshift64* generator for test inputs. */
-static inline uint64_t tvo_test_rand(uint64_t *s)
-{
-    uint64_t x = *s;
-    x ^= x >> 12;
-    x ^= x << 25;
-    x ^= x >> 27;
-    *s = x;
-    return x * 0x2545F4914F6CDD1DULL;
-}
+#include "tvo_rand.h"
 
 #endif
