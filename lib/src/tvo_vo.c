@@ -225,13 +225,22 @@ static int32_t redetect(tvo_vo *vo, const tvo_pyramid *pyr)
     return got;
 }
 
+/* The relative pose of the m current correspondences (vo->x1 -> vo->x2); inliers into vo->mask. */
+static tvo_status relpose_tracks(tvo_vo *vo, const tvo_relpose_config *rc, int32_t m, tvo_relpose *out)
+{
+    return tvo_relpose_estimate(rc, vo->x1, vo->x2, m, out, vo->mask, vo->scratch, vo->scratch_size);
+}
+
 /* A plane seen with a small baseline has two poses that explain the tracks equally well (relpose
  * flags AMBIGUOUS). Pick the twin whose translation continues the recent motion (frames at camera
- * rate move smoothly); without a recent direction, or when neither twin is within 45 degrees of it,
- * keep only the rotation (the twins' rotations differ by about the parallax, which is small here).
- * Returns the resulting state and writes the pose to use into rp->R, rp->t. */
-static tvo_vo_state resolve_ambiguous(const tvo_vo *vo, tvo_relpose *rp)
+ * rate move smoothly). Without a recent direction, or when neither twin is within 45 degrees of it,
+ * the epipolar model alone (rc without the homography), which also weighs the points off the plane,
+ * picks one; the frame keeps the AMBIGUOUS flag. If that fails too, only the rotation is kept (the
+ * twins' rotations differ by about the parallax, which is small here).
+ * Returns the resulting state and writes the pose to use into *rp. */
+static tvo_vo_state resolve_ambiguous(tvo_vo *vo, tvo_relpose_config rc, int32_t m, tvo_relpose *rp)
 {
+    tvo_relpose re;
     if (vo->t_dir_age <= TVO_VO_PRIOR_FRAMES) {
         const double *d = vo->t_dir;
         double c0 = rp->t[0] * d[0] + rp->t[1] * d[1] + rp->t[2] * d[2];
@@ -245,6 +254,13 @@ static tvo_vo_state resolve_ambiguous(const tvo_vo *vo, tvo_relpose *rp)
             return TVO_VO_OK;
     }
     rp->t[0] = rp->t[1] = rp->t[2] = 0.0;
+    rc.use_homography = 0;
+    if (relpose_tracks(vo, &rc, m, &re) == TVO_OK &&
+        !(re.flags & (TVO_RELPOSE_FLAG_LOW_CONFIDENCE | TVO_RELPOSE_FLAG_ROTATION_ONLY))) {
+        re.flags |= rp->flags & (TVO_RELPOSE_FLAG_AMBIGUOUS | TVO_RELPOSE_FLAG_LOW_CONFIDENCE);
+        *rp = re;
+        return TVO_VO_OK;
+    }
     return TVO_VO_ROTATION_ONLY;
 }
 
@@ -360,7 +376,7 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
         tvo_relpose_config rc = vo->cfg.relpose;
         const double f = 0.5 * (vo->cfg.camera.fx + vo->cfg.camera.fy);
         rc.threshold = vo->cfg.pose_threshold_px / f;
-        st = tvo_relpose_estimate(&rc, vo->x1, vo->x2, m, &rp, vo->mask, vo->scratch, vo->scratch_size);
+        st = relpose_tracks(vo, &rc, m, &rp);
         if (st == TVO_OK && (rp.flags & TVO_RELPOSE_FLAG_HOMOGRAPHY) &&
             (rp.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE) && !(rp.flags & TVO_RELPOSE_FLAG_AMBIGUOUS) &&
             rc.use_homography) {
@@ -368,17 +384,18 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
                epipolar model still may, so ask for it alone before calling the frame lost (not when
                the plane's twins are both fine: the epipolar model alone would return one of them
                unflagged, and they are resolved below) */
-            rc.use_homography = 0;
-            st = tvo_relpose_estimate(&rc, vo->x1, vo->x2, m, &rp, vo->mask, vo->scratch, vo->scratch_size);
+            tvo_relpose_config re = rc;
+            re.use_homography = 0;
+            st = relpose_tracks(vo, &re, m, &rp);
         }
         if (st == TVO_OK && (rp.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE) &&
             !(rp.flags & (TVO_RELPOSE_FLAG_AMBIGUOUS | TVO_RELPOSE_FLAG_ROTATION_ONLY))) {
             /* no epipolar pose we can trust (too few cheirality-consistent inliers): the rotation
                usually still is, so ask for the rotation-only model alone rather than lose the frame */
             tvo_relpose rr;
-            rc.min_parallax_deg = 180.0; /* every parallax is below it */
-            if (tvo_relpose_estimate(&rc, vo->x1, vo->x2, m, &rr, vo->mask, vo->scratch, vo->scratch_size) ==
-                    TVO_OK && !(rr.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE))
+            tvo_relpose_config ro = rc;
+            ro.min_parallax_deg = 180.0; /* every parallax is below it */
+            if (relpose_tracks(vo, &ro, m, &rr) == TVO_OK && !(rr.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE))
                 rp = rr;
         }
         res->pose_status = st;
@@ -393,22 +410,9 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
         } else {
             /* rp: X_cur = R X_prev + t, i.e. T_cur_prev; report T_prev_cur */
             tvo_pose T_cur_prev;
-            if (ambiguous) {
-                res->state = resolve_ambiguous(vo, &rp);
-                if (res->state == TVO_VO_ROTATION_ONLY) {
-                    /* no recent motion to choose with: the epipolar model alone, which also weighs
-                       the points off the plane, picks one (the frame keeps the AMBIGUOUS flag) */
-                    tvo_relpose re;
-                    rc.use_homography = 0;
-                    if (tvo_relpose_estimate(&rc, vo->x1, vo->x2, m, &re, vo->mask, vo->scratch,
-                                             vo->scratch_size) == TVO_OK &&
-                        !(re.flags & (TVO_RELPOSE_FLAG_LOW_CONFIDENCE | TVO_RELPOSE_FLAG_ROTATION_ONLY))) {
-                        re.flags |= rp.flags & (TVO_RELPOSE_FLAG_AMBIGUOUS | TVO_RELPOSE_FLAG_LOW_CONFIDENCE);
-                        rp = re;
-                        res->state = TVO_VO_OK;
-                    }
-                }
-            } else
+            if (ambiguous)
+                res->state = resolve_ambiguous(vo, rc, m, &rp);
+            else
                 res->state = (rp.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY) ? TVO_VO_ROTATION_ONLY : TVO_VO_OK;
             if (res->state == TVO_VO_OK) {
                 const double d = tvo_la_rot_dist(rp.R, rp.R_rot) * (180.0 / 3.14159265358979323846);
