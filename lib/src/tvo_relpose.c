@@ -217,18 +217,26 @@ static int32_t cheiral_count(const double R[9], const double t[3], const tvo_poi
     return good;
 }
 
-/* The four (R, t) of E; picks the one with most points in front of both cameras among mask. */
-static int32_t decompose_essential(const double E[9], const tvo_point2d *x1, const tvo_point2d *x2,
-                                   int32_t n, const uint8_t *mask, double R[9], double t[3])
+/* E = U diag(1, 1, 0) V^T with U, V proper rotations (det +1): the factors both pose decompositions
+ * start from. */
+static void essential_uv(const double E[9], double U[9], double V[9])
 {
-    double U[9], s[3], V[9];
-    tvo_la_svd3(E, U, s, V);
+    double sv[3];
+    tvo_la_svd3(E, U, sv, V);
     if (tvo_la_mat3_det(U) < 0.0)
         for (int i = 0; i < 9; ++i)
             U[i] = -U[i];
     if (tvo_la_mat3_det(V) < 0.0)
         for (int i = 0; i < 9; ++i)
             V[i] = -V[i];
+}
+
+/* The four (R, t) of E; picks the one with most points in front of both cameras among mask. */
+static int32_t decompose_essential(const double E[9], const tvo_point2d *x1, const tvo_point2d *x2,
+                                   int32_t n, const uint8_t *mask, double R[9], double t[3])
+{
+    double U[9], V[9];
+    essential_uv(E, U, V);
     static const double W[9] = {0, -1, 0, 1, 0, 0, 0, 0, 1};
     double UW[9], UWt[9], Ra[9], Rb[9];
     tvo_la_mat3_mul(U, W, UW);
@@ -944,14 +952,8 @@ static int collinear(const tvo_point2d *x, int32_t n)
 /* Any one (R, t) with [t]x R = E up to scale (no cheirality: all four give the same Sampson error) */
 static int pose_any(const double E[9], double R[9], double t[3])
 {
-    double U[9], s[3], V[9];
-    tvo_la_svd3(E, U, s, V);
-    if (tvo_la_mat3_det(U) < 0.0)
-        for (int i = 0; i < 9; ++i)
-            U[i] = -U[i];
-    if (tvo_la_mat3_det(V) < 0.0)
-        for (int i = 0; i < 9; ++i)
-            V[i] = -V[i];
+    double U[9], V[9];
+    essential_uv(E, U, V);
     static const double W[9] = {0, -1, 0, 1, 0, 0, 0, 0, 1};
     double UW[9];
     tvo_la_mat3_mul(U, W, UW);
