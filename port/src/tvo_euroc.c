@@ -578,12 +578,10 @@ done:
 
 /* ---- csv files ----------------------------------------------------------------------------------- */
 
-tvo_status tvo_euroc_parse_frames_csv(const char *text, size_t len, tvo_euroc_frame *frames, int32_t capacity,
-                                      int32_t *count, char *err, size_t err_size)
+/* The argument checks both csv parsers start with; sets up the line iterator over [text, text+len). */
+static tvo_status tvo_csv_begin(const char *text, size_t len, int32_t capacity, int32_t *count, tvo_lines *it,
+                                char *err, size_t err_size)
 {
-    tvo_lines it;
-    const char *b, *e;
-    int32_t n = 0;
     if (err != NULL && err_size > 0)
         err[0] = '\0';
     if (count == NULL || (text == NULL && len > 0)) {
@@ -595,19 +593,43 @@ tvo_status tvo_euroc_parse_frames_csv(const char *text, size_t len, tvo_euroc_fr
         tvo_set_err(err, err_size, "negative capacity");
         return TVO_ERR_ARG;
     }
-    it.p = text;
-    it.stop = text + len;
-    it.line = 0;
-    while (tvo_next_line(&it, &b, &e)) {
+    it->p = text;
+    it->stop = text + len;
+    it->line = 0;
+    return TVO_OK;
+}
+
+/* The next data line of a csv, trimmed, skipping blank and '#' lines: 1 with [*b, *e), 0 at the end,
+ * -1 (message in err) for a line holding a NUL byte. */
+static int tvo_csv_next_row(tvo_lines *it, const char **b, const char **e, char *err, size_t err_size)
+{
+    while (tvo_next_line(it, b, e)) {
+        tvo_trim(b, e);
+        if (*b == *e || **b == '#')
+            continue;
+        if (memchr(*b, '\0', (size_t)(*e - *b)) != NULL) {
+            tvo_set_err(err, err_size, "line %d: NUL byte", it->line);
+            return -1;
+        }
+        return 1;
+    }
+    return 0;
+}
+
+tvo_status tvo_euroc_parse_frames_csv(const char *text, size_t len, tvo_euroc_frame *frames, int32_t capacity,
+                                      int32_t *count, char *err, size_t err_size)
+{
+    tvo_lines it;
+    const char *b, *e;
+    int32_t n = 0;
+    tvo_status st;
+    int row;
+    st = tvo_csv_begin(text, len, capacity, count, &it, err, err_size);
+    if (st != TVO_OK)
+        return st;
+    while ((row = tvo_csv_next_row(&it, &b, &e, err, err_size)) > 0) {
         const char *c, *tb, *te, *fb, *fe;
         int64_t t;
-        tvo_trim(&b, &e);
-        if (b == e || *b == '#')
-            continue;
-        if (memchr(b, '\0', (size_t)(e - b)) != NULL) {
-            tvo_set_err(err, err_size, "line %d: NUL byte", it.line);
-            return TVO_ERR_FORMAT;
-        }
         c = (const char *)memchr(b, ',', (size_t)(e - b));
         if (c == NULL) {
             tvo_set_err(err, err_size, "line %d: expected 'timestamp,filename'", it.line);
@@ -644,6 +666,8 @@ tvo_status tvo_euroc_parse_frames_csv(const char *text, size_t len, tvo_euroc_fr
         }
         ++n;
     }
+    if (row < 0)
+        return TVO_ERR_FORMAT;
     *count = n;
     if (frames != NULL && n > capacity) {
         tvo_set_err(err, err_size, "%d frames do not fit in a capacity of %d", (int)n, (int)capacity);
@@ -692,32 +716,16 @@ tvo_status tvo_euroc_parse_groundtruth(const char *text, size_t len, tvo_euroc_g
     const char *b, *e;
     int32_t n = 0;
     int64_t last = -1;
-    if (err != NULL && err_size > 0)
-        err[0] = '\0';
-    if (count == NULL || (text == NULL && len > 0)) {
-        tvo_set_err(err, err_size, "NULL argument");
-        return TVO_ERR_NULL;
-    }
-    *count = 0;
-    if (capacity < 0) {
-        tvo_set_err(err, err_size, "negative capacity");
-        return TVO_ERR_ARG;
-    }
-    it.p = text;
-    it.stop = text + len;
-    it.line = 0;
-    while (tvo_next_line(&it, &b, &e)) {
+    tvo_status st;
+    int row;
+    st = tvo_csv_begin(text, len, capacity, count, &it, err, err_size);
+    if (st != TVO_OK)
+        return st;
+    while ((row = tvo_csv_next_row(&it, &b, &e, err, err_size)) > 0) {
         const char *fb[8], *fe[8];
         tvo_euroc_gt_row r;
         double qn;
         int nf, i;
-        tvo_trim(&b, &e);
-        if (b == e || *b == '#')
-            continue;
-        if (memchr(b, '\0', (size_t)(e - b)) != NULL) {
-            tvo_set_err(err, err_size, "line %d: NUL byte", it.line);
-            return TVO_ERR_FORMAT;
-        }
         nf = tvo_split_fields(b, e, fb, fe, 8);
         if (nf < 0) {
             tvo_set_err(err, err_size, "line %d: empty field", it.line);
@@ -770,6 +778,8 @@ tvo_status tvo_euroc_parse_groundtruth(const char *text, size_t len, tvo_euroc_g
             rows[n] = r;
         ++n;
     }
+    if (row < 0)
+        return TVO_ERR_FORMAT;
     *count = n;
     if (rows != NULL && n > capacity) {
         tvo_set_err(err, err_size, "%d rows do not fit in a capacity of %d", (int)n, (int)capacity);
