@@ -260,6 +260,13 @@ static void test_frames_csv(void **state)
     BAD_CSV("99999999999999999999,x.png\n", "bad timestamp");
     BAD_CSV(",x.png\n", "bad timestamp");
     BAD_CSV("1,../x.png\n", "bad file name");
+    {   /* a NUL byte inside a row (strlen would stop at it: explicit length) */
+        static const char nul[] = "1,a.png\n2,b\0.png\n";
+        err[0] = '\0';
+        assert_int_equal(tvo_euroc_parse_frames_csv(nul, sizeof nul - 1, fr, 4, &n, err, sizeof err), TVO_ERR_FORMAT);
+        assert_non_null(strstr(err, "line 2: NUL byte"));
+        assert_int_equal(n, 0);
+    }
     BAD_CSV("1,sub/x.png\n", "bad file name");
     BAD_CSV("1,..\n", "bad file name");
     BAD_CSV("1,x.png,extra\n", "bad file name");
@@ -328,6 +335,13 @@ static void test_groundtruth_parse(void **state)
     BAD_GT("2000,0,0,0,1,0,0,0\n1000,0,0,0,1,0,0,0\n", "line 2: timestamp not increasing");
     BAD_GT("1000,0,,0,1,0,0,0\n", "line 1: empty field");
     BAD_GT("1000,0,0,0,1,0,0,0,\n", "empty field");
+    {
+        static const char nul[] = "#h\n1000,0,0,0,1,0,0,0\0\n";
+        err[0] = '\0';
+        assert_int_equal(tvo_euroc_parse_groundtruth(nul, sizeof nul - 1, rows, 4, &n, err, sizeof err), TVO_ERR_FORMAT);
+        assert_non_null(strstr(err, "line 2: NUL byte"));
+        assert_int_equal(n, 0);
+    }
     BAD_GT("t,0,0,0,1,0,0,0\n", "bad timestamp");
 #undef BAD_GT
     {
