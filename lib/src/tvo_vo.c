@@ -23,6 +23,13 @@ struct tvo_vo {
     tvo_point2d *x1, *x2;     /* [max_tracks] normalised prev / cur */
     uint8_t *ok1, *ok2, *mask;/* [max_tracks] */
     tvo_corner *corners;      /* [max_tracks] */
+    /* relative scale: each track's normalised position two frames back (frame k-2 while frame k is
+       processed; valid where has0[i]) and the previous frame's pose (X_(k-1) = R0 X_(k-2) + t0, |t0| = 1;
+       valid while has_pose0) */
+    tvo_point2d *x0;          /* [max_tracks] */
+    uint8_t *has0;            /* [max_tracks] */
+    double R0[9], t0[3];
+    int32_t has_pose0;
     void *scratch;
     size_t scratch_size;
 };
@@ -56,6 +63,8 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->min_pose_tracks = 30;
     cfg->fast_min_threshold = 7; /* as ORB-SLAM's second FAST pass (20 then 7) */
     cfg->pose_threshold_px = 1.0;
+    cfg->min_scale_points = 20;
+    cfg->scale_min_parallax_deg = 0.1;
     /* rotation-only below 0.15 deg of rotation-compensated parallax: about 4x the noise floor of
        0.3 px tracking noise at f = 460 px; pure rotation measures ~0.005 deg in test_vo */
     cfg->relpose.min_parallax_deg = 0.02;
@@ -77,6 +86,10 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (!(cfg->pose_threshold_px > 0.0) || !isfinite(cfg->pose_threshold_px))
         return 0;
+    if (cfg->min_scale_points < 3) /* above max_tracks: never available */
+        return 0;
+    if (!(cfg->scale_min_parallax_deg > 0.0 && cfg->scale_min_parallax_deg <= 10.0))
+        return 0;
     if (cfg->lk.max_level < 0 || cfg->lk.max_level + 1 > TVO_MAX_PYR_LEVELS)
         return 0;
     return 1;
@@ -87,8 +100,10 @@ static size_t scratch_need(const tvo_vo_config *cfg)
     size_t a = tvo_detect_scratch_size(&cfg->detect, cfg->camera.width, cfg->camera.height);
     size_t b = tvo_lk_scratch_size(&cfg->lk);
     size_t c = tvo_relpose_scratch_size(cfg->max_tracks);
+    size_t d = tvo_size_mul((size_t)cfg->max_tracks, sizeof(double)); /* depth ratios (rel_scale) */
     size_t m = a > b ? a : b;
-    return m > c ? m : c;
+    m = m > c ? m : c;
+    return m > d ? m : d;
 }
 
 /* Bytes tvo_vo_init() carves out of the caller's block, in the order it carves them. */
@@ -105,6 +120,8 @@ static size_t layout_size(const tvo_vo_config *cfg)
     s = tvo_size_add(s, tvo_arena_round(n) * 4);                        /* st ok1 ok2 mask */
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))) * 2);
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_corner))));
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))));   /* x0 */
+    s = tvo_size_add(s, tvo_arena_round(n));                                       /* has0 */
     s = tvo_size_add(s, tvo_arena_round(scratch_need(cfg)));
     return tvo_size_add(s, TVO_ARENA_ALIGN); /* slack for an unaligned block */
 }
@@ -156,12 +173,14 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg, void *mem, size_t
     vo->x1 = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
     vo->x2 = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
     vo->corners = (tvo_corner *)tvo_arena_alloc(&a, n * sizeof(tvo_corner));
+    vo->x0 = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
+    vo->has0 = (uint8_t *)tvo_arena_alloc(&a, n);
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
     vo->scratch_size = scratch_need(cfg);
     vo->scratch = tvo_arena_alloc(&a, vo->scratch_size);
     if (vo->pts == NULL || vo->next == NULL || vo->st == NULL || vo->ok1 == NULL || vo->ok2 == NULL ||
         vo->mask == NULL || vo->x1 == NULL || vo->x2 == NULL || vo->corners == NULL ||
-        vo->scratch == NULL)
+        vo->x0 == NULL || vo->has0 == NULL || vo->scratch == NULL)
         return TVO_ERR_NO_MEMORY;
     *out = vo;
     return TVO_OK;
@@ -174,6 +193,7 @@ void tvo_vo_reset(tvo_vo *vo)
     vo->has_prev = 0;
     vo->n = 0;
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
+    vo->has_pose0 = 0;
 }
 
 static int64_t now_ns(const tvo_vo *vo)
@@ -208,6 +228,7 @@ static int32_t detect_append(tvo_vo *vo, const tvo_pyramid *pyr, int32_t thresho
     for (int32_t i = 0; i < got; ++i) {
         vo->pts[vo->n + i].x = vo->corners[i].x;
         vo->pts[vo->n + i].y = vo->corners[i].y;
+        vo->has0[vo->n + i] = 0; /* a new track has no earlier position */
     }
     vo->n += got;
     return got;
@@ -281,6 +302,124 @@ static void fill_features(const tvo_vo_result *res, float f[TVO_FEAT_COUNT])
     f[TVO_FEAT_ROT_ONLY] = res->state == TVO_VO_ROTATION_ONLY ? 1.0f : 0.0f;
 }
 
+/* k-th smallest of a[0..n) (0 <= k < n), reordering a: quickselect with a median-of-three pivot
+ * (deterministic; O(n) expected). */
+static double select_kth(double *a, int32_t n, int32_t k)
+{
+    int32_t lo = 0, hi = n - 1;
+    while (hi > lo) {
+        const int32_t mid = lo + (hi - lo) / 2;
+        double p, t;
+        int32_t i = lo, j = hi;
+        if (a[mid] < a[lo]) { t = a[mid]; a[mid] = a[lo]; a[lo] = t; }
+        if (a[hi] < a[lo]) { t = a[hi]; a[hi] = a[lo]; a[lo] = t; }
+        if (a[hi] < a[mid]) { t = a[hi]; a[hi] = a[mid]; a[mid] = t; }
+        p = a[mid];
+        while (i <= j) {
+            while (a[i] < p)
+                ++i;
+            while (a[j] > p)
+                --j;
+            if (i <= j) {
+                t = a[i]; a[i] = a[j]; a[j] = t;
+                ++i;
+                --j;
+            }
+        }
+        if (k <= j)
+            hi = j;
+        else if (k >= i)
+            lo = i;
+        else
+            break;
+    }
+    return a[k];
+}
+
+static void cross3(const double a[3], const double b[3], double c[3])
+{
+    c[0] = a[1] * b[2] - a[2] * b[1];
+    c[1] = a[2] * b[0] - a[0] * b[2];
+    c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static double dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void rot_mul(const double R[9], const double x[3], double y[3])
+{
+    for (int r = 0; r < 3; ++r)
+        y[r] = R[3 * r] * x[0] + R[3 * r + 1] * x[1] + R[3 * r + 2] * x[2];
+}
+
+/* Depth along the ray xb (homogeneous, z = 1) in frame b of the point seen along xa in frame a, with
+ * X_b = R X_a + t: lambda xb - nu (R xa) = t, solved by crossing with R xa. 0 when the two rays are
+ * closer than the angle whose squared sine is sin2_min (no usable parallax) or the point is behind
+ * either camera. */
+static double depth_in_b(const double R[9], const double t[3], const double xa[3], const double xb[3],
+                         double sin2_min)
+{
+    double a[3], c[3], d[3], c2, lam, nu;
+    rot_mul(R, xa, a);
+    cross3(xb, a, c);
+    c2 = dot3(c, c);
+    if (!(c2 > sin2_min * dot3(xb, xb) * dot3(a, a)))
+        return 0.0;
+    cross3(t, a, d);
+    lam = dot3(c, d) / c2;
+    /* nu from the same equation crossed with xb from the left: -nu (xb x R xa) = xb x t */
+    cross3(t, xb, d);
+    nu = dot3(c, d) / c2;
+    return (lam > 0.0 && nu > 0.0 && isfinite(lam)) ? lam : 0.0;
+}
+
+/* The relative scale of this frame's step over the previous one from the m carried tracks (x0 in frame
+ * k-2 where has0, x1 in k-1, x2 in k) and the two unit-translation poses: each track's depth in frame
+ * k-1 from the pair (k-2, k-1) over its depth from (k-1, k), the median over the tracks with enough
+ * parallax in both. Writes the number of tracks used into *used; returns TVO_VO_REL_SCALE_NONE when
+ * fewer than cfg.min_scale_points. Uses vo->scratch. */
+static double relative_scale(tvo_vo *vo, const double R[9], const double t[3], int32_t m, int32_t *used)
+{
+    double *ratio = (double *)vo->scratch;
+    const double sp = sin(vo->cfg.scale_min_parallax_deg * (3.14159265358979323846 / 180.0));
+    const double sin2_min = sp * sp;
+    double Rt[9], tt[3];
+    int32_t k = 0;
+    /* the pair (k-1, k) seen from frame k-1: X_(k-1) = R^T X_k - R^T t */
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+            Rt[3 * r + c] = R[3 * c + r];
+    rot_mul(Rt, t, tt);
+    tt[0] = -tt[0];
+    tt[1] = -tt[1];
+    tt[2] = -tt[2];
+    for (int32_t i = 0; i < m; ++i) {
+        double xa[3], xb[3], xc[3], da, db;
+        if (!vo->has0[i])
+            continue;
+        xa[0] = vo->x0[i].x; xa[1] = vo->x0[i].y; xa[2] = 1.0;
+        xb[0] = vo->x1[i].x; xb[1] = vo->x1[i].y; xb[2] = 1.0;
+        xc[0] = vo->x2[i].x; xc[1] = vo->x2[i].y; xc[2] = 1.0;
+        da = depth_in_b(vo->R0, vo->t0, xa, xb, sin2_min); /* frame k-1 from (k-2, k-1) */
+        if (da <= 0.0)
+            continue;
+        db = depth_in_b(Rt, tt, xc, xb, sin2_min); /* frame k-1 from (k-1, k) */
+        if (db <= 0.0)
+            continue;
+        {
+            const double r = da / db;
+            if (isfinite(r) && r > 0.0)
+                ratio[k++] = r;
+        }
+    }
+    *used = k;
+    if (k < vo->cfg.min_scale_points)
+        return TVO_VO_REL_SCALE_NONE;
+    return select_kth(ratio, k, k / 2);
+}
+
 /* Keep the entries i with keep[i] != 0 of the parallel track arrays, in order. */
 static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
 {
@@ -292,6 +431,8 @@ static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
         vo->next[m] = vo->next[i];
         vo->x1[m] = vo->x1[i];
         vo->x2[m] = vo->x2[i];
+        vo->x0[m] = vo->x0[i];
+        vo->has0[m] = vo->has0[i];
         ++m;
     }
     return m;
@@ -303,7 +444,7 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
     tvo_pyramid *pc, *pp;
     int64_t t0, t1;
     const int32_t w = vo != NULL ? vo->cfg.camera.width : 0, h = vo != NULL ? vo->cfg.camera.height : 0;
-    int32_t m;
+    int32_t m, pose0_next = 0; /* whether this frame's pose is a unit translation for the next rel_scale */
     if (res == NULL)
         return TVO_ERR_NULL;
     result_clear(res, TVO_VO_LOST);
@@ -435,12 +576,24 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
                 memcpy(vo->t_dir, rp.t, sizeof(vo->t_dir));
             /* carry the inliers (the outliers are bad tracks) */
             m = compact(vo, m, vo->mask);
-            for (int32_t i = 0; i < m; ++i)
+            if (res->state == TVO_VO_OK && vo->has_pose0)
+                res->rel_scale = relative_scale(vo, rp.R, rp.t, m, &res->rel_scale_points);
+            for (int32_t i = 0; i < m; ++i) {
                 vo->pts[i] = vo->next[i];
+                vo->x0[i] = vo->x1[i]; /* frame k-1 becomes k-2 of the next frame */
+                vo->has0[i] = 1;
+            }
             vo->n = m;
+            if (res->state == TVO_VO_OK) {
+                memcpy(vo->R0, rp.R, sizeof(vo->R0));
+                memcpy(vo->t0, rp.t, sizeof(vo->t0));
+                pose0_next = 1;
+            }
             if (!tvo_pose_is_finite(&res->T_prev_cur)) { /* cannot happen by contract; never emit it */
                 res->T_prev_cur = tvo_pose_identity();
                 res->state = TVO_VO_LOST;
+                res->rel_scale = TVO_VO_REL_SCALE_NONE;
+                pose0_next = 0;
             }
         }
     }
@@ -453,6 +606,7 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
     res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
 
 done:
+    vo->has_pose0 = pose0_next;
     if (res->state == TVO_VO_OK)
         vo->t_dir_age = 0;
     else if (vo->t_dir_age <= TVO_VO_PRIOR_FRAMES)

@@ -209,6 +209,104 @@ static void test_single_plane_unresolved(void **state)
     assert_true(rmax < 1.5);
 }
 
+/* Relative scale: a camera translating with known, varying step lengths (and a slow yaw) through the
+ * room; rel_scale must give |t_k| / |t_(k-1)| within a few percent on the frames where it is available,
+ * be unavailable (0, never NaN) on the first two frames and after a reset, and after rotation-only
+ * frames. Steps 4-12 cm at 20-60 px of flow keep most tracks inside the 320x240 view. */
+static const double scale_steps[] = { 0.08, 0.05, 0.10, 0.07, 0.12, 0.06, 0.09, 0.045, 0.08, 0.11,
+                                      0.055, 0.09, 0.07, 0.10, 0.06, 0.08 };
+#define SCALE_FRAMES ((int)(sizeof(scale_steps) / sizeof(scale_steps[0])) + 1)
+
+static tvo_pose scale_pose(int k, const double dir[3])
+{
+    tvo_pose T = tvo_pose_identity();
+    double s = 0.0;
+    const double v[3] = { 0.01 * sin(0.5 * k), 0.004 * k, 0.0 };
+    for (int j = 0; j < k; ++j)
+        s += scale_steps[j];
+    tvo_rotvec_to_rot(v, T.R);
+    for (int i = 0; i < 3; ++i)
+        T.t[i] = dir[i] * s;
+    return T;
+}
+
+static void test_relative_scale(void **state)
+{
+    fixture *f = *state;
+    const double dir[3] = { 0.6, 0.1, -0.79 }; /* sideways and backwards: the far wall stays in view */
+    double worst = 0.0, prop = scale_steps[0], prop_worst = 0.0;
+    int avail = 0;
+    for (int k = 0; k < SCALE_FRAMES; ++k) {
+        tvo_pose T = scale_pose(k, dir);
+        tvo_vo_result res;
+        tvo_image img = tvo_image_make(W, H, W, f->img);
+        render(&T, f->img);
+        assert_int_equal(tvo_vo_process(f->vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
+        assert_true(isfinite(res.rel_scale) && res.rel_scale >= 0.0);
+        if (k < 2) {
+            assert_true(res.rel_scale == TVO_VO_REL_SCALE_NONE);
+            continue;
+        }
+        if (getenv("TVO_TEST_VERBOSE") != NULL)
+            fprintf(stderr, "frame %2d: state %d tracked %d inliers %d rel_scale %g points %d\n", k, (int)res.state,
+                    (int)res.tracked, (int)res.inliers, res.rel_scale, (int)res.rel_scale_points);
+        if (res.rel_scale != TVO_VO_REL_SCALE_NONE) {
+            const double truth = scale_steps[k - 1] / scale_steps[k - 2];
+            const double e = fabs(res.rel_scale / truth - 1.0);
+            fprintf(stderr, "frame %2d: rel_scale %.4f truth %.4f (%+.2f %%) from %d tracks\n", k, res.rel_scale,
+                    truth, 100.0 * (res.rel_scale / truth - 1.0), (int)res.rel_scale_points);
+            assert_int_equal(res.state, TVO_VO_OK);
+            assert_true(res.rel_scale_points >= f->cfg.min_scale_points);
+            worst = e > worst ? e : worst;
+            avail++;
+            /* propagated from the first step: s_k = r_k s_(k-1) */
+            prop *= res.rel_scale;
+            {
+                const double pe = fabs(prop / scale_steps[k - 1] - 1.0);
+                prop_worst = pe > prop_worst ? pe : prop_worst;
+            }
+        } else {
+            prop = scale_steps[k - 1]; /* (not reached when every frame has one) */
+        }
+    }
+    fprintf(stderr, "relative scale: %d of %d frames, worst error %.2f %%; propagated from the first step: worst "
+            "%.2f %%\n", avail, SCALE_FRAMES - 2, 100.0 * worst, 100.0 * prop_worst);
+    assert_true(avail >= (SCALE_FRAMES - 2) * 8 / 10);
+    assert_true(worst < 0.06);
+    assert_true(prop_worst < 0.06);
+
+    /* after a reset: the first two frames have none again */
+    tvo_vo_reset(f->vo);
+    for (int k = 0; k < 3; ++k) {
+        tvo_pose T = scale_pose(k, dir);
+        tvo_vo_result res;
+        tvo_image img = tvo_image_make(W, H, W, f->img);
+        render(&T, f->img);
+        assert_int_equal(tvo_vo_process(f->vo, &img, 5000000000LL + k * 50000000LL, &res), TVO_OK);
+        if (k < 2)
+            assert_true(res.rel_scale == TVO_VO_REL_SCALE_NONE && res.rel_scale_points == 0);
+        else
+            assert_true(res.rel_scale > 0.0);
+    }
+}
+
+/* Pure rotation: no translation, so never a relative scale. */
+static void test_relative_scale_rotation_only(void **state)
+{
+    fixture *f = *state;
+    const double dir[3] = { 0.0, 0.0, 0.0 };
+    for (int k = 0; k < 8; ++k) {
+        tvo_pose T = motion(k, dir, 0.0, 0.8);
+        tvo_vo_result res;
+        tvo_image img = tvo_image_make(W, H, W, f->img);
+        render(&T, f->img);
+        assert_int_equal(tvo_vo_process(f->vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
+        if (res.state != TVO_VO_OK)
+            assert_true(res.rel_scale == TVO_VO_REL_SCALE_NONE);
+        assert_true(isfinite(res.rel_scale));
+    }
+}
+
 static void test_bad_input(void **state)
 {
     fixture *f = *state;
@@ -284,6 +382,8 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_pure_rotation_reports_rotation_only, setup, teardown),
         cmocka_unit_test_setup_teardown(test_single_plane_twins, setup, teardown),
         cmocka_unit_test_setup_teardown(test_single_plane_unresolved, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_relative_scale, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_relative_scale_rotation_only, setup, teardown),
         cmocka_unit_test_setup_teardown(test_bad_input, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -9,7 +9,9 @@
  *
  * Memory: tvo_vo_required_size(&cfg) bytes, handed to tvo_vo_init(); nothing is allocated afterwards.
  * For 752x480 with the default configuration this is about 1.1 MB (see the README for the figure
- * printed by `tvo_replay --print-memory`). Not thread-safe: one tvo_vo per thread.
+ * printed by `tvo_replay --print-memory`); of it, max_tracks * 17 bytes (rounded, 5.2 KB for 300 tracks)
+ * keep each track's position in the frame before the previous one, for the relative scale
+ * (tvo_vo_result.rel_scale). Not thread-safe: one tvo_vo per thread.
  */
 #ifndef TINYVO_VO_H
 #define TINYVO_VO_H
@@ -68,12 +70,19 @@ typedef struct tvo_vo_config {
                                    corners wanted, it is repeated with this FAST threshold (if it is lower
                                    than detect.fast_threshold); [0, 255], 0 disables; default 7 */
     double pose_threshold_px;   /* RANSAC inlier threshold in pixels, converted with the focal length; default 1.0 */
+    int32_t min_scale_points;   /* relative scale (tvo_vo_result.rel_scale): fewer usable three-frame tracks
+                                   than this -> not available; >= 3 (above max_tracks: never); default 20 */
+    double scale_min_parallax_deg; /* ...a track is usable when both of its pairs (k-2,k-1) and (k-1,k) see it
+                                   with at least this ray angle, in degrees, (0, 10]; default 0.1 */
     tvo_clock_fn clock;         /* optional (NULL: no timings) */
     void *clock_user;
 } tvo_vo_config;
 
 /* Fill cfg with defaults for `camera` (copied). */
 void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
+
+/* tvo_vo_result.rel_scale when the relative scale is not available. */
+#define TVO_VO_REL_SCALE_NONE 0.0
 
 typedef struct tvo_vo_result {
     tvo_vo_state state;
@@ -87,6 +96,15 @@ typedef struct tvo_vo_result {
     double parallax_deg;       /* median rotation-compensated parallax of the inliers */
     int64_t dt_ns;             /* time since the previous frame (0 on the first; at most INT64_MAX) */
     float features[TVO_FEAT_COUNT]; /* front-end features for the per-DoF networks (nn.h layout) */
+    double rel_scale;          /* relative scale r = |t_k| / |t_(k-1)|: the metric length of this frame's step
+                                  over the previous frame's, from the tracks seen in frames k-2, k-1 and k,
+                                  triangulated in frame k-1 once with the previous step's unit translation
+                                  and once with this one's (median depth ratio). TVO_VO_REL_SCALE_NONE (0)
+                                  when not available: this frame or the previous one is not OK (no
+                                  translation: initialising, rotation-only, lost, after a reset), or fewer
+                                  than cfg.min_scale_points tracks have enough parallax and positive depth in
+                                  both pairs (e.g. most tracks re-detected). Otherwise finite and > 0. */
+    int32_t rel_scale_points;  /* tracks the median used (may be > 0 with rel_scale 0: too few of them) */
     int64_t stage_ns[TVO_STAGE_COUNT];
 } tvo_vo_result;
 
