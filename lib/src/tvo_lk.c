@@ -446,27 +446,57 @@ static void lk_mismatch(const uint8_t *src, int32_t sstride, const int32_t wt[4]
 }
 
 #if LK_SSE2
-/* 8 pixels of a row: (J bilinear, 5 fractional bits) - I, as int16; loads 9 bytes of j0 and j1. */
-static __m128i lk_diff8_sse2(const uint8_t *j0, const uint8_t *j1, const int16_t *iw, __m128i w01,
-                             __m128i w23, __m128i rnd)
+/* Rows of one 8-column strip whose int32 lane sums of (J - I) * Ix (or * Iy) cannot overflow: per row a
+ * lane adds two products of |J - I| <= 255 * 32 = 8160 and |Ix| <= 16 * 255 = 4080, 66,585,600; 32 rows
+ * make 2,130,739,200 < 2^31. */
+#define LK_MISMATCH_STRIP_ROWS 32
+
+/* The (J - I) * Ix and * Iy sums of one 8-column strip of the window (rows 0..win-1), added to *s1 and
+ * *s2. j: top-left of the strip in the J block; iw / ixw / iyw: the strip's column in the window
+ * buffers. Each J row is widened and paired (J[x], J[x+1]) once: its products with (w00, w01) are kept
+ * for the next row, with (w10, w11) used for this one; the sums are the same integers as
+ * lk_mismatch(). mask selects the lanes that count (all of them, or the new lanes of the overlapping
+ * last strip). */
+static void lk_mismatch_strip_sse2(const uint8_t *j, int32_t sstride, const int16_t *iw, const int16_t *ixw,
+                                   const int16_t *iyw, int32_t win, __m128i w01, __m128i w23, __m128i mask,
+                                   int64_t *s1, int64_t *s2)
 {
-    const __m128i z = _mm_setzero_si128();
-    __m128i a0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)j0), z);
-    __m128i a1 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j0 + 1)), z);
-    __m128i b0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)j1), z);
-    __m128i b1 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j1 + 1)), z);
-    /* pairs (J[x], J[x+1]) times (w00, w01), plus (J'[x], J'[x+1]) times (w10, w11) */
-    __m128i lo = _mm_add_epi32(_mm_madd_epi16(_mm_unpacklo_epi16(a0, a1), w01),
-                               _mm_madd_epi16(_mm_unpacklo_epi16(b0, b1), w23));
-    __m128i hi = _mm_add_epi32(_mm_madd_epi16(_mm_unpackhi_epi16(a0, a1), w01),
-                               _mm_madd_epi16(_mm_unpackhi_epi16(b0, b1), w23));
-    lo = _mm_srai_epi32(_mm_add_epi32(lo, rnd), LK_I_SHIFT); /* non-negative: exact */
-    hi = _mm_srai_epi32(_mm_add_epi32(hi, rnd), LK_I_SHIFT);
-    return _mm_sub_epi16(_mm_packs_epi32(lo, hi), _mm_loadu_si128((const __m128i *)iw));
+    const __m128i z = _mm_setzero_si128(), rnd = _mm_set1_epi32(LK_I_ROUND);
+    __m128i a0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)j), z);
+    __m128i a1 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j + 1)), z);
+    __m128i top_lo = _mm_madd_epi16(_mm_unpacklo_epi16(a0, a1), w01);
+    __m128i top_hi = _mm_madd_epi16(_mm_unpackhi_epi16(a0, a1), w01);
+    int32_t y = 0;
+    while (y < win) {
+        const int32_t end = win - y > LK_MISMATCH_STRIP_ROWS ? y + LK_MISMATCH_STRIP_ROWS : win;
+        __m128i acc1 = z, acc2 = z;
+        for (; y < end; ++y) {
+            __m128i b0, b1, plo, phi, lo, hi, d;
+            j += sstride;
+            b0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)j), z);
+            b1 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j + 1)), z);
+            plo = _mm_unpacklo_epi16(b0, b1);
+            phi = _mm_unpackhi_epi16(b0, b1);
+            lo = _mm_add_epi32(top_lo, _mm_madd_epi16(plo, w23));
+            hi = _mm_add_epi32(top_hi, _mm_madd_epi16(phi, w23));
+            top_lo = _mm_madd_epi16(plo, w01);
+            top_hi = _mm_madd_epi16(phi, w01);
+            lo = _mm_srai_epi32(_mm_add_epi32(lo, rnd), LK_I_SHIFT); /* non-negative: exact */
+            hi = _mm_srai_epi32(_mm_add_epi32(hi, rnd), LK_I_SHIFT);
+            d = _mm_and_si128(_mm_sub_epi16(_mm_packs_epi32(lo, hi), _mm_loadu_si128((const __m128i *)iw)), mask);
+            acc1 = _mm_add_epi32(acc1, _mm_madd_epi16(d, _mm_loadu_si128((const __m128i *)ixw)));
+            acc2 = _mm_add_epi32(acc2, _mm_madd_epi16(d, _mm_loadu_si128((const __m128i *)iyw)));
+            iw += win;
+            ixw += win;
+            iyw += win;
+        }
+        *s1 += lk_hsum_epi32(acc1);
+        *s2 += lk_hsum_epi32(acc2);
+    }
 }
 
-/* Same sums as lk_mismatch() for win >= 8; never reads outside the (win+1)^2 block: the last
- * 8-pixel group of a row overlaps the previous one and its repeated lanes are masked out. */
+/* Same sums as lk_mismatch() for win >= 8, strip by strip; never reads outside the (win+1)^2 block:
+ * the last strip overlaps the previous one and its repeated lanes are masked out. */
 static void lk_mismatch_sse2(const uint8_t *src, int32_t sstride, const int32_t wt[4], const lk_work *wk,
                              int64_t *b1, int64_t *b2)
 {
@@ -474,31 +504,18 @@ static void lk_mismatch_sse2(const uint8_t *src, int32_t sstride, const int32_t 
     const int32_t full = win & ~7, tail = win - full, last = win - 8;
     const __m128i w01 = _mm_set1_epi32((int32_t)((uint32_t)wt[0] | ((uint32_t)wt[1] << 16)));
     const __m128i w23 = _mm_set1_epi32((int32_t)((uint32_t)wt[2] | ((uint32_t)wt[3] << 16)));
-    const __m128i rnd = _mm_set1_epi32(LK_I_ROUND);
-    /* lanes 8 - tail .. 7 of the last group are new pixels */
+    /* lanes 8 - tail .. 7 of the last strip are new pixels */
     const __m128i lane = _mm_set_epi16(7, 6, 5, 4, 3, 2, 1, 0);
     const __m128i mask = _mm_cmpgt_epi16(lane, _mm_set1_epi16((int16_t)(7 - tail)));
+    const __m128i all = _mm_set1_epi32(-1);
     int64_t s1 = 0, s2 = 0;
-    int32_t x, y;
-    for (y = 0; y < win; ++y) {
-        const uint8_t *j0 = src + (size_t)y * (size_t)sstride, *j1 = j0 + sstride;
-        const int16_t *iw = wk->iwin + (size_t)y * (size_t)win;
-        const int16_t *ixw = wk->ixwin + (size_t)y * (size_t)win;
-        const int16_t *iyw = wk->iywin + (size_t)y * (size_t)win;
-        __m128i acc1 = _mm_setzero_si128(), acc2 = _mm_setzero_si128();
-        for (x = 0; x < full; x += 8) {
-            __m128i d = lk_diff8_sse2(j0 + x, j1 + x, iw + x, w01, w23, rnd);
-            acc1 = _mm_add_epi32(acc1, _mm_madd_epi16(d, _mm_loadu_si128((const __m128i *)(ixw + x))));
-            acc2 = _mm_add_epi32(acc2, _mm_madd_epi16(d, _mm_loadu_si128((const __m128i *)(iyw + x))));
-        }
-        if (tail > 0) {
-            __m128i d = _mm_and_si128(lk_diff8_sse2(j0 + last, j1 + last, iw + last, w01, w23, rnd), mask);
-            acc1 = _mm_add_epi32(acc1, _mm_madd_epi16(d, _mm_loadu_si128((const __m128i *)(ixw + last))));
-            acc2 = _mm_add_epi32(acc2, _mm_madd_epi16(d, _mm_loadu_si128((const __m128i *)(iyw + last))));
-        }
-        s1 += lk_hsum_epi32(acc1);
-        s2 += lk_hsum_epi32(acc2);
-    }
+    int32_t x;
+    for (x = 0; x < full; x += 8)
+        lk_mismatch_strip_sse2(src + x, sstride, wk->iwin + x, wk->ixwin + x, wk->iywin + x, win, w01, w23,
+                               all, &s1, &s2);
+    if (tail > 0)
+        lk_mismatch_strip_sse2(src + last, sstride, wk->iwin + last, wk->ixwin + last, wk->iywin + last, win,
+                               w01, w23, mask, &s1, &s2);
     *b1 = s1;
     *b2 = s2;
 }
