@@ -209,63 +209,161 @@ static int32_t lk_hsum_epi32(__m128i v)
     return _mm_cvtsi128_si32(v);
 }
 
-/* 8 bilinear samples of an int16 grid (pairs x, x+1 of rows g0, g1), descaled by 2^14 with floor
- * (= the biased shift of the C path), as int16. */
-static __m128i lk_interp8_s16(const int16_t *g0, const int16_t *g1, __m128i w01, __m128i w23, __m128i rnd)
+/* Products of the (x, x+1) pairs of 8 int16 values at p with the weight pair w: lanes 0..3 (lo) and 4..7
+ * (hi) as int32. */
+static void lk_pair_madd_s16(const int16_t *p, __m128i w, __m128i *lo, __m128i *hi)
 {
-    __m128i a0 = _mm_loadu_si128((const __m128i *)g0), a1 = _mm_loadu_si128((const __m128i *)(g0 + 1));
-    __m128i b0 = _mm_loadu_si128((const __m128i *)g1), b1 = _mm_loadu_si128((const __m128i *)(g1 + 1));
-    __m128i lo = _mm_add_epi32(_mm_madd_epi16(_mm_unpacklo_epi16(a0, a1), w01),
-                               _mm_madd_epi16(_mm_unpacklo_epi16(b0, b1), w23));
-    __m128i hi = _mm_add_epi32(_mm_madd_epi16(_mm_unpackhi_epi16(a0, a1), w01),
-                               _mm_madd_epi16(_mm_unpackhi_epi16(b0, b1), w23));
-    lo = _mm_srai_epi32(_mm_add_epi32(lo, rnd), LK_W_BITS);
-    hi = _mm_srai_epi32(_mm_add_epi32(hi, rnd), LK_W_BITS);
-    return _mm_packs_epi32(lo, hi);
+    __m128i a0 = _mm_loadu_si128((const __m128i *)p), a1 = _mm_loadu_si128((const __m128i *)(p + 1));
+    *lo = _mm_madd_epi16(_mm_unpacklo_epi16(a0, a1), w);
+    *hi = _mm_madd_epi16(_mm_unpackhi_epi16(a0, a1), w);
 }
 
-/* SSE2 version of the Scharr rows of lk_prev_window (win >= 8), same integers: for each of the g grid
- * rows, the vertical pass over p = win + 3 columns and the horizontal pass over g = win + 1 columns, in
- * 8-lane groups; the last group of a row overlaps the previous one (idempotent stores). */
-static void lk_scharr_sse2(const uint8_t *src, int32_t sstride, lk_work *wk)
+/* Same for 8 uint8 values (9 bytes read). */
+static void lk_pair_u8(const uint8_t *p, __m128i *lo, __m128i *hi)
 {
-    const int32_t win = wk->win, g = win + 1, p = win + 3;
+    const __m128i z = _mm_setzero_si128();
+    __m128i a0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)p), z);
+    __m128i a1 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(p + 1)), z);
+    *lo = _mm_unpacklo_epi16(a0, a1);
+    *hi = _mm_unpackhi_epi16(a0, a1);
+}
+
+/* One 8-column strip of the Scharr grid (rows 0..g-1): horizontal passes first (difference
+ * s[x+2] - s[x] and smoothing 3 s[x] + 10 s[x+1] + 3 s[x+2] of each source row, computed once), then
+ * the vertical ones from the last three rows: dx = 3 hd[r] + 10 hd[r+1] + 3 hd[r+2], dy = hs[r+2] -
+ * hs[r], the same integers as the vertical-then-horizontal C path (|values| <= 4080 fit int16). */
+static void lk_scharr_strip_sse2(const uint8_t *s, int32_t sstride, int16_t *dx, int16_t *dy, int32_t g,
+                                 int32_t rows)
+{
     const __m128i z = _mm_setzero_si128(), k3 = _mm_set1_epi16(3), k10 = _mm_set1_epi16(10);
-    int16_t *t0 = wk->tv0, *t1 = wk->tv1;
-    int32_t r, k, x;
-    for (r = 0; r < g; ++r) {
-        const uint8_t *s0 = src + (size_t)r * (size_t)sstride;
-        const uint8_t *s1 = s0 + sstride;
-        const uint8_t *s2 = s1 + sstride;
-        int16_t *dx = wk->gx + (size_t)r * (size_t)g, *dy = wk->gy + (size_t)r * (size_t)g;
-        for (k = 0; k < p; k += 8) {
-            __m128i a, b, c;
-            x = k + 8 <= p ? k : p - 8;
-            a = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s0 + x)), z);
-            b = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s1 + x)), z);
-            c = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s2 + x)), z);
-            _mm_storeu_si128((__m128i *)(t0 + x),
-                             _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(a, c), k3), _mm_mullo_epi16(b, k10)));
-            _mm_storeu_si128((__m128i *)(t1 + x), _mm_sub_epi16(c, a));
-        }
-        for (k = 0; k < g; k += 8) {
-            __m128i l0, l2, m0, m1, m2;
-            x = k + 8 <= g ? k : g - 8;
-            l0 = _mm_loadu_si128((const __m128i *)(t0 + x));
-            l2 = _mm_loadu_si128((const __m128i *)(t0 + x + 2));
-            m0 = _mm_loadu_si128((const __m128i *)(t1 + x));
-            m1 = _mm_loadu_si128((const __m128i *)(t1 + x + 1));
-            m2 = _mm_loadu_si128((const __m128i *)(t1 + x + 2));
-            _mm_storeu_si128((__m128i *)(dx + x), _mm_sub_epi16(l2, l0));
-            _mm_storeu_si128((__m128i *)(dy + x),
-                             _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(m0, m2), k3), _mm_mullo_epi16(m1, k10)));
-        }
+    __m128i hd0, hd1, hs0, hs1, a, b, c;
+    int32_t r;
+    a = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)s), z);
+    b = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s + 1)), z);
+    c = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s + 2)), z);
+    hd0 = _mm_sub_epi16(c, a);
+    hs0 = _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(a, c), k3), _mm_mullo_epi16(b, k10));
+    s += sstride;
+    a = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)s), z);
+    b = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s + 1)), z);
+    c = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s + 2)), z);
+    hd1 = _mm_sub_epi16(c, a);
+    hs1 = _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(a, c), k3), _mm_mullo_epi16(b, k10));
+    for (r = 0; r < rows; ++r) {
+        __m128i hd2, hs2;
+        s += sstride;
+        a = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)s), z);
+        b = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s + 1)), z);
+        c = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s + 2)), z);
+        hd2 = _mm_sub_epi16(c, a);
+        hs2 = _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(a, c), k3), _mm_mullo_epi16(b, k10));
+        _mm_storeu_si128((__m128i *)dx,
+                         _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(hd0, hd2), k3), _mm_mullo_epi16(hd1, k10)));
+        _mm_storeu_si128((__m128i *)dy, _mm_sub_epi16(hs2, hs0));
+        hd0 = hd1;
+        hd1 = hd2;
+        hs0 = hs1;
+        hs1 = hs2;
+        dx += g;
+        dy += g;
     }
 }
 
-/* SSE2 version of the window interpolation of lk_prev_window (win >= 8), same integers. s is the
- * window's top-left pixel (patch offset +1, +1). The last 8-group of a row overlaps the previous one:
- * stores are idempotent and the gradient sums mask the repeated lanes. */
+/* SSE2 version of the Scharr rows of lk_prev_window (win >= 8), same integers, in 8-column strips of
+ * the g = win + 1 grid columns; the last strip overlaps the previous one (idempotent stores). */
+static void lk_scharr_sse2(const uint8_t *src, int32_t sstride, lk_work *wk)
+{
+    const int32_t g = wk->win + 1;
+    int32_t x;
+    for (x = 0; x + 8 <= g; x += 8)
+        lk_scharr_strip_sse2(src + x, sstride, wk->gx + x, wk->gy + x, g, g);
+    if (g & 7)
+        lk_scharr_strip_sse2(src + g - 8, sstride, wk->gx + g - 8, wk->gy + g - 8, g, g);
+}
+
+/* Grey values (5 fractional bits) of one 8-column window strip, rows 0..win-1 from source rows s,
+ * s + sstride, ...; each source row is widened and paired once (see lk_mismatch_strip_sse2). */
+static void lk_grey_strip_sse2(const uint8_t *s, int32_t sstride, int16_t *iw, int32_t win, __m128i w01,
+                               __m128i w23)
+{
+    const __m128i rnd = _mm_set1_epi32(LK_I_ROUND);
+    __m128i plo, phi, top_lo, top_hi;
+    int32_t y;
+    lk_pair_u8(s, &plo, &phi);
+    top_lo = _mm_madd_epi16(plo, w01);
+    top_hi = _mm_madd_epi16(phi, w01);
+    for (y = 0; y < win; ++y) {
+        __m128i lo, hi;
+        s += sstride;
+        lk_pair_u8(s, &plo, &phi);
+        lo = _mm_add_epi32(top_lo, _mm_madd_epi16(plo, w23));
+        hi = _mm_add_epi32(top_hi, _mm_madd_epi16(phi, w23));
+        top_lo = _mm_madd_epi16(plo, w01);
+        top_hi = _mm_madd_epi16(phi, w01);
+        lo = _mm_srai_epi32(_mm_add_epi32(lo, rnd), LK_I_SHIFT);
+        hi = _mm_srai_epi32(_mm_add_epi32(hi, rnd), LK_I_SHIFT);
+        _mm_storeu_si128((__m128i *)iw, _mm_packs_epi32(lo, hi));
+        iw += win;
+    }
+}
+
+/* The G sums below add per strip and lane two products of |d| <= 4080 per row into int32: at most
+ * 63 rows * 2 * 4080^2 = 2,097,446,400 < 2^31. */
+#if TVO_LK_MAX_WIN_SIZE > 63
+#error "lk_deriv_strip_sse2: int32 strip sums need win_size <= 63"
+#endif
+
+/* Interpolated d/dx, d/dy of one 8-column window strip (rows 0..win-1) from the Scharr grid at gx, gy
+ * (stride g), descaled by 2^14 with floor (= the biased shift of the C path); the G sums of the lanes in
+ * mask are added to A[3]. Each grid row is paired once, as in lk_grey_strip_sse2. */
+static void lk_deriv_strip_sse2(const int16_t *gx, const int16_t *gy, int32_t g, int16_t *ixw, int16_t *iyw,
+                                int32_t win, __m128i w01, __m128i w23, __m128i mask, int64_t A[3])
+{
+    const __m128i rnd = _mm_set1_epi32(1 << (LK_W_BITS - 1));
+    __m128i xt_lo, xt_hi, yt_lo, yt_hi, c11, c12, c22;
+    int32_t y;
+    lk_pair_madd_s16(gx, w01, &xt_lo, &xt_hi);
+    lk_pair_madd_s16(gy, w01, &yt_lo, &yt_hi);
+    c11 = c12 = c22 = _mm_setzero_si128();
+    for (y = 0; y < win; ++y) {
+        __m128i a0, a1, plo, phi, dx, dy, mx;
+        gx += g;
+        gy += g;
+        a0 = _mm_loadu_si128((const __m128i *)gx);
+        a1 = _mm_loadu_si128((const __m128i *)(gx + 1));
+        plo = _mm_unpacklo_epi16(a0, a1);
+        phi = _mm_unpackhi_epi16(a0, a1);
+        a0 = _mm_srai_epi32(_mm_add_epi32(_mm_add_epi32(xt_lo, _mm_madd_epi16(plo, w23)), rnd), LK_W_BITS);
+        a1 = _mm_srai_epi32(_mm_add_epi32(_mm_add_epi32(xt_hi, _mm_madd_epi16(phi, w23)), rnd), LK_W_BITS);
+        xt_lo = _mm_madd_epi16(plo, w01);
+        xt_hi = _mm_madd_epi16(phi, w01);
+        dx = _mm_packs_epi32(a0, a1);
+        a0 = _mm_loadu_si128((const __m128i *)gy);
+        a1 = _mm_loadu_si128((const __m128i *)(gy + 1));
+        plo = _mm_unpacklo_epi16(a0, a1);
+        phi = _mm_unpackhi_epi16(a0, a1);
+        a0 = _mm_srai_epi32(_mm_add_epi32(_mm_add_epi32(yt_lo, _mm_madd_epi16(plo, w23)), rnd), LK_W_BITS);
+        a1 = _mm_srai_epi32(_mm_add_epi32(_mm_add_epi32(yt_hi, _mm_madd_epi16(phi, w23)), rnd), LK_W_BITS);
+        yt_lo = _mm_madd_epi16(plo, w01);
+        yt_hi = _mm_madd_epi16(phi, w01);
+        dy = _mm_packs_epi32(a0, a1);
+        _mm_storeu_si128((__m128i *)ixw, dx);
+        _mm_storeu_si128((__m128i *)iyw, dy);
+        mx = _mm_and_si128(dx, mask);
+        c11 = _mm_add_epi32(c11, _mm_madd_epi16(mx, dx));
+        c12 = _mm_add_epi32(c12, _mm_madd_epi16(mx, dy));
+        c22 = _mm_add_epi32(c22, _mm_madd_epi16(_mm_and_si128(dy, mask), dy));
+        ixw += win;
+        iyw += win;
+    }
+    A[0] += lk_hsum_epi32(c11);
+    A[1] += lk_hsum_epi32(c12);
+    A[2] += lk_hsum_epi32(c22);
+}
+
+/* SSE2 version of the window interpolation of lk_prev_window (win >= 8), same integers, in 8-column
+ * strips. s is the window's top-left pixel (patch offset +1, +1). The last strip overlaps the previous
+ * one: stores are idempotent and the gradient sums mask the repeated lanes. */
 static void lk_prev_interp_sse2(const uint8_t *s, int32_t sstride, const int32_t wt[4], lk_work *wk,
                                 int64_t A[3])
 {
@@ -273,57 +371,20 @@ static void lk_prev_interp_sse2(const uint8_t *s, int32_t sstride, const int32_t
     const int32_t full = win & ~7, tail = win - full, last = win - 8;
     const __m128i w01 = _mm_set1_epi32((int32_t)((uint32_t)wt[0] | ((uint32_t)wt[1] << 16)));
     const __m128i w23 = _mm_set1_epi32((int32_t)((uint32_t)wt[2] | ((uint32_t)wt[3] << 16)));
-    const __m128i rnd_i = _mm_set1_epi32(LK_I_ROUND);
-    const __m128i rnd_d = _mm_set1_epi32(1 << (LK_W_BITS - 1));
     const __m128i lane = _mm_set_epi16(7, 6, 5, 4, 3, 2, 1, 0);
     const __m128i mask = _mm_cmpgt_epi16(lane, _mm_set1_epi16((int16_t)(7 - tail)));
-    const __m128i z = _mm_setzero_si128();
-    int64_t a11 = 0, a12 = 0, a22 = 0;
-    int32_t x, y;
-    for (y = 0; y < win; ++y) {
-        const uint8_t *s0 = s + (size_t)y * (size_t)sstride, *s1 = s0 + sstride;
-        const int16_t *gx0 = wk->gx + (size_t)y * (size_t)g, *gy0 = wk->gy + (size_t)y * (size_t)g;
-        int16_t *iw = wk->iwin + (size_t)y * (size_t)win;
-        int16_t *ixw = wk->ixwin + (size_t)y * (size_t)win;
-        int16_t *iyw = wk->iywin + (size_t)y * (size_t)win;
-        __m128i c11 = z, c12 = z, c22 = z;
-        int32_t k;
-        for (k = 0; k < full || (k == full && tail > 0); k += 8) {
-            __m128i a0, a1, b0, b1, lo, hi, dx, dy;
-            x = k < full ? k : last;
-            a0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s0 + x)), z);
-            a1 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s0 + x + 1)), z);
-            b0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s1 + x)), z);
-            b1 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s1 + x + 1)), z);
-            lo = _mm_add_epi32(_mm_madd_epi16(_mm_unpacklo_epi16(a0, a1), w01),
-                               _mm_madd_epi16(_mm_unpacklo_epi16(b0, b1), w23));
-            hi = _mm_add_epi32(_mm_madd_epi16(_mm_unpackhi_epi16(a0, a1), w01),
-                               _mm_madd_epi16(_mm_unpackhi_epi16(b0, b1), w23));
-            dx = lk_interp8_s16(gx0 + x, gx0 + g + x, w01, w23, rnd_d);
-            dy = lk_interp8_s16(gy0 + x, gy0 + g + x, w01, w23, rnd_d);
-            lo = _mm_srai_epi32(_mm_add_epi32(lo, rnd_i), LK_I_SHIFT);
-            hi = _mm_srai_epi32(_mm_add_epi32(hi, rnd_i), LK_I_SHIFT);
-            _mm_storeu_si128((__m128i *)(iw + x), _mm_packs_epi32(lo, hi));
-            _mm_storeu_si128((__m128i *)(ixw + x), dx);
-            _mm_storeu_si128((__m128i *)(iyw + x), dy);
-            if (k == full) { /* overlapping tail group: count only the new lanes */
-                __m128i mx = _mm_and_si128(dx, mask);
-                c11 = _mm_add_epi32(c11, _mm_madd_epi16(mx, dx));
-                c12 = _mm_add_epi32(c12, _mm_madd_epi16(mx, dy));
-                c22 = _mm_add_epi32(c22, _mm_madd_epi16(_mm_and_si128(dy, mask), dy));
-            } else {
-                c11 = _mm_add_epi32(c11, _mm_madd_epi16(dx, dx));
-                c12 = _mm_add_epi32(c12, _mm_madd_epi16(dx, dy));
-                c22 = _mm_add_epi32(c22, _mm_madd_epi16(dy, dy));
-            }
-        }
-        a11 += lk_hsum_epi32(c11);
-        a12 += lk_hsum_epi32(c12);
-        a22 += lk_hsum_epi32(c22);
+    const __m128i all = _mm_set1_epi32(-1);
+    int32_t x;
+    A[0] = A[1] = A[2] = 0;
+    for (x = 0; x < full; x += 8) {
+        lk_grey_strip_sse2(s + x, sstride, wk->iwin + x, win, w01, w23);
+        lk_deriv_strip_sse2(wk->gx + x, wk->gy + x, g, wk->ixwin + x, wk->iywin + x, win, w01, w23, all, A);
     }
-    A[0] = a11;
-    A[1] = a12;
-    A[2] = a22;
+    if (tail > 0) {
+        lk_grey_strip_sse2(s + last, sstride, wk->iwin + last, win, w01, w23);
+        lk_deriv_strip_sse2(wk->gx + last, wk->gy + last, g, wk->ixwin + last, wk->iywin + last, win, w01, w23,
+                            mask, A);
+    }
 }
 #endif
 
