@@ -183,12 +183,19 @@ static void lk_gather(const lk_level *lv, int32_t x0, int32_t y0, int32_t size, 
 /* cvRound for 0 <= v < 2^23: round half to even, without relying on the FPU rounding mode. */
 static int32_t lk_round(float v)
 {
-    float f = floorf(v);
-    float d = v - f; /* exact */
-    int32_t i = (int32_t)f;
+    int32_t i = (int32_t)v; /* = floor(v) for v >= 0 */
+    float d = v - (float)i; /* exact */
     if (d > 0.5f || (d == 0.5f && (i & 1) != 0))
         ++i;
     return i;
+}
+
+/* floor(v) as an integer for -2^31 < v < 2^31 (window corners that passed lk_corner_ok()); cheaper
+ * than floorf() without SSE4.1. */
+static int32_t lk_floor_i(float v)
+{
+    int32_t i = (int32_t)v; /* truncates toward 0 */
+    return (float)i > v ? i - 1 : i;
 }
 
 /* Bilinear weights for the fractional offsets a, b in [0, 1), as OpenCV computes them. */
@@ -432,14 +439,20 @@ static void lk_prev_window(const lk_level *lv, int32_t ix, int32_t iy, const int
         }
     }
     if (!inside) { /* derivatives outside the image are 0 (OpenCV's BORDER_CONSTANT) */
+        /* grid columns c_lo..c_hi-1 are inside the image */
+        const int32_t c_lo = ix < 0 ? (-ix < g ? -ix : g) : 0;
+        const int32_t c_hi = lv->w - ix < g ? (lv->w - ix > c_lo ? lv->w - ix : c_lo) : g;
         for (r = 0; r < g; ++r) {
-            int row_out = iy + r < 0 || iy + r >= lv->h;
-            for (c = 0; c < g; ++c) {
-                if (row_out || ix + c < 0 || ix + c >= lv->w) {
-                    wk->gx[r * g + c] = 0;
-                    wk->gy[r * g + c] = 0;
-                }
+            int16_t *dx = wk->gx + (size_t)r * (size_t)g, *dy = wk->gy + (size_t)r * (size_t)g;
+            if (iy + r < 0 || iy + r >= lv->h) {
+                memset(dx, 0, (size_t)g * sizeof(int16_t));
+                memset(dy, 0, (size_t)g * sizeof(int16_t));
+                continue;
             }
+            for (c = 0; c < c_lo; ++c)
+                dx[c] = dy[c] = 0;
+            for (c = c_hi; c < g; ++c)
+                dx[c] = dy[c] = 0;
         }
     }
 
@@ -647,8 +660,8 @@ static int lk_track_level(const lk_params *prm, const lk_level *I, const lk_leve
     py -= half;
     if (!lk_corner_ok(px, win, I->w) || !lk_corner_ok(py, win, I->h))
         return 0;
-    ix = (int32_t)floorf(px);
-    iy = (int32_t)floorf(py);
+    ix = lk_floor_i(px);
+    iy = lk_floor_i(py);
     lk_weights(px - (float)ix, py - (float)iy, wt);
     lk_prev_window(I, ix, iy, wt, wk, A, prm->simd);
 
@@ -669,8 +682,8 @@ static int lk_track_level(const lk_params *prm, const lk_level *I, const lk_leve
             ok = 0;
             break;
         }
-        ix = (int32_t)floorf(cx);
-        iy = (int32_t)floorf(cy);
+        ix = lk_floor_i(cx);
+        iy = lk_floor_i(cy);
         lk_weights(cx - (float)ix, cy - (float)iy, wt);
         blk = lk_next_block(J, ix, iy, wk, &sstride);
 #if LK_SSE2
@@ -706,8 +719,8 @@ static int lk_track_level(const lk_params *prm, const lk_level *I, const lk_leve
         float fx = outx - half, fy = outy - half;
         if (!lk_corner_ok(fx, win, J->w) || !lk_corner_ok(fy, win, J->h))
             return 0;
-        ix = (int32_t)floorf(fx);
-        iy = (int32_t)floorf(fy);
+        ix = lk_floor_i(fx);
+        iy = lk_floor_i(fy);
         lk_weights(fx - (float)ix, fy - (float)iy, wt);
         blk = lk_next_block(J, ix, iy, wk, &sstride);
         *err = (float)lk_abs_error(blk, sstride, wt, wk) * (1.f / (float)(32 * win * win));
