@@ -159,24 +159,32 @@ static tvo_status lk_work_init(lk_work *wk, int32_t win, void *scratch, size_t s
     return TVO_OK;
 }
 
+/* Largest block lk_gather() copies: the (win+3)^2 patch or the (win+1+2*margin)^2 jpatch. */
+#define LK_GATHER_MAX (TVO_LK_MAX_WIN_SIZE + 3 + 2 * LK_JPATCH_MARGIN)
+
 /* Copy the size x size block whose top-left is (x0, y0) (may lie outside) into dst, reflecting. */
 static void lk_gather(const lk_level *lv, int32_t x0, int32_t y0, int32_t size, uint8_t *dst)
 {
+    int32_t map[LK_GATHER_MAX]; /* source column of each block column outside the image */
     int32_t r, c, c_lo, c_hi;
-    /* columns c_lo..c_hi-1 are inside the image: copied as a run; the others reflected */
-    c_lo = x0 < 0 ? -x0 : 0;
+    /* columns c_lo..c_hi-1 are inside the image: copied as a run; the others through map */
+    c_lo = x0 < 0 ? (-x0 < size ? -x0 : size) : 0;
     c_hi = lv->w - x0 < size ? lv->w - x0 : size;
     if (c_hi < c_lo)
         c_hi = c_lo;
+    for (c = 0; c < c_lo; ++c)
+        map[c] = tvo_reflect101(x0 + c, lv->w);
+    for (c = c_hi; c < size; ++c)
+        map[c] = tvo_reflect101(x0 + c, lv->w);
     for (r = 0; r < size; ++r) {
         const uint8_t *row = lv->data + (size_t)tvo_reflect101(y0 + r, lv->h) * (size_t)lv->stride;
         uint8_t *out = dst + (size_t)r * (size_t)size;
-        for (c = 0; c < c_lo && c < size; ++c)
-            out[c] = row[tvo_reflect101(x0 + c, lv->w)];
+        for (c = 0; c < c_lo; ++c)
+            out[c] = row[map[c]];
         if (c_hi > c_lo)
             memcpy(out + c_lo, row + x0 + c_lo, (size_t)(c_hi - c_lo));
-        for (c = c_hi > c_lo ? c_hi : (c_lo < size ? c_lo : size); c < size; ++c)
-            out[c] = row[tvo_reflect101(x0 + c, lv->w)];
+        for (c = c_hi; c < size; ++c)
+            out[c] = row[map[c]];
     }
 }
 
