@@ -329,10 +329,10 @@ static void lk_grey_strip_sse2(const uint8_t *s, int32_t sstride, int16_t *iw, i
 #endif
 
 /* Interpolated d/dx, d/dy of one 8-column window strip (rows 0..win-1) from the Scharr grid at gx, gy
- * (stride g), descaled by 2^14 with floor (= the biased shift of the C path); the G sums of the lanes in
- * mask are added to A[3]. Each grid row is paired once, as in lk_grey_strip_sse2. */
+ * (stride g), descaled by 2^14 with floor (= the biased shift of the C path); the G sums are added to
+ * A[3], when masked only those of the lanes in mask. Each grid row is paired once, as in lk_grey_strip_sse2. */
 static void lk_deriv_strip_sse2(const int16_t *gx, const int16_t *gy, int32_t g, int16_t *ixw, int16_t *iyw,
-                                int32_t win, __m128i w01, __m128i w23, __m128i mask, int64_t A[3])
+                                int32_t win, __m128i w01, __m128i w23, int masked, __m128i mask, int64_t A[3])
 {
     const __m128i rnd = _mm_set1_epi32(1 << (LK_W_BITS - 1));
     __m128i xt_lo, xt_hi, yt_lo, yt_hi, c11, c12, c22;
@@ -341,7 +341,7 @@ static void lk_deriv_strip_sse2(const int16_t *gx, const int16_t *gy, int32_t g,
     lk_pair_madd_s16(gy, w01, &yt_lo, &yt_hi);
     c11 = c12 = c22 = _mm_setzero_si128();
     for (y = 0; y < win; ++y) {
-        __m128i a0, a1, plo, phi, dx, dy, mx;
+        __m128i a0, a1, plo, phi, dx, dy, mx, my;
         gx += g;
         gy += g;
         a0 = _mm_loadu_si128((const __m128i *)gx);
@@ -364,10 +364,11 @@ static void lk_deriv_strip_sse2(const int16_t *gx, const int16_t *gy, int32_t g,
         dy = _mm_packs_epi32(a0, a1);
         _mm_storeu_si128((__m128i *)ixw, dx);
         _mm_storeu_si128((__m128i *)iyw, dy);
-        mx = _mm_and_si128(dx, mask);
+        mx = masked ? _mm_and_si128(dx, mask) : dx;
+        my = masked ? _mm_and_si128(dy, mask) : dy;
         c11 = _mm_add_epi32(c11, _mm_madd_epi16(mx, dx));
         c12 = _mm_add_epi32(c12, _mm_madd_epi16(mx, dy));
-        c22 = _mm_add_epi32(c22, _mm_madd_epi16(_mm_and_si128(dy, mask), dy));
+        c22 = _mm_add_epi32(c22, _mm_madd_epi16(my, dy));
         ixw += win;
         iyw += win;
     }
@@ -388,17 +389,16 @@ static void lk_prev_interp_sse2(const uint8_t *s, int32_t sstride, const int32_t
     const __m128i w23 = _mm_set1_epi32((int32_t)((uint32_t)wt[2] | ((uint32_t)wt[3] << 16)));
     const __m128i lane = _mm_set_epi16(7, 6, 5, 4, 3, 2, 1, 0);
     const __m128i mask = _mm_cmpgt_epi16(lane, _mm_set1_epi16((int16_t)(7 - tail)));
-    const __m128i all = _mm_set1_epi32(-1);
     int32_t x;
     A[0] = A[1] = A[2] = 0;
     for (x = 0; x < full; x += 8) {
         lk_grey_strip_sse2(s + x, sstride, wk->iwin + x, win, w01, w23);
-        lk_deriv_strip_sse2(wk->gx + x, wk->gy + x, g, wk->ixwin + x, wk->iywin + x, win, w01, w23, all, A);
+        lk_deriv_strip_sse2(wk->gx + x, wk->gy + x, g, wk->ixwin + x, wk->iywin + x, win, w01, w23, 0, mask, A);
     }
     if (tail > 0) {
         lk_grey_strip_sse2(s + last, sstride, wk->iwin + last, win, w01, w23);
         lk_deriv_strip_sse2(wk->gx + last, wk->gy + last, g, wk->ixwin + last, wk->iywin + last, win, w01, w23,
-                            mask, A);
+                            1, mask, A);
     }
 }
 #endif
@@ -537,11 +537,11 @@ static void lk_mismatch(const uint8_t *src, int32_t sstride, const int32_t wt[4]
  * *s2. j: top-left of the strip in the J block; iw / ixw / iyw: the strip's column in the window
  * buffers. Each J row is widened and paired (J[x], J[x+1]) once: its products with (w00, w01) are kept
  * for the next row, with (w10, w11) used for this one; the sums are the same integers as
- * lk_mismatch(). mask selects the lanes that count (all of them, or the new lanes of the overlapping
- * last strip). */
+ * lk_mismatch(). When masked, only the lanes in mask count (the new lanes of the overlapping last
+ * strip). */
 static void lk_mismatch_strip_sse2(const uint8_t *j, int32_t sstride, const int16_t *iw, const int16_t *ixw,
-                                   const int16_t *iyw, int32_t win, __m128i w01, __m128i w23, __m128i mask,
-                                   int64_t *s1, int64_t *s2)
+                                   const int16_t *iyw, int32_t win, __m128i w01, __m128i w23, int masked,
+                                   __m128i mask, int64_t *s1, int64_t *s2)
 {
     const __m128i z = _mm_setzero_si128(), rnd = _mm_set1_epi32(LK_I_ROUND);
     __m128i a0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)j), z);
@@ -565,7 +565,9 @@ static void lk_mismatch_strip_sse2(const uint8_t *j, int32_t sstride, const int1
             top_hi = _mm_madd_epi16(phi, w01);
             lo = _mm_srai_epi32(_mm_add_epi32(lo, rnd), LK_I_SHIFT); /* non-negative: exact */
             hi = _mm_srai_epi32(_mm_add_epi32(hi, rnd), LK_I_SHIFT);
-            d = _mm_and_si128(_mm_sub_epi16(_mm_packs_epi32(lo, hi), _mm_loadu_si128((const __m128i *)iw)), mask);
+            d = _mm_sub_epi16(_mm_packs_epi32(lo, hi), _mm_loadu_si128((const __m128i *)iw));
+            if (masked)
+                d = _mm_and_si128(d, mask);
             acc1 = _mm_add_epi32(acc1, _mm_madd_epi16(d, _mm_loadu_si128((const __m128i *)ixw)));
             acc2 = _mm_add_epi32(acc2, _mm_madd_epi16(d, _mm_loadu_si128((const __m128i *)iyw)));
             iw += win;
@@ -589,15 +591,14 @@ static void lk_mismatch_sse2(const uint8_t *src, int32_t sstride, const int32_t 
     /* lanes 8 - tail .. 7 of the last strip are new pixels */
     const __m128i lane = _mm_set_epi16(7, 6, 5, 4, 3, 2, 1, 0);
     const __m128i mask = _mm_cmpgt_epi16(lane, _mm_set1_epi16((int16_t)(7 - tail)));
-    const __m128i all = _mm_set1_epi32(-1);
     int64_t s1 = 0, s2 = 0;
     int32_t x;
     for (x = 0; x < full; x += 8)
-        lk_mismatch_strip_sse2(src + x, sstride, wk->iwin + x, wk->ixwin + x, wk->iywin + x, win, w01, w23,
-                               all, &s1, &s2);
+        lk_mismatch_strip_sse2(src + x, sstride, wk->iwin + x, wk->ixwin + x, wk->iywin + x, win, w01, w23, 0,
+                               mask, &s1, &s2);
     if (tail > 0)
         lk_mismatch_strip_sse2(src + last, sstride, wk->iwin + last, wk->ixwin + last, wk->iywin + last, win,
-                               w01, w23, mask, &s1, &s2);
+                               w01, w23, 1, mask, &s1, &s2);
     *b1 = s1;
     *b2 = s2;
 }
