@@ -1,7 +1,8 @@
 /* tvo_replay: replay an EuRoC/ASL sequence through the tinyvo VO and write the trajectory.
  *
- *   tvo_replay --euroc DIR [--cam cam0|cam1] --out TRAJ.txt [--scale gt|model|none] [--model FILE]
- *              [--frame camera|body] [--stats STATS.json] [--max-frames N] [--strict] [--quiet]
+ *   tvo_replay --euroc DIR [--cam cam0|cam1] --out TRAJ.txt [--scale gt|model|propagate|const|none]
+ *              [--model FILE] [--scale-alpha A] [--step M] [--frame camera|body] [--stats STATS.json]
+ *              [--max-frames N] [--strict] [--quiet]
  *
  * The trajectory is written in TUM format (t tx ty tz qx qy qz qw, seconds). Bad frames (missing,
  * corrupt, wrong size, non-increasing timestamps) are reported, counted in the stats and skipped; the
@@ -22,7 +23,7 @@
 #include "tinyvo/port/png.h"
 #include "tinyvo/vo.h"
 
-enum scale_mode { SCALE_NONE, SCALE_GT, SCALE_MODEL };
+enum scale_mode { SCALE_NONE, SCALE_GT, SCALE_MODEL, SCALE_PROPAGATE, SCALE_CONST };
 enum skip_kind { SKIP_MISSING, SKIP_CORRUPT, SKIP_SIZE, SKIP_TIMESTAMP, SKIP_COUNT };
 static const char *const skip_names[SKIP_COUNT] = { "missing", "corrupt", "wrong_size", "timestamp" };
 static const char *const state_names[TVO_VO_STATE_COUNT] = { "ok", "initialising", "rotation_only",
@@ -36,6 +37,7 @@ static const char *const stage_names[TVO_STAGE_COUNT] = { "pyramid", "track", "u
 typedef struct options {
     const char *euroc, *cam, *out, *model, *stats, *features;
     enum scale_mode scale;
+    double alpha, step; /* --scale-alpha (< 0: not given), --step */
     int body_frame, strict, quiet, print_memory;
     long max_frames;
 } options;
@@ -47,14 +49,23 @@ static void usage(FILE *f)
             "  --euroc DIR          EuRoC/ASL sequence (folder holding mav0/)\n"
             "  --cam cam0|cam1      camera to replay (default cam0)\n"
             "  --out FILE           trajectory in TUM format (t tx ty tz qx qy qz qw)\n"
-            "  --scale gt|model|none  per-step scale: ground-truth step length, the per-DoF\n"
-            "                       networks (--model), or unit steps (default none)\n"
+            "  --scale MODE         per-step scale: gt (ground-truth step length), model (the\n"
+            "                       per-DoF networks' translation, --model), propagate (first\n"
+            "                       step from ground truth, then s_k = r_k s_(k-1) with the VO's\n"
+            "                       relative scale r_k), const (--step every frame), none (unit\n"
+            "                       steps; default)\n"
             "  --model FILE         tinyvo weights file (needed by --scale model)\n"
+            "  --scale-alpha A      with model or const: step length s_k from the filter\n"
+            "                       log s_k = (1-A)(log s_(k-1) + log r_k) + A log n_k, n_k the\n"
+            "                       prior (|t| of the networks, or --step) along the raw VO\n"
+            "                       direction; A in [0, 1] (vo.h, tvo_scale_filter)\n"
+            "  --step M             constant step length in metres for --scale const\n"
             "  --frame camera|body  pose written: camera (default) or body (through T_BS)\n"
             "  --stats FILE         JSON with frame counts, status counts and stage timings\n"
             "  --features FILE      CSV of the per-frame front-end features (nn.h layout), for\n"
             "                       the dataset builder: t_ns,state,relpose_flags,\n"
-            "                       pose_status,inliers,<feature names>\n"
+            "                       pose_status,inliers,<feature names>,rel_scale,\n"
+            "                       rel_scale_points\n"
             "  --max-frames N       stop after N frames\n"
             "  --strict             exit non-zero at the first bad frame instead of skipping it\n"
             "  --quiet              no progress line\n"
@@ -66,6 +77,8 @@ static int parse_args(int argc, char **argv, options *o)
     memset(o, 0, sizeof(*o));
     o->cam = "cam0";
     o->scale = SCALE_NONE;
+    o->alpha = -1.0;
+    o->step = -1.0;
     o->max_frames = -1;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
@@ -107,10 +120,29 @@ static int parse_args(int argc, char **argv, options *o)
                 o->scale = SCALE_MODEL;
             else if (!strcmp(v, "none"))
                 o->scale = SCALE_NONE;
+            else if (!strcmp(v, "propagate"))
+                o->scale = SCALE_PROPAGATE;
+            else if (!strcmp(v, "const"))
+                o->scale = SCALE_CONST;
             else {
-                fprintf(stderr, "tvo_replay: --scale must be gt, model or none (got '%s')\n", v);
+                fprintf(stderr, "tvo_replay: --scale must be gt, model, propagate, const or none (got '%s')\n", v);
                 return -1;
             }
+        } else if (!strcmp(a, "--scale-alpha") || !strcmp(a, "--step")) {
+            char *end = NULL;
+            double x;
+            NEED_VALUE();
+            x = strtod(v, &end);
+            if (end == v || *end != '\0' || !isfinite(x) ||
+                (!strcmp(a, "--step") ? !(x > 0.0) : !(x >= 0.0 && x <= 1.0))) {
+                fprintf(stderr, "tvo_replay: %s needs a number %s (got '%s')\n", a,
+                        !strcmp(a, "--step") ? "> 0" : "in [0, 1]", v);
+                return -1;
+            }
+            if (!strcmp(a, "--step"))
+                o->step = x;
+            else
+                o->alpha = x;
         } else if (!strcmp(a, "--frame")) {
             NEED_VALUE();
             if (!strcmp(v, "body"))
@@ -147,6 +179,14 @@ static int parse_args(int argc, char **argv, options *o)
     }
     if (o->scale == SCALE_MODEL && o->model == NULL) {
         fprintf(stderr, "tvo_replay: --scale model needs --model FILE\n");
+        return -1;
+    }
+    if (o->scale == SCALE_CONST && o->step < 0.0) {
+        fprintf(stderr, "tvo_replay: --scale const needs --step M\n");
+        return -1;
+    }
+    if (o->alpha >= 0.0 && o->scale != SCALE_MODEL && o->scale != SCALE_CONST) {
+        fprintf(stderr, "tvo_replay: --scale-alpha goes with --scale model or const\n");
         return -1;
     }
     return 0;
@@ -211,6 +251,7 @@ int main(int argc, char **argv)
     tvo_vo_config cfg;
     tvo_vo *vo = NULL;
     tvo_traj traj;
+    tvo_scale_filter filt;
     tvo_pose T_bs, T_sb;
     void *vo_mem = NULL, *nn_file = NULL, *nn_mem = NULL;
     tvo_nn *nn = NULL;
@@ -236,10 +277,12 @@ int main(int argc, char **argv)
         return 1;
     }
     have_gt = tvo_euroc_has_groundtruth(seq);
-    if (o.scale == SCALE_GT && !have_gt) {
-        fprintf(stderr, "tvo_replay: --scale gt needs ground truth, and %s has none\n", o.euroc);
+    if ((o.scale == SCALE_GT || o.scale == SCALE_PROPAGATE) && !have_gt) {
+        fprintf(stderr, "tvo_replay: --scale %s needs ground truth, and %s has none\n",
+                o.scale == SCALE_GT ? "gt" : "propagate", o.euroc);
         goto cleanup;
     }
+    (void)tvo_scale_filter_init(&filt, o.alpha >= 0.0 ? o.alpha : 0.0);
     T_bs = tvo_euroc_T_BS(seq);
     T_sb = tvo_pose_inverse(&T_bs);
     period_ns = (int64_t)llround(1e9 / (tvo_euroc_rate_hz(seq) > 0 ? tvo_euroc_rate_hz(seq) : 20.0));
@@ -311,7 +354,7 @@ int main(int argc, char **argv)
         fprintf(feat, "t_ns,state,relpose_flags,pose_status,inliers");
         for (int k = 0; k < TVO_FEAT_COUNT; ++k)
             fprintf(feat, ",%s", feature_names[k]);
-        fprintf(feat, "\n");
+        fprintf(feat, ",rel_scale,rel_scale_points\n");
     }
     t_start = (double)tvo_clock_now_ns() * 1e-9;
     for (long i = 0; i < n_frames; ++i) {
@@ -378,7 +421,7 @@ int main(int argc, char **argv)
                     (int)res.pose_status, (int)res.inliers);
             for (int k = 0; k < TVO_FEAT_COUNT; ++k)
                 fprintf(feat, ",%.9g", (double)res.features[k]);
-            fputc('\n', feat);
+            fprintf(feat, ",%.9g,%d\n", res.rel_scale, (int)res.rel_scale_points);
         }
         for (int s = 0; s < TVO_STAGE_COUNT; ++s)
             timing[s][timed] = (double)res.stage_ns[s] * 1e-3;
@@ -397,16 +440,47 @@ int main(int argc, char **argv)
             }
             step = res.T_prev_cur;
             if (res.state == TVO_VO_OK || res.state == TVO_VO_ROTATION_ONLY) {
-                double scale = 1.0;
+                double scale = 1.0, gt_len = -1.0;
+                if (gt_ok && have_prev_gt) {
+                    tvo_pose rel = tvo_pose_body_to_camera_relative(&T_w_b_prev, &T_w_b, &T_bs);
+                    gt_len = sqrt(rel.t[0] * rel.t[0] + rel.t[1] * rel.t[1] + rel.t[2] * rel.t[2]);
+                }
                 if (o.scale == SCALE_GT) {
+                    scale = gt_len >= 0.0 ? gt_len : 0.0;
+                } else if (o.scale == SCALE_PROPAGATE) {
+                    /* the first frame with a translation takes the ground-truth length, later ones
+                       r_k s_(k-1) (s_(k-1) when r_k is not available); rotation-only frames have t = 0 */
                     scale = 0.0;
-                    if (gt_ok && have_prev_gt) {
-                        tvo_pose rel = tvo_pose_body_to_camera_relative(&T_w_b_prev, &T_w_b, &T_bs);
-                        scale = sqrt(rel.t[0] * rel.t[0] + rel.t[1] * rel.t[1] + rel.t[2] * rel.t[2]);
+                    if (res.state == TVO_VO_OK) {
+                        if (!filt.has_s) {
+                            if (gt_len > 0.0 && tvo_scale_filter_seed(&filt, gt_len) == TVO_OK)
+                                scale = gt_len;
+                        } else {
+                            (void)tvo_scale_filter_update(&filt, res.rel_scale, 0.0, &scale);
+                        }
                     }
-                } else if (o.scale == SCALE_MODEL) {
+                } else if (o.scale == SCALE_CONST && o.alpha < 0.0) {
+                    scale = o.step;
+                } else if (o.scale == SCALE_MODEL && o.alpha < 0.0) {
                     if (tvo_vo_refine(nn, &res, &step) != TVO_OK)
                         scale = 0.0;
+                } else if (o.scale == SCALE_MODEL || o.scale == SCALE_CONST) {
+                    /* the filter: prior n_k = |t| of the networks (or --step) along the raw direction;
+                       networks' rotation when the model has rotation branches */
+                    double prior = o.step;
+                    scale = 0.0;
+                    if (o.scale == SCALE_MODEL) {
+                        tvo_pose refined;
+                        prior = 0.0;
+                        if (tvo_vo_refine(nn, &res, &refined) == TVO_OK) {
+                            if ((tvo_nn_output_mask(nn) & 0x7) == 0x7)
+                                prior = sqrt(refined.t[0] * refined.t[0] + refined.t[1] * refined.t[1] +
+                                             refined.t[2] * refined.t[2]);
+                            memcpy(step.R, refined.R, sizeof(step.R));
+                        }
+                    }
+                    if (res.state == TVO_VO_OK)
+                        (void)tvo_scale_filter_update(&filt, res.rel_scale, prior, &scale);
                 }
                 if (tvo_traj_step(&traj, &step, scale) != TVO_OK)
                     counts_state[TVO_VO_LOST]++;

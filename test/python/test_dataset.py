@@ -90,6 +90,36 @@ def test_malformed_features_csv(tmp_path):
         ds.pair_sequence(f, g, T_BS)
 
 
+def test_features_csv_relative_scale_columns(tmp_path):
+    """tvo_replay's csv with the rel_scale columns is read (and carried into the dataset); the older
+    16-column files read as 'not available'; a NaN or negative rel_scale or a wrong column count is refused."""
+    g = write_sequence(str(tmp_path / "SEQ"), n=30)
+    t = g.t_ns[2:12] + 1000
+    head = ",".join(ds.CSV_COLUMNS + ds.CSV_EXTRA)
+    rows = [f"{int(x)},0,0,0,10," + ",".join(["0.5"] * nnfmt.FEAT_COUNT) + f",{0.9 + 0.01 * k:.9g},{40 + k}"
+            for k, x in enumerate(t)]
+    p = tmp_path / "new.csv"
+    p.write_text(head + "\n" + "\n".join(rows) + "\n")
+    fr = ds.read_features_csv(str(p))
+    np.testing.assert_allclose(fr["rel_scale"], 0.9 + 0.01 * np.arange(len(t)))
+    assert fr["rel_scale_points"].tolist() == list(range(40, 40 + len(t)))
+    data = ds.build([str(tmp_path / "SEQ") + ":" + str(p)], str(tmp_path / "w"), log=lambda s: None)
+    np.testing.assert_allclose(data["rel_scale"], (0.9 + 0.01 * np.arange(len(t)))[1:])
+    old = tmp_path / "old.csv"
+    write_features(str(old), t, [0] * len(t))
+    fo = ds.read_features_csv(str(old))
+    assert np.all(fo["rel_scale"] == 0) and np.all(fo["rel_scale_points"] == 0)
+    for bad in ("nan", "-1"):
+        q = tmp_path / f"bad_{bad}.csv"
+        q.write_text(rows[0].rsplit(",", 2)[0] + f",{bad},3\n")
+        with pytest.raises(ValueError):
+            ds.read_features_csv(str(q))
+    q = tmp_path / "bad_cols.csv"
+    q.write_text(rows[0] + ",7\n")
+    with pytest.raises(ValueError):
+        ds.read_features_csv(str(q))
+
+
 def test_dataset_roundtrip_is_trainer_readable(tmp_path):
     from tinyvo_tools import train
     g = write_sequence(str(tmp_path / "SEQ"), n=40)

@@ -54,3 +54,35 @@ def test_replay_trajectory_is_finite_tum(replayed):
         assert all(math.isfinite(v) for v in vals)
         assert all(abs(v) < 1e3 for v in vals[1:4])            # metres, inside the rendered room
         assert abs(sum(q * q for q in vals[4:]) - 1.0) < 1e-6  # unit quaternion
+
+
+def test_replay_scale_propagate(replayed, tmp_path):
+    """--scale propagate (first step from ground truth, then the VO's relative scale r_k) on the same
+    sequence: a metric trajectory, finite, same rotations as --scale gt; the scale options refuse
+    arguments that do not fit."""
+    traj_gt, _, _ = replayed
+    seq = traj_gt.parent / "seq"
+    out, feat = tmp_path / "prop.txt", tmp_path / "f.csv"
+    subprocess.run([str(REPLAY), "--euroc", str(seq), "--out", str(out), "--scale", "propagate",
+                    "--features", str(feat), "--quiet"], check=True)
+    a = [[float(x) for x in ln.split()] for ln in traj_gt.read_text().splitlines()]
+    b = [[float(x) for x in ln.split()] for ln in out.read_text().splitlines()]
+    assert len(a) == len(b) == 120
+    assert all(math.isfinite(v) for r in b for v in r)
+    assert all(max(abs(x - y) for x, y in zip(ra[4:], rb[4:])) < 1e-9 for ra, rb in zip(a, b))
+    from tinyvo_tools import dataset as ds
+    fr = ds.read_features_csv(str(feat))
+    have = fr["rel_scale"] > 0
+    assert have.sum() >= 60                       # most frames after two translating ones have one
+    assert (fr["rel_scale_points"][have] >= 20).all()
+    ev = tmp_path / "ev.json"
+    subprocess.run([sys.executable, "-m", "tinyvo_tools.eval", "--est", str(out), "--gt", str(seq), "--out",
+                    str(ev), "--metric-scale"], check=True, stdout=subprocess.DEVNULL)
+    ate = json.loads(ev.read_text())["standard"]["ate_m"]["rmse"]
+    print(f"propagate: ATE SE(3) {ate:.3f} m, r_k on {int(have.sum())} of 120 frames")
+    assert math.isfinite(ate) and ate < 1.0
+    for bad in (["--scale", "propagate", "--scale-alpha", "0.5"], ["--scale", "const"],
+                ["--scale", "const", "--step", "-1"], ["--scale", "model", "--model", "x", "--scale-alpha", "2"]):
+        r = subprocess.run([str(REPLAY), "--euroc", str(seq), "--out", str(tmp_path / "x.txt"), *bad],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        assert r.returncode != 0, bad

@@ -307,6 +307,73 @@ static void test_relative_scale_rotation_only(void **state)
     }
 }
 
+/* The step-length filter: propagation, the prior's pull, its log/exp against libm, bad input. */
+static void test_scale_filter(void **state)
+{
+    tvo_scale_filter f;
+    double s = -1.0;
+    (void)state;
+    /* propagation (alpha 0) from a seed: s_k = r_k s_(k-1); r not available: carried */
+    assert_int_equal(tvo_scale_filter_init(&f, 0.0), TVO_OK);
+    assert_int_equal(tvo_scale_filter_update(&f, 1.5, 0.0, &s), TVO_ERR_RANGE); /* nothing to start from */
+    assert_true(s == 0.0);
+    assert_int_equal(tvo_scale_filter_seed(&f, 0.04), TVO_OK);
+    assert_int_equal(tvo_scale_filter_update(&f, 1.5, 0.0, &s), TVO_OK);
+    assert_true(fabs(s - 0.06) < 1e-14);
+    assert_int_equal(tvo_scale_filter_update(&f, TVO_VO_REL_SCALE_NONE, 0.0, &s), TVO_OK);
+    assert_true(fabs(s - 0.06) < 1e-14);
+    assert_int_equal(tvo_scale_filter_update(&f, NAN, 0.0, &s), TVO_OK); /* treated as not available */
+    assert_true(fabs(s - 0.06) < 1e-14);
+    assert_int_equal(tvo_scale_filter_update(&f, 0.25, 1.0, &s), TVO_OK); /* alpha 0 ignores the prior */
+    assert_true(fabs(s - 0.015) < 1e-14);
+    /* without a seed the prior starts it; alpha 1 is the prior alone; 0 < alpha < 1: geometric blend */
+    assert_int_equal(tvo_scale_filter_init(&f, 1.0), TVO_OK);
+    assert_int_equal(tvo_scale_filter_update(&f, 2.0, 0.03, &s), TVO_OK);
+    assert_true(fabs(s - 0.03) < 1e-14);
+    assert_int_equal(tvo_scale_filter_update(&f, 2.0, 0.05, &s), TVO_OK);
+    assert_true(fabs(s - 0.05) < 1e-14);
+    assert_int_equal(tvo_scale_filter_init(&f, 0.25), TVO_OK);
+    assert_int_equal(tvo_scale_filter_seed(&f, 0.02), TVO_OK);
+    assert_int_equal(tvo_scale_filter_update(&f, 1.1, 0.05, &s), TVO_OK);
+    assert_true(fabs(s - pow(0.022, 0.75) * pow(0.05, 0.25)) < 1e-14);
+    assert_int_equal(f.steps, 1);
+    /* a long run of one ratio converges to the fixed point n r^((1-a)/a) */
+    for (int k = 0; k < 400; ++k)
+        assert_int_equal(tvo_scale_filter_update(&f, 1.1, 0.05, &s), TVO_OK);
+    assert_true(fabs(s / (0.05 * pow(1.1, 3.0)) - 1.0) < 1e-9);
+    /* the deterministic log/exp over a wide range of seeds: within 1e-14 of libm */
+    for (double x = 1e-8; x < 900.0; x *= 1.37) {
+        assert_int_equal(tvo_scale_filter_init(&f, 0.0), TVO_OK);
+        assert_int_equal(tvo_scale_filter_seed(&f, x), TVO_OK);
+        assert_true(fabs(f.log_s - log(x)) < 1e-13);
+        assert_int_equal(tvo_scale_filter_update(&f, 1.0, 0.0, &s), TVO_OK);
+        assert_true(fabs(s / x - 1.0) < 1e-13);
+    }
+    /* runaway ratios saturate at 1e3 m / 1e-9 m, never inf or 0 */
+    assert_int_equal(tvo_scale_filter_init(&f, 0.0), TVO_OK);
+    assert_int_equal(tvo_scale_filter_seed(&f, 1.0), TVO_OK);
+    for (int k = 0; k < 50; ++k)
+        assert_int_equal(tvo_scale_filter_update(&f, 1e30, 0.0, &s), TVO_OK);
+    assert_true(isfinite(s) && fabs(s / 1e3 - 1.0) < 1e-9);
+    for (int k = 0; k < 50; ++k)
+        assert_int_equal(tvo_scale_filter_update(&f, 1e-30, 0.0, &s), TVO_OK);
+    assert_true(s > 0.0 && fabs(s / 1e-9 - 1.0) < 1e-9);
+    /* bad input */
+    assert_int_equal(tvo_scale_filter_init(NULL, 0.5), TVO_ERR_NULL);
+    assert_int_equal(tvo_scale_filter_init(&f, -0.1), TVO_ERR_ARG);
+    assert_int_equal(tvo_scale_filter_init(&f, 1.5), TVO_ERR_ARG);
+    assert_int_equal(tvo_scale_filter_init(&f, NAN), TVO_ERR_ARG);
+    assert_int_equal(tvo_scale_filter_update(&f, 1.0, 0.05, &s), TVO_ERR_ARG); /* left unusable */
+    assert_int_equal(tvo_scale_filter_init(&f, 0.5), TVO_OK);
+    assert_int_equal(tvo_scale_filter_seed(&f, 0.0), TVO_ERR_ARG);
+    assert_int_equal(tvo_scale_filter_seed(&f, INFINITY), TVO_ERR_ARG);
+    assert_int_equal(tvo_scale_filter_seed(NULL, 1.0), TVO_ERR_NULL);
+    assert_int_equal(f.has_s, 0);
+    assert_int_equal(tvo_scale_filter_update(&f, 1.0, 0.05, NULL), TVO_ERR_NULL);
+    assert_int_equal(tvo_scale_filter_update(NULL, 1.0, 0.05, &s), TVO_ERR_NULL);
+    assert_true(s == 0.0);
+}
+
 static void test_bad_input(void **state)
 {
     fixture *f = *state;
@@ -384,6 +451,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_single_plane_unresolved, setup, teardown),
         cmocka_unit_test_setup_teardown(test_relative_scale, setup, teardown),
         cmocka_unit_test_setup_teardown(test_relative_scale_rotation_only, setup, teardown),
+        cmocka_unit_test(test_scale_filter),
         cmocka_unit_test_setup_teardown(test_bad_input, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -17,7 +17,7 @@ Ground truth is interpolated at the image timestamps (linear/slerp, trajio.inter
 timestamps fall outside the ground truth, or whose VO state is not in --states (default: 0 ok and
 2 rotation-only, the states tvo_replay integrates) are dropped. Output .npz (read by train.py):
 ``features`` (N,11) float32, ``targets`` (N,6) float32, ``sequence`` (N,) str, plus ``t_ns``, ``state``,
-``dt_gt`` for analysis. Normalisation statistics are NOT computed here: the trainer fits them on the
+``dt_gt`` for analysis and ``rel_scale`` (N,) (the VO's |t_k|/|t_(k-1)| of the row, 0 = not available). Normalisation statistics are NOT computed here: the trainer fits them on the
 training sequences only and stores them in the model.
 """
 from __future__ import annotations
@@ -34,6 +34,8 @@ from scipy.spatial.transform import Rotation
 from . import nnfmt, trajio
 
 CSV_COLUMNS = ["t_ns", "state", "relpose_flags", "pose_status", "inliers"] + nnfmt.FEATURES
+# tvo_replay since the relative scale (vo.h, tvo_vo_result.rel_scale) appends these two; older files lack them
+CSV_EXTRA = ["rel_scale", "rel_scale_points"]
 STATE_OK, STATE_INIT, STATE_ROT_ONLY, STATE_LOST = 0, 1, 2, 3
 
 
@@ -54,7 +56,9 @@ def default_replay() -> Optional[str]:
 
 def read_features_csv(path: str) -> Dict[str, np.ndarray]:
     """Parse tvo_replay's --features csv. Returns t_ns (int64), state, relpose_flags, pose_status,
-    inliers (int) and features (N,11 float64). Raises ValueError on a malformed file."""
+    inliers (int), features (N,11 float64), rel_scale (N float64; 0 = not available, also for files
+    written before the column existed) and rel_scale_points (N int). Raises ValueError on a malformed
+    file."""
     rows = []
     with open(path, "r", encoding="utf-8") as f:
         for ln, line in enumerate(f, 1):
@@ -62,10 +66,12 @@ def read_features_csv(path: str) -> Dict[str, np.ndarray]:
             if not line or line.startswith("#") or line[0].isalpha():
                 continue  # header / comments
             parts = line.split(",")
-            if len(parts) != len(CSV_COLUMNS):
-                raise ValueError(f"{path}:{ln}: {len(parts)} columns, expected {len(CSV_COLUMNS)}")
+            nf = len(CSV_COLUMNS)
+            if len(parts) not in (nf, nf + len(CSV_EXTRA)):
+                raise ValueError(f"{path}:{ln}: {len(parts)} columns, expected {nf} or {nf + len(CSV_EXTRA)}")
             try:
-                rows.append((int(parts[0]), [int(p) for p in parts[1:5]], [float(p) for p in parts[5:]]))
+                extra = (float(parts[nf]), int(parts[nf + 1])) if len(parts) > nf else (0.0, 0)
+                rows.append((int(parts[0]), [int(p) for p in parts[1:5]], [float(p) for p in parts[5:nf]], extra))
             except ValueError as e:
                 raise ValueError(f"{path}:{ln}: {e}") from None
     n = len(rows)
@@ -74,6 +80,10 @@ def read_features_csv(path: str) -> Dict[str, np.ndarray]:
     for k, name in enumerate(CSV_COLUMNS[1:5]):
         out[name] = ints[:, k]
     out["features"] = np.array([r[2] for r in rows], np.float64).reshape(n, nnfmt.FEAT_COUNT)
+    out["rel_scale"] = np.array([r[3][0] for r in rows], np.float64).reshape(n)
+    out["rel_scale_points"] = np.array([r[3][1] for r in rows], np.int64).reshape(n)
+    if not np.all(np.isfinite(out["rel_scale"])) or np.any(out["rel_scale"] < 0):
+        raise ValueError(f"{path}: rel_scale must be finite and >= 0")
     return out
 
 
@@ -170,7 +180,7 @@ def build(seqs: Sequence[str], work_dir: str, replay: Optional[str] = None, name
           states=(STATE_OK, STATE_ROT_ONLY), log=print) -> Dict[str, np.ndarray]:
     """seqs: folders, or 'FOLDER:FEATURES.csv' to reuse a features csv. Returns the dataset dict."""
     names = names or {}
-    parts = {k: [] for k in ("features", "targets", "sequence", "t_ns", "state", "dt_gt")}
+    parts = {k: [] for k in ("features", "targets", "sequence", "t_ns", "state", "dt_gt", "rel_scale")}
     os.makedirs(work_dir, exist_ok=True)
     for spec in seqs:
         seq_dir, _, csv = spec.partition(":") if ":" in spec and not os.path.isdir(spec) else (spec, "", "")
@@ -191,6 +201,7 @@ def build(seqs: Sequence[str], work_dir: str, replay: Optional[str] = None, name
         parts["sequence"].append(np.array([name] * len(k)))
         parts["t_ns"].append(feat["t_ns"][k])
         parts["state"].append(feat["state"][k])
+        parts["rel_scale"].append(feat["rel_scale"][k])
         parts["dt_gt"].append((feat["t_ns"][k] - feat["t_ns"][k - 1]) * 1e-9 if len(k) else np.zeros(0))
         log(f"{name}: {len(feat['t_ns'])} frames, {len(k)} pairs "
             f"(mean step {np.linalg.norm(tgt[:, :3], axis=1).mean() if len(k) else 0:.4f} m)")
@@ -199,7 +210,8 @@ def build(seqs: Sequence[str], work_dir: str, replay: Optional[str] = None, name
             "sequence": np.concatenate(parts["sequence"]).astype(str),
             "t_ns": np.concatenate(parts["t_ns"]).astype(np.int64),
             "state": np.concatenate(parts["state"]).astype(np.int8),
-            "dt_gt": np.concatenate(parts["dt_gt"]).astype(np.float64)}
+            "dt_gt": np.concatenate(parts["dt_gt"]).astype(np.float64),
+            "rel_scale": np.concatenate(parts["rel_scale"]).astype(np.float64)}
 
 
 def save(path: str, data: Dict[str, np.ndarray]) -> None:

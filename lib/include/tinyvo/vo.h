@@ -132,6 +132,32 @@ void tvo_vo_reset(tvo_vo *vo);
  * with scale 0. */
 tvo_status tvo_vo_refine(const tvo_nn *nn, const tvo_vo_result *res, tvo_pose *step);
 
+/* Step-length filter: the metric length of each OK frame's unit translation from the VO's relative scale
+ * (tvo_vo_result.rel_scale) and an absolute step-length prior n_k (e.g. the per-DoF networks' |t|, or a
+ * constant), combined in log space as a complementary filter:
+ *     log s_k = (1 - alpha) (log s_(k-1) + log r_k) + alpha log n_k
+ * alpha = 0 propagates the scale (s_k = r_k s_(k-1), after tvo_scale_filter_seed()); alpha = 1 is the
+ * prior alone. When r_k is not available the previous length is carried (r_k = 1); without a prior
+ * (n_k <= 0 or not finite) the prediction alone is kept. The state is two numbers: no allocation.
+ * log/exp are evaluated with + - * / and frexp/ldexp only, so results agree across targets. */
+typedef struct tvo_scale_filter {
+    double alpha;              /* weight of the prior per step, [0, 1] */
+    double log_s;              /* log of the last step length (m), valid when has_s */
+    int32_t has_s;
+    int32_t steps;             /* updates done since init */
+} tvo_scale_filter;
+
+/* TVO_ERR_NULL, or TVO_ERR_ARG for alpha outside [0, 1] (or NaN): f is then unusable (its updates return
+ * TVO_ERR_ARG with a zero step). */
+tvo_status tvo_scale_filter_init(tvo_scale_filter *f, double alpha);
+/* Set the current step length (m, finite, > 0; else TVO_ERR_ARG and f unchanged), e.g. from ground truth. */
+tvo_status tvo_scale_filter_seed(tvo_scale_filter *f, double step);
+/* One frame with a translation: rel_scale r_k (TVO_VO_REL_SCALE_NONE when not available; other values
+ * <= 0 or not finite are treated the same), prior n_k in metres (<= 0 or not finite: none). *step gets
+ * s_k (finite, in [1e-9, 1e3] m). Without a state and without a prior there is nothing to start from:
+ * *step = 0 and TVO_ERR_RANGE (integrate a zero step). */
+tvo_status tvo_scale_filter_update(tvo_scale_filter *f, double rel_scale, double prior, double *step);
+
 /* Trajectory integration: T_w_c(k+1) = T_w_c(k) * [R | scale * t]. */
 typedef struct tvo_traj {
     tvo_pose T_w_c;            /* current camera pose in the world */
