@@ -530,15 +530,43 @@ static void lk_mismatch(const uint8_t *src, int32_t sstride, const int32_t wt[4]
 #if LK_SSE2
 /* Rows of one 8-column strip whose int32 lane sums of (J - I) * Ix (or * Iy) cannot overflow: per row a
  * lane adds two products of |J - I| <= 255 * 32 = 8160 and |Ix| <= 16 * 255 = 4080, 66,585,600; 32 rows
- * make 2,130,739,200 < 2^31. */
+ * make 2,130,739,200 < 2^31. Even, as the rows are taken in pairs. */
 #define LK_MISMATCH_STRIP_ROWS 32
+
+/* State of one strip of lk_mismatch_strip_sse2 between rows. */
+typedef struct lk_mm_state {
+    __m128i top_lo, top_hi; /* the previous J row's products with (w00, w01), plus the rounding term */
+    __m128i acc1, acc2;     /* lane sums of (J - I) * Ix and * Iy */
+} lk_mm_state;
+
+/* One window row of a strip: j is the J row below it (its top J row is in st). */
+static void lk_mismatch_row_sse2(lk_mm_state *st, const uint8_t *j, const int16_t *iw, const int16_t *ixw,
+                                 const int16_t *iyw, __m128i w01, __m128i w23, int masked, __m128i mask)
+{
+    const __m128i z = _mm_setzero_si128(), rnd = _mm_set1_epi32(LK_I_ROUND);
+    __m128i b0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)j), z);
+    __m128i b1 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j + 1)), z);
+    __m128i plo = _mm_unpacklo_epi16(b0, b1), phi = _mm_unpackhi_epi16(b0, b1);
+    __m128i lo = _mm_add_epi32(_mm_madd_epi16(plo, w23), st->top_lo);
+    __m128i hi = _mm_add_epi32(_mm_madd_epi16(phi, w23), st->top_hi);
+    __m128i d;
+    st->top_lo = _mm_add_epi32(_mm_madd_epi16(plo, w01), rnd);
+    st->top_hi = _mm_add_epi32(_mm_madd_epi16(phi, w01), rnd);
+    lo = _mm_srai_epi32(lo, LK_I_SHIFT); /* non-negative: exact */
+    hi = _mm_srai_epi32(hi, LK_I_SHIFT);
+    d = _mm_sub_epi16(_mm_packs_epi32(lo, hi), _mm_loadu_si128((const __m128i *)iw));
+    if (masked)
+        d = _mm_and_si128(d, mask);
+    st->acc1 = _mm_add_epi32(_mm_madd_epi16(_mm_loadu_si128((const __m128i *)ixw), d), st->acc1);
+    st->acc2 = _mm_add_epi32(_mm_madd_epi16(_mm_loadu_si128((const __m128i *)iyw), d), st->acc2);
+}
 
 /* The (J - I) * Ix and * Iy sums of one 8-column strip of the window (rows 0..win-1), added to *s1 and
  * *s2. j: top-left of the strip in the J block; iw / ixw / iyw: the strip's column in the window
  * buffers. Each J row is widened and paired (J[x], J[x+1]) once: its products with (w00, w01) are kept
  * for the next row, with (w10, w11) used for this one; the sums are the same integers as
  * lk_mismatch(). When masked, only the lanes in mask count (the new lanes of the overlapping last
- * strip). */
+ * strip). Rows go in pairs (fewer register copies between loop-carried values). */
 static void lk_mismatch_strip_sse2(const uint8_t *j, int32_t sstride, const int16_t *iw, const int16_t *ixw,
                                    const int16_t *iyw, int32_t win, __m128i w01, __m128i w23, int masked,
                                    __m128i mask, int64_t *s1, int64_t *s2)
@@ -546,36 +574,31 @@ static void lk_mismatch_strip_sse2(const uint8_t *j, int32_t sstride, const int1
     const __m128i z = _mm_setzero_si128(), rnd = _mm_set1_epi32(LK_I_ROUND);
     __m128i a0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)j), z);
     __m128i a1 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j + 1)), z);
-    __m128i top_lo = _mm_madd_epi16(_mm_unpacklo_epi16(a0, a1), w01);
-    __m128i top_hi = _mm_madd_epi16(_mm_unpackhi_epi16(a0, a1), w01);
+    lk_mm_state st;
     int32_t y = 0;
+    st.top_lo = _mm_add_epi32(_mm_madd_epi16(_mm_unpacklo_epi16(a0, a1), w01), rnd);
+    st.top_hi = _mm_add_epi32(_mm_madd_epi16(_mm_unpackhi_epi16(a0, a1), w01), rnd);
     while (y < win) {
         const int32_t end = win - y > LK_MISMATCH_STRIP_ROWS ? y + LK_MISMATCH_STRIP_ROWS : win;
-        __m128i acc1 = z, acc2 = z;
-        for (; y < end; ++y) {
-            __m128i b0, b1, plo, phi, lo, hi, d;
+        st.acc1 = st.acc2 = z;
+        for (; y + 2 <= end; y += 2) {
+            lk_mismatch_row_sse2(&st, j + sstride, iw, ixw, iyw, w01, w23, masked, mask);
+            lk_mismatch_row_sse2(&st, j + 2 * sstride, iw + win, ixw + win, iyw + win, w01, w23, masked, mask);
+            j += 2 * sstride;
+            iw += 2 * win;
+            ixw += 2 * win;
+            iyw += 2 * win;
+        }
+        if (y < end) {
+            lk_mismatch_row_sse2(&st, j + sstride, iw, ixw, iyw, w01, w23, masked, mask);
             j += sstride;
-            b0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)j), z);
-            b1 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j + 1)), z);
-            plo = _mm_unpacklo_epi16(b0, b1);
-            phi = _mm_unpackhi_epi16(b0, b1);
-            lo = _mm_add_epi32(top_lo, _mm_madd_epi16(plo, w23));
-            hi = _mm_add_epi32(top_hi, _mm_madd_epi16(phi, w23));
-            top_lo = _mm_madd_epi16(plo, w01);
-            top_hi = _mm_madd_epi16(phi, w01);
-            lo = _mm_srai_epi32(_mm_add_epi32(lo, rnd), LK_I_SHIFT); /* non-negative: exact */
-            hi = _mm_srai_epi32(_mm_add_epi32(hi, rnd), LK_I_SHIFT);
-            d = _mm_sub_epi16(_mm_packs_epi32(lo, hi), _mm_loadu_si128((const __m128i *)iw));
-            if (masked)
-                d = _mm_and_si128(d, mask);
-            acc1 = _mm_add_epi32(acc1, _mm_madd_epi16(d, _mm_loadu_si128((const __m128i *)ixw)));
-            acc2 = _mm_add_epi32(acc2, _mm_madd_epi16(d, _mm_loadu_si128((const __m128i *)iyw)));
             iw += win;
             ixw += win;
             iyw += win;
+            ++y;
         }
-        *s1 += lk_hsum_epi32(acc1);
-        *s2 += lk_hsum_epi32(acc2);
+        *s1 += lk_hsum_epi32(st.acc1);
+        *s2 += lk_hsum_epi32(st.acc2);
     }
 }
 
