@@ -18,6 +18,10 @@
 #define DM_LN2_HI 0x1.62e42fefa38p-1
 #define DM_LN2_LO 0x1.ef35793c7673p-45
 #define DM_SQRT1_2 0x1.6a09e667f3bcdp-1
+/* exp's split of ln 2: the high part has 32 significant bits, so k * DM_EXP_LN2_HI is exact for |k| < 2^21 */
+#define DM_EXP_LN2_HI 0x1.62e42feep-1
+#define DM_EXP_LN2_LO 0x1.a39ef35793c76p-33
+#define DM_INV_LN2 0x1.71547652b82fep+0
 
 /* atan(j / 8) = hi[j] + lo[j] */
 static const double dm_atan_hi[9] = {
@@ -203,6 +207,36 @@ double tvo_dm_log1p(double x)
         return x;
     /* log(u) * x / (u - 1): corrects the rounding of 1 + x (u - 1 is exact) */
     return dm_log(u) * (x / (u - 1.0));
+}
+
+double tvo_dm_log(double x)
+{
+    if (isnan(x) || x < 0.0)
+        return (double)NAN;
+    if (x == 0.0)
+        return -HUGE_VAL;
+    if (isinf(x))
+        return x;
+    return dm_log(x); /* frexp normalises subnormals exactly */
+}
+
+double tvo_dm_exp(double x)
+{
+    double k, r, p;
+    if (isnan(x))
+        return x;
+    if (x > 709.782712893384)
+        return HUGE_VAL;
+    if (x < -745.2)
+        return 0.0;
+    /* x = k ln2 + r, |r| <= ln2 / 2 (two-part ln2, k * hi exact); the Taylor series to r^17 is below
+       2^-60 relative there; 2^k applied by ldexp (exact; rounds once into the subnormal range) */
+    k = floor(x * DM_INV_LN2 + 0.5);
+    r = (x - k * DM_EXP_LN2_HI) - k * DM_EXP_LN2_LO;
+    p = 1.0;
+    for (int i = 17; i >= 1; --i)
+        p = 1.0 + p * r / (double)i;
+    return ldexp(p, (int)k);
 }
 
 double tvo_dm_hypot(double x, double y)

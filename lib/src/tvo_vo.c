@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "tinyvo/arena.h"
+#include "tinyvo/dmath.h"
 #include "tinyvo/linalg.h"
 #include "tinyvo/pyramid.h"
 
@@ -383,10 +384,7 @@ static double depth_in_b(const double R[9], const double t[3], const double xa[3
 static double relative_scale(tvo_vo *vo, const double R[9], const double t[3], int32_t m, int32_t *used)
 {
     double *ratio = (double *)vo->scratch;
-    /* sin of the angle (<= 10 deg = 0.175 rad) by its series to x^9 (error < 1e-13): no libm sine, so
-       the result agrees across targets */
-    const double x = vo->cfg.scale_min_parallax_deg * (3.14159265358979323846 / 180.0), x2 = x * x;
-    const double sp = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0 * (1.0 - x2 / 72.0))));
+    const double sp = tvo_dm_sin(vo->cfg.scale_min_parallax_deg * (3.14159265358979323846 / 180.0));
     const double sin2_min = sp * sp;
     double Rt[9], tt[3];
     int32_t k = 0;
@@ -649,43 +647,6 @@ tvo_status tvo_vo_refine(const tvo_nn *nn, const tvo_vo_result *res, tvo_pose *s
 
 /* ---- step-length filter ------------------------------------------------------------------------ */
 
-#define TVO_LN2 0.69314718055994530942
-
-/* Natural log of a finite x > 0 with + - * / and frexp only (deterministic across targets):
- * x = m 2^e, m in [sqrt(1/2), sqrt(2)), log m = 2 atanh(z), z = (m - 1) / (m + 1), |z| < 0.172;
- * the series to z^19 is below 1e-16 relative. */
-static double det_log(double x)
-{
-    int e = 0;
-    double m = frexp(x, &e), z, z2, sum, term;
-    if (m < 0.70710678118654752440) {
-        m *= 2.0;
-        e -= 1;
-    }
-    z = (m - 1.0) / (m + 1.0);
-    z2 = z * z;
-    sum = 0.0;
-    term = z;
-    for (int k = 1; k <= 19; k += 2) {
-        sum += term / (double)k;
-        term *= z2;
-    }
-    return 2.0 * sum + (double)e * TVO_LN2;
-}
-
-/* exp(x) for |x| <= 700 with + - * / and ldexp only: x = k ln2 + r, |r| <= ln2/2, Taylor to r^16. */
-static double det_exp(double x)
-{
-    const double kf = floor(x / TVO_LN2 + 0.5);
-    const double r = x - kf * TVO_LN2;
-    double sum = 1.0, term = 1.0;
-    for (int k = 1; k <= 16; ++k) {
-        term *= r / (double)k;
-        sum += term;
-    }
-    return ldexp(sum, (int)kf);
-}
-
 #define TVO_SCALE_LOG_MIN (-20.7232658369464) /* log 1e-9 */
 #define TVO_SCALE_LOG_MAX 6.90775527898214    /* log 1e3 */
 
@@ -713,7 +674,7 @@ tvo_status tvo_scale_filter_seed(tvo_scale_filter *f, double step)
         return TVO_ERR_NULL;
     if (!(step > 0.0) || !isfinite(step))
         return TVO_ERR_ARG;
-    f->log_s = clamp_log(det_log(step));
+    f->log_s = clamp_log(tvo_dm_log(step));
     f->has_s = 1;
     return TVO_OK;
 }
@@ -732,15 +693,15 @@ tvo_status tvo_scale_filter_update(tvo_scale_filter *f, double rel_scale, double
     if (!f->has_s) {
         if (!have_n)
             return TVO_ERR_RANGE;
-        v = det_log(prior);
+        v = tvo_dm_log(prior);
     } else {
-        const double pred = f->log_s + (have_r ? det_log(rel_scale) : 0.0);
-        v = have_n ? (1.0 - f->alpha) * pred + f->alpha * det_log(prior) : pred;
+        const double pred = f->log_s + (have_r ? tvo_dm_log(rel_scale) : 0.0);
+        v = have_n ? (1.0 - f->alpha) * pred + f->alpha * tvo_dm_log(prior) : pred;
     }
     f->log_s = clamp_log(v);
     f->has_s = 1;
     f->steps++;
-    *step = det_exp(f->log_s);
+    *step = tvo_dm_exp(f->log_s);
     return TVO_OK;
 }
 

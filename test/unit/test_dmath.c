@@ -41,6 +41,8 @@ static void check1(const char *name, double (*f)(double), double (*ref)(double),
 }
 
 static double log1p_small(double x) { return log1p(x); }
+static double exp_ref(double x) { return exp(x); }
+static double log_ref(double x) { return log(x); }
 
 static void test_accuracy(void **state)
 {
@@ -52,6 +54,10 @@ static void test_accuracy(void **state)
     check1("atan", tvo_dm_atan, atan, -12.0, 12.0, 1);
     check1("log1p", tvo_dm_log1p, log1p_small, -0.999999, 50.0, 0);
     check1("log1p", tvo_dm_log1p, log1p_small, -15.0, 300.0, 1); /* negative side: x in (-1, 0) only */
+    check1("log", tvo_dm_log, log_ref, -300.0, 300.0, 1);         /* negative x: NaN from both, skipped */
+    check1("log", tvo_dm_log, log_ref, 0.5, 2.0, 0);
+    check1("exp", tvo_dm_exp, exp_ref, -708.0, 709.0, 0);
+    check1("exp", tvo_dm_exp, exp_ref, -1.0, 1.0, 0);
     {
         uint64_t s = 99;
         double worst = 0.0, worst_h = 0.0;
@@ -86,6 +92,12 @@ static void test_special_values(void **state)
     assert_true(isnan(tvo_dm_atan(NAN)) && isnan(tvo_dm_atan2(NAN, 1.0)) && isnan(tvo_dm_atan2(1.0, NAN)));
     assert_true(isnan(tvo_dm_log1p(-1.5)) && isnan(tvo_dm_log1p(NAN)) && isnan(tvo_dm_log1p(-INFINITY)));
     assert_true(tvo_dm_log1p(-1.0) == -INFINITY && tvo_dm_log1p(INFINITY) == INFINITY);
+    assert_true(isnan(tvo_dm_log(-1.0)) && isnan(tvo_dm_log(NAN)) && tvo_dm_log(0.0) == -INFINITY);
+    assert_true(tvo_dm_log(INFINITY) == INFINITY && tvo_dm_log(1.0) == 0.0);
+    assert_true(fabs(tvo_dm_log(4.9e-324) - log(4.9e-324)) <= 1e-13); /* smallest subnormal */
+    assert_true(tvo_dm_exp(0.0) == 1.0 && isnan(tvo_dm_exp(NAN)) && tvo_dm_exp(-INFINITY) == 0.0);
+    assert_true(tvo_dm_exp(710.0) == INFINITY && tvo_dm_exp(INFINITY) == INFINITY && tvo_dm_exp(-746.0) == 0.0);
+    assert_true(tvo_dm_exp(-740.0) > 0.0 && fabs(tvo_dm_exp(-740.0) - exp(-740.0)) <= 4.9e-324);
     assert_true(fabs(tvo_dm_atan(INFINITY) - pi / 2) < 1e-15 && fabs(tvo_dm_atan(-1e300) + pi / 2) < 1e-15);
     /* atan2's quadrants, zeros and infinities as C99 */
     {

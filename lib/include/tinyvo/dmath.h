@@ -1,6 +1,6 @@
 /* tinyvo: deterministic elementary functions.
  *
- * libm's sin, cos, tan, atan, atan2, log1p and hypot are not correctly rounded, and their last bit
+ * libm's sin, cos, tan, atan, atan2, log, log1p, exp and hypot are not correctly rounded, and their last bit
  * differs between C libraries, library versions and CPUs (glibc picks FMA variants at run time on
  * x86-64 and computes differently on aarch64; newlib on a Cortex-M has its own code). tinyvo's per-frame
  * path calls these functions instead, so that a frame gives bit-identical poses on every IEEE-754
@@ -27,6 +27,10 @@ double tvo_dm_atan(double x);
 double tvo_dm_atan2(double y, double x);
 /* log(1 + x): NaN for x < -1 or NaN, -inf for x = -1, +inf for +inf. */
 double tvo_dm_log1p(double x);
+/* Natural log: NaN for x < 0 or NaN, -inf for 0, +inf for +inf (subnormal x are handled exactly). */
+double tvo_dm_log(double x);
+/* e^x: +inf above log(DBL_MAX), 0 below -745.2, NaN for NaN. */
+double tvo_dm_exp(double x);
 /* sqrt(x^2 + y^2) without libm's overflow protection: for |x|, |y| below 1e150 (tinyvo's normalised
  * coordinates are below 1e6). */
 double tvo_dm_hypot(double x, double y);
