@@ -243,42 +243,59 @@ static void lk_pair_u8(const uint8_t *p, __m128i *lo, __m128i *hi)
     *hi = _mm_unpackhi_epi16(a0, a1);
 }
 
-/* One 8-column strip of the Scharr grid (rows 0..g-1): horizontal passes first (difference
- * s[x+2] - s[x] and smoothing 3 s[x] + 10 s[x+1] + 3 s[x+2] of each source row, computed once), then
- * the vertical ones from the last three rows: dx = 3 hd[r] + 10 hd[r+1] + 3 hd[r+2], dy = hs[r+2] -
- * hs[r], the same integers as the vertical-then-horizontal C path (|values| <= 4080 fit int16). */
+/* Horizontal Scharr passes of 8 columns of one source row: difference s[x+2] - s[x] and smoothing
+ * 3 s[x] + 10 s[x+1] + 3 s[x+2] (10 bytes read). */
+static void lk_scharr_h_sse2(const uint8_t *s, __m128i *hd, __m128i *hs)
+{
+    const __m128i z = _mm_setzero_si128(), k3 = _mm_set1_epi16(3), k10 = _mm_set1_epi16(10);
+    __m128i a = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)s), z);
+    __m128i b = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s + 1)), z);
+    __m128i c = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s + 2)), z);
+    *hd = _mm_sub_epi16(c, a);
+    *hs = _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(a, c), k3), _mm_mullo_epi16(b, k10));
+}
+
+/* Vertical passes from three rows' horizontal ones: dx = 3 hd0 + 10 hd1 + 3 hd2, dy = hs2 - hs0. */
+static void lk_scharr_v_sse2(__m128i hd0, __m128i hd1, __m128i hd2, __m128i hs0, __m128i hs2, int16_t *dx,
+                             int16_t *dy)
+{
+    const __m128i k3 = _mm_set1_epi16(3), k10 = _mm_set1_epi16(10);
+    _mm_storeu_si128((__m128i *)dx, _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(hd0, hd2), k3),
+                                                  _mm_mullo_epi16(hd1, k10)));
+    _mm_storeu_si128((__m128i *)dy, _mm_sub_epi16(hs2, hs0));
+}
+
+/* One 8-column strip of the Scharr grid (rows 0..rows-1, from source rows 0..rows+1): the horizontal
+ * passes once per source row, then the vertical ones from the last three rows; the same integers as the
+ * vertical-then-horizontal C path (|values| <= 4080 fit int16). Rows go in threes so that the three
+ * carried rows rotate through fixed registers. */
 static void lk_scharr_strip_sse2(const uint8_t *s, int32_t sstride, int16_t *dx, int16_t *dy, int32_t g,
                                  int32_t rows)
 {
-    const __m128i z = _mm_setzero_si128(), k3 = _mm_set1_epi16(3), k10 = _mm_set1_epi16(10);
-    __m128i hd0, hd1, hs0, hs1, a, b, c;
-    int32_t r;
-    a = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)s), z);
-    b = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s + 1)), z);
-    c = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s + 2)), z);
-    hd0 = _mm_sub_epi16(c, a);
-    hs0 = _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(a, c), k3), _mm_mullo_epi16(b, k10));
-    s += sstride;
-    a = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)s), z);
-    b = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s + 1)), z);
-    c = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s + 2)), z);
-    hd1 = _mm_sub_epi16(c, a);
-    hs1 = _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(a, c), k3), _mm_mullo_epi16(b, k10));
-    for (r = 0; r < rows; ++r) {
-        __m128i hd2, hs2;
-        s += sstride;
-        a = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)s), z);
-        b = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s + 1)), z);
-        c = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s + 2)), z);
-        hd2 = _mm_sub_epi16(c, a);
-        hs2 = _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(a, c), k3), _mm_mullo_epi16(b, k10));
-        _mm_storeu_si128((__m128i *)dx,
-                         _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(hd0, hd2), k3), _mm_mullo_epi16(hd1, k10)));
-        _mm_storeu_si128((__m128i *)dy, _mm_sub_epi16(hs2, hs0));
+    __m128i hd0, hd1, hd2, hs0, hs1, hs2;
+    int32_t r = 0;
+    lk_scharr_h_sse2(s, &hd0, &hs0);
+    lk_scharr_h_sse2(s + sstride, &hd1, &hs1);
+    s += 2 * (size_t)sstride;
+    for (; r + 3 <= rows; r += 3) {
+        lk_scharr_h_sse2(s, &hd2, &hs2);
+        lk_scharr_v_sse2(hd0, hd1, hd2, hs0, hs2, dx, dy);
+        lk_scharr_h_sse2(s + sstride, &hd0, &hs0);
+        lk_scharr_v_sse2(hd1, hd2, hd0, hs1, hs0, dx + g, dy + g);
+        lk_scharr_h_sse2(s + 2 * (size_t)sstride, &hd1, &hs1);
+        lk_scharr_v_sse2(hd2, hd0, hd1, hs2, hs1, dx + 2 * g, dy + 2 * g);
+        s += 3 * (size_t)sstride;
+        dx += 3 * g;
+        dy += 3 * g;
+    }
+    for (; r < rows; ++r) {
+        lk_scharr_h_sse2(s, &hd2, &hs2);
+        lk_scharr_v_sse2(hd0, hd1, hd2, hs0, hs2, dx, dy);
         hd0 = hd1;
         hd1 = hd2;
         hs0 = hs1;
         hs1 = hs2;
+        s += sstride;
         dx += g;
         dy += g;
     }
@@ -296,6 +313,21 @@ static void lk_scharr_sse2(const uint8_t *src, int32_t sstride, lk_work *wk)
         lk_scharr_strip_sse2(src + g - 8, sstride, wk->gx + g - 8, wk->gy + g - 8, g, g);
 }
 
+/* One row of a grey strip: top_lo/hi hold the upper source row's products with (w00, w01) plus the
+ * rounding term, s is the lower source row; they are replaced by the lower row's. */
+static void lk_grey_row_sse2(__m128i *top_lo, __m128i *top_hi, const uint8_t *s, int16_t *iw, __m128i w01,
+                             __m128i w23)
+{
+    const __m128i rnd = _mm_set1_epi32(LK_I_ROUND);
+    __m128i plo, phi, lo, hi;
+    lk_pair_u8(s, &plo, &phi);
+    lo = _mm_srai_epi32(_mm_add_epi32(_mm_madd_epi16(plo, w23), *top_lo), LK_I_SHIFT);
+    hi = _mm_srai_epi32(_mm_add_epi32(_mm_madd_epi16(phi, w23), *top_hi), LK_I_SHIFT);
+    *top_lo = _mm_add_epi32(_mm_madd_epi16(plo, w01), rnd);
+    *top_hi = _mm_add_epi32(_mm_madd_epi16(phi, w01), rnd);
+    _mm_storeu_si128((__m128i *)iw, _mm_packs_epi32(lo, hi));
+}
+
 /* Grey values (5 fractional bits) of one 8-column window strip, rows 0..win-1 from source rows s,
  * s + sstride, ...; each source row is widened and paired once (see lk_mismatch_strip_sse2). */
 static void lk_grey_strip_sse2(const uint8_t *s, int32_t sstride, int16_t *iw, int32_t win, __m128i w01,
@@ -305,21 +337,16 @@ static void lk_grey_strip_sse2(const uint8_t *s, int32_t sstride, int16_t *iw, i
     __m128i plo, phi, top_lo, top_hi;
     int32_t y;
     lk_pair_u8(s, &plo, &phi);
-    top_lo = _mm_madd_epi16(plo, w01);
-    top_hi = _mm_madd_epi16(phi, w01);
-    for (y = 0; y < win; ++y) {
-        __m128i lo, hi;
-        s += sstride;
-        lk_pair_u8(s, &plo, &phi);
-        lo = _mm_add_epi32(top_lo, _mm_madd_epi16(plo, w23));
-        hi = _mm_add_epi32(top_hi, _mm_madd_epi16(phi, w23));
-        top_lo = _mm_madd_epi16(plo, w01);
-        top_hi = _mm_madd_epi16(phi, w01);
-        lo = _mm_srai_epi32(_mm_add_epi32(lo, rnd), LK_I_SHIFT);
-        hi = _mm_srai_epi32(_mm_add_epi32(hi, rnd), LK_I_SHIFT);
-        _mm_storeu_si128((__m128i *)iw, _mm_packs_epi32(lo, hi));
-        iw += win;
+    top_lo = _mm_add_epi32(_mm_madd_epi16(plo, w01), rnd);
+    top_hi = _mm_add_epi32(_mm_madd_epi16(phi, w01), rnd);
+    for (y = 0; y + 2 <= win; y += 2) {
+        lk_grey_row_sse2(&top_lo, &top_hi, s + sstride, iw, w01, w23);
+        lk_grey_row_sse2(&top_lo, &top_hi, s + 2 * (size_t)sstride, iw + win, w01, w23);
+        s += 2 * (size_t)sstride;
+        iw += 2 * win;
     }
+    if (y < win)
+        lk_grey_row_sse2(&top_lo, &top_hi, s + sstride, iw, w01, w23);
 }
 
 /* The G sums below add per strip and lane two products of |d| <= 4080 per row into int32: at most
@@ -328,53 +355,70 @@ static void lk_grey_strip_sse2(const uint8_t *s, int32_t sstride, int16_t *iw, i
 #error "lk_deriv_strip_sse2: int32 strip sums need win_size <= 63"
 #endif
 
+/* One interpolated row of an int16 grid strip: top_lo/hi hold the upper grid row's products with
+ * (w00, w01) plus the rounding term, g1 is the lower grid row; returns the 8 values (descaled by 2^14
+ * with floor = the biased shift of the C path) and replaces top by the lower row's products. */
+static __m128i lk_interp_row_s16(__m128i *top_lo, __m128i *top_hi, const int16_t *g1, __m128i w01, __m128i w23)
+{
+    const __m128i rnd = _mm_set1_epi32(1 << (LK_W_BITS - 1));
+    __m128i a0 = _mm_loadu_si128((const __m128i *)g1), a1 = _mm_loadu_si128((const __m128i *)(g1 + 1));
+    __m128i plo = _mm_unpacklo_epi16(a0, a1), phi = _mm_unpackhi_epi16(a0, a1);
+    __m128i lo = _mm_srai_epi32(_mm_add_epi32(_mm_madd_epi16(plo, w23), *top_lo), LK_W_BITS);
+    __m128i hi = _mm_srai_epi32(_mm_add_epi32(_mm_madd_epi16(phi, w23), *top_hi), LK_W_BITS);
+    *top_lo = _mm_add_epi32(_mm_madd_epi16(plo, w01), rnd);
+    *top_hi = _mm_add_epi32(_mm_madd_epi16(phi, w01), rnd);
+    return _mm_packs_epi32(lo, hi);
+}
+
+/* State of one strip of lk_deriv_strip_sse2 between rows. */
+typedef struct lk_dv_state {
+    __m128i xt_lo, xt_hi, yt_lo, yt_hi; /* upper grid rows' products (see lk_interp_row_s16) */
+    __m128i c11, c12, c22;              /* G lane sums */
+} lk_dv_state;
+
+static void lk_deriv_row_sse2(lk_dv_state *st, const int16_t *gx1, const int16_t *gy1, int16_t *ixw, int16_t *iyw,
+                              __m128i w01, __m128i w23, int masked, __m128i mask)
+{
+    __m128i dx = lk_interp_row_s16(&st->xt_lo, &st->xt_hi, gx1, w01, w23);
+    __m128i dy = lk_interp_row_s16(&st->yt_lo, &st->yt_hi, gy1, w01, w23);
+    __m128i mx = masked ? _mm_and_si128(dx, mask) : dx;
+    __m128i my = masked ? _mm_and_si128(dy, mask) : dy;
+    _mm_storeu_si128((__m128i *)ixw, dx);
+    _mm_storeu_si128((__m128i *)iyw, dy);
+    st->c11 = _mm_add_epi32(_mm_madd_epi16(mx, dx), st->c11);
+    st->c12 = _mm_add_epi32(_mm_madd_epi16(mx, dy), st->c12);
+    st->c22 = _mm_add_epi32(_mm_madd_epi16(my, dy), st->c22);
+}
+
 /* Interpolated d/dx, d/dy of one 8-column window strip (rows 0..win-1) from the Scharr grid at gx, gy
- * (stride g), descaled by 2^14 with floor (= the biased shift of the C path); the G sums are added to
- * A[3], when masked only those of the lanes in mask. Each grid row is paired once, as in lk_grey_strip_sse2. */
+ * (stride g); the G sums are added to A[3], when masked only those of the lanes in mask. Each grid row
+ * is paired once (as in lk_grey_strip_sse2); rows go in pairs. */
 static void lk_deriv_strip_sse2(const int16_t *gx, const int16_t *gy, int32_t g, int16_t *ixw, int16_t *iyw,
                                 int32_t win, __m128i w01, __m128i w23, int masked, __m128i mask, int64_t A[3])
 {
     const __m128i rnd = _mm_set1_epi32(1 << (LK_W_BITS - 1));
-    __m128i xt_lo, xt_hi, yt_lo, yt_hi, c11, c12, c22;
+    lk_dv_state st;
     int32_t y;
-    lk_pair_madd_s16(gx, w01, &xt_lo, &xt_hi);
-    lk_pair_madd_s16(gy, w01, &yt_lo, &yt_hi);
-    c11 = c12 = c22 = _mm_setzero_si128();
-    for (y = 0; y < win; ++y) {
-        __m128i a0, a1, plo, phi, dx, dy, mx, my;
-        gx += g;
-        gy += g;
-        a0 = _mm_loadu_si128((const __m128i *)gx);
-        a1 = _mm_loadu_si128((const __m128i *)(gx + 1));
-        plo = _mm_unpacklo_epi16(a0, a1);
-        phi = _mm_unpackhi_epi16(a0, a1);
-        a0 = _mm_srai_epi32(_mm_add_epi32(_mm_add_epi32(xt_lo, _mm_madd_epi16(plo, w23)), rnd), LK_W_BITS);
-        a1 = _mm_srai_epi32(_mm_add_epi32(_mm_add_epi32(xt_hi, _mm_madd_epi16(phi, w23)), rnd), LK_W_BITS);
-        xt_lo = _mm_madd_epi16(plo, w01);
-        xt_hi = _mm_madd_epi16(phi, w01);
-        dx = _mm_packs_epi32(a0, a1);
-        a0 = _mm_loadu_si128((const __m128i *)gy);
-        a1 = _mm_loadu_si128((const __m128i *)(gy + 1));
-        plo = _mm_unpacklo_epi16(a0, a1);
-        phi = _mm_unpackhi_epi16(a0, a1);
-        a0 = _mm_srai_epi32(_mm_add_epi32(_mm_add_epi32(yt_lo, _mm_madd_epi16(plo, w23)), rnd), LK_W_BITS);
-        a1 = _mm_srai_epi32(_mm_add_epi32(_mm_add_epi32(yt_hi, _mm_madd_epi16(phi, w23)), rnd), LK_W_BITS);
-        yt_lo = _mm_madd_epi16(plo, w01);
-        yt_hi = _mm_madd_epi16(phi, w01);
-        dy = _mm_packs_epi32(a0, a1);
-        _mm_storeu_si128((__m128i *)ixw, dx);
-        _mm_storeu_si128((__m128i *)iyw, dy);
-        mx = masked ? _mm_and_si128(dx, mask) : dx;
-        my = masked ? _mm_and_si128(dy, mask) : dy;
-        c11 = _mm_add_epi32(c11, _mm_madd_epi16(mx, dx));
-        c12 = _mm_add_epi32(c12, _mm_madd_epi16(mx, dy));
-        c22 = _mm_add_epi32(c22, _mm_madd_epi16(my, dy));
-        ixw += win;
-        iyw += win;
+    lk_pair_madd_s16(gx, w01, &st.xt_lo, &st.xt_hi);
+    lk_pair_madd_s16(gy, w01, &st.yt_lo, &st.yt_hi);
+    st.xt_lo = _mm_add_epi32(st.xt_lo, rnd);
+    st.xt_hi = _mm_add_epi32(st.xt_hi, rnd);
+    st.yt_lo = _mm_add_epi32(st.yt_lo, rnd);
+    st.yt_hi = _mm_add_epi32(st.yt_hi, rnd);
+    st.c11 = st.c12 = st.c22 = _mm_setzero_si128();
+    for (y = 0; y + 2 <= win; y += 2) {
+        lk_deriv_row_sse2(&st, gx + g, gy + g, ixw, iyw, w01, w23, masked, mask);
+        lk_deriv_row_sse2(&st, gx + 2 * g, gy + 2 * g, ixw + win, iyw + win, w01, w23, masked, mask);
+        gx += 2 * g;
+        gy += 2 * g;
+        ixw += 2 * win;
+        iyw += 2 * win;
     }
-    A[0] += lk_hsum_epi32(c11);
-    A[1] += lk_hsum_epi32(c12);
-    A[2] += lk_hsum_epi32(c22);
+    if (y < win)
+        lk_deriv_row_sse2(&st, gx + g, gy + g, ixw, iyw, w01, w23, masked, mask);
+    A[0] += lk_hsum_epi32(st.c11);
+    A[1] += lk_hsum_epi32(st.c12);
+    A[2] += lk_hsum_epi32(st.c22);
 }
 
 /* SSE2 version of the window interpolation of lk_prev_window (win >= 8), same integers, in 8-column
