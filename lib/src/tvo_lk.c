@@ -24,6 +24,14 @@
 #define LK_SSE2 0
 #endif
 
+/* The SSE2 row helpers are small and called once per row: always inline them (their state lives in
+ * registers then, not behind a pointer). */
+#if defined(__GNUC__)
+#define LK_INLINE static inline __attribute__((always_inline))
+#else
+#define LK_INLINE static inline
+#endif
+
 #define LK_W_BITS 14
 #define LK_ONE (1 << LK_W_BITS)
 /* Descale of the grey value (5 fractional bits kept): (v + 2^8) >> 9, v >= 0. */
@@ -217,7 +225,7 @@ static void lk_weights(float a, float b, int32_t w[4])
 
 #if LK_SSE2
 /* Sum of the 4 int32 lanes. */
-static int32_t lk_hsum_epi32(__m128i v)
+LK_INLINE int32_t lk_hsum_epi32(__m128i v)
 {
     v = _mm_add_epi32(v, _mm_shuffle_epi32(v, _MM_SHUFFLE(1, 0, 3, 2)));
     v = _mm_add_epi32(v, _mm_shuffle_epi32(v, _MM_SHUFFLE(2, 3, 0, 1)));
@@ -226,7 +234,7 @@ static int32_t lk_hsum_epi32(__m128i v)
 
 /* Products of the (x, x+1) pairs of 8 int16 values at p with the weight pair w: lanes 0..3 (lo) and 4..7
  * (hi) as int32. */
-static void lk_pair_madd_s16(const int16_t *p, __m128i w, __m128i *lo, __m128i *hi)
+LK_INLINE void lk_pair_madd_s16(const int16_t *p, __m128i w, __m128i *lo, __m128i *hi)
 {
     __m128i a0 = _mm_loadu_si128((const __m128i *)p), a1 = _mm_loadu_si128((const __m128i *)(p + 1));
     *lo = _mm_madd_epi16(_mm_unpacklo_epi16(a0, a1), w);
@@ -234,7 +242,7 @@ static void lk_pair_madd_s16(const int16_t *p, __m128i w, __m128i *lo, __m128i *
 }
 
 /* Same for 8 uint8 values (9 bytes read). */
-static void lk_pair_u8(const uint8_t *p, __m128i *lo, __m128i *hi)
+LK_INLINE void lk_pair_u8(const uint8_t *p, __m128i *lo, __m128i *hi)
 {
     const __m128i z = _mm_setzero_si128();
     __m128i a0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)p), z);
@@ -245,7 +253,7 @@ static void lk_pair_u8(const uint8_t *p, __m128i *lo, __m128i *hi)
 
 /* Horizontal Scharr passes of 8 columns of one source row: difference s[x+2] - s[x] and smoothing
  * 3 s[x] + 10 s[x+1] + 3 s[x+2] (10 bytes read). */
-static void lk_scharr_h_sse2(const uint8_t *s, __m128i *hd, __m128i *hs)
+LK_INLINE void lk_scharr_h_sse2(const uint8_t *s, __m128i *hd, __m128i *hs)
 {
     const __m128i z = _mm_setzero_si128(), k3 = _mm_set1_epi16(3), k10 = _mm_set1_epi16(10);
     __m128i a = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)s), z);
@@ -256,7 +264,7 @@ static void lk_scharr_h_sse2(const uint8_t *s, __m128i *hd, __m128i *hs)
 }
 
 /* Vertical passes from three rows' horizontal ones: dx = 3 hd0 + 10 hd1 + 3 hd2, dy = hs2 - hs0. */
-static void lk_scharr_v_sse2(__m128i hd0, __m128i hd1, __m128i hd2, __m128i hs0, __m128i hs2, int16_t *dx,
+LK_INLINE void lk_scharr_v_sse2(__m128i hd0, __m128i hd1, __m128i hd2, __m128i hs0, __m128i hs2, int16_t *dx,
                              int16_t *dy)
 {
     const __m128i k3 = _mm_set1_epi16(3), k10 = _mm_set1_epi16(10);
@@ -315,7 +323,7 @@ static void lk_scharr_sse2(const uint8_t *src, int32_t sstride, lk_work *wk)
 
 /* One row of a grey strip: top_lo/hi hold the upper source row's products with (w00, w01) plus the
  * rounding term, s is the lower source row; they are replaced by the lower row's. */
-static void lk_grey_row_sse2(__m128i *top_lo, __m128i *top_hi, const uint8_t *s, int16_t *iw, __m128i w01,
+LK_INLINE void lk_grey_row_sse2(__m128i *top_lo, __m128i *top_hi, const uint8_t *s, int16_t *iw, __m128i w01,
                              __m128i w23)
 {
     const __m128i rnd = _mm_set1_epi32(LK_I_ROUND);
@@ -358,7 +366,7 @@ static void lk_grey_strip_sse2(const uint8_t *s, int32_t sstride, int16_t *iw, i
 /* One interpolated row of an int16 grid strip: top_lo/hi hold the upper grid row's products with
  * (w00, w01) plus the rounding term, g1 is the lower grid row; returns the 8 values (descaled by 2^14
  * with floor = the biased shift of the C path) and replaces top by the lower row's products. */
-static __m128i lk_interp_row_s16(__m128i *top_lo, __m128i *top_hi, const int16_t *g1, __m128i w01, __m128i w23)
+LK_INLINE __m128i lk_interp_row_s16(__m128i *top_lo, __m128i *top_hi, const int16_t *g1, __m128i w01, __m128i w23)
 {
     const __m128i rnd = _mm_set1_epi32(1 << (LK_W_BITS - 1));
     __m128i a0 = _mm_loadu_si128((const __m128i *)g1), a1 = _mm_loadu_si128((const __m128i *)(g1 + 1));
@@ -376,7 +384,7 @@ typedef struct lk_dv_state {
     __m128i c11, c12, c22;              /* G lane sums */
 } lk_dv_state;
 
-static void lk_deriv_row_sse2(lk_dv_state *st, const int16_t *gx1, const int16_t *gy1, int16_t *ixw, int16_t *iyw,
+LK_INLINE void lk_deriv_row_sse2(lk_dv_state *st, const int16_t *gx1, const int16_t *gy1, int16_t *ixw, int16_t *iyw,
                               __m128i w01, __m128i w23, int masked, __m128i mask)
 {
     __m128i dx = lk_interp_row_s16(&st->xt_lo, &st->xt_hi, gx1, w01, w23);
@@ -584,7 +592,7 @@ typedef struct lk_mm_state {
 } lk_mm_state;
 
 /* One window row of a strip: j is the J row below it (its top J row is in st). */
-static void lk_mismatch_row_sse2(lk_mm_state *st, const uint8_t *j, const int16_t *iw, const int16_t *ixw,
+LK_INLINE void lk_mismatch_row_sse2(lk_mm_state *st, const uint8_t *j, const int16_t *iw, const int16_t *ixw,
                                  const int16_t *iyw, __m128i w01, __m128i w23, int masked, __m128i mask)
 {
     const __m128i z = _mm_setzero_si128(), rnd = _mm_set1_epi32(LK_I_ROUND);
