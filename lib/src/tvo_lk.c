@@ -224,12 +224,19 @@ static void lk_weights(float a, float b, int32_t w[4])
 }
 
 #if LK_SSE2
-/* Sum of the 4 int32 lanes. */
-LK_INLINE int32_t lk_hsum_epi32(__m128i v)
+/* A strip's int32 lane sums each fit int32 (bounds at the sums below), four of them together need not:
+ * they are added, sign-extended, into two int64 lanes (*acc), which lk_hsum_epi64 adds at the end. */
+LK_INLINE void lk_acc_epi64(__m128i v, __m128i *acc)
 {
-    v = _mm_add_epi32(v, _mm_shuffle_epi32(v, _MM_SHUFFLE(1, 0, 3, 2)));
-    v = _mm_add_epi32(v, _mm_shuffle_epi32(v, _MM_SHUFFLE(2, 3, 0, 1)));
-    return _mm_cvtsi128_si32(v);
+    const __m128i sign = _mm_srai_epi32(v, 31);
+    *acc = _mm_add_epi64(*acc, _mm_add_epi64(_mm_unpacklo_epi32(v, sign), _mm_unpackhi_epi32(v, sign)));
+}
+
+LK_INLINE int64_t lk_hsum_epi64(__m128i v)
+{
+    int64_t t[2];
+    _mm_storeu_si128((__m128i *)t, v);
+    return t[0] + t[1];
 }
 
 /* Products of the (x, x+1) pairs of 8 int16 values at p with the weight pair w: lanes 0..3 (lo) and 4..7
@@ -358,7 +365,7 @@ static void lk_grey_strip_sse2(const uint8_t *s, int32_t sstride, int16_t *iw, i
 }
 
 /* The G sums below add per strip and lane two products of |d| <= 4080 per row into int32: at most
- * 63 rows * 2 * 4080^2 = 2,097,446,400 < 2^31. */
+ * 63 rows * 2 * 4080^2 = 2,097,446,400 < 2^31; the lanes are added in int64 (lk_acc_epi64). */
 #if TVO_LK_MAX_WIN_SIZE > 63
 #error "lk_deriv_strip_sse2: int32 strip sums need win_size <= 63"
 #endif
@@ -399,10 +406,11 @@ LK_INLINE void lk_deriv_row_sse2(lk_dv_state *st, const int16_t *gx1, const int1
 }
 
 /* Interpolated d/dx, d/dy of one 8-column window strip (rows 0..win-1) from the Scharr grid at gx, gy
- * (stride g); the G sums are added to A[3], when masked only those of the lanes in mask. Each grid row
+ * (stride g); the G sums (a11, a12, a22) are added to the int64 lanes of A[3], when masked only
+ * those of the lanes in mask. Each grid row
  * is paired once (as in lk_grey_strip_sse2); rows go in pairs. */
 static void lk_deriv_strip_sse2(const int16_t *gx, const int16_t *gy, int32_t g, int16_t *ixw, int16_t *iyw,
-                                int32_t win, __m128i w01, __m128i w23, int masked, __m128i mask, int64_t A[3])
+                                int32_t win, __m128i w01, __m128i w23, int masked, __m128i mask, __m128i A[3])
 {
     const __m128i rnd = _mm_set1_epi32(1 << (LK_W_BITS - 1));
     lk_dv_state st;
@@ -424,9 +432,9 @@ static void lk_deriv_strip_sse2(const int16_t *gx, const int16_t *gy, int32_t g,
     }
     if (y < win)
         lk_deriv_row_sse2(&st, gx + g, gy + g, ixw, iyw, w01, w23, masked, mask);
-    A[0] += lk_hsum_epi32(st.c11);
-    A[1] += lk_hsum_epi32(st.c12);
-    A[2] += lk_hsum_epi32(st.c22);
+    lk_acc_epi64(st.c11, &A[0]);
+    lk_acc_epi64(st.c12, &A[1]);
+    lk_acc_epi64(st.c22, &A[2]);
 }
 
 /* SSE2 version of the window interpolation of lk_prev_window (win >= 8), same integers, in 8-column
@@ -442,16 +450,20 @@ static void lk_prev_interp_sse2(const uint8_t *s, int32_t sstride, const int32_t
     const __m128i lane = _mm_set_epi16(7, 6, 5, 4, 3, 2, 1, 0);
     const __m128i mask = _mm_cmpgt_epi16(lane, _mm_set1_epi16((int16_t)(7 - tail)));
     int32_t x;
-    A[0] = A[1] = A[2] = 0;
+    __m128i acc[3];
+    acc[0] = acc[1] = acc[2] = _mm_setzero_si128();
     for (x = 0; x < full; x += 8) {
         lk_grey_strip_sse2(s + x, sstride, wk->iwin + x, win, w01, w23);
-        lk_deriv_strip_sse2(wk->gx + x, wk->gy + x, g, wk->ixwin + x, wk->iywin + x, win, w01, w23, 0, mask, A);
+        lk_deriv_strip_sse2(wk->gx + x, wk->gy + x, g, wk->ixwin + x, wk->iywin + x, win, w01, w23, 0, mask, acc);
     }
     if (tail > 0) {
         lk_grey_strip_sse2(s + last, sstride, wk->iwin + last, win, w01, w23);
         lk_deriv_strip_sse2(wk->gx + last, wk->gy + last, g, wk->ixwin + last, wk->iywin + last, win, w01, w23,
-                            1, mask, A);
+                            1, mask, acc);
     }
+    A[0] = lk_hsum_epi64(acc[0]);
+    A[1] = lk_hsum_epi64(acc[1]);
+    A[2] = lk_hsum_epi64(acc[2]);
 }
 #endif
 
@@ -582,7 +594,7 @@ static void lk_mismatch(const uint8_t *src, int32_t sstride, const int32_t wt[4]
 #if LK_SSE2
 /* Rows of one 8-column strip whose int32 lane sums of (J - I) * Ix (or * Iy) cannot overflow: per row a
  * lane adds two products of |J - I| <= 255 * 32 = 8160 and |Ix| <= 16 * 255 = 4080, 66,585,600; 32 rows
- * make 2,130,739,200 < 2^31. Even, as the rows are taken in pairs. */
+ * make 2,130,739,200 < 2^31 (the four lanes are added in int64). Even, as the rows go in pairs. */
 #define LK_MISMATCH_STRIP_ROWS 32
 
 /* State of one strip of lk_mismatch_strip_sse2 between rows. */
@@ -613,15 +625,15 @@ LK_INLINE void lk_mismatch_row_sse2(lk_mm_state *st, const uint8_t *j, const int
     st->acc2 = _mm_add_epi32(_mm_madd_epi16(_mm_loadu_si128((const __m128i *)iyw), d), st->acc2);
 }
 
-/* The (J - I) * Ix and * Iy sums of one 8-column strip of the window (rows 0..win-1), added to *s1 and
- * *s2. j: top-left of the strip in the J block; iw / ixw / iyw: the strip's column in the window
+/* The (J - I) * Ix and * Iy sums of one 8-column strip of the window (rows 0..win-1), added to the
+ * int64 lanes of *s1 and *s2. j: top-left of the strip in the J block; iw / ixw / iyw: the strip's column in the window
  * buffers. Each J row is widened and paired (J[x], J[x+1]) once: its products with (w00, w01) are kept
  * for the next row, with (w10, w11) used for this one; the sums are the same integers as
  * lk_mismatch(). When masked, only the lanes in mask count (the new lanes of the overlapping last
  * strip). Rows go in pairs (fewer register copies between loop-carried values). */
 static void lk_mismatch_strip_sse2(const uint8_t *j, int32_t sstride, const int16_t *iw, const int16_t *ixw,
                                    const int16_t *iyw, int32_t win, __m128i w01, __m128i w23, int masked,
-                                   __m128i mask, int64_t *s1, int64_t *s2)
+                                   __m128i mask, __m128i *s1, __m128i *s2)
 {
     const __m128i z = _mm_setzero_si128(), rnd = _mm_set1_epi32(LK_I_ROUND);
     __m128i a0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)j), z);
@@ -649,8 +661,8 @@ static void lk_mismatch_strip_sse2(const uint8_t *j, int32_t sstride, const int1
             iyw += win;
             ++y;
         }
-        *s1 += lk_hsum_epi32(st.acc1);
-        *s2 += lk_hsum_epi32(st.acc2);
+        lk_acc_epi64(st.acc1, s1);
+        lk_acc_epi64(st.acc2, s2);
     }
 }
 
@@ -666,7 +678,7 @@ static void lk_mismatch_sse2(const uint8_t *src, int32_t sstride, const int32_t 
     /* lanes 8 - tail .. 7 of the last strip are new pixels */
     const __m128i lane = _mm_set_epi16(7, 6, 5, 4, 3, 2, 1, 0);
     const __m128i mask = _mm_cmpgt_epi16(lane, _mm_set1_epi16((int16_t)(7 - tail)));
-    int64_t s1 = 0, s2 = 0;
+    __m128i s1 = _mm_setzero_si128(), s2 = _mm_setzero_si128();
     int32_t x;
     for (x = 0; x < full; x += 8)
         lk_mismatch_strip_sse2(src + x, sstride, wk->iwin + x, wk->ixwin + x, wk->iywin + x, win, w01, w23, 0,
@@ -674,8 +686,8 @@ static void lk_mismatch_sse2(const uint8_t *src, int32_t sstride, const int32_t 
     if (tail > 0)
         lk_mismatch_strip_sse2(src + last, sstride, wk->iwin + last, wk->ixwin + last, wk->iywin + last, win,
                                w01, w23, 1, mask, &s1, &s2);
-    *b1 = s1;
-    *b2 = s2;
+    *b1 = lk_hsum_epi64(s1);
+    *b2 = lk_hsum_epi64(s2);
 }
 #endif
 

@@ -408,6 +408,74 @@ static void test_portable_and_simd_identical(void **state)
     }
 }
 
+/* Extreme contrast: binary (0 / 255) images whose Scharr derivatives reach +-4080 (the largest there
+ * are) and |J - I| 255 * 32. Variant 0: prev of 2-px stripes with random flips, next its random binary
+ * cousin. Variant 1: prev of 2-px stripes crossed by 2-px bands every 16 rows, next the same moved
+ * left by one pixel, points on integer positions: J - I and d/dx are correlated, so at win 21 an
+ * 8-column strip's sum of (J - I) * Ix in the first iteration is ~2.5e9 and of Ix^2 more: above 2^31. The SIMD strips keep int32
+ * lane sums (32 rows per reduction for the iteration sums, whole strips for G) and add lanes in int64;
+ * they must still match the portable path bit for bit, also for windows above 32 rows. */
+static void extreme_images(int variant, uint64_t *seed)
+{
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            int v;
+            if (variant == 0) {
+                v = ((x >> 1) & 1) ? 255 : 0;
+                if ((tvo_test_rand(seed) & 15) == 0)
+                    v = 255 - v;
+                F.a[y * W + x] = (uint8_t)v;
+                F.b[y * W + x] = (tvo_test_rand(seed) & 1) ? (uint8_t)(255 - v) : (uint8_t)v;
+            } else {
+                F.a[y * W + x] = ((y & 15) < 2 || ((x >> 1) & 1)) ? 255 : 0;
+                F.b[y * W + x] = ((y & 15) < 2 || (((x + 1) >> 1) & 1)) ? 255 : 0;
+            }
+        }
+}
+
+static void test_portable_and_simd_identical_extreme(void **state)
+{
+    static tvo_point2f p0[200], p1[200], q1[200];
+    static uint8_t s1[200], s2[200];
+    static float e1[200], e2[200];
+    static uint8_t big_scratch[1 << 17];
+    static const int wins[] = { 21, 33, 47, 63 };
+    tvo_image ia = tvo_image_make(W, H, W, F.a), ib = tvo_image_make(W, H, W, F.b);
+    uint64_t seed = 4242;
+    (void)state;
+    build(3, 0.0, 0.0);
+    for (int variant = 0; variant < 2; ++variant) {
+    extreme_images(variant, &seed);
+    assert_int_equal(tvo_pyramid_build(&F.pa, &ia), TVO_OK);
+    assert_int_equal(tvo_pyramid_build(&F.pb, &ib), TVO_OK);
+    for (int i = 0; i < 200; ++i) {
+        if (variant == 0) {
+            p0[i].x = (float)((double)(tvo_test_rand(&seed) >> 11) / 9007199254740992.0 * (W + 20) - 10);
+            p0[i].y = (float)((double)(tvo_test_rand(&seed) >> 11) / 9007199254740992.0 * (H + 20) - 10);
+        } else {
+            p0[i].x = (float)(10 + (i % 20) * 7);
+            p0[i].y = (float)(10 + (i / 20) * 10);
+        }
+    }
+    for (size_t k = 0; k < sizeof(wins) / sizeof(wins[0]); ++k) {
+        tvo_lk_config c = F.cfg;
+        c.win_size = wins[k];
+        c.fb_check = 1;
+        c.min_eig_threshold = 0.0f; /* keep every window, however odd */
+        assert_true(tvo_lk_scratch_size(&c) <= sizeof(big_scratch));
+        c.force_portable = 0;
+        assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, s1, e1, 200, big_scratch, sizeof(big_scratch)),
+                         TVO_OK);
+        c.force_portable = 1;
+        assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, q1, s2, e2, 200, big_scratch, sizeof(big_scratch)),
+                         TVO_OK);
+        assert_memory_equal(p1, q1, sizeof(p1));
+        assert_memory_equal(s1, s2, sizeof(s1));
+        assert_memory_equal(e1, e2, sizeof(e1));
+    }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -421,6 +489,7 @@ int main(void)
         cmocka_unit_test(test_bad_inputs),
         cmocka_unit_test(test_scratch_alignment_any),
         cmocka_unit_test(test_portable_and_simd_identical),
+        cmocka_unit_test(test_portable_and_simd_identical_extreme),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
