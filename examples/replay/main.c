@@ -57,7 +57,8 @@ static void usage(FILE *f)
             "  --model FILE         tinyvo weights file (needed by --scale model)\n"
             "  --scale-alpha A      with model or const: step length s_k from the filter\n"
             "                       log s_k = (1-A)(log s_(k-1) + log r_k) + A log n_k, n_k the\n"
-            "                       prior (|t| of the networks, or --step) along the raw VO\n"
+            "                       prior (|t| of the networks or their step-length branch,\n"
+            "                       or --step) along the raw VO\n"
             "                       direction; A in [0, 1] (vo.h, tvo_scale_filter)\n"
             "  --step M             constant step length in metres for --scale const\n"
             "  --frame camera|body  pose written: camera (default) or body (through T_BS)\n"
@@ -473,7 +474,8 @@ int main(int argc, char **argv)
                         tvo_pose refined;
                         prior = 0.0;
                         if (tvo_vo_refine(nn, &res, &refined) == TVO_OK) {
-                            if ((tvo_nn_output_mask(nn) & 0x7) == 0x7)
+                            /* |t| of tx ty tz, or the step-length branch's s (|s u| = s, u unit) */
+                            if ((tvo_nn_output_mask(nn) & 0x47) != 0)
                                 prior = sqrt(refined.t[0] * refined.t[0] + refined.t[1] * refined.t[1] +
                                              refined.t[2] * refined.t[2]);
                             memcpy(step.R, refined.R, sizeof(step.R));

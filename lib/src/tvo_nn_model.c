@@ -212,11 +212,14 @@ static tvo_status tvo_nn_validate(const uint8_t *f, size_t size, size_t *bytes)
         uint32_t dof = rd_u32(e), n_in = rd_u32(e + 4), n_layers = rd_u32(e + 8);
         uint32_t in_off = rd_u32(e + 12), ly_off = rd_u32(e + 16), i, k, prev_n;
         int32_t prev_zp = rd_i32(e + 24);
-        if (dof >= TVO_NN_DOF_COUNT)
+        if (dof >= TVO_NN_CODE_COUNT)
             return TVO_ERR_RANGE;
         if (dof_seen & (1u << dof))
             return TVO_ERR_FORMAT;
         dof_seen |= 1u << dof;
+        /* a step-length branch (1.1): not in a 1.0 file, one at most, never beside tx ty tz */
+        if ((dof_seen & 0xC0u) != 0 && (minor < 1u || (dof_seen & 0xC0u) == 0xC0u || (dof_seen & 0x7u) != 0))
+            return TVO_ERR_FORMAT;
         if (n_in == 0 || n_in > TVO_FEAT_COUNT || n_layers == 0 || n_layers > TVO_NN_MAX_LAYERS)
             return TVO_ERR_SIZE;
         if (rd_u32(e + 36) != 0 || rd_u32(e + 40) != 0 || rd_u32(e + 44) != 0)
@@ -286,7 +289,7 @@ tvo_status tvo_nn_load(tvo_nn **out, const void *file, size_t file_size, void *m
         br->in_zp = rd_i32(e + 24);
         br->out_scale = rd_f32(e + 28);
         br->out_offset = rd_f32(e + 32);
-        nn->mask |= (int32_t)1 << br->dof;
+        nn->mask |= (int32_t)1 << (br->dof < TVO_NN_STEP ? br->dof : TVO_NN_STEP);
         for (i = 0; i < (uint32_t)br->n_in; ++i) {
             const uint8_t *ie = f + in_off + (size_t)i * TVO_NN_INPUT_ENTRY_SIZE;
             br->ids[i] = (uint8_t)rd_u32(ie);
@@ -358,13 +361,43 @@ tvo_status tvo_nn_load(tvo_nn **out, const void *file, size_t file_size, void *m
     return TVO_OK;
 }
 
+/* exp(x) for |x| <= 700 with + - * / and ldexp only (x = k ln2 + r, |r| <= ln2/2, Taylor to r^16): the
+ * same operations in the same order as nnfmt.det_exp, so the step of a log-step branch is bit-exact
+ * with the NumPy reference on every IEEE-754 target (no fused multiply-add: -ffp-contract=off). */
+static double nn_exp(double x)
+{
+    const double ln2 = 0.69314718055994530942;
+    const double kf = floor(x / ln2 + 0.5);
+    const double r = x - kf * ln2;
+    double sum = 1.0, term = 1.0;
+    int k;
+    for (k = 1; k <= 16; ++k) {
+        term *= r / (double)k;
+        sum += term;
+    }
+    return ldexp(sum, (int)kf);
+}
+
 tvo_status tvo_nn_run(const tvo_nn *nn, const float features[TVO_FEAT_COUNT], float out[6])
+{
+    float all[TVO_NN_OUT_COUNT];
+    tvo_status st;
+    int32_t d;
+    if (nn == NULL || features == NULL || out == NULL)
+        return TVO_ERR_NULL;
+    st = tvo_nn_run_all(nn, features, all);
+    for (d = 0; d < TVO_NN_DOF_COUNT; ++d)
+        out[d] = all[d];
+    return st;
+}
+
+tvo_status tvo_nn_run_all(const tvo_nn *nn, const float features[TVO_FEAT_COUNT], float out[TVO_NN_OUT_COUNT])
 {
     int32_t b, d;
     uint32_t i;
     if (nn == NULL || features == NULL || out == NULL)
         return TVO_ERR_NULL;
-    for (d = 0; d < TVO_NN_DOF_COUNT; ++d)
+    for (d = 0; d < TVO_NN_OUT_COUNT; ++d)
         out[d] = NAN;
     for (i = 0; i < TVO_FEAT_COUNT; ++i)
         if (((nn->feature_mask >> i) & 1u) && !is_finite_f(features[i]))
@@ -398,11 +431,15 @@ tvo_status tvo_nn_run(const tvo_nn *nn, const float features[TVO_FEAT_COUNT], fl
         v = v + br->out_offset;
         if (!is_finite_f(v)) {
             /* finite weights and scales can still overflow float (a huge out_scale): no output then */
-            for (d = 0; d < TVO_NN_DOF_COUNT; ++d)
+            for (d = 0; d < TVO_NN_OUT_COUNT; ++d)
                 out[d] = NAN;
             return TVO_ERR_NOT_FINITE;
         }
-        out[br->dof] = v;
+        if (br->dof == (int32_t)TVO_NN_CODE_LOG_STEP) {
+            v = v < TVO_NN_LOG_STEP_MIN ? TVO_NN_LOG_STEP_MIN : (v > TVO_NN_LOG_STEP_MAX ? TVO_NN_LOG_STEP_MAX : v);
+            v = (float)nn_exp((double)v);
+        }
+        out[br->dof < TVO_NN_STEP ? br->dof : TVO_NN_STEP] = v;
     }
     return TVO_OK;
 }

@@ -623,13 +623,13 @@ done:
 
 tvo_status tvo_vo_refine(const tvo_nn *nn, const tvo_vo_result *res, tvo_pose *step)
 {
-    float y[TVO_NN_DOF_COUNT];
+    float y[TVO_NN_OUT_COUNT];
     int32_t mask;
     tvo_status st;
     if (nn == NULL || res == NULL || step == NULL)
         return TVO_ERR_NULL;
     *step = res->T_prev_cur;
-    st = tvo_nn_run(nn, res->features, y);
+    st = tvo_nn_run_all(nn, res->features, y);
     if (st != TVO_OK)
         return st;
     mask = tvo_nn_output_mask(nn);
@@ -641,6 +641,12 @@ tvo_status tvo_vo_refine(const tvo_nn *nn, const tvo_vo_result *res, tvo_pose *s
         step->t[0] = y[TVO_NN_TX];
         step->t[1] = y[TVO_NN_TY];
         step->t[2] = y[TVO_NN_TZ];
+    } else if (mask & (1 << TVO_NN_STEP)) {
+        /* step length along the raw unit translation (t = 0 stays 0); a negative length gives t = 0 */
+        const double s = y[TVO_NN_STEP] > 0.0f ? (double)y[TVO_NN_STEP] : 0.0;
+        step->t[0] = s * res->T_prev_cur.t[0];
+        step->t[1] = s * res->T_prev_cur.t[1];
+        step->t[2] = s * res->T_prev_cur.t[2];
     }
     return TVO_OK;
 }

@@ -24,6 +24,7 @@ class CModel:
         tvo.tvo_nn_load.argtypes = [ctypes.POINTER(ctypes.c_void_p), ctypes.c_char_p, ctypes.c_size_t,
                                     ctypes.c_void_p, ctypes.c_size_t]
         tvo.tvo_nn_run.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
+        tvo.tvo_nn_run_all.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
         tvo.tvo_nn_output_mask.argtypes = [ctypes.c_void_p]
         tvo.tvo_nn_macs.argtypes = [ctypes.c_void_p]
         tvo.tvo_nn_macs.restype = ctypes.c_uint32
@@ -37,16 +38,17 @@ class CModel:
         if st != 0:
             raise ValueError(f"load status {st}")
 
-    def run(self, features: np.ndarray):
+    def run(self, features: np.ndarray, n_out: int = 6):
+        """tvo_nn_run (6 outputs) or tvo_nn_run_all (n_out = 7, the step length last)."""
         features = np.ascontiguousarray(features, np.float32)
-        out = np.empty((features.shape[0], 6), np.float32)
+        out = np.empty((features.shape[0], n_out), np.float32)
         fp = features.ctypes.data
         op = out.ctypes.data
-        run = self.tvo.tvo_nn_run
+        run = self.tvo.tvo_nn_run if n_out == 6 else self.tvo.tvo_nn_run_all
         h = self.handle
         status = np.empty(features.shape[0], np.int32)
         for i in range(features.shape[0]):
-            status[i] = run(h, fp + 4 * FEAT * i, op + 24 * i)
+            status[i] = run(h, fp + 4 * FEAT * i, op + 4 * n_out * i)
         return out, status
 
     @property
@@ -77,7 +79,27 @@ def test_golden_vectors(tvo, name):
     out, st = c.run(x)
     assert (st == 0).all()
     assert_bits_equal(out, y)
-    # the reference still reproduces the stored vectors (format/reference drift)
+    # the reference still reproduces the stored vectors (format/reference drift); 1.0 model: no step
+    ref = nnfmt.reference_run(nnfmt.read(data), x)
+    assert np.isnan(ref[:, 6]).all()
+    assert_bits_equal(ref[:, :6], y)
+
+
+@pytest.mark.parametrize("name,mask", [("step", 0x78), ("steplin", 0x40)])
+def test_golden_vectors_step(tvo, name, mask):
+    """Format 1.1 step-length models (log step with rx ry rz; linear step alone): 7 outputs."""
+    data = (DATA / f"{name}.tvonn").read_bytes()
+    assert struct.unpack_from("<HH", data, 4) == (1, 1)
+    x, y, gen = nnfmt.read_golden(DATA / f"{name}.golden")
+    assert y.shape[1] == 7 and gen.startswith("tinyvo_tools.nngolden")
+    c = CModel(tvo, data)
+    assert c.mask == mask
+    out, st = c.run(x, 7)
+    assert (st == 0).all()
+    assert_bits_equal(out, y)
+    out6, st = c.run(x, 6)
+    assert (st == 0).all()
+    assert_bits_equal(out6, y[:, :6])
     assert_bits_equal(nnfmt.reference_run(nnfmt.read(data), x), y)
 
 
@@ -102,7 +124,49 @@ def test_random_inputs_per_activation(tvo, act):
     out, st = c.run(x)
     assert (st == 0).all()
     ref = nnfmt.reference_run(model, x)
+    assert_bits_equal(out, ref[:, :6])
+
+
+@pytest.mark.parametrize("act", quant.nnfmt.ACTS[1:])
+@pytest.mark.parametrize("code", [nnfmt.DOF_STEP, nnfmt.DOF_LOG_STEP])
+def test_random_inputs_step(tvo, act, code):
+    """A step-length branch (linear or log, wide outputs so that the log clamp is reached) with rx ry rz,
+    10,000 random inputs per activation, through tvo_nn_run_all."""
+    rng = np.random.default_rng(2000 + 10 * code + quant.nnfmt.ACT_CODE[act])
+    calib = quant.synthetic_features(rng, 1000)
+    st_br = quant.random_float_branch(rng, code, act, sizes=(32, 16))
+    if code == nnfmt.DOF_LOG_STEP:
+        st_br.out_scale, st_br.out_offset = 10.0, -4.0
+    fbs = [st_br] + [quant.random_float_branch(rng, d, act, sizes=(32, 16)) for d in (3, 4, 5)]
+    model = quant.quantize_model(fbs, calib)
+    data = nnfmt.write(model)
+    assert model.minor == 1
+    c = CModel(tvo, data)
+    assert c.mask == 0x78
+    x = random_inputs(rng, 10000)
+    out, st = c.run(x, 7)
+    assert (st == 0).all()
+    ref = nnfmt.reference_run(model, x)
     assert_bits_equal(out, ref)
+    assert np.isnan(out[:, :3]).all() and np.isfinite(out[:, 3:]).all()
+
+
+def test_old_reader_files_and_step_refusals(tvo):
+    """1.0 files still load (tiny, paper: their golden tests above); the writer keeps 1.0 for models
+    without a step branch; inconsistent step models are refused by the C loader (-9 = TVO_ERR_FORMAT)."""
+    rng = np.random.default_rng(11)
+    calib = quant.synthetic_features(rng, 300)
+    plain = quant.quantize_model([quant.random_float_branch(rng, 0, "relu", sizes=(8,))], calib)
+    assert struct.unpack_from("<HH", nnfmt.write(plain), 4) == (1, 0)
+    assert load_status(tvo, nnfmt.write(plain)) == 0
+    for dofs in ([nnfmt.DOF_STEP, 0], [nnfmt.DOF_LOG_STEP, nnfmt.DOF_STEP], [2, nnfmt.DOF_LOG_STEP]):
+        with pytest.raises(ValueError):
+            nnfmt.check_dofs(dofs)
+        m = quant.quantize_model([quant.random_float_branch(rng, d, "relu", sizes=(8,)) for d in dofs], calib)
+        assert load_status(tvo, nnfmt.write(m)) == -9, dofs
+    m = quant.quantize_model([quant.random_float_branch(rng, nnfmt.DOF_STEP, "relu", sizes=(8,))], calib)
+    m.version_minor = 0
+    assert load_status(tvo, nnfmt.write(m)) == -9
 
 
 def test_partial_model_and_feature_subset(tvo):
@@ -118,7 +182,7 @@ def test_partial_model_and_feature_subset(tvo):
     out, st = c.run(x)
     assert (st == 0).all()
     assert np.isnan(out[:, [0, 2, 3, 5]]).all()
-    assert_bits_equal(out, nnfmt.reference_run(model, x))
+    assert_bits_equal(out, nnfmt.reference_run(model, x)[:, :6])
     x[0, 7] = np.inf  # read: refused
     out, st = c.run(x[:1])
     assert st[0] == -6 and np.isnan(out).all()

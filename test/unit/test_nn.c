@@ -61,13 +61,15 @@ static tvo_status status_of(const uint8_t *f, size_t size)
     return tvo_nn_required_size(f, size, &need);
 }
 
-static void check_golden(const char *model_name, const char *golden_name)
+/* Golden file version 1: 6 outputs per record (tvo_nn_run); version 2: 7 (tvo_nn_run_all, the step). */
+static void check_golden(const char *model_name, const char *golden_name, int32_t want_mask,
+                         int32_t want_branches, tvo_nn_act act0, tvo_nn_act act_last)
 {
     blob m = read_file(model_name), g = read_file(golden_name);
     size_t need = 0;
     void *mem;
     tvo_nn *nn = NULL;
-    uint32_t n, nf, i;
+    uint32_t n, nf, i, ver, no;
     if (m.data == NULL || m.size == 0 || g.data == NULL || g.size < 48) {
         free(m.data);
         free(g.data);
@@ -75,11 +77,13 @@ static void check_golden(const char *model_name, const char *golden_name)
         return;
     }
     assert_memory_equal(g.data, "TVNG", 4);
-    assert_int_equal(get32(g.data + 4), 1);
+    ver = get32(g.data + 4);
+    assert_true(ver == 1 || ver == 2);
+    no = ver == 1 ? 6u : (uint32_t)TVO_NN_OUT_COUNT;
     n = get32(g.data + 8);
     nf = get32(g.data + 12);
     assert_int_equal(nf, TVO_FEAT_COUNT);
-    assert_int_equal(g.size, 48u + (size_t)n * (nf + 6u) * 4u);
+    assert_int_equal(g.size, 48u + (size_t)n * (nf + no) * 4u);
     assert_int_equal(tvo_nn_required_size(m.data, m.size, &need), TVO_OK);
     mem = malloc(need + 1);
     assert_non_null(mem);
@@ -87,17 +91,24 @@ static void check_golden(const char *model_name, const char *golden_name)
     assert_int_equal(tvo_nn_load(&nn, m.data, m.size, (uint8_t *)mem + 1, need), TVO_OK);
     assert_non_null(nn);
     memset(m.data, 0xA5, m.size); /* the model must not reference the file */
-    assert_int_equal(tvo_nn_output_mask(nn), 0x3F);
-    assert_int_equal(tvo_nn_branch_count(nn), 6);
-    assert_int_equal(tvo_nn_branch_activation(nn, 0), TVO_NN_ACT_RELU);
-    assert_int_equal(tvo_nn_branch_activation(nn, 5), TVO_NN_ACT_SIGMOID);
+    assert_int_equal(tvo_nn_output_mask(nn), want_mask);
+    assert_int_equal(tvo_nn_branch_count(nn), want_branches);
+    assert_int_equal(tvo_nn_branch_activation(nn, 0), act0);
+    assert_int_equal(tvo_nn_branch_activation(nn, want_branches - 1), act_last);
     assert_true(tvo_nn_macs(nn) > 0);
     for (i = 0; i < n; ++i) {
-        float feat[TVO_FEAT_COUNT], want[6], out[6];
-        memcpy(feat, g.data + 48 + (size_t)i * (nf + 6) * 4, sizeof feat);
-        memcpy(want, g.data + 48 + (size_t)i * (nf + 6) * 4 + nf * 4, sizeof want);
-        assert_int_equal(tvo_nn_run(nn, feat, out), TVO_OK);
-        assert_memory_equal(out, want, sizeof out); /* bit for bit */
+        float feat[TVO_FEAT_COUNT], want[TVO_NN_OUT_COUNT], out[TVO_NN_OUT_COUNT], out6[6];
+        const uint8_t *rec = g.data + 48 + (size_t)i * (nf + no) * 4;
+        memcpy(feat, rec, sizeof feat);
+        memcpy(want, rec + nf * 4, no * 4u);
+        assert_int_equal(tvo_nn_run(nn, feat, out6), TVO_OK);
+        assert_memory_equal(out6, want, sizeof out6); /* bit for bit */
+        assert_int_equal(tvo_nn_run_all(nn, feat, out), TVO_OK);
+        assert_memory_equal(out, want, sizeof out6);
+        if (no == 7u)
+            assert_memory_equal(&out[TVO_NN_STEP], &want[TVO_NN_STEP], sizeof(float));
+        else
+            assert_true(isnan(out[TVO_NN_STEP]));
     }
     free(mem);
     free(m.data);
@@ -107,13 +118,22 @@ static void check_golden(const char *model_name, const char *golden_name)
 static void test_golden_tiny(void **state)
 {
     (void)state;
-    check_golden("tiny.tvonn", "tiny.golden");
+    check_golden("tiny.tvonn", "tiny.golden", 0x3F, 6, TVO_NN_ACT_RELU, TVO_NN_ACT_SIGMOID);
 }
 
 static void test_golden_paper(void **state)
 {
     (void)state;
-    check_golden("paper.tvonn", "paper.golden");
+    check_golden("paper.tvonn", "paper.golden", 0x3F, 6, TVO_NN_ACT_RELU, TVO_NN_ACT_SIGMOID);
+}
+
+/* Format 1.1: a log-step branch (code 7) with rx ry rz, and a linear step branch (code 6) alone. The
+ * golden step values include both ends of the log clamp (1.1e-7 and 2981 m) and negative linear steps. */
+static void test_golden_step(void **state)
+{
+    (void)state;
+    check_golden("step.tvonn", "step.golden", 0x78, 4, TVO_NN_ACT_ELU, TVO_NN_ACT_SIGMOID);
+    check_golden("steplin.tvonn", "steplin.golden", 0x40, 1, TVO_NN_ACT_SELU, TVO_NN_ACT_SELU);
 }
 
 static void test_null_and_memory(void **state)
@@ -199,7 +219,29 @@ static void e_nb7(uint8_t *f, size_t *s) { (void)s; put32(f + 28, 7); }
 static void e_bt_past(uint8_t *f, size_t *s) { put32(f + 32, (uint32_t)*s - 40); }
 static void e_bt_in_header(uint8_t *f, size_t *s) { (void)s; put32(f + 32, 16); }
 static void e_bt_misaligned(uint8_t *f, size_t *s) { (void)s; put32(f + 32, get32(f + 32) + 2); }
-static void e_dof_range(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 2), 6); }
+static void e_dof_range(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 2), TVO_NN_CODE_COUNT); }
+static void e_step_in_1_0(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 3), TVO_NN_CODE_STEP); }
+static void e_log_step_in_1_0(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 3), TVO_NN_CODE_LOG_STEP); }
+/* on tiny (1.0, tx..rz) declared 1.1: a step branch replacing rx, beside tx ty tz */
+static void e_step_with_t(uint8_t *f, size_t *s)
+{
+    (void)s;
+    f[6] = 1;
+    put32(branch_entry(f, 3), TVO_NN_CODE_STEP);
+}
+/* on step.tvonn (log step, rx, ry, rz): */
+static void e_step_both(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 1), TVO_NN_CODE_STEP); }
+static void e_step_dup(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 1), TVO_NN_CODE_LOG_STEP); }
+static void e_step_plus_tz(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 3), TVO_NN_TZ); }
+static void e_step_plus_tx_first(uint8_t *f, size_t *s)
+{
+    (void)s; /* tx before the step branch: refused whatever the order */
+    put32(branch_entry(f, 0), TVO_NN_TX);
+    put32(branch_entry(f, 1), TVO_NN_CODE_LOG_STEP);
+}
+static void e_step_minor0(uint8_t *f, size_t *s) { (void)s; f[6] = 0; }
+static void e_step_code8(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 0), 8); }
+static void e_step_linear(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 0), TVO_NN_CODE_STEP); }
 static void e_dof_dup(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 2), 1); }
 static void e_n_inputs0(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 0) + 4, 0); }
 static void e_n_inputs_big(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 0) + 4, TVO_FEAT_COUNT + 1); }
@@ -287,7 +329,10 @@ static void test_bad_files(void **state)
     expect(&g, e_bt_past, 1, TVO_ERR_RANGE, "branch table past the end");
     expect(&g, e_bt_in_header, 1, TVO_ERR_RANGE, "branch table inside the header");
     expect(&g, e_bt_misaligned, 1, TVO_ERR_FORMAT, "branch table misaligned");
-    expect(&g, e_dof_range, 1, TVO_ERR_RANGE, "dof 6");
+    expect(&g, e_dof_range, 1, TVO_ERR_RANGE, "dof code 8");
+    expect(&g, e_step_in_1_0, 1, TVO_ERR_FORMAT, "step-length code in a 1.0 file");
+    expect(&g, e_log_step_in_1_0, 1, TVO_ERR_FORMAT, "log-step code in a 1.0 file");
+    expect(&g, e_step_with_t, 1, TVO_ERR_FORMAT, "step-length branch beside tx ty tz (1.1)");
     expect(&g, e_dof_dup, 1, TVO_ERR_FORMAT, "duplicated dof");
     expect(&g, e_n_inputs0, 1, TVO_ERR_SIZE, "0 inputs");
     expect(&g, e_n_inputs_big, 1, TVO_ERR_SIZE, "too many inputs");
@@ -350,6 +395,26 @@ static void test_bad_files(void **state)
         }
     }
     free(copy);
+    free(g.data);
+}
+
+/* Step-length models (format 1.1): inconsistent combinations refused, the valid ones loaded; a 1.0
+ * reader's view (minor 0) of a step file refused. */
+static void test_bad_step_files(void **state)
+{
+    blob g = read_file("step.tvonn");
+    (void)state;
+    assert_non_null(g.data);
+    assert_int_equal(status_of(g.data, g.size), TVO_OK);
+    assert_int_equal(g.data[6], 1); /* minor version 1 */
+    assert_int_equal(get32(branch_entry(g.data, 0)), TVO_NN_CODE_LOG_STEP);
+    expect(&g, e_step_both, 1, TVO_ERR_FORMAT, "step and log step in one model");
+    expect(&g, e_step_dup, 1, TVO_ERR_FORMAT, "two log-step branches");
+    expect(&g, e_step_plus_tz, 1, TVO_ERR_FORMAT, "log step beside tz");
+    expect(&g, e_step_plus_tx_first, 1, TVO_ERR_FORMAT, "tx then log step");
+    expect(&g, e_step_minor0, 1, TVO_ERR_FORMAT, "step file declared 1.0");
+    expect(&g, e_step_code8, 1, TVO_ERR_RANGE, "code 8");
+    expect(&g, e_step_linear, 1, TVO_OK, "linear step with rx ry rz");
     free(g.data);
 }
 
@@ -450,6 +515,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_golden_tiny),
         cmocka_unit_test(test_golden_paper),
+        cmocka_unit_test(test_golden_step),
+        cmocka_unit_test(test_bad_step_files),
         cmocka_unit_test(test_null_and_memory),
         cmocka_unit_test(test_bad_files),
         cmocka_unit_test(test_kernels),

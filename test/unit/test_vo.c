@@ -374,6 +374,83 @@ static void test_scale_filter(void **state)
     assert_true(s == 0.0);
 }
 
+/* A weights file of test/data/nn loaded into malloc'd memory (NULL if missing). */
+static tvo_nn *load_nn(const char *name, void **mem)
+{
+    char path[4096];
+    const char *src = getenv("TVO_SOURCE_DIR");
+    FILE *fp;
+    long n;
+    uint8_t *buf;
+    size_t need = 0;
+    tvo_nn *nn = NULL;
+    *mem = NULL;
+    snprintf(path, sizeof path, "%s/test/data/nn/%s", src != NULL ? src : ".", name);
+    fp = fopen(path, "rb");
+    if (fp == NULL)
+        return NULL;
+    fseek(fp, 0, SEEK_END);
+    n = ftell(fp);
+    fseek(fp, 0, SEEK_SET);
+    buf = (uint8_t *)malloc((size_t)n);
+    if (buf != NULL && fread(buf, 1, (size_t)n, fp) == (size_t)n &&
+        tvo_nn_required_size(buf, (size_t)n, &need) == TVO_OK && (*mem = malloc(need)) != NULL &&
+        tvo_nn_load(&nn, buf, (size_t)n, *mem, need) != TVO_OK)
+        nn = NULL;
+    fclose(fp);
+    free(buf);
+    return nn;
+}
+
+/* tvo_vo_refine with a step-length model (format 1.1): t = s u along the raw unit translation u, s the
+ * model's step (tvo_nn_run_all); a negative linear step gives t = 0; the rotation branches of step.tvonn
+ * replace R; a log-step model never gives t = 0 for a unit u. */
+static void test_refine_step_length(void **state)
+{
+    void *mem_lin = NULL, *mem_log = NULL;
+    tvo_nn *lin = load_nn("steplin.tvonn", &mem_lin), *lg = load_nn("step.tvonn", &mem_log);
+    int pos = 0, neg = 0;
+    (void)state;
+    assert_non_null(lin);
+    assert_non_null(lg);
+    for (int k = 0; k < 200; ++k) {
+        tvo_vo_result res;
+        tvo_pose step;
+        float y[TVO_NN_OUT_COUNT];
+        const double a = 0.1 * k, u[3] = {cos(a) * 0.6, sin(a) * 0.6, 0.8};
+        memset(&res, 0, sizeof res);
+        res.T_prev_cur = tvo_pose_identity();
+        memcpy(res.T_prev_cur.t, u, sizeof u);
+        for (int i = 0; i < TVO_FEAT_COUNT; ++i)
+            res.features[i] = (float)(0.3 * sin(0.7 * k + 1.3 * i) * (1 + i));
+        assert_int_equal(tvo_nn_run_all(lin, res.features, y), TVO_OK);
+        assert_int_equal(tvo_vo_refine(lin, &res, &step), TVO_OK);
+        for (int j = 0; j < 3; ++j) {
+            const double want = y[TVO_NN_STEP] > 0.0f ? (double)y[TVO_NN_STEP] * u[j] : 0.0;
+            assert_true(step.t[j] == want);
+        }
+        assert_memory_equal(step.R, res.T_prev_cur.R, sizeof step.R); /* no rotation branches */
+        if (y[TVO_NN_STEP] > 0.0f)
+            ++pos;
+        else
+            ++neg;
+        assert_int_equal(tvo_nn_run_all(lg, res.features, y), TVO_OK);
+        assert_int_equal(tvo_vo_refine(lg, &res, &step), TVO_OK);
+        assert_true(y[TVO_NN_STEP] > 0.0f);
+        for (int j = 0; j < 3; ++j)
+            assert_true(step.t[j] == (double)y[TVO_NN_STEP] * u[j]);
+        {
+            const double v[3] = {y[TVO_NN_RX], y[TVO_NN_RY], y[TVO_NN_RZ]};
+            double R[9];
+            tvo_rotvec_to_rot(v, R);
+            assert_memory_equal(step.R, R, sizeof R);
+        }
+    }
+    assert_true(pos > 10 && neg > 10); /* both branches of the rule were exercised */
+    free(mem_lin);
+    free(mem_log);
+}
+
 static void test_bad_input(void **state)
 {
     fixture *f = *state;
@@ -452,6 +529,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_relative_scale, setup, teardown),
         cmocka_unit_test_setup_teardown(test_relative_scale_rotation_only, setup, teardown),
         cmocka_unit_test(test_scale_filter),
+        cmocka_unit_test(test_refine_step_length),
         cmocka_unit_test_setup_teardown(test_bad_input, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

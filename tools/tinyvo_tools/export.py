@@ -20,15 +20,17 @@ GOLDEN_GENERATOR = "tinyvo_tools.export 1"
 
 
 def compare(model: nnfmt.Model, branches, features: np.ndarray, targets: np.ndarray) -> dict:
-    """Per-DoF quantised-vs-float difference relative to the DoF's std (of the targets)."""
+    """Per-DoF quantised-vs-float difference relative to the DoF's std (of the targets). A step-length
+    branch (linear or log) is compared on the step it gives, in metres, against the std of |t|."""
     q = nnfmt.reference_run(model, features).astype(np.float64)
     f = quant.float_run(branches, features)
+    targets = train.targets_with_step(targets)
     rep = {}
     for b in branches:
-        d = b.dof
+        d = min(b.dof, nnfmt.OUT_STEP)  # output column; targets column 6 = |t| (m)
         std = float(targets[:, d].std()) or 1.0
         diff = q[:, d] - f[:, d]
-        rep[nnfmt.DOFS[d]] = {"std": std, "rms_diff_over_std": float(np.sqrt(np.mean(diff ** 2)) / std),
+        rep[nnfmt.DOFS[b.dof]] = {"std": std, "rms_diff_over_std": float(np.sqrt(np.mean(diff ** 2)) / std),
                               "max_abs_diff_over_std": float(np.abs(diff).max() / std),
                               "float_rmse": float(np.sqrt(np.mean((f[:, d] - targets[:, d]) ** 2))),
                               "quant_rmse": float(np.sqrt(np.mean((q[:, d] - targets[:, d]) ** 2)))}
@@ -55,7 +57,10 @@ def export(branches, meta, features, targets, seq, out_path, golden_path=None, n
         rng = np.random.default_rng(seed)
         pick = rng.choice(len(features), size=min(n_golden, len(features)), replace=False)
         x = features[np.sort(pick)]
-        nnfmt.write_golden(golden_path, x, nnfmt.reference_run(nnfmt.read(data), x), GOLDEN_GENERATOR)
+        y = nnfmt.reference_run(nnfmt.read(data), x)
+        if not model.output_mask & (1 << nnfmt.OUT_STEP):
+            y = y[:, :6]  # golden version 1 (6 outputs) for models without a step-length branch
+        nnfmt.write_golden(golden_path, x, y, GOLDEN_GENERATOR)
     return rep
 
 

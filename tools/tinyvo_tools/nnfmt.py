@@ -16,7 +16,7 @@ import numpy as np
 
 MAGIC = b"TVNN"
 VERSION_MAJOR = 1
-VERSION_MINOR = 0
+VERSION_MINOR = 1            # 1.1: DoF codes 6 (step length) and 7 (log step length)
 HEADER_SIZE = 64
 BRANCH_ENTRY_SIZE = 48
 INPUT_ENTRY_SIZE = 12
@@ -26,7 +26,51 @@ PAYLOAD_ALIGN = 16
 FEAT_LAYOUT_ID = 1
 FEATURES = ["rx", "ry", "rz", "tx", "ty", "tz", "inlier_ratio", "parallax_deg", "tracks", "dt", "rot_only"]
 FEAT_COUNT = len(FEATURES)
-DOFS = ["tx", "ty", "tz", "rx", "ry", "rz"]
+DOFS = ["tx", "ty", "tz", "rx", "ry", "rz", "step", "log_step"]   # branch DoF codes 0..7
+DOF_STEP = 6          # output: metric length |t| of the step (m), applied to the raw VO unit translation
+DOF_LOG_STEP = 7      # output: its natural log; the interpreter returns exp of it (det_exp) as the step
+OUT_COUNT = 7         # reference_run / tvo_nn_run_all outputs: tx ty tz rx ry rz step
+OUT_STEP = 6
+LOG_STEP_MIN = -16.0  # a log-step branch's value is clamped to [LOG_STEP_MIN, LOG_STEP_MAX] before exp
+LOG_STEP_MAX = 8.0
+STEP_MIN_M = 1e-4     # training: log targets of steps below this use this
+LN2 = 0.69314718055994530942
+
+
+def min_minor(dofs) -> int:
+    """The lowest minor version that describes a file with these branch DoF codes."""
+    return 1 if any(d >= DOF_STEP for d in dofs) else 0
+
+
+def check_dofs(dofs) -> None:
+    """Raise ValueError for a set of branch DoFs the C loader refuses (docs/weights-format.md)."""
+    dofs = list(dofs)
+    if len(set(dofs)) != len(dofs) or any(not 0 <= d < len(DOFS) for d in dofs):
+        raise ValueError(f"DoF codes {dofs}: each of 0..{len(DOFS) - 1} at most once")
+    if DOF_STEP in dofs and DOF_LOG_STEP in dofs:
+        raise ValueError("a model holds one step-length branch (step or log_step), not both")
+    if any(d >= DOF_STEP for d in dofs) and any(d < 3 for d in dofs):
+        raise ValueError("a step-length branch cannot be mixed with tx/ty/tz branches")
+
+
+def det_exp(x: np.ndarray) -> np.ndarray:
+    """exp in float64 with the operations of the C interpreter's (tvo_nn_model.c nn_exp), in the same
+    order: x = k ln2 + r, Taylor to r^16, ldexp. Bit-exact with C (IEEE binary64, no fused ops)."""
+    x = np.asarray(x, np.float64)
+    kf = np.floor(x / LN2 + 0.5)
+    r = x - kf * LN2
+    s = np.ones_like(x)
+    term = np.ones_like(x)
+    for k in range(1, 17):
+        term = term * (r / float(k))
+        s = s + term
+    return np.ldexp(s, kf.astype(np.int32))
+
+
+def log_step_to_step(v: np.ndarray) -> np.ndarray:
+    """A log-step branch's float32 output -> the float32 step length of the interpreter."""
+    v = np.clip(np.asarray(v, np.float32), np.float32(LOG_STEP_MIN), np.float32(LOG_STEP_MAX))
+    return det_exp(v.astype(np.float64)).astype(np.float32)
 
 ACTS = ["none", "relu", "leaky_relu", "elu", "selu", "tanh", "sigmoid"]
 ACT_CODE = {name: i for i, name in enumerate(ACTS)}
@@ -82,14 +126,19 @@ class Model:
     layout_id: int = FEAT_LAYOUT_ID
     n_features: int = FEAT_COUNT
     version_major: int = VERSION_MAJOR
-    version_minor: int = VERSION_MINOR
+    version_minor: Optional[int] = None  # None: the lowest minor that describes the branches (min_minor)
 
     @property
     def output_mask(self) -> int:
+        """Bit d for output d of tvo_nn_run_all (0..5 the DoFs, 6 = step for codes 6 and 7)."""
         m = 0
         for b in self.branches:
-            m |= 1 << b.dof
+            m |= 1 << min(b.dof, OUT_STEP)
         return m
+
+    @property
+    def minor(self) -> int:
+        return self.version_minor if self.version_minor is not None else min_minor(b.dof for b in self.branches)
 
     @property
     def macs(self) -> int:
@@ -153,7 +202,7 @@ def write(model: Model) -> bytes:
         layer_offs.append(offs)
     size = off
     buf = bytearray(size)
-    struct.pack_into("<4sHHIIIIIIIIII", buf, 0, MAGIC, model.version_major, model.version_minor, size, 0,
+    struct.pack_into("<4sHHIIIIIIIIII", buf, 0, MAGIC, model.version_major, model.minor, size, 0,
                      HEADER_SIZE, model.layout_id, model.n_features, nb, bt_off, BRANCH_ENTRY_SIZE,
                      LAYER_ENTRY_SIZE, INPUT_ENTRY_SIZE)
     for i, b in enumerate(model.branches):
@@ -271,35 +320,45 @@ def run_branch(b: Branch, features: np.ndarray) -> np.ndarray:
 
 
 def reference_run(model: Model, features: np.ndarray) -> np.ndarray:
-    """(N, 6) float32, NaN for DoFs the model does not provide; bit-exact with tvo_nn_run()."""
+    """(N, 7) float32: tx ty tz rx ry rz step, NaN for outputs the model does not provide; bit-exact with
+    tvo_nn_run_all() (tvo_nn_run() returns the first six). A log-step branch's value v gives
+    step = (float)det_exp(clamp(v, LOG_STEP_MIN, LOG_STEP_MAX))."""
     features = np.atleast_2d(np.asarray(features, np.float32))
-    out = np.full((features.shape[0], len(DOFS)), np.nan, np.float32)
+    out = np.full((features.shape[0], OUT_COUNT), np.nan, np.float32)
     for b in model.branches:
-        out[:, b.dof] = run_branch(b, features)
+        y = run_branch(b, features)
+        if b.dof == DOF_LOG_STEP:
+            out[:, OUT_STEP] = log_step_to_step(y)
+        else:
+            out[:, min(b.dof, OUT_STEP)] = y
     return out
 
 
 # ---- golden vectors --------------------------------------------------------------------------
 
 GOLDEN_MAGIC = b"TVNG"
-GOLDEN_VERSION = 1
+GOLDEN_VERSION = 2          # 1: 6 outputs per record; 2: 7 (tx ty tz rx ry rz step)
+GOLDEN_OUTPUTS = {1: 6, 2: 7}
 
 
 def write_golden(path, features: np.ndarray, outputs: np.ndarray, generator: str) -> None:
     """Golden vectors: "TVNG", u32 version, u32 n, u32 n_features, char generator[32] (the writing
-    script and its version), then n records of n_features float32 features + 6 float32 outputs (LE)."""
+    script and its version), then n records of n_features float32 features + 7 float32 outputs (LE;
+    version 1 files, still read, have 6). Outputs with 6 columns are written as version 1."""
     features = np.asarray(features, "<f4")
     outputs = np.asarray(outputs, "<f4")
+    ver = 1 if outputs.shape[1] == 6 else GOLDEN_VERSION
     gen = generator.encode()[:31].ljust(32, b"\0")
     with open(path, "wb") as fh:
-        fh.write(struct.pack("<4sIII32s", GOLDEN_MAGIC, GOLDEN_VERSION, features.shape[0], features.shape[1], gen))
+        fh.write(struct.pack("<4sIII32s", GOLDEN_MAGIC, ver, features.shape[0], features.shape[1], gen))
         fh.write(np.concatenate([features, outputs], axis=1).astype("<f4").tobytes())
 
 
 def read_golden(path):
     data = open(path, "rb").read()
     magic, ver, n, nf, gen = struct.unpack_from("<4sIII32s", data, 0)
-    if magic != GOLDEN_MAGIC or ver != GOLDEN_VERSION:
+    if magic != GOLDEN_MAGIC or ver not in GOLDEN_OUTPUTS:
         raise ValueError("not a golden file")
-    rec = np.frombuffer(data, "<f4", n * (nf + 6), 48).reshape(n, nf + 6)
+    no = GOLDEN_OUTPUTS[ver]
+    rec = np.frombuffer(data, "<f4", n * (nf + no), 48).reshape(n, nf + no)
     return rec[:, :nf].copy(), rec[:, nf:].copy(), gen.rstrip(b"\0").decode()

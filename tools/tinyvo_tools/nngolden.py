@@ -8,7 +8,14 @@ Writes (deterministic, seed 5):
   tiny.golden      256 inputs (calibration-like, outliers, edge values) and the NumPy reference outputs
   paper.tvonn      paper-sized model (6 branches 11 -> 256 -> 32 -> 32 -> 1, same activations): bench
   paper.golden     64 golden vectors for it
-The golden files record this script's name and GENERATOR_VERSION.
+  step.tvonn       format 1.1: a log-step branch (code 7, elu, wide output so that the clamp to
+                   [LOG_STEP_MIN, LOG_STEP_MAX] is reached) and rx ry rz (relu, tanh, sigmoid), 11 -> 16 -> 8 -> 1
+  step.golden      256 golden vectors (version 2: 7 outputs, the last one the step length)
+  steplin.tvonn    format 1.1: one linear step-length branch (code 6, selu) alone
+  steplin.golden   256 golden vectors (version 2)
+Files without a step-length branch are written as 1.0 with version-1 golden files (6 outputs), so tiny and
+paper stay byte-identical to the files of generator version 2. The golden files record this script's name
+and GENERATOR_VERSION.
 """
 from __future__ import annotations
 
@@ -19,7 +26,7 @@ import numpy as np
 
 from . import nnfmt, quant
 
-GENERATOR_VERSION = 2
+GENERATOR_VERSION = 3
 GENERATOR = f"tinyvo_tools.nngolden {GENERATOR_VERSION}"
 BRANCH_ACTS = ["relu", "leaky_relu", "elu", "selu", "tanh", "sigmoid"]
 
@@ -50,12 +57,27 @@ def main(argv=None):
     rng = np.random.default_rng(5)
     for name, sizes, n in (("tiny", (16, 8), 256), ("paper", (256, 32, 32), 64)):
         model, _, _ = make_model(rng, sizes)
-        data = nnfmt.write(model)
-        (args.out / f"{name}.tvonn").write_bytes(data)
-        x = test_inputs(rng, n)
-        y = nnfmt.reference_run(nnfmt.read(data), x)
-        nnfmt.write_golden(args.out / f"{name}.golden", x, y, GENERATOR)
-        print(f"{name}: {len(data)} bytes, {model.macs} MACs, {n} golden vectors")
+        write_pair(args.out, name, model, test_inputs(rng, n), GENERATOR)
+    # step-length models (1.1); generated after tiny and paper so that those stay unchanged
+    calib = quant.synthetic_features(rng, 2000)
+    ls = quant.random_float_branch(rng, nnfmt.DOF_LOG_STEP, "elu", sizes=(16, 8))
+    ls.out_scale, ls.out_offset = 12.0, -4.0  # outputs beyond [-16, 8] on the widened inputs
+    fbs = [ls] + [quant.random_float_branch(rng, d, a, sizes=(16, 8))
+                  for d, a in ((3, "relu"), (4, "tanh"), (5, "sigmoid"))]
+    write_pair(args.out, "step", quant.quantize_model(fbs, calib), test_inputs(rng, 256), GENERATOR)
+    fbs = [quant.random_float_branch(rng, nnfmt.DOF_STEP, "selu", sizes=(16, 8))]
+    write_pair(args.out, "steplin", quant.quantize_model(fbs, calib), test_inputs(rng, 256), GENERATOR)
+
+
+def write_pair(out, name, model, x, generator):
+    """NAME.tvonn and NAME.golden (6 outputs for a model without a step-length branch, else 7)."""
+    data = nnfmt.write(model)
+    (out / f"{name}.tvonn").write_bytes(data)
+    y = nnfmt.reference_run(nnfmt.read(data), x)
+    if not model.output_mask & (1 << nnfmt.OUT_STEP):
+        y = y[:, :6]
+    nnfmt.write_golden(out / f"{name}.golden", x, y, generator)
+    print(f"{name}: {len(data)} bytes, format 1.{model.minor}, {model.macs} MACs, {len(x)} golden vectors")
 
 
 if __name__ == "__main__":

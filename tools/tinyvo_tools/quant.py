@@ -85,10 +85,16 @@ class FloatBranch:
 
 
 def float_run(branches: Sequence[FloatBranch], features: np.ndarray) -> np.ndarray:
+    """(N, 7) float64 like nnfmt.reference_run: tx ty tz rx ry rz step (a log-step branch: exp of its
+    value clamped to [LOG_STEP_MIN, LOG_STEP_MAX])."""
     features = np.atleast_2d(features)
-    out = np.full((features.shape[0], 6), np.nan)
+    out = np.full((features.shape[0], nnfmt.OUT_COUNT), np.nan)
     for b in branches:
-        out[:, b.dof] = b.forward(features)
+        y = b.forward(features)
+        if b.dof == nnfmt.DOF_LOG_STEP:
+            out[:, nnfmt.OUT_STEP] = np.exp(np.clip(y, nnfmt.LOG_STEP_MIN, nnfmt.LOG_STEP_MAX))
+        else:
+            out[:, min(b.dof, nnfmt.OUT_STEP)] = y
     return out
 
 

@@ -4,6 +4,7 @@
            [--train MH_01,MH_02,MH_03,V1_01,V2_01] [--val MH_04,V1_02,V2_03]
            [--acts relu,leaky_relu,elu,selu,tanh,sigmoid] [--epochs 40] [--joint-epochs 10] [--lr 1e-3] [--seed 0]
            [--sizes 256,32,32] [--replay tvo_replay] [--retrain]
+           [--translation t|step|log_step] [--scale-alpha A]
 
 DATASET.npz is the dataset builder's output (tinyvo_tools.dataset) holding rows of the training and the
 validation sequences; SEQ-ROOT/<name> are the EuRoC folders of the validation sequences (replayed here).
@@ -18,6 +19,13 @@ For every activation function (all six branches use it) a model is trained on th
 - ``net <act>``: that activation's int8 model, translation and rotation from the nets;
 - ``net <act>, t only + raw R``: the same model's three translation branches, rotation from the raw VO
   (what tvo_replay does with a model holding only tx ty tz: OUT/models/<act>.t.tvonn).
+
+``--translation step`` (or ``log_step``): the translation is one step-length branch (format 1.1, DoF code 6
+or 7: |t| or log |t|) applied to the raw VO unit translation, instead of tx ty tz; the models then hold
+step, rx, ry, rz and ``<act>.t.tvonn`` the step branch alone. ``--scale-alpha A`` adds the scale filter
+rows (``log s_k = (1-A)(log s_(k-1) + log r_k) + A log n_k``, tvo_scale_filter, r_k the VO's relative
+scale from the features csv): n_k the constant step, and n_k each model's step (``t only`` models: their
+|t|); the ``--ship`` one also through ``tvo_replay --scale model --scale-alpha A``.
 
 Both protocols of tinyvo_tools.eval (docs/evaluation.md): standard (ATE RMSE after SE(3) alignment, i.e.
 --metric-scale; per-DoF RPE per frame, m / deg) and the paper protocol (no alignment, chained from the first
@@ -45,16 +53,48 @@ from . import nnfmt, quant, trajio
 TRAIN_DEFAULT = "MH_01,MH_02,MH_03,V1_01,V2_01"
 VAL_DEFAULT = "MH_04,V1_02,V2_03"
 ACTS_DEFAULT = "relu,leaky_relu,elu,selu,tanh,sigmoid"
-DOFS = nnfmt.DOFS
+DOFS = nnfmt.DOFS[:6]
 
 
-def replay(binary, seq_dir, out, scale, model=None):
+def replay(binary, seq_dir, out, scale, model=None, alpha=None):
     cmd = [binary, "--euroc", seq_dir, "--out", out, "--scale", scale, "--quiet"]
     if model:
         cmd += ["--model", model]
+    if alpha is not None:
+        cmd += ["--scale-alpha", repr(float(alpha))]
     r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     if r.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)}: {r.stderr.strip()[-400:]}")
+
+
+def filter_steps(state, rel_scale, prior, alpha):
+    """The step lengths tvo_replay integrates with --scale-alpha (tvo_scale_filter_update's recursion, in
+    float64 with numpy log/exp): frames in state OK run the filter, others get 0 (rotation-only: t = 0)."""
+    s = np.zeros(len(state))
+    log_s = None
+    lo, hi = np.log(1e-9), np.log(1e3)
+    for k in range(1, len(state)):
+        if state[k] != dsmod.STATE_OK:
+            continue
+        has_prior = np.isfinite(prior[k]) and prior[k] > 0
+        if log_s is None:
+            if not has_prior:
+                continue
+            log_s = float(np.log(prior[k]))
+        else:
+            pred = log_s + (np.log(rel_scale[k]) if rel_scale[k] > 0 else 0.0)
+            log_s = (1 - alpha) * pred + alpha * np.log(prior[k]) if has_prior else pred
+        log_s = float(np.clip(log_s, lo, hi))
+        s[k] = np.exp(log_s)
+    return s
+
+
+def net_translation(y, feat):
+    """(N, 3) metric translation of the reference outputs y (N, 7): tx ty tz, or a step-length output
+    times the raw unit direction (tvo_vo_refine: a non-positive step gives t = 0)."""
+    if np.isfinite(y[:, 6]).all():
+        return np.maximum(y[:, 6], 0.0)[:, None] * feat[:, 3:6].astype(np.float64)
+    return y[:, :3]
 
 
 def constant_step_traj(unit_path, out_path, step):
@@ -129,17 +169,19 @@ def response_plots(branches, feats_train, out_dir, tag):
             x = np.tile(med, (len(xs), 1)).astype(np.float32)
             x[:, fid] = xs
             y = b.forward(x)
-            a.plot(xs, y * (1.0 if b.dof < 3 else 57.29577951308232), lw=1.2)
+            if b.dof == nnfmt.DOF_LOG_STEP:
+                y = np.exp(np.clip(y, nnfmt.LOG_STEP_MIN, nnfmt.LOG_STEP_MAX))  # the step it gives, m
+            a.plot(xs, y * (57.29577951308232 if 3 <= b.dof < 6 else 1.0), lw=1.2)
             a.set_title(nnfmt.FEATURES[fid], fontsize=9)
             a.grid(True, alpha=0.3)
             a.tick_params(labelsize=7)
         for a in list(axs.flat)[len(ids):]:
             a.axis("off")
-        unit = "m" if b.dof < 3 else "deg"
-        fig.suptitle(f"branch {DOFS[b.dof]} ({b.activation}): output [{unit}] vs each input "
+        unit = "deg" if 3 <= b.dof < 6 else "m"
+        fig.suptitle(f"branch {nnfmt.DOFS[b.dof]} ({b.activation}): output [{unit}] vs each input "
                      f"(others at training median)", fontsize=10)
         fig.tight_layout()
-        p = os.path.join(out_dir, f"response_{tag}_{DOFS[b.dof]}.png")
+        p = os.path.join(out_dir, f"response_{tag}_{nnfmt.DOFS[b.dof]}.png")
         fig.savefig(p, dpi=90)
         plt.close(fig)
         paths.append(p)
@@ -198,6 +240,9 @@ def main(argv=None) -> int:
     ap.add_argument("--ship", default="relu", help="activation also evaluated through tvo_replay --scale model")
     ap.add_argument("--retrain", action="store_true", help="retrain even if OUT/models/<act>.ckpt.npz exists")
     ap.add_argument("--quiet", action="store_true", help="no progress bars")
+    ap.add_argument("--translation", default="t", choices=["t", "step", "log_step"],
+                    help="translation branches: tx ty tz (t) or one step-length branch (linear or log)")
+    ap.add_argument("--scale-alpha", type=float, default=None, help="also the scale filter rows with this weight")
     a = ap.parse_args(argv)
     from . import export, train
 
@@ -228,6 +273,10 @@ def main(argv=None) -> int:
                         "seed": a.seed, "input_clip": a.input_clip, "input_clip_margin": a.input_clip_margin}, "models": {}, "sequences": {}, "step_level": {}}
 
     # ---- train + export one model per activation -----------------------------------------------
+    t_dofs = [0, 1, 2] if a.translation == "t" else [nnfmt.DOFS.index(a.translation)]
+    dofs = t_dofs + [3, 4, 5]
+    res["settings"]["translation"] = a.translation
+    res["settings"]["scale_alpha"] = a.scale_alpha
     branches_by_act = {}
     for act in acts:
         ck = os.path.join(a.out, "models", f"{act}.ckpt.npz")
@@ -235,10 +284,10 @@ def main(argv=None) -> int:
         meta = {"dataset": os.path.abspath(a.dataset), "val_sequences": va_names, "train_sequences": tr_names,
                 "sizes": list(sizes), "epochs": a.epochs, "joint_epochs": a.joint_epochs, "lr": a.lr,
                 "seed": a.seed, "input_clip": a.input_clip, "input_clip_margin": a.input_clip_margin,
-                "feature_layout_id": nnfmt.FEAT_LAYOUT_ID}
+                "feature_layout_id": nnfmt.FEAT_LAYOUT_ID, "translation": a.translation}
         t0 = time.time()
         if a.retrain or not os.path.isfile(ck):
-            br = train.train(f[tr], t[tr], train.parse_activations(act), sizes=sizes, epochs=a.epochs,
+            br = train.train(f[tr], t[tr], train.parse_activations(act), sizes=sizes, epochs=a.epochs, dofs=dofs,
                              joint_epochs=a.joint_epochs, lr=a.lr, seed=a.seed, progress=not a.quiet,
                              input_clip=a.input_clip, input_clip_margin=a.input_clip_margin)
             quant.save_checkpoint(ck, br, meta)
@@ -247,7 +296,7 @@ def main(argv=None) -> int:
         keep = tr | va  # export calibrates on the training rows only (val_sequences in meta)
         rep = export.export(br, meta, f[keep], t[keep], seq[keep], nnf)
         # the translation branches alone: tvo_replay then keeps the raw VO rotation (output mask 0x7)
-        rep_t = export.export([b for b in br if b.dof < 3], meta, f[keep], t[keep], seq[keep],
+        rep_t = export.export([b for b in br if b.dof in t_dofs], meta, f[keep], t[keep], seq[keep],
                               os.path.join(a.out, "models", f"{act}.t.tvonn"))
         branches_by_act[act] = br
         res["models"][act] = {"tvonn": nnf, "bytes": rep["bytes"], "macs": rep["macs"], "train_s": train_s,
@@ -267,6 +316,7 @@ def main(argv=None) -> int:
     for act in acts:
         with open(res["models"][act]["tvonn"], "rb") as fh:
             q = nnfmt.reference_run(nnfmt.read(fh.read()), f[va]).astype(np.float64)
+        q = np.hstack([net_translation(q, f[va]), q[:, 3:6]])
         res["step_level"][f"net {act} (int8)"] = step_rmse(q, tv)
         errs[f"net {act}"] = q - tv
     for k in errs:
@@ -304,8 +354,16 @@ def main(argv=None) -> int:
             paths["raw VO, constant step (all training rows)"] = (raw, np.full(len(tn), const_all))
         for act in acts:
             y = nnfmt.reference_run(models[act], fr["features"].astype(np.float32)).astype(np.float64)
-            paths[f"net {act}"] = (y, np.ones(len(tn)))
-            paths[f"net {act}, t only + raw R"] = (np.hstack([y[:, :3], raw[:, 3:]]), np.ones(len(tn)))
+            yt = net_translation(y, fr["features"])
+            paths[f"net {act}"] = (np.hstack([yt, y[:, 3:6]]), np.ones(len(tn)))
+            paths[f"net {act}, t only + raw R"] = (np.hstack([yt, raw[:, 3:]]), np.ones(len(tn)))
+            if a.scale_alpha is not None:
+                prior = np.linalg.norm(yt, axis=1)
+                paths[f"net {act}, t only, filter a={a.scale_alpha:g}"] = (
+                    raw, filter_steps(fr["state"], fr["rel_scale"], prior, a.scale_alpha))
+        if a.scale_alpha is not None:
+            paths[f"raw VO, constant step, filter a={a.scale_alpha:g}"] = (
+                raw, filter_steps(fr["state"], fr["rel_scale"], np.full(len(tn), const_step), a.scale_alpha))
         for label, (steps, scale) in paths.items():
             tp = os.path.join(a.out, "traj", f"{name}.{label.replace(' ', '_').replace(',', '')}.txt")
             integrate(tn, fr["state"], steps, scale, T_wc[0], tp)
@@ -317,6 +375,10 @@ def main(argv=None) -> int:
             tm = os.path.join(a.out, "traj", f"{name}.{a.ship}.t.tvo_replay.txt")
             replay(binary, sd, tm, "model", res["models"][a.ship]["tvonn_t_only"])
             out[f"net {a.ship}, t only (tvo_replay --scale model)"] = evaluate(tm, sd)
+            if a.scale_alpha is not None:
+                tm = os.path.join(a.out, "traj", f"{name}.{a.ship}.t.filter.tvo_replay.txt")
+                replay(binary, sd, tm, "model", res["models"][a.ship]["tvonn_t_only"], a.scale_alpha)
+                out[f"net {a.ship}, t only, filter a={a.scale_alpha:g} (tvo_replay)"] = evaluate(tm, sd)
         res["sequences"][name] = out
         print(f"{name}: " + ", ".join(f"{k} ATE {v['ate_se3_m']:.3f}" for k, v in out.items()))
 
@@ -362,11 +424,11 @@ def main(argv=None) -> int:
         L.append(f"| {k} | " + " | ".join(f"{v[d]:.4f}" for d in DOFS) + " |")
     L += ["", "## Models", "", "Quantised (int8) vs float: RMS difference of each DoF's output on the validation rows, "
           "in % of that DoF's ground-truth std (issue 5's bound: 2 %).", "",
-          "| activation | bytes | MACs/frame | " + " | ".join(f"q-vs-f {d} %" for d in DOFS) + " |",
-          "|---" * (3 + len(DOFS)) + "|"]
+          "| activation | bytes | MACs/frame | " + " | ".join(f"q-vs-f {nnfmt.DOFS[d]} %" for d in dofs) + " |",
+          "|---" * (3 + len(dofs)) + "|"]
     for act, m in res["models"].items():
         L.append(f"| {act} | {m['bytes']} | {m['macs']} | " +
-                 " | ".join(f"{100 * m['quant_vs_float'][d]:.2f}" for d in DOFS) + " |")
+                 " | ".join(f"{100 * m['quant_vs_float'][nnfmt.DOFS[d]]:.2f}" for d in dofs) + " |")
     L += ["", "Plots: " + ", ".join(os.path.relpath(p, a.out) for p in plots), ""]
     with open(os.path.join(a.out, "tables.md"), "w", encoding="utf-8") as fh:
         fh.write("\n".join(L))

@@ -5,7 +5,9 @@
 
 DATASET.npz (written by the dataset builder): `features` (N x 11 float32, enum tvo_feature),
 `targets` (N x 6 float32: tx ty tz rx ry rz ground-truth relative pose prev->cur in the prev camera
-frame, metres / rotation vector), `sequence` (N strings: the sequence of each row).
+frame, metres / rotation vector), `sequence` (N strings: the sequence of each row). `--dofs step` (or
+`log_step`) trains one step-length branch instead of tx ty tz: its target is |t| (or log |t|), and the
+interpreter applies it to the raw VO unit translation (docs/weights-format.md, DoF codes 6 and 7).
 
 Stage 1 trains each branch alone (Huber loss on normalised targets, RMSprop as in the paper), one after
 the other with a progress bar each; stage 2 combines them and fine-tunes all together on the summed
@@ -47,15 +49,16 @@ def build_branch(n_in: int, activation: str, sizes=DEFAULT_SIZES):
 
 
 def parse_activations(spec: str) -> Dict[int, str]:
-    """'relu' (all branches) or 'tx=selu,ty=tanh,...' (others default to relu)."""
-    acts = {d: "relu" for d in range(6)}
+    """'relu' (all branches) or 'tx=selu,ty=tanh,...' (others default to relu); 'step=' / 'log_step='
+    name the step-length branch (nnfmt.DOF_STEP / DOF_LOG_STEP)."""
+    acts = {d: "relu" for d in range(len(nnfmt.DOFS))}
     for part in spec.split(","):
         part = part.strip()
         if "=" in part:
             dof, act = part.split("=")
             acts[nnfmt.DOFS.index(dof.strip())] = act.strip()
         elif part:
-            acts = {d: part for d in range(6)}
+            acts = {d: part for d in range(len(nnfmt.DOFS))}
     for a in acts.values():
         if a not in nnfmt.ACTS[1:]:
             raise ValueError(f"unknown activation {a}; choose from {nnfmt.ACTS[1:]}")
@@ -71,6 +74,16 @@ def load_dataset(path):
         raise ValueError(f"dataset shapes {feats.shape} {targ.shape}: want (N, {nnfmt.FEAT_COUNT}) and (N, 6)")
     ok = np.isfinite(feats).all(axis=1) & np.isfinite(targ).all(axis=1)
     return feats[ok], targ[ok], seq[ok]
+
+
+def targets_with_step(targets: np.ndarray) -> np.ndarray:
+    """(N, 6) targets -> (N, 8): the six DoFs, then the step length |t| (m, DOF_STEP) and its natural log
+    (DOF_LOG_STEP; steps below STEP_MIN_M count as STEP_MIN_M). Already (N, 8): returned unchanged."""
+    targets = np.asarray(targets)
+    if targets.shape[1] == len(nnfmt.DOFS):
+        return targets
+    s = np.linalg.norm(targets[:, :3].astype(np.float64), axis=1)
+    return np.hstack([targets, s[:, None], np.log(np.maximum(s, nnfmt.STEP_MIN_M))[:, None]]).astype(targets.dtype)
 
 
 def split_rows(seq: np.ndarray, val_sequences: Sequence[str]):
@@ -121,6 +134,8 @@ def train(features: np.ndarray, targets: np.ndarray, activations: Dict[int, str]
         clip_lo, clip_hi = plo - input_clip_margin * w, phi + input_clip_margin * w
         xn_np = np.clip(xn_np, clip_lo, clip_hi).astype(np.float32)
     xn = torch.from_numpy(xn_np)
+    if any(d >= 6 for d in dofs):
+        targets = targets_with_step(targets)
     t_mean, t_std = targets.mean(axis=0), targets.std(axis=0)
     t_std = np.where(t_std > 1e-9, t_std, 1.0)
     yn = torch.from_numpy(((targets - t_mean) / t_std).astype(np.float32))
@@ -176,6 +191,9 @@ def main(argv=None):
     ap.add_argument("dataset", help=".npz with features, targets, sequence (or 'synthetic' for a demo)")
     ap.add_argument("-o", "--out", required=True, help="checkpoint to write (.npz)")
     ap.add_argument("--act", default="relu", help="activation for all branches or tx=selu,ty=tanh,...")
+    ap.add_argument("--dofs", default="tx,ty,tz,rx,ry,rz",
+                    help="branches to train: DoF names, or 'step' / 'log_step' (one step-length branch, alone "
+                         "or with rx,ry,rz; never with tx ty tz)")
     ap.add_argument("--val-sequences", default="", help="comma-separated sequences held out (never fitted)")
     ap.add_argument("--epochs", type=int, default=100)
     ap.add_argument("--joint-epochs", type=int, default=20)
@@ -195,7 +213,9 @@ def main(argv=None):
     tr, _ = split_rows(seq, val)
     sizes = tuple(int(s) for s in args.sizes.split(","))
     acts = parse_activations(args.act)
-    branches = train(f[tr], t[tr], acts, sizes=sizes, epochs=args.epochs, joint_epochs=args.joint_epochs,
+    dofs = [nnfmt.DOFS.index(d.strip()) for d in args.dofs.split(",") if d.strip()]
+    nnfmt.check_dofs(dofs)
+    branches = train(f[tr], t[tr], acts, sizes=sizes, dofs=dofs, epochs=args.epochs, joint_epochs=args.joint_epochs,
                      batch=args.batch, lr=args.lr, seed=args.seed,
                      input_clip=args.input_clip, input_clip_margin=args.input_clip_margin)
     quant.save_checkpoint(args.out, branches, {

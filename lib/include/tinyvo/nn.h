@@ -40,13 +40,26 @@ enum tvo_feature {
 #define TVO_FEAT_LAYOUT_ID 1u
 
 /* outputs: index 0..5 = tx ty tz (metres, T_prev_cur translation in the prev camera frame), rx ry rz
- * (rotation vector of R_prev_cur, rad). */
+ * (rotation vector of R_prev_cur, rad); index 6 (TVO_NN_STEP, tvo_nn_run_all only) = the metric length
+ * |t| of the step (metres), which tvo_vo_refine applies to the raw VO unit translation. */
 enum tvo_nn_dof { TVO_NN_TX = 0, TVO_NN_TY, TVO_NN_TZ, TVO_NN_RX, TVO_NN_RY, TVO_NN_RZ, TVO_NN_DOF_COUNT };
+#define TVO_NN_STEP 6                 /* output index of the step length */
+#define TVO_NN_OUT_COUNT 7            /* outputs of tvo_nn_run_all */
+
+/* Branch DoF codes of the file (docs/weights-format.md): 0..5 the DoFs above; since version 1.1 also a
+ * step-length branch, whose value is |t| in metres (code 6) or ln |t| (code 7; the interpreter returns
+ * exp of it, clamped to [TVO_NN_LOG_STEP_MIN, TVO_NN_LOG_STEP_MAX] first, as the step). A model holds at
+ * most one step-length branch and then no tx ty tz branch. */
+#define TVO_NN_CODE_STEP 6u
+#define TVO_NN_CODE_LOG_STEP 7u
+#define TVO_NN_CODE_COUNT 8u
+#define TVO_NN_LOG_STEP_MIN (-16.0f)
+#define TVO_NN_LOG_STEP_MAX 8.0f
 
 /* ---- format constants (docs/weights-format.md) ------------------------------------------------ */
 #define TVO_NN_MAGIC 0x4E4E5654u      /* bytes "TVNN" read as a little-endian u32 */
 #define TVO_NN_VERSION_MAJOR 1u       /* a file with another major version is refused */
-#define TVO_NN_VERSION_MINOR 0u       /* files with a higher minor version are accepted */
+#define TVO_NN_VERSION_MINOR 1u       /* files with a higher minor version are accepted; 1: step-length codes */
 #define TVO_NN_HEADER_SIZE 64u
 #define TVO_NN_BRANCH_ENTRY_SIZE 48u
 #define TVO_NN_INPUT_ENTRY_SIZE 12u
@@ -95,14 +108,16 @@ tvo_status tvo_nn_required_size(const void *file, size_t file_size, size_t *byte
  *                      (truncated or trailing bytes), file larger than TVO_NN_MAX_FILE_SIZE, a count
  *                      of branches/inputs/layers/units that is 0 or above its limit, entry sizes wrong
  *   TVO_ERR_FORMAT     wrong magic; layer sizes that do not chain; zero points that do not chain;
- *                      a duplicated DoF; a misaligned offset; non-zero reserved fields; a float-output
+ *                      a duplicated DoF; a step-length branch (code 6 or 7) in a file of minor version 0,
+ *                      beside a tx, ty or tz branch, or beside another step-length branch; a misaligned
+ *                      offset; non-zero reserved fields; a float-output
  *                      layer that is not the last or a last layer that is not float output with 1 unit;
  *                      a LUT given for NONE or missing for another activation
  *   TVO_ERR_VERSION    major version differs from TVO_NN_VERSION_MAJOR
  *   TVO_ERR_CRC        CRC32 of bytes [16, file_size) differs from the header's
  *   TVO_ERR_MISMATCH   feature layout id or feature count differs from the compiled TVO_FEAT_LAYOUT_ID
  *   TVO_ERR_RANGE      an offset or table past the end of the file or overlapping the header; a
- *                      feature id or DoF out of range; zero point outside [-128, 127]; requantisation
+ *                      feature id or DoF code out of range (>= TVO_NN_CODE_COUNT); zero point outside [-128, 127]; requantisation
  *                      multiplier outside [2^30, 2^31) or shift outside [1, 62]; a bias or a worst-case
  *                      sum that could overflow int32
  *   TVO_ERR_UNSUPPORTED unknown activation code or layer output kind
@@ -120,7 +135,12 @@ tvo_status tvo_nn_load(tvo_nn **nn, const void *file, size_t file_size, void *me
  * Cost: sum over layers of n_in * n_out MACs (tvo_nn_macs()). */
 tvo_status tvo_nn_run(const tvo_nn *nn, const float features[TVO_FEAT_COUNT], float out[6]);
 
-/* Bit d (0..5) set when the model provides DoF d. 0 for NULL. */
+/* Same as tvo_nn_run with the seven outputs: out[TVO_NN_STEP] is the step length (m) of a model with a
+ * step-length branch (code 6: the branch's value, any sign; code 7: exp of the clamped value, > 0), NaN
+ * otherwise. tvo_nn_run gives the first six of these. */
+tvo_status tvo_nn_run_all(const tvo_nn *nn, const float features[TVO_FEAT_COUNT], float out[TVO_NN_OUT_COUNT]);
+
+/* Bit d (0..6) set when the model provides output d (bit 6: a step-length branch). 0 for NULL. */
 int32_t tvo_nn_output_mask(const tvo_nn *nn);
 
 /* Multiply-accumulates per tvo_nn_run() call. 0 for NULL. */

@@ -126,8 +126,9 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
 void tvo_vo_reset(tvo_vo *vo);
 
 /* The per-DoF networks' refinement of a frame's raw step: *step = res->T_prev_cur with its translation
- * (metres) replaced by the model's tx ty tz when the model provides all three, and its rotation by the
- * model's rotation vector when it provides rx ry rz. Integrate the result with scale 1. On an error of
+ * (metres) replaced by the model's tx ty tz when the model provides all three, or by the model's step
+ * length s times the raw unit translation when it has a step-length branch (s <= 0 gives t = 0), and its
+ * rotation by the model's rotation vector when it provides rx ry rz. Integrate the result with scale 1. On an error of
  * tvo_nn_run (e.g. a non-finite feature) *step is the raw step and the status is returned: integrate it
  * with scale 0. */
 tvo_status tvo_vo_refine(const tvo_nn *nn, const tvo_vo_result *res, tvo_pose *step);
