@@ -196,28 +196,34 @@ static int32_t mark_inliers(const double E[9], const tvo_point2d *x1, const tvo_
     return cnt;
 }
 
-/* depth signs of the midpoint triangulation: +1 both positive, -1 otherwise, 0 if rays ~parallel */
-static int cheiral_point(const double R[9], const double t[3], const tvo_point2d *p1, const tvo_point2d *p2)
+/* depth signs of the midpoint triangulation: 1 both positive, 2 both negative, 0 otherwise (also for
+ * rays ~parallel). The depths are linear in t: the pose (R, -t) swaps 1 and 2 exactly (the same
+ * products with flipped signs), so one pass counts the points in front of both cameras for +t and -t. */
+static int cheiral_sign(const double R[9], const double t[3], const tvo_point2d *p1, const tvo_point2d *p2)
 {
-    double f1[3] = {p1->x, p1->y, 1.0}, b[3] = {p2->x, p2->y, 1.0}, a[3];
-    tvo_la_mat3_vec(R, f1, a);
+    const double b[3] = {p2->x, p2->y, 1.0};
+    /* a = R (x1, y1, 1), written out (bit-identical to tvo_la_mat3_vec, which is not inlined) */
+    const double a[3] = {R[0] * p1->x + R[1] * p1->y + R[2], R[3] * p1->x + R[4] * p1->y + R[5],
+                         R[6] * p1->x + R[7] * p1->y + R[8]};
     double aa = dot3(a, a), bb = dot3(b, b), ab = dot3(a, b), at = dot3(a, t), bt = dot3(b, t);
     double det = aa * bb - ab * ab;
     if (!(det > 1e-10 * aa * bb))
         return 0;
     double l1 = (-at * bb + ab * bt) / det;
     double l2 = (aa * bt - ab * at) / det;
-    return (l1 > 0.0 && l2 > 0.0) ? 1 : -1;
+    return (l1 > 0.0 && l2 > 0.0) ? 1 : (l1 < 0.0 && l2 < 0.0) ? 2 : 0;
 }
 
+/* points of the mask in front of both cameras for (R, t); *neg gets the count for (R, -t) */
 static int32_t cheiral_count(const double R[9], const double t[3], const tvo_point2d *x1,
-                             const tvo_point2d *x2, int32_t n, const uint8_t *mask)
+                             const tvo_point2d *x2, int32_t n, const uint8_t *mask, int32_t *neg)
 {
-    int32_t good = 0;
+    int32_t g[3] = {0, 0, 0};
     for (int32_t i = 0; i < n; ++i)
         if (mask == NULL || mask[i])
-            good += cheiral_point(R, t, &x1[i], &x2[i]) > 0;
-    return good;
+            ++g[cheiral_sign(R, t, &x1[i], &x2[i])];
+    *neg = g[2];
+    return g[1];
 }
 
 /* E = U diag(1, 1, 0) V^T with U, V proper rotations (det +1): the factors both pose decompositions
@@ -247,7 +253,9 @@ static int32_t decompose_essential(const double E[9], const tvo_point2d *x1, con
     tvo_la_mat3_mul_bt(UW, V, Ra);
     tvo_la_mat3_mul_bt(UWt, V, Rb);
     double tu[3] = {U[2], U[5], U[8]};
-    int32_t best = -1;
+    int32_t best = -1, gk[4];
+    gk[0] = cheiral_count(Ra, tu, x1, x2, n, mask, &gk[1]);
+    gk[2] = cheiral_count(Rb, tu, x1, x2, n, mask, &gk[3]);
     for (int k = 0; k < 4; ++k) {
         const double *Rc = (k < 2) ? Ra : Rb;
         double tc[3] = {tu[0], tu[1], tu[2]};
@@ -256,7 +264,7 @@ static int32_t decompose_essential(const double E[9], const tvo_point2d *x1, con
             tc[1] = -tc[1];
             tc[2] = -tc[2];
         }
-        int32_t g = cheiral_count(Rc, tc, x1, x2, n, mask);
+        int32_t g = gk[k];
         if (g > best) {
             best = g;
             memcpy(R, Rc, 9 * sizeof(double));
@@ -295,16 +303,23 @@ static void tangent_basis(const double t[3], double b1[3], double b2[3])
  * the product of the (1 + r^2 / c2), one multiplication per point instead of one log1p (which was
  * a third of a pass): the product is rescaled by exact powers of two, and a factor is capped at
  * 2^100 (a point adds at most 100 ln 2), so it neither overflows nor depends on the target. */
-static double lm_pass(const double R[9], const double t[3], const double b1[3], const double b2[3],
+static double lm_pass(const double Rp[9], const double tp[3], const double b1p[3], const double b2p[3],
                       const tvo_point2d *x1, const tvo_point2d *x2, int32_t n, const uint8_t *mask, double c2,
                       int want_cost, double H[25], double g[5])
 {
     double prod = 1.0;
     int32_t scaled = 0; /* the cost is log(prod) + scaled * RP_PROD_EXP * log(2) */
+    /* local copies of the pose and local sums: stores through H and g could alias the inputs, so
+     * the compiler would otherwise reload R, t, b1, b2 and H, g from memory for every point */
+    double R[9], t[3], b1[3], b2[3], Hs[25], gs[5];
+    memcpy(R, Rp, sizeof R);
+    memcpy(t, tp, sizeof t);
+    memcpy(b1, b1p, sizeof b1);
+    memcpy(b2, b2p, sizeof b2);
     for (int p = 0; p < 25; ++p)
-        H[p] = 0.0;
+        Hs[p] = 0.0;
     for (int p = 0; p < 5; ++p)
-        g[p] = 0.0;
+        gs[p] = 0.0;
     for (int32_t i = 0; i < n; ++i) {
         if (!mask[i])
             continue;
@@ -341,14 +356,16 @@ static double lm_pass(const double R[9], const double t[3], const double b1[3], 
         double wgt = 1.0 / q; /* IRLS weight of the Cauchy loss on r = e / sqrt(d) */
         for (int p = 0; p < 5; ++p) {
             double wj = wgt * J[p];
-            g[p] += wj * e;
+            gs[p] += wj * e;
             for (int k = p; k < 5; ++k)
-                H[5 * p + k] += wj * J[k];
+                Hs[5 * p + k] += wj * J[k];
         }
     }
-    for (int p = 0; p < 5; ++p)
-        for (int k = 0; k < p; ++k)
-            H[5 * p + k] = H[5 * k + p];
+    for (int p = 0; p < 5; ++p) {
+        g[p] = gs[p];
+        for (int k = p; k < 5; ++k)
+            H[5 * p + k] = H[5 * k + p] = Hs[5 * p + k];
+    }
     if (!want_cost)
         return 0.0;
     return tvo_dm_log1p(prod - 1.0) + (double)scaled * (RP_PROD_EXP * 0.69314718055994530942);
@@ -827,20 +844,29 @@ static int decompose_homography(const double H[9], double Rs[16][9], double ts[1
     return nc;
 }
 
-/* points that are Sampson inliers of [t]x R AND in front of both cameras */
-static int32_t good_count(const double R[9], const double t[3], const tvo_point2d *x1, const tvo_point2d *x2,
-                          int32_t n, double thr2, const uint8_t *mask)
+/* points that are Sampson inliers of [t]x R AND in front of both cameras; with neg != NULL also the
+ * count for the pose (R, -t) in the same pass (same Sampson error, depth signs swapped) */
+static int32_t good_count2(const double R[9], const double t[3], const tvo_point2d *x1, const tvo_point2d *x2,
+                           int32_t n, double thr2, const uint8_t *mask, int32_t *neg)
 {
     double E[9];
-    int32_t g = 0;
+    int32_t g[3] = {0, 0, 0};
     essential_from_pose(R, t, E);
     for (int32_t i = 0; i < n; ++i) {
         if (mask != NULL && !mask[i])
             continue;
-        if (sampson2(E, &x1[i], &x2[i]) < thr2 && cheiral_point(R, t, &x1[i], &x2[i]) > 0)
-            ++g;
+        if (sampson2(E, &x1[i], &x2[i]) < thr2)
+            ++g[cheiral_sign(R, t, &x1[i], &x2[i])];
     }
-    return g;
+    if (neg != NULL)
+        *neg = g[2];
+    return g[1];
+}
+
+static int32_t good_count(const double R[9], const double t[3], const tvo_point2d *x1, const tvo_point2d *x2,
+                          int32_t n, double thr2, const uint8_t *mask)
+{
+    return good_count2(R, t, x1, x2, n, thr2, mask, NULL);
 }
 
 static int poses_differ(const double Ra[9], const double ta[3], const double Rb[9], const double tb[3])
@@ -1311,9 +1337,16 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
                 double Rs[16][9], ts[16][3];
                 int nc = decompose_homography(Hb, Rs, ts);
                 int32_t gk[16];
+                for (int k = 0; k < 16; ++k)
+                    gk[k] = -1;
                 int kb = -1, kb2 = -1;
                 for (int k = 0; k < nc; ++k) {
-                    gk[k] = good_count(Rs[k], ts[k], x1, x2, n, 4.0 * thr2, mask_h);
+                    /* decompose_homography emits each (R, t) followed by (R, -t): one pass for both */
+                    if (k % 2 == 0 && k + 1 < nc && memcmp(Rs[k], Rs[k + 1], sizeof Rs[k]) == 0 &&
+                        ts[k + 1][0] == -ts[k][0] && ts[k + 1][1] == -ts[k][1] && ts[k + 1][2] == -ts[k][2])
+                        gk[k] = good_count2(Rs[k], ts[k], x1, x2, n, 4.0 * thr2, mask_h, &gk[k + 1]);
+                    else if (gk[k] < 0)
+                        gk[k] = good_count(Rs[k], ts[k], x1, x2, n, 4.0 * thr2, mask_h);
                     if (kb < 0 || gk[k] > gk[kb])
                         kb = k;
                 }
