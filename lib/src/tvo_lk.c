@@ -50,8 +50,8 @@ typedef struct lk_level {
 typedef struct lk_work {
     int32_t win;
     uint8_t *patch;   /* (win+3)^2 gathered pixels near borders */
-    int16_t *tv0;     /* win+3: vertical Scharr smoothing */
-    int16_t *tv1;     /* win+3: vertical Scharr difference */
+    int16_t *tv0;     /* win+3: vertical Scharr smoothing (portable path) */
+    int16_t *tv1;     /* win+3: vertical Scharr difference (portable path) */
     int16_t *gx, *gy; /* (win+1)^2 Scharr derivatives on the integer grid */
     int16_t *iwin;    /* win^2 window grey values, 5 fractional bits */
     int16_t *ixwin;   /* win^2 interpolated d/dx */
@@ -407,8 +407,8 @@ LK_INLINE void lk_deriv_row_sse2(lk_dv_state *st, const int16_t *gx1, const int1
 
 /* Interpolated d/dx, d/dy of one 8-column window strip (rows 0..win-1) from the Scharr grid at gx, gy
  * (stride g); the G sums (a11, a12, a22) are added to the int64 lanes of A[3], when masked only
- * those of the lanes in mask. Each grid row
- * is paired once (as in lk_grey_strip_sse2); rows go in pairs. */
+ * those of the lanes in mask. Each grid row is paired once (as in lk_grey_strip_sse2); rows go in
+ * pairs. */
 static void lk_deriv_strip_sse2(const int16_t *gx, const int16_t *gy, int32_t g, int16_t *ixw, int16_t *iyw,
                                 int32_t win, __m128i w01, __m128i w23, int masked, __m128i mask, __m128i A[3])
 {
@@ -626,11 +626,11 @@ LK_INLINE void lk_mismatch_row_sse2(lk_mm_state *st, const uint8_t *j, const int
 }
 
 /* The (J - I) * Ix and * Iy sums of one 8-column strip of the window (rows 0..win-1), added to the
- * int64 lanes of *s1 and *s2. j: top-left of the strip in the J block; iw / ixw / iyw: the strip's column in the window
- * buffers. Each J row is widened and paired (J[x], J[x+1]) once: its products with (w00, w01) are kept
- * for the next row, with (w10, w11) used for this one; the sums are the same integers as
- * lk_mismatch(). When masked, only the lanes in mask count (the new lanes of the overlapping last
- * strip). Rows go in pairs (fewer register copies between loop-carried values). */
+ * int64 lanes of *s1 and *s2. j: top-left of the strip in the J block; iw / ixw / iyw: the strip's
+ * column in the window buffers. Each J row is widened and paired (J[x], J[x+1]) once: its products
+ * with (w00, w01) are kept for the next row, with (w10, w11) used for this one; the sums are the same
+ * integers as lk_mismatch(). When masked, only the lanes in mask count (the new lanes of the
+ * overlapping last strip). Rows go in pairs (fewer register copies between loop-carried values). */
 static void lk_mismatch_strip_sse2(const uint8_t *j, int32_t sstride, const int16_t *iw, const int16_t *ixw,
                                    const int16_t *iyw, int32_t win, __m128i w01, __m128i w23, int masked,
                                    __m128i mask, __m128i *s1, __m128i *s2)

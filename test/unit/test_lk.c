@@ -412,9 +412,10 @@ static void test_portable_and_simd_identical(void **state)
  * are) and |J - I| 255 * 32. Variant 0: prev of 2-px stripes with random flips, next its random binary
  * cousin. Variant 1: prev of 2-px stripes crossed by 2-px bands every 16 rows, next the same moved
  * left by one pixel, points on integer positions: J - I and d/dx are correlated, so at win 21 an
- * 8-column strip's sum of (J - I) * Ix in the first iteration is ~2.5e9 and of Ix^2 more: above 2^31. The SIMD strips keep int32
- * lane sums (32 rows per reduction for the iteration sums, whole strips for G) and add lanes in int64;
- * they must still match the portable path bit for bit, also for windows above 32 rows. */
+ * 8-column strip's sum of (J - I) * Ix in the first iteration is ~2.5e9 and of Ix^2 more: above 2^31.
+ * The SIMD strips keep int32 lane sums (32 rows per reduction for the iteration sums, whole strips for
+ * G) and add lanes in int64; they must still match the portable path bit for bit, also for windows
+ * above 32 rows. */
 static void extreme_images(int variant, uint64_t *seed)
 {
     for (int y = 0; y < H; ++y)
