@@ -99,3 +99,57 @@ def test_input_domain_clamp(tvo, tmp_path):
     # the outliers set the plain model's int8 step of rx; the domain's step is many times finer
     assert step["domain"] < step["plain"] / 10, step
     assert gap["domain"].max() < 0.02, gap
+
+
+def test_calibration_rule2(tvo):
+    """Exporter calibration rule 2 (quant.py): relu layers requantised over [0, (1 + RELU_HEADROOM) max]
+    with the identity table, the input domain (within the features' own range) on the int8 levels -128..127
+    exactly, layers re-fitted to the int8 inputs; bit-exact in C, and a smaller quantised-vs-float gap than
+    rule 1 on held-out rows for a relu model."""
+    rng = np.random.default_rng(4)
+    f, t, seq = train.synthetic_dataset(rng, 900, sequences=("A", "B", "V"))
+    tr, va = train.split_rows(seq, ["V"])
+    kw = dict(sizes=(32, 16), epochs=4, joint_epochs=1, batch=64, lr=1e-3, seed=1, progress=False)
+    br = train.train(f[tr], t[tr], train.parse_activations("relu"), dofs=[7, 3], input_clip=0.5, **kw)
+    m1 = quant.quantize_model(br, f[tr], calibration=1)
+    m2 = quant.quantize_model(br, f[tr])  # rule 2 is the default
+    b2 = m2.branches[0]
+    fe = quant.equalise_inputs(br[0], f[tr])
+    trace = fe.forward_all(f[tr])
+    for k, L in enumerate(b2.layers[:-1]):
+        assert L.out_zp == -128 and L.act_zp == -128 and L.act_scale == L.out_scale
+        np.testing.assert_array_equal(L.lut, np.arange(-128, 128))  # relu on [0, hi]: identity
+        hi = trace[k + 1][0].max() * (1 + quant.RELU_HEADROOM)
+        assert abs(L.out_scale * 255 - hi) <= 1e-6 * hi
+    # the domain's ends are levels -128 and 127: rot_only 0 / 1 (domain [0, 1] after the feature range)
+    # and inputs far outside the domain
+    x = nnfmt.quantize_input(b2, f)
+    col = b2.feature_ids.index(nnfmt.FEATURES.index("rot_only"))
+    assert set(np.unique(x[:, col])) == {-128, 127}
+    np.testing.assert_array_equal(x[f[:, 10] == 1.0, col], 127)
+    far = np.vstack([f[:4] * 0 + 1e6, f[:4] * 0 - 1e6]).astype(np.float32)
+    xf = nnfmt.quantize_input(b2, far)
+    assert (xf[:4] == 127).all() and (xf[4:] == -128).all()
+    # C == reference on the rule 2 model
+    data = nnfmt.write(m2)
+    y, st = CModel(tvo, data).run(f)
+    assert (st == 0).all()
+    ref = nnfmt.reference_run(nnfmt.read(data), f)
+    assert_bits_equal(y, ref[:, :6])
+    # gap on the held-out rows (% of the std of |t|): rule 2 below rule 1
+    fl = quant.float_run(br, f[va])[:, 6]
+    std = np.linalg.norm(t[va, :3], axis=1).std()
+    gap = {r: np.sqrt(np.mean((nnfmt.reference_run(m, f[va])[:, 6] - fl) ** 2)) / std for r, m in ((1, m1), (2, m2))}
+    print("gap rule 1 / 2", gap)
+    assert gap[2] < gap[1], gap
+
+
+def test_calibration_rule1_reproduces_golden_models():
+    """Rule 1 is kept for files exported before rule 2: nngolden (rule 1) rebuilds tiny.tvonn exactly."""
+    from tinyvo_tools import nngolden
+    model, _, _ = nngolden.make_model(np.random.default_rng(5), (16, 8))
+    ref = (nngolden.pathlib.Path(__file__).resolve().parents[1] / "data" / "nn" / "tiny.tvonn").read_bytes()
+    assert nnfmt.write(model) == ref
+    with pytest.raises(ValueError):
+        quant.quantize_model([quant.random_float_branch(np.random.default_rng(0), 0, "relu", sizes=(4,))],
+                             quant.synthetic_features(np.random.default_rng(0), 50), calibration=3)

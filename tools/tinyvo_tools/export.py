@@ -37,18 +37,20 @@ def compare(model: nnfmt.Model, branches, features: np.ndarray, targets: np.ndar
     return rep
 
 
-def export(branches, meta, features, targets, seq, out_path, golden_path=None, n_golden=256, seed=0):
-    """Quantise, write the weights file (and golden vectors); return the report dict."""
+def export(branches, meta, features, targets, seq, out_path, golden_path=None, n_golden=256, seed=0,
+           calibration=quant.CALIBRATION_DEFAULT):
+    """Quantise (calibration rule: quant.CALIBRATION_DEFAULT), write the weights file (and golden vectors);
+    return the report dict."""
     val = meta.get("val_sequences") or []
     tr, va = train.split_rows(seq, val)
     if not tr.any():
         raise ValueError("no training rows to calibrate on")
-    model = quant.quantize_model(branches, features[tr])
+    model = quant.quantize_model(branches, features[tr], calibration=calibration)
     data = nnfmt.write(model)
     with open(out_path, "wb") as fh:
         fh.write(data)
     evalrows = va if va.any() else tr
-    rep = {"file": str(out_path), "bytes": len(data), "macs": model.macs, "output_mask": model.output_mask,
+    rep = {"file": str(out_path), "bytes": len(data), "calibration": calibration, "macs": model.macs, "output_mask": model.output_mask,
            "calibration_rows": int(tr.sum()), "eval_rows": int(evalrows.sum()),
            "eval_split": "validation" if va.any() else "training",
            "per_dof": compare(model, branches, features[evalrows], targets[evalrows])}
@@ -71,13 +73,15 @@ def main(argv=None):
     ap.add_argument("-o", "--out", required=True)
     ap.add_argument("--golden", default=None, help="also write golden vectors here")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--calibration", type=int, default=quant.CALIBRATION_DEFAULT, choices=[1, 2],
+                    help="quantisation calibration rule (quant.py; 1: files exported before rule 2)")
     args = ap.parse_args(argv)
     branches, meta = quant.load_checkpoint(args.checkpoint)
     if args.dataset == "synthetic":
         f, t, seq = train.synthetic_dataset(np.random.default_rng(meta.get("seed", 0)), 20000)
     else:
         f, t, seq = train.load_dataset(args.dataset)
-    rep = export(branches, meta, f, t, seq, args.out, args.golden, seed=args.seed)
+    rep = export(branches, meta, f, t, seq, args.out, args.golden, seed=args.seed, calibration=args.calibration)
     print(json.dumps(rep, indent=2))
 
 

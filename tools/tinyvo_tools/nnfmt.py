@@ -26,6 +26,12 @@ PAYLOAD_ALIGN = 16
 FEAT_LAYOUT_ID = 1
 FEATURES = ["rx", "ry", "rz", "tx", "ty", "tz", "inlier_ratio", "parallax_deg", "tracks", "dt", "rot_only"]
 FEAT_COUNT = len(FEATURES)
+# the range each feature of layout 1 can take by its definition (enum tvo_feature, nn.h): rotation vector
+# components |r_i| <= pi, unit translation components in [-1, 1] (unit or zero), inlier ratio in [0, 1],
+# parallax, tracks / 1000 and dt non-negative, rot_only 0 or 1. quant.equalise_inputs narrows a model's
+# input domain to it, so that no int8 input level is spent on values no front end produces.
+FEAT_RANGE = [(-np.pi, np.pi)] * 3 + [(-1.0, 1.0)] * 3 + [(0.0, 1.0), (0.0, np.inf), (0.0, np.inf),
+                                                          (0.0, np.inf), (0.0, 1.0)]
 DOFS = ["tx", "ty", "tz", "rx", "ry", "rz", "step", "log_step"]   # branch DoF codes 0..7
 DOF_STEP = 6          # output: metric length |t| of the step (m), applied to the raw VO unit translation
 DOF_LOG_STEP = 7      # output: its natural log; the interpreter returns exp of it (det_exp) as the step

@@ -13,6 +13,7 @@ Writes (deterministic, seed 5):
   step.golden      256 golden vectors (version 2: 7 outputs, the last one the step length)
   steplin.tvonn    format 1.1: one linear step-length branch (code 6, selu) alone
   steplin.golden   256 golden vectors (version 2)
+All use the exporter's calibration rule 1 (quant.py), so that the files stay reproducible.
 Files without a step-length branch are written as 1.0 with version-1 golden files (6 outputs), so tiny and
 paper stay byte-identical to the files of generator version 2. The golden files record this script's name
 and GENERATOR_VERSION.
@@ -34,7 +35,7 @@ BRANCH_ACTS = ["relu", "leaky_relu", "elu", "selu", "tanh", "sigmoid"]
 def make_model(rng, sizes, acts=BRANCH_ACTS, calib_n=2000):
     calib = quant.synthetic_features(rng, calib_n)
     fbs = [quant.random_float_branch(rng, d, a, sizes=sizes) for d, a in enumerate(acts)]
-    return quant.quantize_model(fbs, calib), fbs, calib
+    return quant.quantize_model(fbs, calib, calibration=1), fbs, calib
 
 
 def test_inputs(rng, n):
@@ -64,9 +65,9 @@ def main(argv=None):
     ls.out_scale, ls.out_offset = 12.0, -4.0  # outputs beyond [-16, 8] on the widened inputs
     fbs = [ls] + [quant.random_float_branch(rng, d, a, sizes=(16, 8))
                   for d, a in ((3, "relu"), (4, "tanh"), (5, "sigmoid"))]
-    write_pair(args.out, "step", quant.quantize_model(fbs, calib), test_inputs(rng, 256), GENERATOR)
+    write_pair(args.out, "step", quant.quantize_model(fbs, calib, calibration=1), test_inputs(rng, 256), GENERATOR)
     fbs = [quant.random_float_branch(rng, nnfmt.DOF_STEP, "selu", sizes=(16, 8))]
-    write_pair(args.out, "steplin", quant.quantize_model(fbs, calib), test_inputs(rng, 256), GENERATOR)
+    write_pair(args.out, "steplin", quant.quantize_model(fbs, calib, calibration=1), test_inputs(rng, 256), GENERATOR)
 
 
 def write_pair(out, name, model, x, generator):

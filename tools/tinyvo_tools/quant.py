@@ -132,20 +132,70 @@ def make_lut(act: str, in_scale: float, in_zp: int, out_scale: float, out_zp: in
     return np.clip(r, -128, 127).astype(np.int8)
 
 
-def equalise_inputs(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0) -> FloatBranch:
-    """The same float function with each normalised input re-scaled so that its calibration range maps
-    to [-1, 1]; the first layer absorbs the change (W' = W / a, b' = b - W' c). All inputs then share
-    one int8 scale without wasting resolution on inputs with a narrow range. The range is the model's
-    input domain (clip_lo/clip_hi) when it has one, else the calibration min/max (or pct percentiles)."""
-    z = fb.normalise(calib)
-    if fb.clip_lo is not None:  # the model's own input domain: map it to [-1, 1] exactly
+# Calibration rules (quantize_model's `calibration`, export --calibration):
+#   1: the rule of weights files exported before rule 2 existed (tinyvo_synth_euroc_t_sigmoid.tvonn, the
+#      golden test models): input domain onto [-1, 1], every activation range min/max on the calibration
+#      rows (0 included) before and after the activation.
+#   2 (default): (a) a branch's input domain is intersected with the features' own range
+#      (nnfmt.FEAT_RANGE) and its ends are the int8 levels -128 and 127 (DOMAIN_*); (b) relu layers are
+#      requantised over [0, (1 + RELU_HEADROOM) max] with the identity as table (negative pre-activations
+#      need no levels: relu zeroes them; the headroom keeps faster motion than in calibration from
+#      saturating); (c) each layer's float weights and biases are re-fitted (ridge REFIT_RIDGE towards the
+#      float ones, relu channels on the rows where the float channel is positive) to map the int8 inputs the
+#      interpreter really gives that layer to the float model's pre-activations, before they are quantised.
+#   Rule 2's settings were chosen on the training sequences only (models/MODEL_CARD.md, "Quantisation").
+CALIBRATION_DEFAULT = 2
+RELU_HEADROOM = 0.75
+REFIT_RIDGE = 0.01
+
+# A branch with an input domain has it mapped onto the int8 input levels exactly: the domain's ends (where
+# clamped inputs and features at their bounds, e.g. inlier ratio 1 or the rot_only flag, sit) are the levels
+# -128 and 127 (scale DOMAIN_SCALE, zero point 0), never half-way between two levels.
+DOMAIN_SCALE = float(np.float32(2.0 / 255.0))
+DOMAIN_LO = -128.0 * DOMAIN_SCALE
+DOMAIN_HI = 127.0 * DOMAIN_SCALE
+
+
+def input_map(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0, calibration: int = CALIBRATION_DEFAULT):
+    """(a, c): the per-input affine map z' = a z + c of equalise_inputs (z the normalised, clamped input).
+    The range mapped is the model's input domain (clip_lo/clip_hi) when it has one (rule 2: intersected
+    with the features' own range, nnfmt.FEAT_RANGE in normalised units, onto [DOMAIN_LO, DOMAIN_HI]; rule
+    1: onto [-1, 1]); else the calibration min/max (or pct percentiles) onto [-1, 1]."""
+    if fb.clip_lo is not None and calibration >= 2:  # the model's own input domain
         lo, hi = np.asarray(fb.clip_lo, np.float64), np.asarray(fb.clip_hi, np.float64)
+        ns = np.asarray(fb.norm_scale, np.float64)
+        no = np.asarray(fb.norm_offset, np.float64)
+        p = np.array([nnfmt.FEAT_RANGE[i] for i in fb.feature_ids], np.float64)
+        with np.errstate(invalid="ignore"):
+            a_lo = np.where(ns > 0, p[:, 0], p[:, 1]) * ns + no
+            a_hi = np.where(ns > 0, p[:, 1], p[:, 0]) * ns + no
+        a_lo = np.where(np.isfinite(a_lo), a_lo, -np.inf)
+        a_hi = np.where(np.isfinite(a_hi), a_hi, np.inf)
+        nlo, nhi = np.maximum(lo, a_lo), np.minimum(hi, a_hi)
+        ok = nhi - nlo > 1e-6  # keep the domain where the intersection would be (almost) empty
+        lo, hi = np.where(ok, nlo, lo), np.where(ok, nhi, hi)
+        e_lo, e_hi = DOMAIN_LO, DOMAIN_HI
+    elif fb.clip_lo is not None:
+        lo, hi = np.asarray(fb.clip_lo, np.float64), np.asarray(fb.clip_hi, np.float64)
+        e_lo, e_hi = -1.0, 1.0
     else:
+        z = fb.normalise(calib)
         lo = np.percentile(z, pct, axis=0) if pct > 0 else z.min(axis=0)
         hi = np.percentile(z, 100 - pct, axis=0) if pct > 0 else z.max(axis=0)
+        e_lo, e_hi = -1.0, 1.0
     span = np.where(hi - lo > 1e-6, hi - lo, 1.0)
-    a = 2.0 / span                   # z' = a z + c
-    c = -1.0 - a * lo
+    a = (e_hi - e_lo) / span
+    return a, e_lo - a * lo
+
+
+def equalise_inputs(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0,
+                    calibration: int = CALIBRATION_DEFAULT) -> FloatBranch:
+    """The same float function with each normalised input re-scaled by input_map (z' = a z + c) so that
+    its range maps to [-1, 1] (a branch with an input domain, rule 2: to [DOMAIN_LO, DOMAIN_HI]); the first layer
+    absorbs the change (W' = W / a, b' = b - W' c). All inputs then share one int8 scale without wasting
+    resolution on inputs with a narrow range."""
+    a, c = input_map(fb, calib, pct, calibration)
+    e_lo, e_hi = (DOMAIN_LO, DOMAIN_HI) if calibration >= 2 else (-1.0, 1.0)
     ns = np.asarray(fb.norm_scale, np.float64) * a
     no = np.asarray(fb.norm_offset, np.float64) * a + c
     w0 = np.asarray(fb.weights[0], np.float64) / a[None, :]
@@ -154,8 +204,8 @@ def equalise_inputs(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0) -> Flo
                        norm_offset=no.astype(np.float32), weights=[w0, *fb.weights[1:]],
                        biases=[b0, *fb.biases[1:]], activation=fb.activation, out_scale=fb.out_scale,
                        out_offset=fb.out_offset,
-                       clip_lo=None if fb.clip_lo is None else -np.ones(len(ns)),
-                       clip_hi=None if fb.clip_hi is None else np.ones(len(ns)))
+                       clip_lo=None if fb.clip_lo is None else np.full(len(ns), e_lo),
+                       clip_hi=None if fb.clip_hi is None else np.full(len(ns), e_hi))
 
 
 def _range(v: np.ndarray, pct: float):
@@ -164,25 +214,62 @@ def _range(v: np.ndarray, pct: float):
     return v.min(), v.max()
 
 
-def quantize_branch(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0, equalise: bool = True) -> nnfmt.Branch:
+def _refit_layer(w: np.ndarray, b: np.ndarray, x: np.ndarray, target: np.ndarray, lam: float, mask=None):
+    """Weights and biases that map the layer's int8 inputs x (dequantised, as the interpreter sees them) to
+    the float model's pre-activations target (N, n_out) in the least-squares sense, pulled towards the float
+    (w, b) by a ridge term lam * N * |[w b] - [w0 b0]|^2 (lam > 0). mask (N, n_out): per output channel,
+    the rows fitted (None: all)."""
+    n, m = x.shape
+    X = np.hstack([x, np.ones((n, 1))])
+    W0 = np.hstack([w, b[:, None]])                     # (n_out, m + 1)
+    if mask is None:
+        A = X.T @ X + lam * n * np.eye(m + 1)
+        R = X.T @ target + lam * n * W0.T                  # (m + 1, n_out)
+        sol = np.linalg.solve(A, R).T
+        return sol[:, :m], sol[:, m]
+    sol = W0.copy()
+    for o in range(W0.shape[0]):
+        Xo = X[mask[:, o]]
+        A = Xo.T @ Xo + lam * n * np.eye(m + 1)
+        sol[o] = np.linalg.solve(A, Xo.T @ target[mask[:, o], o] + lam * n * W0[o])
+    return sol[:, :m], sol[:, m]
+
+
+def quantize_branch(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0, equalise: bool = True,
+                    calibration: int = CALIBRATION_DEFAULT) -> nnfmt.Branch:
     """pct: clip calibration ranges at the pct / 100-pct percentiles (0 = min/max). A branch with an
-    input domain (clip_lo/clip_hi) gets it as its int8 input range (equalised to [-1, 1]): the int8
-    input stage's clamp is then the model's own clamp."""
+    input domain (clip_lo/clip_hi) gets it as its int8 input range (equalise_inputs): the int8 input
+    stage's clamp is then the model's own clamp (rule 2: within the features' own range). calibration:
+    the rule (1 or 2, see CALIBRATION_DEFAULT)."""
+    if calibration not in (1, 2):
+        raise ValueError(f"calibration rule {calibration}: 1 or 2")
+    rule2 = calibration >= 2
     if fb.clip_lo is not None and not equalise:
         raise ValueError("a branch with an input domain is quantised with equalise=True")
     if equalise:
-        fb = equalise_inputs(fb, calib, pct)
+        fb = equalise_inputs(fb, calib, pct, calibration)
     trace = fb.forward_all(calib)
-    s_in, zp_in = asym_params(*((-1.0, 1.0) if fb.clip_lo is not None else _range(trace[0], pct)))
+    if fb.clip_lo is not None and rule2:  # the equalised domain [DOMAIN_LO, DOMAIN_HI] is int8 -128..127
+        s_in, zp_in = DOMAIN_SCALE, 0
+    elif fb.clip_lo is not None:
+        s_in, zp_in = asym_params(-1.0, 1.0)
+    else:
+        s_in, zp_in = asym_params(*_range(trace[0], pct))
     br = nnfmt.Branch(dof=fb.dof, feature_ids=list(fb.feature_ids),
                       norm_scale=np.asarray(fb.norm_scale, np.float32),
                       norm_offset=np.asarray(fb.norm_offset, np.float32),
                       in_scale=s_in, in_zp=zp_in, out_scale=float(np.float32(fb.out_scale)),
                       out_offset=float(np.float32(fb.out_offset)))
     n = len(fb.weights)
+    relu2 = rule2 and fb.activation == "relu"
+    xq = nnfmt.quantize_input(br, calib) if rule2 else None  # the int8 inputs of the layer being quantised
     for k, (w, b) in enumerate(zip(fb.weights, fb.biases)):
         w = np.asarray(w, np.float64)
         b = np.asarray(b, np.float64)
+        if rule2:
+            pre_f = trace[k + 1][0]
+            mask = (pre_f > 0) if (relu2 and k < n - 1) else None
+            w, b = _refit_layer(w, b, (xq.astype(np.float64) - zp_in) * s_in, pre_f, REFIT_RIDGE, mask)
         amax = np.abs(w).max(axis=1)
         s_w = np.where(amax > 0, amax / 127.0, 1.0)
         wq = np.clip(np.rint(w / s_w[:, None]), -127, 127).astype(np.int8)
@@ -193,7 +280,13 @@ def quantize_branch(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0, equali
             L = nnfmt.Layer(w=wq, bias=bq, act="none", out_kind=nnfmt.OUT_F32, in_zp=zp_in, in_scale=s_in,
                             scale=acc_scale.astype(np.float32))
         else:
-            s_out, zp_out = asym_params(*_range(pre, pct))
+            lo_pre, hi_pre = _range(pre, pct)
+            if relu2:
+                # relu(clamp(a, lo, hi)) == relu(a) for every lo <= 0: the negative pre-activations need no
+                # int8 levels, so the requantised range is [0, hi] (zero point -128) and the table is the
+                # identity (same range after the activation): no level is spent on values relu zeroes
+                lo_pre, hi_pre = 0.0, hi_pre * (1.0 + RELU_HEADROOM)
+            s_out, zp_out = asym_params(lo_pre, hi_pre)
             mult, shift = zip(*(quantize_multiplier(r) for r in acc_scale / s_out))
             L = nnfmt.Layer(w=wq, bias=bq, act=fb.activation, out_kind=nnfmt.OUT_S8, in_zp=zp_in,
                             out_zp=zp_out, in_scale=s_in, out_scale=s_out,
@@ -201,17 +294,21 @@ def quantize_branch(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0, equali
             if fb.activation == "none":
                 L.act_zp, L.act_scale = zp_out, s_out
             else:
-                s_act, zp_act = asym_params(*_range(post, pct))
+                s_act, zp_act = (s_out, zp_out) if relu2 else asym_params(*_range(post, pct))
                 L.act_zp, L.act_scale = zp_act, s_act
                 L.lut = make_lut(fb.activation, s_out, zp_out, s_act, zp_act)
             s_in, zp_in = L.act_scale, L.act_zp
+            if xq is not None:
+                xq = np.clip(nnfmt.requantize(nnfmt.fc_acc(L, xq), L.mult, L.shift) + L.out_zp, -128, 127)
+                xq = (L.lut[xq + 128] if L.lut is not None else xq).astype(np.int8)
         br.layers.append(L)
     return br
 
 
 def quantize_model(branches: Sequence[FloatBranch], calib: np.ndarray, pct: float = 0.0,
-                   equalise: bool = True) -> nnfmt.Model:
-    return nnfmt.Model(branches=[quantize_branch(b, np.atleast_2d(calib), pct, equalise) for b in branches])
+                   equalise: bool = True, calibration: int = CALIBRATION_DEFAULT) -> nnfmt.Model:
+    return nnfmt.Model(branches=[quantize_branch(b, np.atleast_2d(calib), pct, equalise, calibration)
+                                 for b in branches])
 
 
 def random_float_branch(rng: np.random.Generator, dof: int, activation: str, sizes=(256, 32, 32),

@@ -243,6 +243,8 @@ def main(argv=None) -> int:
     ap.add_argument("--translation", default="t", choices=["t", "step", "log_step"],
                     help="translation branches: tx ty tz (t) or one step-length branch (linear or log)")
     ap.add_argument("--scale-alpha", type=float, default=None, help="also the scale filter rows with this weight")
+    ap.add_argument("--calibration", type=int, default=quant.CALIBRATION_DEFAULT, choices=[1, 2],
+                    help="the exporter's calibration rule (quant.py; 1: files exported before rule 2)")
     a = ap.parse_args(argv)
     from . import export, train
 
@@ -277,6 +279,7 @@ def main(argv=None) -> int:
     dofs = t_dofs + [3, 4, 5]
     res["settings"]["translation"] = a.translation
     res["settings"]["scale_alpha"] = a.scale_alpha
+    res["settings"]["calibration"] = a.calibration
     branches_by_act = {}
     for act in acts:
         ck = os.path.join(a.out, "models", f"{act}.ckpt.npz")
@@ -294,10 +297,10 @@ def main(argv=None) -> int:
         br, meta = quant.load_checkpoint(ck)
         train_s = time.time() - t0
         keep = tr | va  # export calibrates on the training rows only (val_sequences in meta)
-        rep = export.export(br, meta, f[keep], t[keep], seq[keep], nnf)
+        rep = export.export(br, meta, f[keep], t[keep], seq[keep], nnf, calibration=a.calibration)
         # the translation branches alone: tvo_replay then keeps the raw VO rotation (output mask 0x7)
         rep_t = export.export([b for b in br if b.dof in t_dofs], meta, f[keep], t[keep], seq[keep],
-                              os.path.join(a.out, "models", f"{act}.t.tvonn"))
+                              os.path.join(a.out, "models", f"{act}.t.tvonn"), calibration=a.calibration)
         branches_by_act[act] = br
         res["models"][act] = {"tvonn": nnf, "bytes": rep["bytes"], "macs": rep["macs"], "train_s": train_s,
                               "quant_vs_float_worst_rms_over_std": rep["worst_rms_diff_over_std"],
