@@ -14,14 +14,22 @@
 #include "tinyvo/arena.h"
 #include "tvo_border.h"
 
-/* SSE2 kernel for the iteration (x86-64 always has SSE2). It computes exactly the same integers as
- * the portable C kernel (exact integer sums), so results are bit-identical; cfg->force_portable
- * selects the C kernel, and test_lk.c checks the two agree. Define TVO_LK_NO_SIMD to compile it out. */
+/* SIMD kernels for the previous-window Scharr rows and interpolation and for the iteration: SSE2 on
+ * x86 (x86-64 always has it), NEON on ARM (aarch64 always; 32-bit ARM when built with -mfpu=neon).
+ * They compute exactly the same integers as the portable C kernels (exact integer sums), so results
+ * are bit-identical; cfg->force_portable selects the C kernels, and test_lk.c checks the two agree.
+ * Define TVO_LK_NO_SIMD to compile the SIMD kernels out. */
 #if defined(__SSE2__) && !defined(TVO_LK_NO_SIMD)
 #include <emmintrin.h>
 #define LK_SSE2 1
 #else
 #define LK_SSE2 0
+#endif
+#if !LK_SSE2 && (defined(__ARM_NEON) || defined(__ARM_NEON__)) && !defined(TVO_LK_NO_SIMD)
+#include <arm_neon.h>
+#define LK_NEON 1
+#else
+#define LK_NEON 0
 #endif
 
 /* The SSE2 row helpers are small and called once per row: always inline them (their state lives in
@@ -87,6 +95,26 @@ void tvo_lk_config_default(tvo_lk_config *cfg)
     cfg->fb_check = 0;
     cfg->fb_max_error = 1.0f;
     cfg->force_portable = 0;
+}
+
+/* Whether tvo_lk_track() runs the SIMD kernels with this window (they need 8-column strips). */
+static int lk_use_simd(const tvo_lk_config *cfg)
+{
+    return !cfg->force_portable && cfg->win_size >= 8;
+}
+
+const char *tvo_lk_kernel_name(const tvo_lk_config *cfg)
+{
+#if LK_SSE2
+    const char *simd = "sse2";
+#elif LK_NEON
+    const char *simd = "neon";
+#else
+    const char *simd = NULL;
+#endif
+    if (simd == NULL || (cfg != NULL && !lk_use_simd(cfg)))
+        return "portable";
+    return simd;
 }
 
 tvo_status tvo_lk_config_check(const tvo_lk_config *cfg)
@@ -467,6 +495,285 @@ static void lk_prev_interp_sse2(const uint8_t *s, int32_t sstride, const int32_t
 }
 #endif
 
+#if LK_NEON
+/* NEON kernels (aarch64; armv7 built with -mfpu=neon): the same strips and the same integers as the
+ * SSE2 ones above and the portable C path. Differences in form only: products are widening
+ * multiply-accumulates by a weight (vmlal_n) instead of pair products (madd), and the descale
+ * (v + 2^(n-1)) >> n is one rounding narrowing shift (vrshrn_n), which rounds in wider precision, so
+ * no rounding term is carried and, as in the C path, a negative v rounds toward -infinity. */
+
+/* int32 lane sums to the int64 lanes of *acc (pairwise; see lk_acc_epi64 for why). */
+LK_INLINE int64_t lk_hsum_s64_neon(int64x2_t v)
+{
+    return vgetq_lane_s64(v, 0) + vgetq_lane_s64(v, 1);
+}
+
+/* Lanes 8 - tail .. 7 of the overlapping last strip are new pixels: all ones there. */
+LK_INLINE int16x8_t lk_tail_mask_neon(int32_t tail)
+{
+    static const int16_t lane[8] = { 0, 1, 2, 3, 4, 5, 6, 7 };
+    return vreinterpretq_s16_u16(vcgtq_s16(vld1q_s16(lane), vdupq_n_s16((int16_t)(7 - tail))));
+}
+
+/* Horizontal Scharr passes of 8 columns of one source row (10 bytes read), as lk_scharr_h_sse2. */
+LK_INLINE void lk_scharr_h_neon(const uint8_t *s, int16x8_t *hd, int16x8_t *hs)
+{
+    const uint8x8_t a = vld1_u8(s), b = vld1_u8(s + 1), c = vld1_u8(s + 2);
+    *hd = vreinterpretq_s16_u16(vsubl_u8(c, a)); /* modulo 2^16: the signed difference */
+    *hs = vreinterpretq_s16_u16(vmlal_u8(vmulq_n_u16(vaddl_u8(a, c), 3), b, vdup_n_u8(10)));
+}
+
+LK_INLINE void lk_scharr_v_neon(int16x8_t hd0, int16x8_t hd1, int16x8_t hd2, int16x8_t hs0, int16x8_t hs2,
+                                int16_t *dx, int16_t *dy)
+{
+    vst1q_s16(dx, vmlaq_n_s16(vmulq_n_s16(vaddq_s16(hd0, hd2), 3), hd1, 10));
+    vst1q_s16(dy, vsubq_s16(hs2, hs0));
+}
+
+/* One 8-column strip of the Scharr grid, as lk_scharr_strip_sse2. */
+static void lk_scharr_strip_neon(const uint8_t *s, int32_t sstride, int16_t *dx, int16_t *dy, int32_t g,
+                                 int32_t rows)
+{
+    int16x8_t hd0, hd1, hd2, hs0, hs1, hs2;
+    int32_t r = 0;
+    lk_scharr_h_neon(s, &hd0, &hs0);
+    lk_scharr_h_neon(s + sstride, &hd1, &hs1);
+    s += 2 * (size_t)sstride;
+    for (; r + 3 <= rows; r += 3) {
+        lk_scharr_h_neon(s, &hd2, &hs2);
+        lk_scharr_v_neon(hd0, hd1, hd2, hs0, hs2, dx, dy);
+        lk_scharr_h_neon(s + sstride, &hd0, &hs0);
+        lk_scharr_v_neon(hd1, hd2, hd0, hs1, hs0, dx + g, dy + g);
+        lk_scharr_h_neon(s + 2 * (size_t)sstride, &hd1, &hs1);
+        lk_scharr_v_neon(hd2, hd0, hd1, hs2, hs1, dx + 2 * g, dy + 2 * g);
+        s += 3 * (size_t)sstride;
+        dx += 3 * g;
+        dy += 3 * g;
+    }
+    for (; r < rows; ++r) {
+        lk_scharr_h_neon(s, &hd2, &hs2);
+        lk_scharr_v_neon(hd0, hd1, hd2, hs0, hs2, dx, dy);
+        hd0 = hd1;
+        hd1 = hd2;
+        hs0 = hs1;
+        hs1 = hs2;
+        s += sstride;
+        dx += g;
+        dy += g;
+    }
+}
+
+static void lk_scharr_neon(const uint8_t *src, int32_t sstride, lk_work *wk)
+{
+    const int32_t g = wk->win + 1;
+    int32_t x;
+    for (x = 0; x + 8 <= g; x += 8)
+        lk_scharr_strip_neon(src + x, sstride, wk->gx + x, wk->gy + x, g, g);
+    if (g & 7)
+        lk_scharr_strip_neon(src + g - 8, sstride, wk->gx + g - 8, wk->gy + g - 8, g, g);
+}
+
+/* Bilinear weights as lane scalars: (w00, w01) for the upper row, (w10, w11) for the lower one. They
+ * fit int16 (0..2^14, and w11 can be -1 when the rounded others add up to more than 2^14), so pixels
+ * are widened to int16 and all products are signed, as in the C path and SSE2's madd. */
+typedef struct lk_wt_neon {
+    int16_t s0, s1, s2, s3;
+} lk_wt_neon;
+
+LK_INLINE lk_wt_neon lk_wt_make_neon(const int32_t wt[4])
+{
+    lk_wt_neon w;
+    w.s0 = (int16_t)wt[0];
+    w.s1 = (int16_t)wt[1];
+    w.s2 = (int16_t)wt[2];
+    w.s3 = (int16_t)wt[3];
+    return w;
+}
+
+/* Grey row of 8 columns: p[x] * wa + p[x+1] * wb for the pixels at p (9 bytes read), added to lo/hi. */
+LK_INLINE int16x8_t lk_widen_u8_neon(const uint8_t *p)
+{
+    return vreinterpretq_s16_u16(vmovl_u8(vld1_u8(p)));
+}
+
+/* The products of a source row with the lower weights (w10, w11) are added to lo/hi (this window row),
+ * those with the upper weights (w00, w01) go to nlo/nhi (the next window row). */
+LK_INLINE void lk_u8_row_neon(const uint8_t *p, lk_wt_neon w, int32x4_t *lo, int32x4_t *hi, int32x4_t *nlo,
+                              int32x4_t *nhi)
+{
+    const int16x8_t a0 = lk_widen_u8_neon(p), a1 = lk_widen_u8_neon(p + 1);
+    *lo = vmlal_n_s16(vmlal_n_s16(*lo, vget_low_s16(a0), w.s2), vget_low_s16(a1), w.s3);
+    *hi = vmlal_n_s16(vmlal_n_s16(*hi, vget_high_s16(a0), w.s2), vget_high_s16(a1), w.s3);
+    *nlo = vmlal_n_s16(vmull_n_s16(vget_low_s16(a0), w.s0), vget_low_s16(a1), w.s1);
+    *nhi = vmlal_n_s16(vmull_n_s16(vget_high_s16(a0), w.s0), vget_high_s16(a1), w.s1);
+}
+
+/* The first source row of a strip: its products with the upper weights. */
+LK_INLINE void lk_u8_top_neon(const uint8_t *p, lk_wt_neon w, int32x4_t *lo, int32x4_t *hi)
+{
+    const int16x8_t a0 = lk_widen_u8_neon(p), a1 = lk_widen_u8_neon(p + 1);
+    *lo = vmlal_n_s16(vmull_n_s16(vget_low_s16(a0), w.s0), vget_low_s16(a1), w.s1);
+    *hi = vmlal_n_s16(vmull_n_s16(vget_high_s16(a0), w.s0), vget_high_s16(a1), w.s1);
+}
+
+/* Grey values (5 fractional bits) of one 8-column window strip, as lk_grey_strip_sse2: top_lo/hi carry
+ * the upper source row's products with (w00, w01). */
+static void lk_grey_strip_neon(const uint8_t *s, int32_t sstride, int16_t *iw, int32_t win, lk_wt_neon w)
+{
+    int32x4_t top_lo, top_hi;
+    int32_t y;
+    lk_u8_top_neon(s, w, &top_lo, &top_hi);
+    for (y = 0; y < win; ++y) {
+        int32x4_t lo = top_lo, hi = top_hi;
+        s += sstride;
+        lk_u8_row_neon(s, w, &lo, &hi, &top_lo, &top_hi);
+        vst1q_s16(iw, vcombine_s16(vrshrn_n_s32(lo, LK_I_SHIFT), vrshrn_n_s32(hi, LK_I_SHIFT)));
+        iw += win;
+    }
+}
+
+/* One interpolated row of an int16 grid strip (see lk_interp_row_s16): top_lo/hi hold the upper grid
+ * row's products with (w00, w01); returns the 8 values and replaces top by the lower row's. */
+LK_INLINE int16x8_t lk_interp_row_neon(int32x4_t *top_lo, int32x4_t *top_hi, const int16_t *g1, lk_wt_neon w)
+{
+    const int16x8_t a0 = vld1q_s16(g1), a1 = vld1q_s16(g1 + 1);
+    const int32x4_t lo = vmlal_n_s16(vmlal_n_s16(*top_lo, vget_low_s16(a0), w.s2), vget_low_s16(a1), w.s3);
+    const int32x4_t hi = vmlal_n_s16(vmlal_n_s16(*top_hi, vget_high_s16(a0), w.s2), vget_high_s16(a1), w.s3);
+    *top_lo = vmlal_n_s16(vmull_n_s16(vget_low_s16(a0), w.s0), vget_low_s16(a1), w.s1);
+    *top_hi = vmlal_n_s16(vmull_n_s16(vget_high_s16(a0), w.s0), vget_high_s16(a1), w.s1);
+    return vcombine_s16(vrshrn_n_s32(lo, LK_W_BITS), vrshrn_n_s32(hi, LK_W_BITS));
+}
+
+/* Interpolated d/dx, d/dy of one 8-column window strip with the G sums, as lk_deriv_strip_sse2: each
+ * lane adds two products per row (lanes x and x+4), at most 63 * 2 * 4080^2 < 2^31 per strip. */
+static void lk_deriv_strip_neon(const int16_t *gx, const int16_t *gy, int32_t g, int16_t *ixw, int16_t *iyw,
+                                int32_t win, lk_wt_neon w, int masked, int16x8_t mask, int64x2_t A[3])
+{
+    const int16x8_t x0 = vld1q_s16(gx), x1 = vld1q_s16(gx + 1), y0 = vld1q_s16(gy), y1 = vld1q_s16(gy + 1);
+    int32x4_t xt_lo = vmlal_n_s16(vmull_n_s16(vget_low_s16(x0), w.s0), vget_low_s16(x1), w.s1);
+    int32x4_t xt_hi = vmlal_n_s16(vmull_n_s16(vget_high_s16(x0), w.s0), vget_high_s16(x1), w.s1);
+    int32x4_t yt_lo = vmlal_n_s16(vmull_n_s16(vget_low_s16(y0), w.s0), vget_low_s16(y1), w.s1);
+    int32x4_t yt_hi = vmlal_n_s16(vmull_n_s16(vget_high_s16(y0), w.s0), vget_high_s16(y1), w.s1);
+    int32x4_t c11 = vdupq_n_s32(0), c12 = vdupq_n_s32(0), c22 = vdupq_n_s32(0);
+    int32_t y;
+    for (y = 0; y < win; ++y) {
+        int16x8_t dx, dy, mx, my;
+        gx += g;
+        gy += g;
+        dx = lk_interp_row_neon(&xt_lo, &xt_hi, gx, w);
+        dy = lk_interp_row_neon(&yt_lo, &yt_hi, gy, w);
+        mx = masked ? vandq_s16(dx, mask) : dx;
+        my = masked ? vandq_s16(dy, mask) : dy;
+        vst1q_s16(ixw, dx);
+        vst1q_s16(iyw, dy);
+        c11 = vmlal_s16(vmlal_s16(c11, vget_low_s16(mx), vget_low_s16(dx)), vget_high_s16(mx), vget_high_s16(dx));
+        c12 = vmlal_s16(vmlal_s16(c12, vget_low_s16(mx), vget_low_s16(dy)), vget_high_s16(mx), vget_high_s16(dy));
+        c22 = vmlal_s16(vmlal_s16(c22, vget_low_s16(my), vget_low_s16(dy)), vget_high_s16(my), vget_high_s16(dy));
+        ixw += win;
+        iyw += win;
+    }
+    A[0] = vpadalq_s32(A[0], c11);
+    A[1] = vpadalq_s32(A[1], c12);
+    A[2] = vpadalq_s32(A[2], c22);
+}
+
+/* NEON version of the window interpolation of lk_prev_window (win >= 8), as lk_prev_interp_sse2. */
+static void lk_prev_interp_neon(const uint8_t *s, int32_t sstride, const int32_t wt[4], lk_work *wk,
+                                int64_t A[3])
+{
+    const int32_t win = wk->win, g = win + 1;
+    const int32_t full = win & ~7, tail = win - full, last = win - 8;
+    const lk_wt_neon w = lk_wt_make_neon(wt);
+    const int16x8_t mask = lk_tail_mask_neon(tail);
+    int64x2_t acc[3];
+    int32_t x;
+    acc[0] = acc[1] = acc[2] = vdupq_n_s64(0);
+    for (x = 0; x < full; x += 8) {
+        lk_grey_strip_neon(s + x, sstride, wk->iwin + x, win, w);
+        lk_deriv_strip_neon(wk->gx + x, wk->gy + x, g, wk->ixwin + x, wk->iywin + x, win, w, 0, mask, acc);
+    }
+    if (tail > 0) {
+        lk_grey_strip_neon(s + last, sstride, wk->iwin + last, win, w);
+        lk_deriv_strip_neon(wk->gx + last, wk->gy + last, g, wk->ixwin + last, wk->iywin + last, win, w, 1, mask,
+                            acc);
+    }
+    A[0] = lk_hsum_s64_neon(acc[0]);
+    A[1] = lk_hsum_s64_neon(acc[1]);
+    A[2] = lk_hsum_s64_neon(acc[2]);
+}
+
+/* Rows of one strip whose int32 lane sums of (J - I) * Ix cannot overflow: each lane adds two products
+ * per row (lanes x and x+4), the bound of LK_MISMATCH_STRIP_ROWS of the SSE2 path. */
+#define LK_MISMATCH_STRIP_ROWS_NEON 32
+
+/* The (J - I) * Ix and * Iy sums of one 8-column strip of the window, as lk_mismatch_strip_sse2. */
+static void lk_mismatch_strip_neon(const uint8_t *j, int32_t sstride, const int16_t *iw, const int16_t *ixw,
+                                   const int16_t *iyw, int32_t win, lk_wt_neon w, int masked, int16x8_t mask,
+                                   int64x2_t *s1, int64x2_t *s2)
+{
+    int32x4_t top_lo, top_hi;
+    int32_t y = 0;
+    lk_u8_top_neon(j, w, &top_lo, &top_hi);
+    while (y < win) {
+        const int32_t end = win - y > LK_MISMATCH_STRIP_ROWS_NEON ? y + LK_MISMATCH_STRIP_ROWS_NEON : win;
+        int32x4_t acc1 = vdupq_n_s32(0), acc2 = vdupq_n_s32(0);
+        for (; y < end; ++y) {
+            int32x4_t lo = top_lo, hi = top_hi;
+            int16x8_t d, ix, iy;
+            j += sstride;
+            lk_u8_row_neon(j, w, &lo, &hi, &top_lo, &top_hi);
+            d = vsubq_s16(vcombine_s16(vrshrn_n_s32(lo, LK_I_SHIFT), vrshrn_n_s32(hi, LK_I_SHIFT)), vld1q_s16(iw));
+            if (masked)
+                d = vandq_s16(d, mask);
+            ix = vld1q_s16(ixw);
+            iy = vld1q_s16(iyw);
+            acc1 = vmlal_s16(vmlal_s16(acc1, vget_low_s16(ix), vget_low_s16(d)), vget_high_s16(ix), vget_high_s16(d));
+            acc2 = vmlal_s16(vmlal_s16(acc2, vget_low_s16(iy), vget_low_s16(d)), vget_high_s16(iy), vget_high_s16(d));
+            iw += win;
+            ixw += win;
+            iyw += win;
+        }
+        *s1 = vpadalq_s32(*s1, acc1);
+        *s2 = vpadalq_s32(*s2, acc2);
+    }
+}
+
+/* Same sums as lk_mismatch() for win >= 8, as lk_mismatch_sse2 (never reads outside the block). */
+static void lk_mismatch_neon(const uint8_t *src, int32_t sstride, const int32_t wt[4], const lk_work *wk,
+                             int64_t *b1, int64_t *b2)
+{
+    const int32_t win = wk->win;
+    const int32_t full = win & ~7, tail = win - full, last = win - 8;
+    const lk_wt_neon w = lk_wt_make_neon(wt);
+    const int16x8_t mask = lk_tail_mask_neon(tail);
+    int64x2_t s1 = vdupq_n_s64(0), s2 = vdupq_n_s64(0);
+    int32_t x;
+    for (x = 0; x < full; x += 8)
+        lk_mismatch_strip_neon(src + x, sstride, wk->iwin + x, wk->ixwin + x, wk->iywin + x, win, w, 0, mask, &s1,
+                               &s2);
+    if (tail > 0)
+        lk_mismatch_strip_neon(src + last, sstride, wk->iwin + last, wk->ixwin + last, wk->iywin + last, win, w, 1,
+                               mask, &s1, &s2);
+    *b1 = lk_hsum_s64_neon(s1);
+    *b2 = lk_hsum_s64_neon(s2);
+}
+#endif
+
+/* The SIMD kernels of this build (same integers as the portable C ones). */
+#if LK_SSE2
+#define LK_SIMD 1
+#define lk_scharr_simd lk_scharr_sse2
+#define lk_prev_interp_simd lk_prev_interp_sse2
+#define lk_mismatch_simd lk_mismatch_sse2
+#elif LK_NEON
+#define LK_SIMD 1
+#define lk_scharr_simd lk_scharr_neon
+#define lk_prev_interp_simd lk_prev_interp_neon
+#define lk_mismatch_simd lk_mismatch_neon
+#else
+#define LK_SIMD 0
+#endif
+
 /* Previous-image window: grey values and interpolated Scharr derivatives at (ix + a, iy + b) + (x, y)
  * for x, y in 0..win-1, into wk->iwin / ixwin / iywin; the gradient sums into A[3]. */
 static void lk_prev_window(const lk_level *lv, int32_t ix, int32_t iy, const int32_t wt[4],
@@ -490,9 +797,9 @@ static void lk_prev_window(const lk_level *lv, int32_t ix, int32_t iy, const int
     }
 
     /* Scharr derivatives on the (win+1)^2 integer grid whose top-left is (ix, iy) */
-#if LK_SSE2
+#if LK_SIMD
     if (simd)
-        lk_scharr_sse2(src, sstride, wk);
+        lk_scharr_simd(src, sstride, wk);
     else
 #endif
     for (r = 0; r < g; ++r) {
@@ -528,9 +835,9 @@ static void lk_prev_window(const lk_level *lv, int32_t ix, int32_t iy, const int
         }
     }
 
-#if LK_SSE2
+#if LK_SIMD
     if (simd) {
-        lk_prev_interp_sse2(src + sstride + 1, sstride, wt, wk, A);
+        lk_prev_interp_simd(src + sstride + 1, sstride, wt, wk, A);
         return;
     }
 #endif
@@ -782,9 +1089,9 @@ static int lk_track_level(const lk_params *prm, const lk_level *I, const lk_leve
         iy = lk_floor_i(cy);
         lk_weights(cx - (float)ix, cy - (float)iy, wt);
         blk = lk_next_block(J, ix, iy, wk, &sstride);
-#if LK_SSE2
+#if LK_SIMD
         if (prm->simd)
-            lk_mismatch_sse2(blk, sstride, wt, wk, &ib1, &ib2);
+            lk_mismatch_simd(blk, sstride, wt, wk, &ib1, &ib2);
         else
 #endif
             lk_mismatch(blk, sstride, wt, wk, &ib1, &ib2);
@@ -945,7 +1252,7 @@ tvo_status tvo_lk_track(const tvo_lk_config *cfg, const tvo_pyramid *prev, const
     prm.max_iters = cfg->max_iters;
     prm.eps2 = (double)cfg->epsilon * (double)cfg->epsilon;
     prm.min_eig = cfg->min_eig_threshold;
-    prm.simd = !cfg->force_portable && prm.win >= 8;
+    prm.simd = lk_use_simd(cfg);
 
     /* as OpenCV: levels whose size is <= the window are not used */
     top = cfg->max_level;

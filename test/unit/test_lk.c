@@ -375,6 +375,43 @@ static void test_scratch_alignment_any(void **state)
     assert_memory_equal(p1, q1, sizeof(p1));
 }
 
+/* The SIMD kernels this build must have (the same macros as lib/src/tvo_lk.c): the identity tests
+ * below compare them with the portable ones, so a build that silently lost them would compare the
+ * portable kernels with themselves. */
+#if defined(__SSE2__) && !defined(TVO_LK_NO_SIMD)
+#define LK_TEST_SIMD "sse2"
+#elif (defined(__ARM_NEON) || defined(__ARM_NEON__)) && !defined(TVO_LK_NO_SIMD)
+#define LK_TEST_SIMD "neon"
+#else
+#define LK_TEST_SIMD "portable"
+#endif
+
+/* The kernel the identity tests compare with the portable one, for window c->win_size. */
+static void expect_simd_kernel(const tvo_lk_config *c)
+{
+    tvo_lk_config p = *c;
+    p.force_portable = 1;
+    assert_string_equal(tvo_lk_kernel_name(c), c->win_size >= 8 ? LK_TEST_SIMD : "portable");
+    assert_string_equal(tvo_lk_kernel_name(&p), "portable");
+}
+
+static void test_kernel_name(void **state)
+{
+    tvo_lk_config c;
+    (void)state;
+    tvo_lk_config_default(&c);
+    assert_string_equal(tvo_lk_kernel_name(NULL), LK_TEST_SIMD);
+    assert_string_equal(tvo_lk_kernel_name(&c), LK_TEST_SIMD); /* win 21 */
+    c.win_size = 7;                                            /* below one 8-column strip */
+    assert_string_equal(tvo_lk_kernel_name(&c), "portable");
+    c.win_size = 9;
+    c.force_portable = 1;
+    assert_string_equal(tvo_lk_kernel_name(&c), "portable");
+#if defined(__aarch64__) && !defined(TVO_LK_NO_SIMD)
+    assert_string_equal(LK_TEST_SIMD, "neon"); /* aarch64 always has NEON */
+#endif
+}
+
 /* The SIMD kernels (when compiled in) and the portable C kernels give bit-identical results, for
  * every tail length of the 8-pixel groups and with border windows. */
 static void test_portable_and_simd_identical(void **state)
@@ -397,6 +434,7 @@ static void test_portable_and_simd_identical(void **state)
         c.fb_check = 1;
         assert_true(tvo_lk_scratch_size(&c) <= sizeof(big_scratch));
         c.force_portable = 0;
+        expect_simd_kernel(&c);
         assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, s1, e1, 300, big_scratch, sizeof(big_scratch)),
                          TVO_OK);
         c.force_portable = 1;
@@ -465,6 +503,7 @@ static void test_portable_and_simd_identical_extreme(void **state)
         c.min_eig_threshold = 0.0f; /* keep every window, however odd */
         assert_true(tvo_lk_scratch_size(&c) <= sizeof(big_scratch));
         c.force_portable = 0;
+        expect_simd_kernel(&c);
         assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, s1, e1, 200, big_scratch, sizeof(big_scratch)),
                          TVO_OK);
         c.force_portable = 1;
@@ -474,6 +513,64 @@ static void test_portable_and_simd_identical_extreme(void **state)
         assert_memory_equal(s1, s2, sizeof(s1));
         assert_memory_equal(e1, e2, sizeof(e1));
     }
+    }
+}
+
+/* OpenCV's bilinear weights as tvo_lk.c computes them (lk_weights): the rounded w00, w01, w10 can add
+ * up to 2^14 + 1, and then w11 = -1. */
+static int lk_test_round(float v)
+{
+    int i = (int)v;
+    float d = v - (float)i;
+    if (d > 0.5f || (d == 0.5f && (i & 1) != 0))
+        ++i;
+    return i;
+}
+
+static int lk_test_w11(float a, float b)
+{
+    return (1 << 14) - lk_test_round((1.f - a) * (1.f - b) * 16384.f) - lk_test_round(a * (1.f - b) * 16384.f) -
+           lk_test_round((1.f - a) * b * 16384.f);
+}
+
+/* Windows whose bilinear weight w11 is -1 (fractional offsets found by a search over multiples of
+ * 2^-18; they occur at about 1 in 10^5 random positions): a SIMD kernel that took the weights as
+ * unsigned would read it as 65535. Both the previous window (prev point) and the first iteration
+ * (the guess, use_initial_flow) sample with these weights; the portable and SIMD results must agree. */
+static void test_portable_and_simd_identical_negative_weight(void **state)
+{
+    static const int frac[][2] = { { 3819, 9 },  { 46187, 13 }, { 3980, 93 },
+                                   { 1869, 107 }, { 27, 11867 }, { 9, 20046 } };
+    enum { NF = sizeof(frac) / sizeof(frac[0]), NP = NF * 4 };
+    static const int wins[] = { 9, 15, 21, 31 };
+    tvo_point2f p0[NP], p1[NP], q1[NP];
+    uint8_t s1[NP], s2[NP];
+    float e1[NP], e2[NP];
+    (void)state;
+    build(1, 1.5, -0.75);
+    for (int k = 0; k < NP; ++k) {
+        /* integer parts in [32, 64): float has 2^-18 resolution there, so the fractions are exact */
+        const float fx = (float)frac[k % NF][0] / 262144.f, fy = (float)frac[k % NF][1] / 262144.f;
+        p0[k].x = (float)(34 + 7 * (k / NF)) + fx;
+        p0[k].y = (float)(40 + 5 * (k / NF)) + fy;
+        assert_int_equal(lk_test_w11(p0[k].x - (float)(int)p0[k].x, p0[k].y - (float)(int)p0[k].y), -1);
+    }
+    for (size_t w = 0; w < sizeof(wins) / sizeof(wins[0]); ++w) {
+        tvo_lk_config c = F.cfg;
+        c.win_size = wins[w];
+        c.max_level = 0;
+        c.use_initial_flow = 1; /* guess = the point moved by whole pixels: same fractions */
+        c.max_iters = 3;
+        for (int k = 0; k < NP; ++k)
+            p1[k] = q1[k] = (tvo_point2f){ p0[k].x + 2.f, p0[k].y - 1.f };
+        c.force_portable = 0;
+        expect_simd_kernel(&c);
+        assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, s1, e1, NP, F.scratch, sizeof(F.scratch)), TVO_OK);
+        c.force_portable = 1;
+        assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, q1, s2, e2, NP, F.scratch, sizeof(F.scratch)), TVO_OK);
+        assert_memory_equal(p1, q1, sizeof(p1));
+        assert_memory_equal(s1, s2, sizeof(s1));
+        assert_memory_equal(e1, e2, sizeof(e1));
     }
 }
 
@@ -491,6 +588,8 @@ int main(void)
         cmocka_unit_test(test_scratch_alignment_any),
         cmocka_unit_test(test_portable_and_simd_identical),
         cmocka_unit_test(test_portable_and_simd_identical_extreme),
+        cmocka_unit_test(test_portable_and_simd_identical_negative_weight),
+        cmocka_unit_test(test_kernel_name),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -61,6 +61,12 @@ typedef struct tvo_lk_config {
 /* The defaults above (OpenCV's defaults for win 21, 3 levels, fb check off). */
 void tvo_lk_config_default(tvo_lk_config *cfg);
 
+/* Which window kernels tvo_lk_track() runs with cfg: "sse2" (x86), "neon" (aarch64, or 32-bit ARM built
+ * with -mfpu=neon), or "portable" (the C kernels: force_portable, win_size < 8, no SIMD in this build,
+ * or built with -DTVO_LK_NO_SIMD). All give the same results. cfg == NULL: the SIMD kernels compiled
+ * in ("portable" when none). Never NULL. */
+const char *tvo_lk_kernel_name(const tvo_lk_config *cfg);
+
 /* TVO_OK, TVO_ERR_NULL, TVO_ERR_ARG (a field out of its range, even win_size) or TVO_ERR_NOT_FINITE
  * (NaN / infinite epsilon, threshold or fb_max_error). */
 tvo_status tvo_lk_config_check(const tvo_lk_config *cfg);
