@@ -211,3 +211,17 @@ def test_corrupt_files_refused(tvo):
     struct.pack_into("<I", b, 20, 2)  # layout id
     nnfmt.fix_crc(b)
     assert load_status(tvo, bytes(b)) == -21
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in (ROOT / "models").glob("*.tvonn")))
+def test_shipped_models(tvo, name):
+    """Every shipped weights file loads in C and matches the NumPy reference bit for bit (all seven outputs
+    of tvo_nn_run_all) on 10,000 random inputs (calibration-like, widened, arbitrary)."""
+    data = (ROOT / "models" / name).read_bytes()
+    model = nnfmt.read(data)
+    c = CModel(tvo, data)
+    assert c.mask == model.output_mask
+    x = random_inputs(np.random.default_rng(3000), 10000)
+    out, st = c.run(x, n_out=nnfmt.OUT_COUNT)
+    assert (st == 0).all()
+    assert_bits_equal(out, nnfmt.reference_run(model, x))
