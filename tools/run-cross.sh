@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # Cross builds for ARM Linux, unit tests run under qemu-user:
-#   tools/run-cross.sh [aarch64-linux-gnu] [arm-linux-gnueabihf]      (default: both)
+#   tools/run-cross.sh [aarch64-linux-gnu] [arm-linux-gnueabihf] [arm-linux-gnueabihf-neon]   (default: all three)
 # For each target: configures build/<triple> with cmake/toolchains/<triple>.cmake (core library,
 # PNG + EuRoC port, V4L2 port, unit and port tests incl. test_determinism; examples and benchmarks
 # off), builds it, and runs ctest: CMAKE_CROSSCOMPILING_EMULATOR makes ctest start every test under
-# qemu-aarch64 / qemu-arm -L /usr/<triple>.
+# qemu-aarch64 / qemu-arm -L /usr/<triple>. arm-linux-gnueabihf-neon is armhf with -mfpu=neon (the NEON
+# LK kernels): only test_lk (NEON vs portable kernels) and test_determinism (same digests) are built and
+# run there, the rest is the plain armhf code. TVO_EXPECT_LK_KERNEL tells test_lk which LK kernels each
+# build must have compiled in (neon on aarch64 and armhf-neon, portable on plain armhf).
 # Installs what it needs when run as root (apt-get update first): the Debian cross compilers,
 # qemu-user, cmocka for the target through Debian multiarch (libcmocka-dev:arm64/armhf), and the
 # target's libspng runtime (libspng0:arm64/armhf). Not libspng-dev:<arch>: it pulls zlib1g-dev and
@@ -17,13 +20,13 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
 TARGETS=("$@")
-[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(aarch64-linux-gnu arm-linux-gnueabihf)
+[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(aarch64-linux-gnu arm-linux-gnueabihf arm-linux-gnueabihf-neon)
 JOBS="${JOBS:-2}"
 
 debarch() {
   case "$1" in
     aarch64-linux-gnu) echo arm64 ;;
-    arm-linux-gnueabihf) echo armhf ;;
+    arm-linux-gnueabihf|arm-linux-gnueabihf-neon) echo armhf ;;
     *) echo "unknown target $1" >&2; exit 2 ;;
   esac
 }
@@ -35,7 +38,7 @@ need=()
 for p in cmake ninja-build qemu-user libspng-dev; do installed "$p" || need+=("$p"); done
 for t in "${TARGETS[@]}"; do
   a=$(debarch "$t")
-  installed "gcc-$t" || need+=("gcc-$t")
+  installed "gcc-${t%-neon}" || need+=("gcc-${t%-neon}")
   installed "libcmocka-dev:$a" || need+=("libcmocka-dev:$a")
   installed "libspng0:$a" || need+=("libspng0:$a")
 done
@@ -57,14 +60,25 @@ fi
 start_all=$(date +%s)
 for t in "${TARGETS[@]}"; do
   start=$(date +%s)
-  echo "== $t: build"
+  triple="${t%-neon}"
+  only=()
+  case "$t" in
+    arm-linux-gnueabihf) export TVO_EXPECT_LK_KERNEL=portable ;;
+    arm-linux-gnueabihf-neon) export TVO_EXPECT_LK_KERNEL=neon; only=(test_lk test_determinism) ;;
+    *) export TVO_EXPECT_LK_KERNEL=neon ;;
+  esac
+  echo "== $t: build${only[*]:+ (${only[*]})}"
   cmake -S . -B "build/$t" -G Ninja --toolchain "cmake/toolchains/$t.cmake" \
         -DCMAKE_BUILD_TYPE=Release -DTVO_WERROR="${TVO_WERROR:-ON}" \
-        -DTVO_BUILD_PORT=ON -DSPNG_INCLUDE_DIR=/usr/include -DSPNG_LIBRARY="/usr/lib/$t/libspng.so.0" \
+        -DTVO_BUILD_PORT=ON -DSPNG_INCLUDE_DIR=/usr/include -DSPNG_LIBRARY="/usr/lib/$triple/libspng.so.0" \
         -DTVO_BUILD_EXAMPLES=OFF -DTVO_BUILD_BENCH=OFF >/dev/null
-  cmake --build "build/$t" -j"$JOBS"
-  echo "== $t: unit tests under $(grep -o 'qemu-[a-z0-9]*' "cmake/toolchains/$t.cmake" | head -1)"
-  ctest --test-dir "build/$t" -j"$JOBS" --output-on-failure
+  cmake --build "build/$t" -j"$JOBS" ${only[@]:+--target "${only[@]}"}
+  echo "== $t: unit tests under $(grep -o 'qemu-[a-z0-9]*' "cmake/toolchains/$triple.cmake" | head -1)"
+  if [ ${#only[@]} -gt 0 ]; then
+    ctest --test-dir "build/$t" -j"$JOBS" --output-on-failure -R "^($(IFS='|'; echo "${only[*]}"))\$"
+  else
+    ctest --test-dir "build/$t" -j"$JOBS" --output-on-failure
+  fi
   echo "== $t: done in $(( $(date +%s) - start )) s"
 done
 echo "== cross targets passed (${TARGETS[*]}) in $(( $(date +%s) - start_all )) s"

@@ -410,6 +410,9 @@ static void test_kernel_name(void **state)
 #if defined(__aarch64__) && !defined(TVO_LK_NO_SIMD)
     assert_string_equal(LK_TEST_SIMD, "neon"); /* aarch64 always has NEON */
 #endif
+    /* set by tools/run-cross.sh per target, so that a build that lost its SIMD flags fails here */
+    if (getenv("TVO_EXPECT_LK_KERNEL") != NULL)
+        assert_string_equal(tvo_lk_kernel_name(NULL), getenv("TVO_EXPECT_LK_KERNEL"));
 }
 
 /* The SIMD kernels (when compiled in) and the portable C kernels give bit-identical results, for
