@@ -86,3 +86,27 @@ def test_replay_scale_propagate(replayed, tmp_path):
         r = subprocess.run([str(REPLAY), "--euroc", str(seq), "--out", str(tmp_path / "x.txt"), *bad],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         assert r.returncode != 0, bad
+
+
+def test_bench_alternating_runs(replayed, tmp_path):
+    """tinyvo_tools.bench on the same render, 40 frames, two alternations: both pipelines ran twice, the
+    figure is the median of the per-run ratios, and both trajectories were evaluated (timings themselves
+    are not asserted: this is a test of the tool, not a timed test)."""
+    pytest.importorskip("cv2")
+    traj, _, _ = replayed
+    seq = traj.parent / "seq"
+    out = tmp_path / "bench"
+    subprocess.run([sys.executable, "-m", "tinyvo_tools.bench", "--euroc", str(seq), "--frames", "40",
+                    "--replay", str(REPLAY), "--out", str(out), "--repeat", "2"], check=True,
+                   stdout=subprocess.DEVNULL)
+    res = json.loads((out / "bench.json").read_text())
+    assert res["frames"] == 40
+    assert len(res["runs"]) == 2
+    ratios = sorted(r["ratio"] for r in res["runs"])
+    assert all(r > 0 and math.isfinite(r) for r in ratios)
+    assert res["ratio_median_of_runs"] == pytest.approx(0.5 * (ratios[0] + ratios[1]))
+    for name in ("tinyvo", "opencv"):
+        assert math.isfinite(res[name]["eval"]["standard"]["ate_m"]["rmse"])
+    bad = subprocess.run([sys.executable, "-m", "tinyvo_tools.bench", "--euroc", str(seq), "--repeat", "0",
+                          "--replay", str(REPLAY), "--out", str(out)], capture_output=True, text=True)
+    assert bad.returncode == 2 and "--repeat must be >= 1" in bad.stderr

@@ -1,7 +1,7 @@
 """Side-by-side benchmark: tinyvo's replay against an OpenCV pipeline doing the same job.
 
     python -m tinyvo_tools.bench --euroc DIR [--frames N] [--replay build/release/examples/replay/tvo_replay]
-                                 [--out OUTDIR]
+                                 [--out OUTDIR] [--repeat N]
 
 Both run on the same frames, single thread, in one session, with ground-truth step lengths:
   tinyvo : tvo_replay --scale gt (its per-stage timings come from --stats: median and p90 per frame)
@@ -9,7 +9,8 @@ Both run on the same frames, single thread, in one session, with ground-truth st
            (21x21, maxLevel 3, 30 iterations / 0.01) with a forward-backward check (1 px),
            undistortPoints, findEssentialMat (RANSAC, p = 0.999, 1 px) and recoverPose.
 Per-frame times exclude PNG decoding for both. Accuracy of both trajectories comes from
-tinyvo_tools.eval (evo). OpenCV is a test/benchmark dependency only; the library never uses it.
+tinyvo_tools.eval (evo). With --repeat N the two alternate N times: the table shows the last run, the
+ratio line the median of the N per-run ratios (the figure to quote on a shared machine). OpenCV is a test/benchmark dependency only; the library never uses it.
 """
 import argparse
 import json
@@ -103,7 +104,12 @@ def main(argv=None):
     ap.add_argument("--frames", type=int, default=0, help="frames to use (0 = all)")
     ap.add_argument("--replay", default=os.path.join("build", "release", "examples", "replay", "tvo_replay"))
     ap.add_argument("--out", default=os.path.join("out", "bench"))
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="alternate the two pipelines this many times and report the median of the per-run "
+                         "ratios (a load change on a shared machine then biases one run, not the figure)")
     a = ap.parse_args(argv)
+    if a.repeat < 1:
+        ap.error("--repeat must be >= 1")
     os.makedirs(a.out, exist_ok=True)
 
     tvo_traj = os.path.join(a.out, "tinyvo.txt")
@@ -111,11 +117,13 @@ def main(argv=None):
     cmd = [a.replay, "--euroc", a.euroc, "--out", tvo_traj, "--scale", "gt", "--stats", stats_path, "--quiet"]
     if a.frames:
         cmd += ["--max-frames", str(a.frames)]
-    subprocess.run(cmd, check=True)
-    with open(stats_path) as fh:
-        stats = json.load(fh)
-
-    t_ns, poses, ms = opencv_pipeline(a.euroc, max_frames=a.frames or None)
+    runs = []  # (tinyvo median ms, opencv median ms) per alternation
+    for _ in range(a.repeat):
+        subprocess.run(cmd, check=True)
+        with open(stats_path) as fh:
+            stats = json.load(fh)
+        t_ns, poses, ms = opencv_pipeline(a.euroc, max_frames=a.frames or None)
+        runs.append((stats["timing_us"]["total"]["median"] / 1e3, float(np.median(ms[1:]))))
     cv_traj = os.path.join(a.out, "opencv.txt")
     trajio.write_tum(cv_traj, trajio.Trajectory(t_ns, poses, "camera"))
 
@@ -129,6 +137,8 @@ def main(argv=None):
         "tinyvo": {"median_ms": tv_med, "p90_ms": tv_p90, "eval": ev_t, "stats": stats},
         "opencv": {"median_ms": cv_med, "p90_ms": cv_p90, "eval": ev_c},
         "ratio_median_tinyvo_over_opencv": tv_med / cv_med if cv_med > 0 else None,
+        "runs": [{"tinyvo_median_ms": t, "opencv_median_ms": c, "ratio": t / c} for t, c in runs],
+        "ratio_median_of_runs": float(np.median([t / c for t, c in runs])),
     }
     with open(os.path.join(a.out, "bench.json"), "w") as fh:
         json.dump(result, fh, indent=2)
@@ -145,6 +155,9 @@ def main(argv=None):
     print(row("tinyvo", tv_med, tv_p90, ev_t))
     print(row("opencv", cv_med, cv_p90, ev_c))
     print(f"ratio tinyvo/opencv (median per frame): {result['ratio_median_tinyvo_over_opencv']:.3f}")
+    if len(runs) > 1:
+        rs = " ".join(f"{t / c:.3f}" for t, c in runs)
+        print(f"{len(runs)} alternating runs, ratios: {rs}; median of runs {result['ratio_median_of_runs']:.3f}")
     print(f"written: {os.path.join(a.out, 'bench.json')}")
     return 0
 
