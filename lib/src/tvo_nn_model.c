@@ -4,6 +4,7 @@
 #include <math.h>
 #include <string.h>
 #include "tinyvo/arena.h"
+#include "tinyvo/dmath.h"
 #include "tinyvo/nn.h"
 
 typedef struct tvo_nn_layer_rt {
@@ -361,23 +362,6 @@ tvo_status tvo_nn_load(tvo_nn **out, const void *file, size_t file_size, void *m
     return TVO_OK;
 }
 
-/* exp(x) for |x| <= 700 with + - * / and ldexp only (x = k ln2 + r, |r| <= ln2/2, Taylor to r^16): the
- * same operations in the same order as nnfmt.det_exp, so the step of a log-step branch is bit-exact
- * with the NumPy reference on every IEEE-754 target (no fused multiply-add: -ffp-contract=off). */
-static double nn_exp(double x)
-{
-    const double ln2 = 0.69314718055994530942;
-    const double kf = floor(x / ln2 + 0.5);
-    const double r = x - kf * ln2;
-    double sum = 1.0, term = 1.0;
-    int k;
-    for (k = 1; k <= 16; ++k) {
-        term *= r / (double)k;
-        sum += term;
-    }
-    return ldexp(sum, (int)kf);
-}
-
 tvo_status tvo_nn_run(const tvo_nn *nn, const float features[TVO_FEAT_COUNT], float out[6])
 {
     float all[TVO_NN_OUT_COUNT];
@@ -437,7 +421,9 @@ tvo_status tvo_nn_run_all(const tvo_nn *nn, const float features[TVO_FEAT_COUNT]
         }
         if (br->dof == (int32_t)TVO_NN_CODE_LOG_STEP) {
             v = v < TVO_NN_LOG_STEP_MIN ? TVO_NN_LOG_STEP_MIN : (v > TVO_NN_LOG_STEP_MAX ? TVO_NN_LOG_STEP_MAX : v);
-            v = (float)nn_exp((double)v);
+            /* tvo_dm_exp: + - * / floor ldexp only, the operations nnfmt.det_exp repeats in the same order,
+               so the step is bit-exact with the NumPy reference on every IEEE-754 target */
+            v = (float)tvo_dm_exp((double)v);
         }
         out[br->dof < TVO_NN_STEP ? br->dof : TVO_NN_STEP] = v;
     }

@@ -225,3 +225,19 @@ def test_shipped_models(tvo, name):
     out, st = c.run(x, n_out=nnfmt.OUT_COUNT)
     assert (st == 0).all()
     assert_bits_equal(out, nnfmt.reference_run(model, x))
+
+
+def test_log_step_exp_is_tvo_dm_exp(tvo):
+    """nnfmt.det_exp repeats tvo_dm_exp's operations (the interpreter's exp of a log step): same binary64
+    bits on 100,000 values over the clamp range [LOG_STEP_MIN, LOG_STEP_MAX] and at its ends / ties."""
+    tvo.tvo_dm_exp.argtypes = [ctypes.c_double]
+    tvo.tvo_dm_exp.restype = ctypes.c_double
+    rng = np.random.default_rng(7)
+    x = np.concatenate([rng.uniform(nnfmt.LOG_STEP_MIN, nnfmt.LOG_STEP_MAX, 100000),
+                        [nnfmt.LOG_STEP_MIN, nnfmt.LOG_STEP_MAX, 0.0, -0.0, 0.5 * np.log(2.0), -0.5 * np.log(2.0)],
+                        rng.uniform(-16, 8, 1000).astype(np.float32)])
+    c = np.array([tvo.tvo_dm_exp(float(v)) for v in x])
+    ref = nnfmt.det_exp(x)
+    bad = c.view(np.uint64) != ref.view(np.uint64)
+    assert not bad.any(), (x[bad][:3], c[bad][:3], ref[bad][:3])
+    assert np.max(np.abs(ref - np.exp(x)) / np.spacing(np.exp(x))) <= 1.0

@@ -40,7 +40,6 @@ OUT_STEP = 6
 LOG_STEP_MIN = -16.0  # a log-step branch's value is clamped to [LOG_STEP_MIN, LOG_STEP_MAX] before exp
 LOG_STEP_MAX = 8.0
 STEP_MIN_M = 1e-4     # training: log targets of steps below this use this
-LN2 = 0.69314718055994530942
 
 
 def min_minor(dofs) -> int:
@@ -59,18 +58,24 @@ def check_dofs(dofs) -> None:
         raise ValueError("a step-length branch cannot be mixed with tx/ty/tz branches")
 
 
+# tvo_dm_exp's constants (lib/src/tvo_dmath.c): 1/ln 2, and ln 2 split so that k * EXP_LN2_HI is exact
+EXP_INV_LN2 = float.fromhex("0x1.71547652b82fep+0")
+EXP_LN2_HI = float.fromhex("0x1.62e42feep-1")
+EXP_LN2_LO = float.fromhex("0x1.a39ef35793c76p-33")
+
+
 def det_exp(x: np.ndarray) -> np.ndarray:
-    """exp in float64 with the operations of the C interpreter's (tvo_nn_model.c nn_exp), in the same
-    order: x = k ln2 + r, Taylor to r^16, ldexp. Bit-exact with C (IEEE binary64, no fused ops)."""
+    """exp in float64 with the operations of the C interpreter's exp (tvo_dm_exp, lib/src/tvo_dmath.c) in
+    the same order: k = floor(x / ln2 + 0.5) as x * (1/ln2) + 0.5, r = (x - k ln2_hi) - k ln2_lo, Horner
+    p = 1 + p r / i for i = 17..1 from p = 1, then ldexp(p, k). Bit-exact with C (IEEE binary64, no fused
+    operations) for the clamped log-step values [LOG_STEP_MIN, LOG_STEP_MAX]."""
     x = np.asarray(x, np.float64)
-    kf = np.floor(x / LN2 + 0.5)
-    r = x - kf * LN2
-    s = np.ones_like(x)
-    term = np.ones_like(x)
-    for k in range(1, 17):
-        term = term * (r / float(k))
-        s = s + term
-    return np.ldexp(s, kf.astype(np.int32))
+    k = np.floor(x * EXP_INV_LN2 + 0.5)
+    r = (x - k * EXP_LN2_HI) - k * EXP_LN2_LO
+    p = np.ones_like(x)
+    for i in range(17, 0, -1):
+        p = 1.0 + p * r / float(i)
+    return np.ldexp(p, k.astype(np.int32))
 
 
 def log_step_to_step(v: np.ndarray) -> np.ndarray:

@@ -14,9 +14,11 @@ Writes (deterministic, seed 5):
   steplin.tvonn    format 1.1: one linear step-length branch (code 6, selu) alone
   steplin.golden   256 golden vectors (version 2)
 All use the exporter's calibration rule 1 (quant.py), so that the files stay reproducible.
-Files without a step-length branch are written as 1.0 with version-1 golden files (6 outputs), so tiny and
-paper stay byte-identical to the files of generator version 2. The golden files record this script's name
-and GENERATOR_VERSION.
+Files without a step-length branch are written as 1.0 with version-1 golden files (6 outputs): the tiny
+and paper models and their vectors and outputs are those of generator version 2 (the golden files in the
+tree still record version 2). The golden files record this script's name and GENERATOR_VERSION; version 4
+(step.golden, steplin.golden): the log step's exp is tvo_dm_exp's operation sequence (nnfmt.det_exp), which
+gave the same float32 outputs as version 3's.
 """
 from __future__ import annotations
 
@@ -27,7 +29,7 @@ import numpy as np
 
 from . import nnfmt, quant
 
-GENERATOR_VERSION = 3
+GENERATOR_VERSION = 4
 GENERATOR = f"tinyvo_tools.nngolden {GENERATOR_VERSION}"
 BRANCH_ACTS = ["relu", "leaky_relu", "elu", "selu", "tanh", "sigmoid"]
 
