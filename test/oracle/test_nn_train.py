@@ -153,3 +153,31 @@ def test_calibration_rule1_reproduces_golden_models():
     with pytest.raises(ValueError):
         quant.quantize_model([quant.random_float_branch(np.random.default_rng(0), 0, "relu", sizes=(4,))],
                              quant.synthetic_features(np.random.default_rng(0), 50), calibration=3)
+
+
+def test_int8_aware_stage3():
+    """train(qat_epochs > 0): each mode of stage 3 runs, is seeded (same weights twice), changes the weights
+    of stages 1-2, and the consistency mode pulls the int8 output towards the float one (its own target)."""
+    rng = np.random.default_rng(6)
+    f, t, seq = train.synthetic_dataset(rng, 500, sequences=("A", "V"))
+    tr, va = train.split_rows(seq, ["V"])
+    kw = dict(sizes=(16, 8), epochs=2, joint_epochs=0, batch=64, lr=1e-3, seed=5, progress=False, dofs=[7],
+              input_clip=0.5)
+    acts = train.parse_activations("relu")
+    base = train.train(f[tr], t[tr], acts, **kw)
+    for mode in train.QAT_MODES:
+        a = train.train(f[tr], t[tr], acts, qat_epochs=2, qat_mode=mode, qat_lr=1e-3, qat_weight=1000.0, **kw)
+        b = train.train(f[tr], t[tr], acts, qat_epochs=2, qat_mode=mode, qat_lr=1e-3, qat_weight=1000.0, **kw)
+        for wa, wb, w0 in zip(a[0].weights, b[0].weights, base[0].weights):
+            np.testing.assert_array_equal(wa, wb)
+        assert any(not np.array_equal(wa, w0) for wa, w0 in zip(a[0].weights, base[0].weights)), mode
+    def gap(br):
+        q = nnfmt.reference_run(quant.quantize_model(br, f[tr]), f[tr])[:, 6]
+        return np.sqrt(np.mean((q - quant.float_run(br, f[tr])[:, 6]) ** 2))
+    # the same fine-tuning epochs without (weight 0) and with the consistency term
+    g = {w: gap(train.train(f[tr], t[tr], acts, qat_epochs=8, qat_mode="consist", qat_lr=1e-3, qat_weight=w, **kw))
+         for w in (0.0, 1e4)}
+    print("int8-vs-float rms gap, consistency weight 0 / 1e4:", g)
+    assert g[1e4] < 0.8 * g[0.0], g
+    with pytest.raises(ValueError):
+        train.train(f[tr], t[tr], acts, qat_epochs=1, qat_mode="swish", **kw)

@@ -11,7 +11,13 @@ interpreter applies it to the raw VO unit translation (docs/weights-format.md, D
 
 Stage 1 trains each branch alone (Huber loss on normalised targets, RMSprop as in the paper), one after
 the other with a progress bar each; stage 2 combines them and fine-tunes all together on the summed
-loss. Input normalisation (mean/std) and target normalisation are fitted on the training rows only and
+loss. Optional stage 3 (`--qat-epochs N`, off by default: none of its modes is used by a shipped model,
+see models/MODEL_CARD.md "Quantisation") fine-tunes them against int8 rounding as the exporter's rule 2
+makes it (`--qat-mode`): `fq` trains the fake-quantised forward pass (inputs on the int8 input levels,
+weights per output channel, hidden layers requantised with the exporter's ranges, recalibrated on the
+training rows every epoch; straight-through gradients), `noise` the float pass with uniform noise of one
+int8 step on inputs and hidden pre-activations, `consist` the float pass plus `--qat-weight` x the mean
+squared difference between the fake-quantised and the float output. Input normalisation (mean/std) and target normalisation are fitted on the training rows only and
 stored in the checkpoint (tinyvo_tools.quant.save_checkpoint); export.py quantises it.
 Seeded: same data + seed -> same checkpoint (single-threaded torch).
 """
@@ -103,12 +109,76 @@ def synthetic_dataset(rng: np.random.Generator, n: int, sequences=("SYN_A", "SYN
     return f, np.concatenate([t, r], axis=1).astype(np.float32), seq
 
 
+QAT_MODES = ("fq", "noise", "consist")
+
+
+def _fake_quant(x, scale: float, zp: int, noise_gen=None):
+    """int8 fake quantisation (levels -128..127 of (scale, zp)): clamped to the representable range and
+    rounded to a level in the forward pass, the rounding's gradient passed straight through. With noise_gen
+    (qat mode noise): x plus uniform noise of one level's width instead."""
+    torch = _torch()
+    if noise_gen is not None:
+        return x + (torch.rand(x.shape, generator=noise_gen) - 0.5) * scale
+    xc = torch.clamp(x, (-128 - zp) * scale, (127 - zp) * scale)
+    return xc + ((torch.round(xc / scale + zp) - zp) * scale - xc).detach()
+
+
+def _fake_quant_weight(w, col_scale=None):
+    """Symmetric per-output-channel int8 weights as quant.quantize_branch makes them (max |w| / 127); for
+    the first layer of an equalised branch the quantised matrix is W / a (col_scale = a), mapped back."""
+    torch = _torch()
+    we = w / col_scale if col_scale is not None else w
+    s = (we.detach().abs().amax(dim=1, keepdim=True) / 127.0).clamp_min(1e-12)
+    wq = we + (torch.clamp(torch.round(we / s), -127, 127) * s - we).detach()
+    return wq * col_scale if col_scale is not None else wq
+
+
+def _qat_calibrate(net, x, activation: str):
+    """Per hidden layer ((pre scale, zp), (post scale, zp)) from the float net on the rows x, with the
+    exporter's rule 2 (quant.quantize_branch): min/max with 0 included; relu: [0, (1 + RELU_HEADROOM) max]."""
+    torch = _torch()
+    mods = list(net)
+    out = []
+    with torch.no_grad():
+        h = x
+        for k in range(0, len(mods) - 1, 2):
+            pre = mods[k](h)
+            h = mods[k + 1](pre)
+            if activation == "relu":
+                rng = (0.0, float(pre.max()) * (1.0 + quant.RELU_HEADROOM))
+            else:
+                rng = (float(pre.min()), float(pre.max()))
+            out.append((quant.asym_params(*rng), quant.asym_params(float(h.min()), float(h.max()))))
+    return out
+
+
+def _qat_forward(net, x, col_scale, calib, activation: str, noise_gen=None):
+    """The float net with the int8 interpreter's roundings on inputs x (already on the int8 input levels),
+    or with noise of their size (noise_gen: mode noise, float weights)."""
+    mods = list(net)
+    h = x
+    for k in range(0, len(mods), 2):
+        lin = mods[k]
+        w = lin.weight if noise_gen is not None else _fake_quant_weight(lin.weight, col_scale if k == 0 else None)
+        h = h @ w.t() + lin.bias
+        if k + 1 < len(mods):
+            (s_pre, zp_pre), (s_post, zp_post) = calib[k // 2]
+            h = mods[k + 1](_fake_quant(h, s_pre, zp_pre, noise_gen))
+            if activation != "relu":  # relu's table is the identity (rule 2: same range before and after)
+                h = _fake_quant(h, s_post, zp_post, noise_gen)
+    return h
+
+
 def train(features: np.ndarray, targets: np.ndarray, activations: Dict[int, str], *,
           sizes=DEFAULT_SIZES, epochs: int = 100, joint_epochs: int = 20, batch: int = 256,
           lr: float = 2e-4, joint_lr: Optional[float] = None, seed: int = 0, feature_ids=None,
           dofs: Sequence[int] = range(6), progress: bool = True, huber_delta: float = 1.0,
-          input_clip: float = 0.0, input_clip_margin: float = 0.25):
+          input_clip: float = 0.0, input_clip_margin: float = 0.25, qat_epochs: int = 0,
+          qat_lr: Optional[float] = None, qat_mode: str = "fq", qat_weight: float = 100.0):
     """Returns a list of quant.FloatBranch (one per DoF in `dofs`).
+
+    qat_epochs > 0: stage 3 (module docstring), all branches together, RMSprop at qat_lr (default lr / 10),
+    qat_mode in QAT_MODES, qat_weight the weight of the consistency term (mode consist).
 
     input_clip > 0: the model's input domain. Each normalised input is clamped to its training
     [input_clip, 100 - input_clip] percentile range widened by input_clip_margin of its width on each side
@@ -174,6 +244,47 @@ def train(features: np.ndarray, targets: np.ndarray, activations: Dict[int, str]
                 opt.step()
                 total += float(loss) * len(idx)
             bar.set_postfix(loss=f"{total / n:.4f}")
+    if qat_epochs > 0:  # stage 3: fine-tuning against int8 rounding
+        if qat_mode not in QAT_MODES:
+            raise ValueError(f"qat_mode {qat_mode}: one of {QAT_MODES}")
+        qin = {}
+        for d in nets:  # inputs on the exporter's int8 input levels (the map depends on the domain only)
+            fb = quant.FloatBranch(dof=d, feature_ids=ids, norm_scale=norm_scale, norm_offset=norm_offset,
+                                   weights=[], biases=[], activation=activations[d], clip_lo=clip_lo,
+                                   clip_hi=clip_hi)
+            a_np, c_np = quant.input_map(fb, features)
+            u = xn_np * a_np + c_np
+            s_in, zp_in = (quant.DOMAIN_SCALE, 0) if clip_lo is not None else quant.asym_params(u.min(), u.max())
+            u = np.clip(np.rint(u / s_in) + zp_in, -128, 127)
+            qin[d] = (torch.from_numpy(((u - zp_in) * s_in - c_np) / a_np).float(),
+                      torch.from_numpy(a_np[None, :]).float(), torch.from_numpy((s_in / a_np)[None, :]).float())
+        gen = torch.Generator().manual_seed(seed) if qat_mode == "noise" else None
+        params = [p for net in nets.values() for p in net.parameters()]
+        opt = torch.optim.RMSprop(params, lr=qat_lr if qat_lr is not None else lr * 0.1)
+        bar = tqdm(range(qat_epochs), desc=f"int8-aware fine-tuning ({qat_mode})", disable=not progress, leave=True)
+        for _ in bar:
+            calib = {d: _qat_calibrate(net, xn, activations[d]) for d, net in nets.items()}
+            perm = torch.from_numpy(rng.permutation(n))
+            total = 0.0
+            for s in range(0, n, batch):
+                idx = perm[s:s + batch]
+                opt.zero_grad()
+                loss = 0.0
+                for d, net in nets.items():
+                    xq, col, step = qin[d]
+                    if qat_mode == "noise":
+                        x = xn[idx] + (torch.rand((len(idx), xn.shape[1]), generator=gen) - 0.5) * step
+                        loss = loss + loss_fn(_qat_forward(net, x, col, calib[d], activations[d], gen)[:, 0], yn[idx, d])
+                    elif qat_mode == "fq":
+                        loss = loss + loss_fn(_qat_forward(net, xq[idx], col, calib[d], activations[d])[:, 0], yn[idx, d])
+                    else:
+                        yf = net(xn[idx])[:, 0]
+                        yq = _qat_forward(net, xq[idx], col, calib[d], activations[d])[:, 0]
+                        loss = loss + loss_fn(yf, yn[idx, d]) + qat_weight * ((yq - yf) ** 2).mean()
+                loss.backward()
+                opt.step()
+                total += float(loss) * len(idx)
+            bar.set_postfix(loss=f"{total / n:.4f}")
     branches = []
     for d, net in nets.items():
         lin = [m for m in net if isinstance(m, torch.nn.Linear)]
@@ -204,6 +315,10 @@ def main(argv=None):
     ap.add_argument("--input-clip", type=float, default=0.0,
                     help="input domain: clamp each input to its training [p, 100-p] percentiles (+margin); 0: off")
     ap.add_argument("--input-clip-margin", type=float, default=0.25)
+    ap.add_argument("--qat-epochs", type=int, default=0, help="stage 3: int8-aware fine-tuning epochs (0: off)")
+    ap.add_argument("--qat-lr", type=float, default=None, help="its learning rate (default: lr / 10)")
+    ap.add_argument("--qat-mode", default="fq", choices=QAT_MODES)
+    ap.add_argument("--qat-weight", type=float, default=100.0, help="consistency weight (--qat-mode consist)")
     args = ap.parse_args(argv)
     if args.dataset == "synthetic":
         f, t, seq = synthetic_dataset(np.random.default_rng(args.seed), 20000)
@@ -217,13 +332,16 @@ def main(argv=None):
     nnfmt.check_dofs(dofs)
     branches = train(f[tr], t[tr], acts, sizes=sizes, dofs=dofs, epochs=args.epochs, joint_epochs=args.joint_epochs,
                      batch=args.batch, lr=args.lr, seed=args.seed,
-                     input_clip=args.input_clip, input_clip_margin=args.input_clip_margin)
+                     input_clip=args.input_clip, input_clip_margin=args.input_clip_margin,
+                     qat_epochs=args.qat_epochs, qat_lr=args.qat_lr, qat_mode=args.qat_mode,
+                     qat_weight=args.qat_weight)
     quant.save_checkpoint(args.out, branches, {
         "tinyvo_tools": __version__, "dataset": args.dataset, "val_sequences": val,
         "train_sequences": sorted(set(seq[tr].tolist())), "sizes": list(sizes), "epochs": args.epochs,
         "joint_epochs": args.joint_epochs, "lr": args.lr, "batch": args.batch, "seed": args.seed,
         "input_clip": args.input_clip,
-        "input_clip_margin": args.input_clip_margin,
+        "input_clip_margin": args.input_clip_margin, "qat_epochs": args.qat_epochs, "qat_lr": args.qat_lr,
+        "qat_mode": args.qat_mode, "qat_weight": args.qat_weight,
         "feature_layout_id": nnfmt.FEAT_LAYOUT_ID})
     print(f"wrote {args.out}: {len(branches)} branches, trained on {int(tr.sum())} rows")
 
