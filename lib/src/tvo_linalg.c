@@ -6,6 +6,14 @@
 #include <math.h>
 #include <string.h>
 
+/* The root finder's helpers are inlined into a body specialised for degree 10 (the 5-point
+ * solver's case: loops over the degree unroll, same operations in the same order). */
+#if defined(__GNUC__)
+#define LA_INLINE static inline __attribute__((always_inline))
+#else
+#define LA_INLINE static inline
+#endif
+
 void tvo_la_mat3_mul(const double A[9], const double B[9], double C[9])
 {
     for (int i = 0; i < 3; ++i)
@@ -329,6 +337,14 @@ tvo_status tvo_la_solve(double *A, double *b, int n, double *x)
     return TVO_OK;
 }
 
+LA_INLINE double poly_eval(const double *c, int deg, double t)
+{
+    double v = c[deg];
+    for (int i = deg - 1; i >= 0; --i)
+        v = v * t + c[i];
+    return v;
+}
+
 double tvo_la_poly_eval(const double *c, int deg, double t)
 {
     double v = c[deg];
@@ -356,9 +372,16 @@ typedef struct sturm_chain {
     int n;            /* fast: degree of p */
 } sturm_chain;
 
-static int sign_changes(const double *f, int len)
+LA_INLINE int sign_changes(const double *f, int len)
 {
-    int changes = 0;
+    int changes = 0, zero = 0;
+    for (int k = 0; k < len; ++k)
+        zero |= f[k] == 0.0;
+    if (!zero) { /* the usual case: no member vanishes, count without branches */
+        for (int k = 1; k < len; ++k)
+            changes += (f[k] > 0.0) != (f[k - 1] > 0.0);
+        return changes;
+    }
     double prev = 0.0;
     for (int k = 0; k < len; ++k) {
         double v = f[k];
@@ -371,11 +394,10 @@ static int sign_changes(const double *f, int len)
     return changes;
 }
 
-static int sturm_changes(const sturm_chain *s, double t)
+LA_INLINE int sturm_changes(const sturm_chain *s, int n, double t)
 {
     double f[11];
     if (s->fast) {
-        int n = s->n;
         f[n] = s->cst;
         f[n - 1] = s->lin[0] + s->lin[1] * t;
         for (int k = n - 1; k >= 1; --k)
@@ -383,12 +405,12 @@ static int sturm_changes(const sturm_chain *s, double t)
         return sign_changes(f, n + 1);
     }
     for (int k = 0; k < s->len; ++k)
-        f[k] = tvo_la_poly_eval(s->p[k], s->deg[k], t);
+        f[k] = poly_eval(s->p[k], s->deg[k], t);
     return sign_changes(f, s->len);
 }
 
 /* fast chain of a monic polynomial a of degree deg >= 2; 0 when some remainder is not generic */
-static int sturm_build_fast(sturm_chain *s, const double *a, int deg)
+LA_INLINE int sturm_build_fast(sturm_chain *s, const double *a, int deg)
 {
     double buf[3][11];
     double *u = buf[0], *v = buf[1], *w = buf[2];
@@ -431,9 +453,10 @@ static int sturm_build_fast(sturm_chain *s, const double *a, int deg)
     return 1;
 }
 
-static void sturm_build(sturm_chain *s, const double *a, int deg)
+LA_INLINE void sturm_build(sturm_chain *s, const double *a, int deg)
 {
     s->fast = 0;
+    s->len = 0;
     if (deg >= 2 && sturm_build_fast(s, a, deg))
         return;
     s->fast = 0;
@@ -479,16 +502,16 @@ static void sturm_build(sturm_chain *s, const double *a, int deg)
     }
 }
 
-static double refine_root(const double *a, int deg, double lo, double hi)
+LA_INLINE double refine_root(const double *a, int deg, double lo, double hi)
 {
     /* the root lies in (lo, hi] */
-    double fhi = tvo_la_poly_eval(a, deg, hi);
+    double fhi = poly_eval(a, deg, hi);
     if (fhi == 0.0)
         return hi;
-    double flo = tvo_la_poly_eval(a, deg, lo);
+    double flo = poly_eval(a, deg, lo);
     if (flo == 0.0) { /* lo is a different root, excluded: step just inside */
         lo += 1e-9 * (hi - lo);
-        flo = tvo_la_poly_eval(a, deg, lo);
+        flo = poly_eval(a, deg, lo);
         if (flo == 0.0)
             return lo;
     }
@@ -529,6 +552,68 @@ static double refine_root(const double *a, int deg, double lo, double hi)
     return x;
 }
 
+/* real roots of the monic a (degree deg) in [-bound, bound], sorted */
+LA_INLINE int roots_monic(const double *a, int deg, double bound, double *roots)
+{
+    sturm_chain s;
+    sturm_build(&s, a, deg);
+
+    struct { double lo, hi; int vlo, vhi, depth; } stack[160];
+    int sp = 0, nroots = 0;
+    stack[sp].lo = -bound;
+    stack[sp].hi = bound;
+    stack[sp].vlo = sturm_changes(&s, deg, -bound);
+    stack[sp].vhi = sturm_changes(&s, deg, bound);
+    stack[sp].depth = 0;
+    ++sp;
+    while (sp > 0 && nroots < deg) {
+        --sp;
+        double lo = stack[sp].lo, hi = stack[sp].hi;
+        int vlo = stack[sp].vlo, vhi = stack[sp].vhi, depth = stack[sp].depth;
+        int cnt = vlo - vhi;
+        if (cnt <= 0)
+            continue;
+        double mid = 0.5 * (lo + hi);
+        if (cnt == 1) {
+            double flo = poly_eval(a, deg, lo), fhi = poly_eval(a, deg, hi);
+            if ((flo > 0.0) != (fhi > 0.0) || flo == 0.0 || fhi == 0.0 || depth >= 64) {
+                roots[nroots++] = refine_root(a, deg, lo, hi);
+                continue;
+            }
+        } else if (depth >= 64 || !(hi - lo > 1e-14 * (1.0 + fabs(mid)))) {
+            roots[nroots++] = mid;
+            continue;
+        }
+        if (sp + 2 > 160) {
+            roots[nroots++] = mid;
+            continue;
+        }
+        int vmid = sturm_changes(&s, deg, mid);
+        stack[sp].lo = mid;
+        stack[sp].hi = hi;
+        stack[sp].vlo = vmid;
+        stack[sp].vhi = vhi;
+        stack[sp].depth = depth + 1;
+        ++sp;
+        stack[sp].lo = lo;
+        stack[sp].hi = mid;
+        stack[sp].vlo = vlo;
+        stack[sp].vhi = vmid;
+        stack[sp].depth = depth + 1;
+        ++sp;
+    }
+    for (int i = 1; i < nroots; ++i) {
+        double v = roots[i];
+        int j = i - 1;
+        while (j >= 0 && roots[j] > v) {
+            roots[j + 1] = roots[j];
+            --j;
+        }
+        roots[j + 1] = v;
+    }
+    return nroots;
+}
+
 int tvo_la_poly_real_roots(const double *c, int deg, double *roots)
 {
     if (c == NULL || roots == NULL || deg < 1 || deg > 10)
@@ -564,61 +649,7 @@ int tvo_la_poly_real_roots(const double *c, int deg, double *roots)
             k2 = k;
     }
     double bound = ldexp(2.0, k2 < -60 ? -60 : k2);
-    sturm_chain s;
-    sturm_build(&s, a, deg);
-
-    struct { double lo, hi; int vlo, vhi, depth; } stack[160];
-    int sp = 0, nroots = 0;
-    stack[sp].lo = -bound;
-    stack[sp].hi = bound;
-    stack[sp].vlo = sturm_changes(&s, -bound);
-    stack[sp].vhi = sturm_changes(&s, bound);
-    stack[sp].depth = 0;
-    ++sp;
-    while (sp > 0 && nroots < deg) {
-        --sp;
-        double lo = stack[sp].lo, hi = stack[sp].hi;
-        int vlo = stack[sp].vlo, vhi = stack[sp].vhi, depth = stack[sp].depth;
-        int cnt = vlo - vhi;
-        if (cnt <= 0)
-            continue;
-        double mid = 0.5 * (lo + hi);
-        if (cnt == 1) {
-            double flo = tvo_la_poly_eval(a, deg, lo), fhi = tvo_la_poly_eval(a, deg, hi);
-            if ((flo > 0.0) != (fhi > 0.0) || flo == 0.0 || fhi == 0.0 || depth >= 64) {
-                roots[nroots++] = refine_root(a, deg, lo, hi);
-                continue;
-            }
-        } else if (depth >= 64 || !(hi - lo > 1e-14 * (1.0 + fabs(mid)))) {
-            roots[nroots++] = mid;
-            continue;
-        }
-        if (sp + 2 > 160) {
-            roots[nroots++] = mid;
-            continue;
-        }
-        int vmid = sturm_changes(&s, mid);
-        stack[sp].lo = mid;
-        stack[sp].hi = hi;
-        stack[sp].vlo = vmid;
-        stack[sp].vhi = vhi;
-        stack[sp].depth = depth + 1;
-        ++sp;
-        stack[sp].lo = lo;
-        stack[sp].hi = mid;
-        stack[sp].vlo = vlo;
-        stack[sp].vhi = vmid;
-        stack[sp].depth = depth + 1;
-        ++sp;
-    }
-    for (int i = 1; i < nroots; ++i) {
-        double v = roots[i];
-        int j = i - 1;
-        while (j >= 0 && roots[j] > v) {
-            roots[j + 1] = roots[j];
-            --j;
-        }
-        roots[j + 1] = v;
-    }
-    return nroots;
+    if (deg == 10)
+        return roots_monic(a, 10, bound, roots);
+    return roots_monic(a, deg, bound, roots);
 }
