@@ -9,6 +9,14 @@
 #include <math.h>
 #include <string.h>
 
+/* SSE2 MSAC scoring: two points per step with the same operations in the same order as the C
+ * loop (-ffp-contract=off), so the costs, counts and early exits are bit-identical to it.
+ * TVO_RELPOSE_NO_SIMD selects the C loop. */
+#if defined(__SSE2__) && !defined(TVO_RELPOSE_NO_SIMD)
+#include <emmintrin.h>
+#define RP_SSE2 1
+#endif
+
 #define RP_PI 3.14159265358979323846
 #define RP_CHI2_1DOF 3.841
 #define RP_CHI2_2DOF 5.991
@@ -25,6 +33,9 @@
 #define RP_PROD_EXP 512     /* lm_pass: the product of the cost factors is multiplied by 2^-512 ... */
 #define RP_PROD_MAX 0x1p512 /* ... whenever it exceeds 2^512 (each factor is at most 2^100) */
 #define RP_PROD_INV 0x1p-512
+#if (RP_PRE_N % 2) != 0 || (RP_BAIL_STEP % 2) != 0
+#error "msac_cost (SSE2) tests after pairs of points: RP_PRE_N and RP_BAIL_STEP must be even"
+#endif
 
 /* ---- deterministic generator ---------------------------------------------------------------- */
 
@@ -157,7 +168,59 @@ static double msac_cost(const double E[9], const tvo_point2d *x1, const tvo_poin
     double cost = 0.0;
     int32_t cnt = 0, i = 0, check = RP_BAIL_STEP;
     const double sd = eps > 0.0 && eps < 1.0 ? RP_BAIL_Z * sqrt(eps * (1.0 - eps)) : 0.0;
-    for (int32_t k = 0; k < n; ++k) {
+    int32_t k = 0;
+#ifdef RP_SSE2
+    /* Points k and k + 1 (k even) per step. All early exits return INFINITY and the cost only grows,
+     * so testing the bound after the pair exits exactly when the C loop does; the pre-test (after
+     * point 10) and the bail-out (every 20 points) fall on the second point of a pair. */
+    {
+        const __m128d E0 = _mm_set1_pd(E[0]), E1 = _mm_set1_pd(E[1]), E2 = _mm_set1_pd(E[2]);
+        const __m128d E3 = _mm_set1_pd(E[3]), E4 = _mm_set1_pd(E[4]), E5 = _mm_set1_pd(E[5]);
+        const __m128d E6 = _mm_set1_pd(E[6]), E7 = _mm_set1_pd(E[7]), E8 = _mm_set1_pd(E[8]);
+        const __m128d T2 = _mm_set1_pd(thr2);
+        for (; k + 1 < n; k += 2) {
+            int32_t j = i + stride;
+            if (j >= n)
+                j -= n;
+            __m128d p0 = _mm_loadu_pd(&x1[i].x), p1 = _mm_loadu_pd(&x1[j].x); /* (x, y) */
+            __m128d q0 = _mm_loadu_pd(&x2[i].x), q1 = _mm_loadu_pd(&x2[j].x);
+            __m128d a0 = _mm_unpacklo_pd(p0, p1), a1 = _mm_unpackhi_pd(p0, p1);
+            __m128d b0 = _mm_unpacklo_pd(q0, q1), b1 = _mm_unpackhi_pd(q0, q1);
+            __m128d ex0 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(E0, a0), _mm_mul_pd(E1, a1)), E2);
+            __m128d ex1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(E3, a0), _mm_mul_pd(E4, a1)), E5);
+            __m128d ex2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(E6, a0), _mm_mul_pd(E7, a1)), E8);
+            __m128d et0 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(E0, b0), _mm_mul_pd(E3, b1)), E6);
+            __m128d et1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(E1, b0), _mm_mul_pd(E4, b1)), E7);
+            __m128d e = _mm_add_pd(_mm_add_pd(_mm_mul_pd(b0, ex0), _mm_mul_pd(b1, ex1)), ex2);
+            __m128d d = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(ex0, ex0), _mm_mul_pd(ex1, ex1)),
+                                              _mm_mul_pd(et0, et0)),
+                                   _mm_mul_pd(et1, et1));
+            __m128d e2 = _mm_mul_pd(e, e);
+            __m128d in = _mm_cmplt_pd(e2, _mm_mul_pd(T2, d));
+            /* inliers add e^2 / d, outliers thr2 (the division of an outlier lane is discarded) */
+            __m128d term = _mm_or_pd(_mm_and_pd(in, _mm_div_pd(e2, d)), _mm_andnot_pd(in, T2));
+            int m = _mm_movemask_pd(in);
+            cost += _mm_cvtsd_f64(term);
+            cost += _mm_cvtsd_f64(_mm_unpackhi_pd(term, term));
+            cnt += (m & 1) + (m >> 1);
+            if (cost > bound)
+                return INFINITY;
+            check -= 2;
+            if (check == 0) {
+                check = RP_BAIL_STEP;
+                double mm = (double)(k + 2);
+                if (sd > 0.0 && (double)cnt < mm * eps - sd * sqrt(mm))
+                    return INFINITY;
+            }
+            if (k + 1 == RP_PRE_N - 1 && cnt <= 1 && eps >= RP_PRE_EPS)
+                return INFINITY;
+            i = j + stride;
+            if (i >= n)
+                i -= n;
+        }
+    }
+#endif
+    for (; k < n; ++k) {
         double a0 = x1[i].x, a1 = x1[i].y, b0 = x2[i].x, b1 = x2[i].y;
         double ex0 = E[0] * a0 + E[1] * a1 + E[2];
         double ex1 = E[3] * a0 + E[4] * a1 + E[5];
