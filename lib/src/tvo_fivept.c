@@ -75,6 +75,15 @@ FP_INLINE void pmul(const double *a, int da, const double *b, int db, double *r)
             r[i + j] += a[i] * b[j];
 }
 
+/* Horner, as tvo_la_poly_eval (same operations), inlined */
+FP_INLINE double peval(const double *c, int deg, double t)
+{
+    double v = c[deg];
+    for (int i = deg - 1; i >= 0; --i)
+        v = v * t + c[i];
+    return v;
+}
+
 /* 4-dim null space of the 5x9 matrix A (rows) as the last 4 columns of Q in A^T = Q R. */
 static int null_space_5x9(double A[5][9], double N[4][9])
 {
@@ -298,7 +307,7 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
         double Bz[3][3];
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 3; ++c)
-                Bz[r][c] = tvo_la_poly_eval(B[r][c], c == 2 ? 4 : 3, z);
+                Bz[r][c] = peval(B[r][c], c == 2 ? 4 : 3, z);
         double best[3] = {0, 0, 0}, bn = 0.0;
         for (int a = 0; a < 3; ++a) {
             double cr[3];
