@@ -369,13 +369,63 @@ static void tangent_basis(const double t[3], double b1[3], double b2[3])
     tvo_la_cross(t, b1, b2);
 }
 
+/* one point of lm_pass: adds its terms to acc (g[0..4], then the upper triangle of H row by row) and
+ * its cost factor to *prod / *scaled */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline void lm_point(const double R[9], const double t[3], const double b1[3], const double b2[3],
+                            double a0, double a1, double q0, double q1, double c2, int want_cost,
+                            double *prod, int32_t *scaled, double acc[20])
+{
+    /* written out (the linalg helpers live in another translation unit and would not be
+     * inlined): u = R f1, c = u x f2, e = t . c, f2t = f2 x t, de/dw = u x f2t,
+     * E f1 = t x u, E^T f2 = R^T f2t (first two components) */
+    const double u0 = R[0] * a0 + R[1] * a1 + R[2];
+    const double u1 = R[3] * a0 + R[4] * a1 + R[5];
+    const double u2 = R[6] * a0 + R[7] * a1 + R[8];
+    const double c[3] = {u1 - u2 * q1, u2 * q0 - u0, u0 * q1 - u1 * q0};
+    const double e = dot3(t, c);
+    const double f2t0 = q1 * t[2] - t[1], f2t1 = t[0] - q0 * t[2], f2t2 = q0 * t[1] - q1 * t[0];
+    const double gw[3] = {u1 * f2t2 - u2 * f2t1, u2 * f2t0 - u0 * f2t2, u0 * f2t1 - u1 * f2t0};
+    const double ex0 = t[1] * u2 - t[2] * u1, ex1 = t[2] * u0 - t[0] * u2;
+    const double et0 = R[0] * f2t0 + R[3] * f2t1 + R[6] * f2t2;
+    const double et1 = R[1] * f2t0 + R[4] * f2t1 + R[7] * f2t2;
+    double d = ex0 * ex0 + ex1 * ex1 + et0 * et0 + et1 * et1;
+    if (!(d > 1e-300))
+        return;
+    double e2 = e * e;
+    double q = d + e2 / c2; /* d (1 + r^2 / c2) */
+    if (want_cost) {
+        double opu = q / d;
+        if (!(opu < 0x1p100))
+            opu = 0x1p100;
+        *prod *= opu;
+        if (*prod > RP_PROD_MAX) {
+            *prod *= RP_PROD_INV;
+            ++*scaled;
+        }
+    }
+    double J[5] = {gw[0], gw[1], gw[2], dot3(b1, c), dot3(b2, c)};
+    double wgt = 1.0 / q; /* IRLS weight of the Cauchy loss on r = e / sqrt(d) */
+    for (int p = 0, m = 5; p < 5; ++p) {
+        double wj = wgt * J[p];
+        acc[p] += wj * e;
+        for (int k = p; k < 5; ++k)
+            acc[m++] += wj * J[k];
+    }
+}
+
 /* One pass over the masked points at the pose (R, t): the Gauss-Newton normal equations H dx = -g
  * of the IRLS-weighted Sampson error (Cauchy loss of scale c2 = c^2) in the 5 parameters (rotation
  * increment, two tangent directions b1, b2 of t), and the robust cost sum log(1 + r^2 / c2) when
  * want_cost (else 0). Residual e = t . (R f1 x f2), Sampson r^2 = e^2 / d. The cost is the log of
  * the product of the (1 + r^2 / c2), one multiplication per point instead of one log1p (which was
  * a third of a pass): the product is rescaled by exact powers of two, and a factor is capped at
- * 2^100 (a point adds at most 100 ln 2), so it neither overflows nor depends on the target. */
+ * 2^100 (a point adds at most 100 ln 2), so it neither overflows nor depends on the target.
+ * SSE2: two masked points per step, the per-point arithmetic in the two lanes with the C code's
+ * operations in the same order, the sums and the product updated with the first point's terms
+ * and then the second's, as the C loop does: bit-identical. */
 static double lm_pass(const double Rp[9], const double tp[3], const double b1p[3], const double b2p[3],
                       const tvo_point2d *x1, const tvo_point2d *x2, int32_t n, const uint8_t *mask, double c2,
                       int want_cost, double H[25], double g[5])
@@ -384,61 +434,111 @@ static double lm_pass(const double Rp[9], const double tp[3], const double b1p[3
     int32_t scaled = 0; /* the cost is log(prod) + scaled * RP_PROD_EXP * log(2) */
     /* local copies of the pose and local sums: stores through H and g could alias the inputs, so
      * the compiler would otherwise reload R, t, b1, b2 and H, g from memory for every point */
-    double R[9], t[3], b1[3], b2[3], Hs[25], gs[5];
+    double R[9], t[3], b1[3], b2[3], acc[20];
     memcpy(R, Rp, sizeof R);
     memcpy(t, tp, sizeof t);
     memcpy(b1, b1p, sizeof b1);
     memcpy(b2, b2p, sizeof b2);
-    for (int p = 0; p < 25; ++p)
-        Hs[p] = 0.0;
-    for (int p = 0; p < 5; ++p)
-        gs[p] = 0.0;
-    for (int32_t i = 0; i < n; ++i) {
+    for (int p = 0; p < 20; ++p)
+        acc[p] = 0.0;
+    int32_t i = 0;
+#ifdef RP_SSE2
+    {
+        const __m128d R0 = _mm_set1_pd(R[0]), R1 = _mm_set1_pd(R[1]), R2 = _mm_set1_pd(R[2]);
+        const __m128d R3 = _mm_set1_pd(R[3]), R4 = _mm_set1_pd(R[4]), R5 = _mm_set1_pd(R[5]);
+        const __m128d R6 = _mm_set1_pd(R[6]), R7 = _mm_set1_pd(R[7]), R8 = _mm_set1_pd(R[8]);
+        const __m128d T0 = _mm_set1_pd(t[0]), T1 = _mm_set1_pd(t[1]), T2 = _mm_set1_pd(t[2]);
+        const __m128d B10 = _mm_set1_pd(b1[0]), B11 = _mm_set1_pd(b1[1]), B12 = _mm_set1_pd(b1[2]);
+        const __m128d B20 = _mm_set1_pd(b2[0]), B21 = _mm_set1_pd(b2[1]), B22 = _mm_set1_pd(b2[2]);
+        const __m128d C2 = _mm_set1_pd(c2), ONE = _mm_set1_pd(1.0);
+        for (;;) {
+            while (i < n && !mask[i])
+                ++i;
+            int32_t j = i + 1;
+            while (j < n && !mask[j])
+                ++j;
+            if (j >= n)
+                break; /* at most one masked point left: the C loop below */
+            __m128d p0 = _mm_loadu_pd(&x1[i].x), p1 = _mm_loadu_pd(&x1[j].x);
+            __m128d r0 = _mm_loadu_pd(&x2[i].x), r1 = _mm_loadu_pd(&x2[j].x);
+            __m128d a0 = _mm_unpacklo_pd(p0, p1), a1 = _mm_unpackhi_pd(p0, p1);
+            __m128d q0 = _mm_unpacklo_pd(r0, r1), q1 = _mm_unpackhi_pd(r0, r1);
+            __m128d u0 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R0, a0), _mm_mul_pd(R1, a1)), R2);
+            __m128d u1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R3, a0), _mm_mul_pd(R4, a1)), R5);
+            __m128d u2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R6, a0), _mm_mul_pd(R7, a1)), R8);
+            __m128d c0 = _mm_sub_pd(u1, _mm_mul_pd(u2, q1));
+            __m128d c1 = _mm_sub_pd(_mm_mul_pd(u2, q0), u0);
+            __m128d cc2 = _mm_sub_pd(_mm_mul_pd(u0, q1), _mm_mul_pd(u1, q0));
+            __m128d e = _mm_add_pd(_mm_add_pd(_mm_mul_pd(T0, c0), _mm_mul_pd(T1, c1)), _mm_mul_pd(T2, cc2));
+            __m128d f0 = _mm_sub_pd(_mm_mul_pd(q1, T2), T1);
+            __m128d f1 = _mm_sub_pd(T0, _mm_mul_pd(q0, T2));
+            __m128d f2 = _mm_sub_pd(_mm_mul_pd(q0, T1), _mm_mul_pd(q1, T0));
+            __m128d J[5];
+            J[0] = _mm_sub_pd(_mm_mul_pd(u1, f2), _mm_mul_pd(u2, f1));
+            J[1] = _mm_sub_pd(_mm_mul_pd(u2, f0), _mm_mul_pd(u0, f2));
+            J[2] = _mm_sub_pd(_mm_mul_pd(u0, f1), _mm_mul_pd(u1, f0));
+            __m128d ex0 = _mm_sub_pd(_mm_mul_pd(T1, u2), _mm_mul_pd(T2, u1));
+            __m128d ex1 = _mm_sub_pd(_mm_mul_pd(T2, u0), _mm_mul_pd(T0, u2));
+            __m128d et0 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R0, f0), _mm_mul_pd(R3, f1)), _mm_mul_pd(R6, f2));
+            __m128d et1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R1, f0), _mm_mul_pd(R4, f1)), _mm_mul_pd(R7, f2));
+            __m128d d = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(ex0, ex0), _mm_mul_pd(ex1, ex1)),
+                                              _mm_mul_pd(et0, et0)),
+                                   _mm_mul_pd(et1, et1));
+            if (_mm_movemask_pd(_mm_cmpgt_pd(d, _mm_set1_pd(1e-300))) != 3) {
+                /* a degenerate point in the pair (rare): both through the C code, in order */
+                lm_point(R, t, b1, b2, x1[i].x, x1[i].y, x2[i].x, x2[i].y, c2, want_cost, &prod, &scaled, acc);
+                lm_point(R, t, b1, b2, x1[j].x, x1[j].y, x2[j].x, x2[j].y, c2, want_cost, &prod, &scaled, acc);
+                i = j + 1;
+                continue;
+            }
+            __m128d e2 = _mm_mul_pd(e, e);
+            __m128d q = _mm_add_pd(d, _mm_div_pd(e2, C2));
+            if (want_cost) {
+                __m128d opu = _mm_div_pd(q, d);
+                double o[2];
+                _mm_storeu_pd(o, opu);
+                for (int l = 0; l < 2; ++l) {
+                    double v = o[l];
+                    if (!(v < 0x1p100))
+                        v = 0x1p100;
+                    prod *= v;
+                    if (prod > RP_PROD_MAX) {
+                        prod *= RP_PROD_INV;
+                        ++scaled;
+                    }
+                }
+            }
+            J[3] = _mm_add_pd(_mm_add_pd(_mm_mul_pd(B10, c0), _mm_mul_pd(B11, c1)), _mm_mul_pd(B12, cc2));
+            J[4] = _mm_add_pd(_mm_add_pd(_mm_mul_pd(B20, c0), _mm_mul_pd(B21, c1)), _mm_mul_pd(B22, cc2));
+            __m128d wgt = _mm_div_pd(ONE, q);
+            __m128d P[20];
+            for (int p = 0, m = 5; p < 5; ++p) {
+                __m128d wj = _mm_mul_pd(wgt, J[p]);
+                P[p] = _mm_mul_pd(wj, e);
+                for (int k = p; k < 5; ++k)
+                    P[m++] = _mm_mul_pd(wj, J[k]);
+            }
+            /* the first point's terms, then the second's (entry pairs m, m + 1 per vector) */
+            for (int m = 0; m < 20; m += 2) {
+                __m128d s = _mm_loadu_pd(&acc[m]);
+                s = _mm_add_pd(s, _mm_unpacklo_pd(P[m], P[m + 1]));
+                s = _mm_add_pd(s, _mm_unpackhi_pd(P[m], P[m + 1]));
+                _mm_storeu_pd(&acc[m], s);
+            }
+            i = j + 1;
+        }
+    }
+#endif
+    for (; i < n; ++i) {
         if (!mask[i])
             continue;
-        /* written out (the linalg helpers live in another translation unit and would not be
-         * inlined): u = R f1, c = u x f2, e = t . c, f2t = f2 x t, de/dw = u x f2t,
-         * E f1 = t x u, E^T f2 = R^T f2t (first two components) */
-        const double a0 = x1[i].x, a1 = x1[i].y, q0 = x2[i].x, q1 = x2[i].y;
-        const double u0 = R[0] * a0 + R[1] * a1 + R[2];
-        const double u1 = R[3] * a0 + R[4] * a1 + R[5];
-        const double u2 = R[6] * a0 + R[7] * a1 + R[8];
-        const double c[3] = {u1 - u2 * q1, u2 * q0 - u0, u0 * q1 - u1 * q0};
-        const double e = dot3(t, c);
-        const double f2t0 = q1 * t[2] - t[1], f2t1 = t[0] - q0 * t[2], f2t2 = q0 * t[1] - q1 * t[0];
-        const double gw[3] = {u1 * f2t2 - u2 * f2t1, u2 * f2t0 - u0 * f2t2, u0 * f2t1 - u1 * f2t0};
-        const double ex0 = t[1] * u2 - t[2] * u1, ex1 = t[2] * u0 - t[0] * u2;
-        const double et0 = R[0] * f2t0 + R[3] * f2t1 + R[6] * f2t2;
-        const double et1 = R[1] * f2t0 + R[4] * f2t1 + R[7] * f2t2;
-        double d = ex0 * ex0 + ex1 * ex1 + et0 * et0 + et1 * et1;
-        if (!(d > 1e-300))
-            continue;
-        double e2 = e * e;
-        double q = d + e2 / c2; /* d (1 + r^2 / c2) */
-        if (want_cost) {
-            double opu = q / d;
-            if (!(opu < 0x1p100))
-                opu = 0x1p100;
-            prod *= opu;
-            if (prod > RP_PROD_MAX) {
-                prod *= RP_PROD_INV;
-                ++scaled;
-            }
-        }
-        double J[5] = {gw[0], gw[1], gw[2], dot3(b1, c), dot3(b2, c)};
-        double wgt = 1.0 / q; /* IRLS weight of the Cauchy loss on r = e / sqrt(d) */
-        for (int p = 0; p < 5; ++p) {
-            double wj = wgt * J[p];
-            gs[p] += wj * e;
-            for (int k = p; k < 5; ++k)
-                Hs[5 * p + k] += wj * J[k];
-        }
+        lm_point(R, t, b1, b2, x1[i].x, x1[i].y, x2[i].x, x2[i].y, c2, want_cost, &prod, &scaled, acc);
     }
-    for (int p = 0; p < 5; ++p) {
-        g[p] = gs[p];
-        for (int k = p; k < 5; ++k)
-            H[5 * p + k] = H[5 * k + p] = Hs[5 * p + k];
-    }
+    for (int p = 0; p < 5; ++p)
+        g[p] = acc[p];
+    for (int p = 0, m = 5; p < 5; ++p)
+        for (int k = p; k < 5; ++k, ++m)
+            H[5 * p + k] = H[5 * k + p] = acc[m];
     if (!want_cost)
         return 0.0;
     return tvo_dm_log1p(prod - 1.0) + (double)scaled * (RP_PROD_EXP * 0.69314718055994530942);
