@@ -106,15 +106,15 @@ static int lk_use_simd(const tvo_lk_config *cfg)
 const char *tvo_lk_kernel_name(const tvo_lk_config *cfg)
 {
 #if LK_SSE2
-    const char *simd = "sse2";
+    if (cfg == NULL || lk_use_simd(cfg))
+        return "sse2";
 #elif LK_NEON
-    const char *simd = "neon";
+    if (cfg == NULL || lk_use_simd(cfg))
+        return "neon";
 #else
-    const char *simd = NULL;
+    (void)cfg;
 #endif
-    if (simd == NULL || (cfg != NULL && !lk_use_simd(cfg)))
-        return "portable";
-    return simd;
+    return "portable";
 }
 
 tvo_status tvo_lk_config_check(const tvo_lk_config *cfg)
