@@ -1055,6 +1055,16 @@ static int decompose_homography(const double H[9], double Rs[16][9], double ts[1
     return nc;
 }
 
+
+/* R equal to Rb entry by entry (as values: the pairs decompose_homography emits share one R) */
+static int same_rotation(const double Ra[9], const double Rb[9])
+{
+    for (int i = 0; i < 9; ++i)
+        if (!(Ra[i] == Rb[i]))
+            return 0;
+    return 1;
+}
+
 /* points that are Sampson inliers of [t]x R AND in front of both cameras; with neg != NULL also the
  * count for the pose (R, -t) in the same pass (same Sampson error, depth signs swapped) */
 static int32_t good_count2(const double R[9], const double t[3], const tvo_point2d *x1, const tvo_point2d *x2,
@@ -1560,7 +1570,7 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
                 int kb = -1, kb2 = -1;
                 for (int k = 0; k < nc; ++k) {
                     /* decompose_homography emits each (R, t) followed by (R, -t): one pass for both */
-                    if (k % 2 == 0 && k + 1 < nc && memcmp(Rs[k], Rs[k + 1], sizeof Rs[k]) == 0 &&
+                    if (k % 2 == 0 && k + 1 < nc && same_rotation(Rs[k], Rs[k + 1]) &&
                         ts[k + 1][0] == -ts[k][0] && ts[k + 1][1] == -ts[k][1] && ts[k + 1][2] == -ts[k][2])
                         gk[k] = good_count2(Rs[k], ts[k], x1, x2, n, 4.0 * thr2, mask_h, &gk[k + 1]);
                     else if (gk[k] < 0)
