@@ -289,12 +289,10 @@ tvo_status tvo_la_sym_eig(double *A, int n, double *w, double *V)
     return TVO_OK;
 }
 
-tvo_status tvo_la_solve(double *A, double *b, int n, double *x)
+/* Gaussian elimination with partial pivoting; inlined into bodies for n = 5 (the LM steps of the
+ * relative pose) and n = 8 (homography refits), whose loops unroll: same operations, same order */
+LA_INLINE tvo_status la_solve_n(double *A, double *b, int n, double *x)
 {
-    if (A == NULL || b == NULL || x == NULL)
-        return TVO_ERR_NULL;
-    if (n < 1 || n > 10)
-        return TVO_ERR_ARG;
     double amax = 0.0;
     for (int i = 0; i < n * n; ++i)
         if (fabs(A[i]) > amax)
@@ -335,6 +333,19 @@ tvo_status tvo_la_solve(double *A, double *b, int n, double *x)
         x[i] = s / A[i * n + i];
     }
     return TVO_OK;
+}
+
+tvo_status tvo_la_solve(double *A, double *b, int n, double *x)
+{
+    if (A == NULL || b == NULL || x == NULL)
+        return TVO_ERR_NULL;
+    if (n < 1 || n > 10)
+        return TVO_ERR_ARG;
+    if (n == 5)
+        return la_solve_n(A, b, 5, x);
+    if (n == 8)
+        return la_solve_n(A, b, 8, x);
+    return la_solve_n(A, b, n, x);
 }
 
 LA_INLINE double poly_eval(const double *c, int deg, double t)
