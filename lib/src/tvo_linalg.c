@@ -682,3 +682,37 @@ int tvo_la_poly_real_roots(const double *c, int deg, double *roots)
         return roots_monic(a, 10, bound, roots);
     return roots_monic(a, deg, bound, roots);
 }
+
+/* k-th smallest of a[0..n) (0 <= k < n), reordering a: quickselect with a median-of-three pivot
+ * (deterministic; O(n) expected). */
+double tvo_la_select_kth(double *a, int32_t n, int32_t k)
+{
+    int32_t lo = 0, hi = n - 1;
+    while (hi > lo) {
+        const int32_t mid = lo + (hi - lo) / 2;
+        double p, t;
+        int32_t i = lo, j = hi;
+        if (a[mid] < a[lo]) { t = a[mid]; a[mid] = a[lo]; a[lo] = t; }
+        if (a[hi] < a[lo]) { t = a[hi]; a[hi] = a[lo]; a[lo] = t; }
+        if (a[hi] < a[mid]) { t = a[hi]; a[hi] = a[mid]; a[mid] = t; }
+        p = a[mid];
+        while (i <= j) {
+            while (a[i] < p)
+                ++i;
+            while (a[j] > p)
+                --j;
+            if (i <= j) {
+                t = a[i]; a[i] = a[j]; a[j] = t;
+                ++i;
+                --j;
+            }
+        }
+        if (k <= j)
+            hi = j;
+        else if (k >= i)
+            lo = i;
+        else
+            break;
+    }
+    return a[k];
+}

@@ -384,7 +384,6 @@ static int32_t decompose_essential(const double E[9], const tvo_point2d *x1, con
     return best;
 }
 
-static double select_kth(double *a, int32_t n, int32_t k);
 static int pose_finite(const double R[9], const double t[3]);
 
 /* ---- refinement: LM on the Sampson error over (R, unit t) ----------------------------------- */
@@ -1096,37 +1095,6 @@ static int poses_differ(const double Ra[9], const double ta[3], const double Rb[
     return tvo_la_rot_dist(Ra, Rb) > 0.5 * RP_PI / 180.0 || c < tvo_dm_cos(2.0 * RP_PI / 180.0);
 }
 
-/* ---- median --------------------------------------------------------------------------------- */
-
-static double select_kth(double *a, int32_t n, int32_t k)
-{
-    int32_t lo = 0, hi = n - 1;
-    while (lo < hi) {
-        double pivot = a[lo + (hi - lo) / 2];
-        int32_t i = lo, j = hi;
-        while (i <= j) {
-            while (a[i] < pivot)
-                ++i;
-            while (a[j] > pivot)
-                --j;
-            if (i <= j) {
-                double t = a[i];
-                a[i] = a[j];
-                a[j] = t;
-                ++i;
-                --j;
-            }
-        }
-        if (k <= j)
-            hi = j;
-        else if (k >= i)
-            lo = i;
-        else
-            break;
-    }
-    return a[k];
-}
-
 /* ---- public API ----------------------------------------------------------------------------- */
 
 void tvo_relpose_config_default(tvo_relpose_config *cfg)
@@ -1363,7 +1331,7 @@ static int32_t polish(const tvo_relpose_config *cfg, double R[9], double t[3], c
         }
         if (m < 6 || cfg->refine_iters == 0)
             break;
-        double med = select_kth(buf, m, m / 2);
+        double med = tvo_la_select_kth(buf, m, m / 2);
         double c2 = 2.5 * 2.5 * 1.4826 * 1.4826 * med;
         if (c2 > thr2)
             c2 = thr2;
@@ -1452,7 +1420,7 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
         tvo_la_cross(u, f2, c);
         buf[m++] = tvo_dm_atan2(sqrt(dot3(c, c)), dot3(u, f2));
     }
-    double parallax = m > 0 ? select_kth(buf, m, m / 2) * (180.0 / RP_PI) : 0.0;
+    double parallax = m > 0 ? tvo_la_select_kth(buf, m, m / 2) * (180.0 / RP_PI) : 0.0;
     out->parallax_deg = parallax;
     if (pose_finite(Rrot, out->t))
         memcpy(out->R_rot, Rrot, sizeof Rrot);

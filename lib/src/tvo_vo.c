@@ -303,40 +303,6 @@ static void fill_features(const tvo_vo_result *res, float f[TVO_FEAT_COUNT])
     f[TVO_FEAT_ROT_ONLY] = res->state == TVO_VO_ROTATION_ONLY ? 1.0f : 0.0f;
 }
 
-/* k-th smallest of a[0..n) (0 <= k < n), reordering a: quickselect with a median-of-three pivot
- * (deterministic; O(n) expected). */
-static double select_kth(double *a, int32_t n, int32_t k)
-{
-    int32_t lo = 0, hi = n - 1;
-    while (hi > lo) {
-        const int32_t mid = lo + (hi - lo) / 2;
-        double p, t;
-        int32_t i = lo, j = hi;
-        if (a[mid] < a[lo]) { t = a[mid]; a[mid] = a[lo]; a[lo] = t; }
-        if (a[hi] < a[lo]) { t = a[hi]; a[hi] = a[lo]; a[lo] = t; }
-        if (a[hi] < a[mid]) { t = a[hi]; a[hi] = a[mid]; a[mid] = t; }
-        p = a[mid];
-        while (i <= j) {
-            while (a[i] < p)
-                ++i;
-            while (a[j] > p)
-                --j;
-            if (i <= j) {
-                t = a[i]; a[i] = a[j]; a[j] = t;
-                ++i;
-                --j;
-            }
-        }
-        if (k <= j)
-            hi = j;
-        else if (k >= i)
-            lo = i;
-        else
-            break;
-    }
-    return a[k];
-}
-
 static void cross3(const double a[3], const double b[3], double c[3])
 {
     c[0] = a[1] * b[2] - a[2] * b[1];
@@ -418,7 +384,7 @@ static double relative_scale(tvo_vo *vo, const double R[9], const double t[3], i
     *used = k;
     if (k < vo->cfg.min_scale_points)
         return TVO_VO_REL_SCALE_NONE;
-    return select_kth(ratio, k, k / 2);
+    return tvo_la_select_kth(ratio, k, k / 2);
 }
 
 /* Keep the entries i with keep[i] != 0 of the parallel track arrays, in order. */

@@ -2,6 +2,8 @@
  * Synthetic scenes: f = 460 px, 752x480 image, points 1..8 m deep, seeded generator. */
 #include "tvo_test.h"
 #include <math.h>
+#include <stdlib.h>
+#include <string.h>
 #include "tinyvo/linalg.h"
 #include "tinyvo/relpose.h"
 
@@ -397,6 +399,32 @@ static void test_nasty_input(void **state)
     }
 }
 
+
+/* tvo_la_select_kth (the median of relpose's parallax / Cauchy scale and of the VO's relative scale)
+ * against a sorted copy: every k of random arrays of 1..200 values, with many duplicates, sorted and
+ * reversed inputs */
+static void test_select_kth(void **state)
+{
+    uint64_t s = 2024;
+    double a[200], sorted[200], work[200];
+    (void)state;
+    for (int trial = 0; trial < 300; ++trial) {
+        const int32_t n = 1 + (int32_t)(tvo_test_rand(&s) % 200u);
+        const int kind = trial % 4;
+        for (int32_t i = 0; i < n; ++i) {
+            const double r = (double)(tvo_test_rand(&s) % 1000u) - 500.0;
+            a[i] = kind == 0 ? r : kind == 1 ? (double)(tvo_test_rand(&s) % 3u) /* duplicates */
+                 : kind == 2 ? (double)i : (double)(n - i);
+        }
+        memcpy(sorted, a, sizeof(double) * (size_t)n);
+        qsort(sorted, (size_t)n, sizeof(double), cmp_double);
+        for (int32_t k = 0; k < n; ++k) {
+            memcpy(work, a, sizeof(double) * (size_t)n);
+            assert_true(tvo_la_select_kth(work, n, k) == sorted[k]);
+        }
+    }
+}
+
 /* degree-10 polynomials (the 5-point solver's case, which has its own evaluation path) built from
  * known real roots and complex pairs: every real root found once, to 1e-9 relative, none invented;
  * also two roots 1e-4 apart and a leading coefficient far from 1 */
@@ -497,6 +525,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_linalg),
         cmocka_unit_test(test_poly_roots_degree10),
+        cmocka_unit_test(test_select_kth),
         cmocka_unit_test(test_fivept_noise_free),
         cmocka_unit_test(test_pipeline_noise_free),
         cmocka_unit_test(test_pipeline_noise_outliers),

@@ -64,6 +64,11 @@ int tvo_la_poly_real_roots(const double *c, int deg, double *roots);
 /* Value of c[0] + c[1] t + ... + c[deg] t^deg (Horner). */
 double tvo_la_poly_eval(const double *c, int deg, double t);
 
+/* The k-th smallest of a[0..n) (0 <= k < n; k = n / 2 gives the median used by relpose and the VO),
+ * reordering a in place: quickselect with a median-of-three pivot, deterministic, O(n) expected. The
+ * values must not be NaN. */
+double tvo_la_select_kth(double *a, int32_t n, int32_t k);
+
 #ifdef __cplusplus
 }
 #endif
