@@ -308,54 +308,6 @@ LK_INLINE void lk_scharr_v_sse2(__m128i hd0, __m128i hd1, __m128i hd2, __m128i h
     _mm_storeu_si128((__m128i *)dy, _mm_sub_epi16(hs2, hs0));
 }
 
-/* One 8-column strip of the Scharr grid (rows 0..rows-1, from source rows 0..rows+1): the horizontal
- * passes once per source row, then the vertical ones from the last three rows; the same integers as the
- * vertical-then-horizontal C path (|values| <= 4080 fit int16). Rows go in threes so that the three
- * carried rows rotate through fixed registers. */
-static void lk_scharr_strip_sse2(const uint8_t *s, int32_t sstride, int16_t *dx, int16_t *dy, int32_t g,
-                                 int32_t rows)
-{
-    __m128i hd0, hd1, hd2, hs0, hs1, hs2;
-    int32_t r = 0;
-    lk_scharr_h_sse2(s, &hd0, &hs0);
-    lk_scharr_h_sse2(s + sstride, &hd1, &hs1);
-    s += 2 * (size_t)sstride;
-    for (; r + 3 <= rows; r += 3) {
-        lk_scharr_h_sse2(s, &hd2, &hs2);
-        lk_scharr_v_sse2(hd0, hd1, hd2, hs0, hs2, dx, dy);
-        lk_scharr_h_sse2(s + sstride, &hd0, &hs0);
-        lk_scharr_v_sse2(hd1, hd2, hd0, hs1, hs0, dx + g, dy + g);
-        lk_scharr_h_sse2(s + 2 * (size_t)sstride, &hd1, &hs1);
-        lk_scharr_v_sse2(hd2, hd0, hd1, hs2, hs1, dx + 2 * g, dy + 2 * g);
-        s += 3 * (size_t)sstride;
-        dx += 3 * g;
-        dy += 3 * g;
-    }
-    for (; r < rows; ++r) {
-        lk_scharr_h_sse2(s, &hd2, &hs2);
-        lk_scharr_v_sse2(hd0, hd1, hd2, hs0, hs2, dx, dy);
-        hd0 = hd1;
-        hd1 = hd2;
-        hs0 = hs1;
-        hs1 = hs2;
-        s += sstride;
-        dx += g;
-        dy += g;
-    }
-}
-
-/* SSE2 version of the Scharr rows of lk_prev_window (win >= 8), same integers, in 8-column strips of
- * the g = win + 1 grid columns; the last strip overlaps the previous one (idempotent stores). */
-static void lk_scharr_sse2(const uint8_t *src, int32_t sstride, lk_work *wk)
-{
-    const int32_t g = wk->win + 1;
-    int32_t x;
-    for (x = 0; x + 8 <= g; x += 8)
-        lk_scharr_strip_sse2(src + x, sstride, wk->gx + x, wk->gy + x, g, g);
-    if (g & 7)
-        lk_scharr_strip_sse2(src + g - 8, sstride, wk->gx + g - 8, wk->gy + g - 8, g, g);
-}
-
 /* One row of a grey strip: top_lo/hi hold the upper source row's products with (w00, w01) plus the
  * rounding term, s is the lower source row; they are replaced by the lower row's. */
 LK_INLINE void lk_grey_row_sse2(__m128i *top_lo, __m128i *top_hi, const uint8_t *s, int16_t *iw, __m128i w01,
@@ -528,49 +480,6 @@ LK_INLINE void lk_scharr_v_neon(int16x8_t hd0, int16x8_t hd1, int16x8_t hd2, int
 {
     vst1q_s16(dx, vmlaq_n_s16(vmulq_n_s16(vaddq_s16(hd0, hd2), 3), hd1, 10));
     vst1q_s16(dy, vsubq_s16(hs2, hs0));
-}
-
-/* One 8-column strip of the Scharr grid, as lk_scharr_strip_sse2. */
-static void lk_scharr_strip_neon(const uint8_t *s, int32_t sstride, int16_t *dx, int16_t *dy, int32_t g,
-                                 int32_t rows)
-{
-    int16x8_t hd0, hd1, hd2, hs0, hs1, hs2;
-    int32_t r = 0;
-    lk_scharr_h_neon(s, &hd0, &hs0);
-    lk_scharr_h_neon(s + sstride, &hd1, &hs1);
-    s += 2 * (size_t)sstride;
-    for (; r + 3 <= rows; r += 3) {
-        lk_scharr_h_neon(s, &hd2, &hs2);
-        lk_scharr_v_neon(hd0, hd1, hd2, hs0, hs2, dx, dy);
-        lk_scharr_h_neon(s + sstride, &hd0, &hs0);
-        lk_scharr_v_neon(hd1, hd2, hd0, hs1, hs0, dx + g, dy + g);
-        lk_scharr_h_neon(s + 2 * (size_t)sstride, &hd1, &hs1);
-        lk_scharr_v_neon(hd2, hd0, hd1, hs2, hs1, dx + 2 * g, dy + 2 * g);
-        s += 3 * (size_t)sstride;
-        dx += 3 * g;
-        dy += 3 * g;
-    }
-    for (; r < rows; ++r) {
-        lk_scharr_h_neon(s, &hd2, &hs2);
-        lk_scharr_v_neon(hd0, hd1, hd2, hs0, hs2, dx, dy);
-        hd0 = hd1;
-        hd1 = hd2;
-        hs0 = hs1;
-        hs1 = hs2;
-        s += sstride;
-        dx += g;
-        dy += g;
-    }
-}
-
-static void lk_scharr_neon(const uint8_t *src, int32_t sstride, lk_work *wk)
-{
-    const int32_t g = wk->win + 1;
-    int32_t x;
-    for (x = 0; x + 8 <= g; x += 8)
-        lk_scharr_strip_neon(src + x, sstride, wk->gx + x, wk->gy + x, g, g);
-    if (g & 7)
-        lk_scharr_strip_neon(src + g - 8, sstride, wk->gx + g - 8, wk->gy + g - 8, g, g);
 }
 
 /* Bilinear weights as lane scalars: (w00, w01) for the upper row, (w10, w11) for the lower one. They
@@ -762,16 +671,70 @@ static void lk_mismatch_neon(const uint8_t *src, int32_t sstride, const int32_t 
 /* The SIMD kernels of this build (same integers as the portable C ones). */
 #if LK_SSE2
 #define LK_SIMD 1
-#define lk_scharr_simd lk_scharr_sse2
+typedef __m128i lk_v16; /* eight int16 lanes */
+#define lk_scharr_h_simd lk_scharr_h_sse2
+#define lk_scharr_v_simd lk_scharr_v_sse2
 #define lk_prev_interp_simd lk_prev_interp_sse2
 #define lk_mismatch_simd lk_mismatch_sse2
 #elif LK_NEON
 #define LK_SIMD 1
-#define lk_scharr_simd lk_scharr_neon
+typedef int16x8_t lk_v16;
+#define lk_scharr_h_simd lk_scharr_h_neon
+#define lk_scharr_v_simd lk_scharr_v_neon
 #define lk_prev_interp_simd lk_prev_interp_neon
 #define lk_mismatch_simd lk_mismatch_neon
 #else
 #define LK_SIMD 0
+#endif
+
+#if LK_SIMD
+/* One 8-column strip of the Scharr grid (rows 0..rows-1, from source rows 0..rows+1): the horizontal
+ * passes once per source row, then the vertical ones from the last three rows; the same integers as the
+ * vertical-then-horizontal C path (|values| <= 4080 fit int16). Rows go in threes so that the three
+ * carried rows rotate through fixed registers. */
+static void lk_scharr_strip_simd(const uint8_t *s, int32_t sstride, int16_t *dx, int16_t *dy, int32_t g,
+                                 int32_t rows)
+{
+    lk_v16 hd0, hd1, hd2, hs0, hs1, hs2;
+    int32_t r = 0;
+    lk_scharr_h_simd(s, &hd0, &hs0);
+    lk_scharr_h_simd(s + sstride, &hd1, &hs1);
+    s += 2 * (size_t)sstride;
+    for (; r + 3 <= rows; r += 3) {
+        lk_scharr_h_simd(s, &hd2, &hs2);
+        lk_scharr_v_simd(hd0, hd1, hd2, hs0, hs2, dx, dy);
+        lk_scharr_h_simd(s + sstride, &hd0, &hs0);
+        lk_scharr_v_simd(hd1, hd2, hd0, hs1, hs0, dx + g, dy + g);
+        lk_scharr_h_simd(s + 2 * (size_t)sstride, &hd1, &hs1);
+        lk_scharr_v_simd(hd2, hd0, hd1, hs2, hs1, dx + 2 * g, dy + 2 * g);
+        s += 3 * (size_t)sstride;
+        dx += 3 * g;
+        dy += 3 * g;
+    }
+    for (; r < rows; ++r) {
+        lk_scharr_h_simd(s, &hd2, &hs2);
+        lk_scharr_v_simd(hd0, hd1, hd2, hs0, hs2, dx, dy);
+        hd0 = hd1;
+        hd1 = hd2;
+        hs0 = hs1;
+        hs1 = hs2;
+        s += sstride;
+        dx += g;
+        dy += g;
+    }
+}
+
+/* SIMD version of the Scharr rows of lk_prev_window (win >= 8), same integers, in 8-column strips of
+ * the g = win + 1 grid columns; the last strip overlaps the previous one (idempotent stores). */
+static void lk_scharr_simd(const uint8_t *src, int32_t sstride, lk_work *wk)
+{
+    const int32_t g = wk->win + 1;
+    int32_t x;
+    for (x = 0; x + 8 <= g; x += 8)
+        lk_scharr_strip_simd(src + x, sstride, wk->gx + x, wk->gy + x, g, g);
+    if (g & 7)
+        lk_scharr_strip_simd(src + g - 8, sstride, wk->gx + g - 8, wk->gy + g - 8, g, g);
+}
 #endif
 
 /* Previous-image window: grey values and interpolated Scharr derivatives at (ix + a, iy + b) + (x, y)
