@@ -117,19 +117,39 @@ static double dot3(const double a[3], const double b[3])
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
+/* The epipolar terms of a correspondence p1 <-> p2 under E: the first two components of E p1 and of
+ * E^T p2 (the epipolar lines' normals in image 2 and 1) and the residual e = p2^T E p1. The SSE2
+ * kernels below repeat these operations in this order. */
+typedef struct epi_terms {
+    double ex0, ex1, et0, et1, e;
+} epi_terms;
+
+static inline epi_terms epipolar_terms(const double E[9], const tvo_point2d *p1, const tvo_point2d *p2)
+{
+    const double a0 = p1->x, a1 = p1->y, b0 = p2->x, b1 = p2->y;
+    const double ex2 = E[6] * a0 + E[7] * a1 + E[8];
+    epi_terms t;
+    t.ex0 = E[0] * a0 + E[1] * a1 + E[2];
+    t.ex1 = E[3] * a0 + E[4] * a1 + E[5];
+    t.et0 = E[0] * b0 + E[3] * b1 + E[6];
+    t.et1 = E[1] * b0 + E[4] * b1 + E[7];
+    t.e = b0 * t.ex0 + b1 * t.ex1 + ex2;
+    return t;
+}
+
+/* Sampson denominator |E p1|_12^2 + |E^T p2|_12^2, summed left to right */
+static inline double sampson_den(const epi_terms *t)
+{
+    return t->ex0 * t->ex0 + t->ex1 * t->ex1 + t->et0 * t->et0 + t->et1 * t->et1;
+}
+
 static double sampson2(const double E[9], const tvo_point2d *p1, const tvo_point2d *p2)
 {
-    double a0 = p1->x, a1 = p1->y, b0 = p2->x, b1 = p2->y;
-    double ex0 = E[0] * a0 + E[1] * a1 + E[2];
-    double ex1 = E[3] * a0 + E[4] * a1 + E[5];
-    double ex2 = E[6] * a0 + E[7] * a1 + E[8];
-    double et0 = E[0] * b0 + E[3] * b1 + E[6];
-    double et1 = E[1] * b0 + E[4] * b1 + E[7];
-    double e = b0 * ex0 + b1 * ex1 + ex2;
-    double d = ex0 * ex0 + ex1 * ex1 + et0 * et0 + et1 * et1;
+    const epi_terms t = epipolar_terms(E, p1, p2);
+    const double d = sampson_den(&t);
     if (!(d > 1e-300))
         return 1e300;
-    return e * e / d;
+    return t.e * t.e / d;
 }
 
 /* sampson2 of the points (p1a, p2a) and (p1b, p2b): r[0], r[1]. SSE2: both in the two lanes with
@@ -250,15 +270,9 @@ static double msac_cost(const double E[9], const tvo_point2d *x1, const tvo_poin
     }
 #endif
     for (; k < n; ++k) {
-        double a0 = x1[i].x, a1 = x1[i].y, b0 = x2[i].x, b1 = x2[i].y;
-        double ex0 = E[0] * a0 + E[1] * a1 + E[2];
-        double ex1 = E[3] * a0 + E[4] * a1 + E[5];
-        double ex2 = E[6] * a0 + E[7] * a1 + E[8];
-        double et0 = E[0] * b0 + E[3] * b1 + E[6];
-        double et1 = E[1] * b0 + E[4] * b1 + E[7];
-        double e = b0 * ex0 + b1 * ex1 + ex2;
-        double d = ex0 * ex0 + ex1 * ex1 + et0 * et0 + et1 * et1;
-        double e2 = e * e;
+        const epi_terms t = epipolar_terms(E, &x1[i], &x2[i]);
+        double d = sampson_den(&t);
+        double e2 = t.e * t.e;
         if (e2 < thr2 * d) { /* Sampson e^2 / d < thr2 without dividing for outliers */
             cost += e2 / d;
             ++cnt;
@@ -917,14 +931,9 @@ static double essential_score(const double E[9], const tvo_point2d *x1, const tv
 {
     double score = 0.0;
     for (int32_t i = 0; i < n; ++i) {
-        double a0 = x1[i].x, a1 = x1[i].y, b0 = x2[i].x, b1 = x2[i].y;
-        double ex0 = E[0] * a0 + E[1] * a1 + E[2];
-        double ex1 = E[3] * a0 + E[4] * a1 + E[5];
-        double ex2 = E[6] * a0 + E[7] * a1 + E[8];
-        double et0 = E[0] * b0 + E[3] * b1 + E[6];
-        double et1 = E[1] * b0 + E[4] * b1 + E[7];
-        double e = b0 * ex0 + b1 * ex1 + ex2;
-        double d2 = ex0 * ex0 + ex1 * ex1, d1 = et0 * et0 + et1 * et1;
+        const epi_terms t = epipolar_terms(E, &x1[i], &x2[i]);
+        const double e = t.e;
+        double d2 = t.ex0 * t.ex0 + t.ex1 * t.ex1, d1 = t.et0 * t.et0 + t.et1 * t.et1;
         if (d2 > 1e-300) {
             double c = e * e / d2 * inv_s2;
             if (c < RP_CHI2_1DOF)
