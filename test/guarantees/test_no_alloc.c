@@ -12,7 +12,7 @@
  * outside the counting windows. Not built with TVO_SANITIZE (ASan owns the allocator there). */
 #include "tvo_guarantee.h"
 
-#include "tinyvo/port/euroc.h"
+#include "tvo_guarantee_euroc.h"
 
 extern void *__libc_malloc(size_t size);
 extern void *__libc_calloc(size_t n, size_t size);
@@ -182,51 +182,27 @@ static void test_synthetic_sequence(void **state)
 
 static void run_euroc(const char *name, int max_frames)
 {
-    char dir[1024], err[256];
-    const char *data = tvo_test_data_dir();
-    tvo_euroc *seq = NULL;
-    const tvo_camera *cam;
-    uint8_t *pix;
-    size_t fsz;
-    int32_t n;
+    tvo_g_frames f;
     tvo_g_model m;
     vo_box b;
     tvo_traj traj;
     int states[TVO_VO_STATE_COUNT] = { 0 };
-    if (data == NULL) {
-        TVO_SKIP("TVO_DATA_DIR not set");
+    if (!tvo_g_frames_load(&f, name, max_frames))
         return;
-    }
-    snprintf(dir, sizeof dir, "%s/euroc/%s", data, name);
-    if (tvo_euroc_open(&seq, dir, "cam0", err, sizeof err) != TVO_OK) {
-        fprintf(stderr, "SKIP %s: %s\n", name, err);
-        skip();
-        return;
-    }
-    cam = tvo_euroc_camera(seq);
-    n = tvo_euroc_frame_count(seq);
-    if (n > max_frames)
-        n = max_frames;
-    fsz = (size_t)cam->width * (size_t)cam->height;
-    pix = malloc(fsz * (size_t)n);
-    assert_non_null(pix);
-    for (int32_t i = 0; i < n; ++i)
-        assert_int_equal(tvo_euroc_read_frame(seq, i, pix + (size_t)i * fsz, fsz), TVO_OK);
     assert_true(tvo_g_load_model(&m, "paper.tvonn"));
-    vo_open(&b, cam);
+    vo_open(&b, f.cam);
     tvo_traj_init(&traj, NULL);
-    for (int32_t i = 0; i < n; ++i) {
-        const long c = counted_frame(&b, &m, &traj, pix + (size_t)i * fsz, cam->width, cam->height,
-                                     tvo_euroc_frame_time(seq, i), 0, states);
+    for (int32_t i = 0; i < f.n; ++i) {
+        const long c = counted_frame(&b, &m, &traj, f.pix + (size_t)i * f.fsz, f.cam->width, f.cam->height, f.t[i],
+                                     0, states);
         if (c != 0)
             fail_msg("%ld allocator calls during %s frame %d", c, name, (int)i);
     }
-    fprintf(stderr, "%s: %d frames, states ok %d rot-only %d lost %d init %d, no allocator call\n", name, (int)n,
+    fprintf(stderr, "%s: %d frames, states ok %d rot-only %d lost %d init %d, no allocator call\n", name, (int)f.n,
             states[TVO_VO_OK], states[TVO_VO_ROTATION_ONLY], states[TVO_VO_LOST], states[TVO_VO_INITIALISING]);
     free(b.mem);
     tvo_g_free_model(&m);
-    free(pix);
-    tvo_euroc_close(seq);
+    tvo_g_frames_free(&f);
 }
 
 static void test_euroc_keyframes(void **state)

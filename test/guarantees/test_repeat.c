@@ -10,7 +10,7 @@
  * hostile frames, and the shared EuRoC keyframes when present. */
 #include "tvo_guarantee.h"
 
-#include "tinyvo/port/euroc.h"
+#include "tvo_guarantee_euroc.h"
 
 typedef struct outcome {
     tvo_status st;
@@ -110,39 +110,12 @@ static void test_synthetic(void **state)
 
 static void test_euroc_keyframes(void **state)
 {
-    char dir[1024], err[256];
-    const char *data = tvo_test_data_dir();
-    tvo_euroc *seq = NULL;
-    const tvo_camera *cam;
-    uint8_t *pix;
-    int64_t t[30];
-    size_t fsz;
-    int32_t n;
+    tvo_g_frames f;
     (void)state;
-    if (data == NULL) {
-        TVO_SKIP("TVO_DATA_DIR not set");
+    if (!tvo_g_frames_load(&f, "V1_01_easy_keyframes", TVO_G_SLOW_BUILD ? 8 : 30))
         return;
-    }
-    snprintf(dir, sizeof dir, "%s/euroc/V1_01_easy_keyframes", data);
-    if (tvo_euroc_open(&seq, dir, "cam0", err, sizeof err) != TVO_OK) {
-        fprintf(stderr, "SKIP: %s\n", err);
-        skip();
-        return;
-    }
-    cam = tvo_euroc_camera(seq);
-    n = tvo_euroc_frame_count(seq);
-    if (n > (TVO_G_SLOW_BUILD ? 8 : 30))
-        n = TVO_G_SLOW_BUILD ? 8 : 30;
-    fsz = (size_t)cam->width * (size_t)cam->height;
-    pix = malloc(fsz * (size_t)n);
-    assert_non_null(pix);
-    for (int32_t i = 0; i < n; ++i) {
-        assert_int_equal(tvo_euroc_read_frame(seq, i, pix + (size_t)i * fsz, fsz), TVO_OK);
-        t[i] = tvo_euroc_frame_time(seq, i);
-    }
-    check_repeatable(cam, pix, t, (int)n, "V1_01_easy_keyframes");
-    free(pix);
-    tvo_euroc_close(seq);
+    check_repeatable(f.cam, f.pix, f.t, (int)f.n, "V1_01_easy_keyframes");
+    tvo_g_frames_free(&f);
 }
 
 int main(void)
