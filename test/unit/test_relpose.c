@@ -356,6 +356,59 @@ static void test_bad_input(void **state)
     assert_int_equal(tvo_essential_8pt(NULL, NULL, 8, E[0]), 0);
 }
 
+/* 8-point solver: the 8-correspondence path (Gaussian elimination on the 8x9 system, the RANSAC
+ * sample) and the least-squares path (n > 8, normal-matrix eigenvector) agree on noise-free data
+ * and recover the true E; 8 noise-free points on a plane (rank 6) are refused. */
+static void test_eightpt_paths(void **state)
+{
+    (void)state;
+    int checked = 0;
+    for (uint64_t seed = 1; seed <= 200; ++seed) {
+        scene sc;
+        make_scene(&sc, 7000 + seed, 9, 20.0, 1.0, 0.0, 0.0, 0);
+        double a[9][2], b[9][2], E8[9], E9[9], Et[9], S[9];
+        for (int i = 0; i < 9; ++i) {
+            a[i][0] = sc.x1[i].x;
+            a[i][1] = sc.x1[i].y;
+            b[i][0] = sc.x2[i].x;
+            b[i][1] = sc.x2[i].y;
+        }
+        assert_int_equal(tvo_essential_8pt((const double (*)[2])a, (const double (*)[2])b, 8, E8), 1);
+        assert_int_equal(tvo_essential_8pt((const double (*)[2])a, (const double (*)[2])b, 9, E9), 1);
+        tvo_la_skew(sc.t, S);
+        tvo_la_mat3_mul(S, sc.R, Et);
+        double n2 = 0.0;
+        for (int k = 0; k < 9; ++k)
+            n2 += Et[k] * Et[k];
+        /* same E up to sign and scale (|E|_F = 1 for both solver outputs) */
+        double dp = 0.0, dm = 0.0, tp = 0.0, tm = 0.0;
+        for (int k = 0; k < 9; ++k) {
+            dp = fmax(dp, fabs(E8[k] - E9[k]));
+            dm = fmax(dm, fabs(E8[k] + E9[k]));
+            tp = fmax(tp, fabs(E8[k] - Et[k] / sqrt(n2)));
+            tm = fmax(tm, fabs(E8[k] + Et[k] / sqrt(n2)));
+        }
+        assert_true(fmin(dp, dm) < 1e-8);
+        assert_true(fmin(tp, tm) < 1e-8);
+        /* the 9th point satisfies the epipolar constraint of the 8-point E */
+        double ex[3] = {E8[0] * a[8][0] + E8[1] * a[8][1] + E8[2], E8[3] * a[8][0] + E8[4] * a[8][1] + E8[5],
+                        E8[6] * a[8][0] + E8[7] * a[8][1] + E8[8]};
+        assert_true(fabs(b[8][0] * ex[0] + b[8][1] * ex[1] + ex[2]) < 1e-10);
+        ++checked;
+        /* planar, noise-free: the 8x9 system has rank 6 */
+        scene pl;
+        make_scene(&pl, 9000 + seed, 8, 20.0, 1.0, 0.0, 0.0, 1);
+        for (int i = 0; i < 8; ++i) {
+            a[i][0] = pl.x1[i].x;
+            a[i][1] = pl.x1[i].y;
+            b[i][0] = pl.x2[i].x;
+            b[i][1] = pl.x2[i].y;
+        }
+        assert_int_equal(tvo_essential_8pt((const double (*)[2])a, (const double (*)[2])b, 8, E8), 0);
+    }
+    assert_int_equal(checked, 200);
+}
+
 /* inputs that are legal but nasty: duplicated points, only 5 distinct ones, pure noise. Any result
  * is accepted as long as it is finite, bounded and flagged when not trustworthy. */
 static void test_nasty_input(void **state)
@@ -532,6 +585,7 @@ int main(void)
         cmocka_unit_test(test_pure_rotation),
         cmocka_unit_test(test_sideways_baseline),
         cmocka_unit_test(test_planar_scene),
+        cmocka_unit_test(test_eightpt_paths),
         cmocka_unit_test(test_deterministic),
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_nasty_input),
