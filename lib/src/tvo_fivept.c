@@ -223,46 +223,57 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
                 scale = fabs(M[r][k]);
     if (!(scale > 1e-300) || !isfinite(scale))
         return 0;
+    /* Rows are addressed through pointers (a pivot swap exchanges two pointers). The update of a
+     * row starts at an even column (c itself when c is even: that entry is eliminated and never
+     * read again), so the loop runs over whole pairs of columns. */
+    double *row[10];
+    for (int r = 0; r < 10; ++r)
+        row[r] = M[r];
     for (int c = 0; c < 10; ++c) {
         int p = c;
+        double pv = fabs(row[c][c]);
         for (int r = c + 1; r < 10; ++r)
-            if (fabs(M[r][c]) > fabs(M[p][c]))
+            if (fabs(row[r][c]) > pv) {
+                pv = fabs(row[r][c]);
                 p = r;
-        if (!(fabs(M[p][c]) > 1e-14 * scale))
-            return 0;
-        if (p != c)
-            for (int k = c; k < 20; ++k) {
-                double t = M[c][k];
-                M[c][k] = M[p][k];
-                M[p][k] = t;
             }
-        double inv = 1.0 / M[c][c];
+        if (!(pv > 1e-14 * scale))
+            return 0;
+        double *pr = row[p];
+        row[p] = row[c];
+        row[c] = pr;
+        double inv = 1.0 / pr[c];
+        int k0 = (c + 1) & ~1;
         for (int r = c + 1; r < 10; ++r) {
-            double f = M[r][c] * inv;
+            double *rr = row[r];
+            double f = rr[c] * inv;
             if (f == 0.0)
                 continue;
-            for (int k = c + 1; k < 20; ++k)
-                M[r][k] -= f * M[c][k];
+            for (int k = k0; k < 20; k += 2) {
+                rr[k] -= f * pr[k];
+                rr[k + 1] -= f * pr[k + 1];
+            }
         }
     }
     for (int r = 9; r >= 4; --r) {
-        double inv = 1.0 / M[r][r];
-        for (int k = 10; k < 20; ++k) {
-            double v = M[r][k];
-            for (int j = r + 1; j < 10; ++j)
-                v -= M[r][j] * M[j][k];
-            M[r][k] = v * inv;
+        double *rr = row[r];
+        double inv = 1.0 / rr[r];
+        for (int k = 10; k < 20; k += 2) {
+            double v0 = rr[k], v1 = rr[k + 1];
+            for (int j = r + 1; j < 10; ++j) {
+                v0 -= rr[j] * row[j][k];
+                v1 -= rr[j] * row[j][k + 1];
+            }
+            rr[k] = v0 * inv;
+            rr[k + 1] = v1 * inv;
         }
-        for (int j = r + 1; j < 10; ++j)
-            M[r][j] = 0.0;
-        M[r][r] = 1.0;
     }
     /* B(z): rows from (x^2z, x^2), (y^2z, y^2), (xyz, xy); ascending coefficients in z */
     double B[3][3][5];
     static const int pairs[3][2] = {{4, 5}, {6, 7}, {8, 9}};
     for (int r = 0; r < 3; ++r) {
-        const double *a = M[pairs[r][0]];
-        const double *b = M[pairs[r][1]];
+        const double *a = row[pairs[r][0]];
+        const double *b = row[pairs[r][1]];
         B[r][0][0] = a[12];
         B[r][0][1] = a[11] - b[12];
         B[r][0][2] = a[10] - b[11];
