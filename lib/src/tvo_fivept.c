@@ -40,29 +40,50 @@ FP_INLINE void mul_ll(const double a[4], const double b[4], double q[10])
     q[9] = a[3] * b[3];
 }
 
-/* c += q * l (quadratic times linear, cubic monomial order above), written out */
-FP_INLINE void mul_ql_acc(const double q[10], const double l[4], double c[20])
+/* c = q0 l0 + q1 l1 + q2 l2 (three quadratic-times-linear products, cubic monomial order above),
+ * written out: per monomial, the sum over each product's terms, then the three sums in order (the
+ * same operations as accumulating the products one by one into a zeroed row, without its loads and
+ * stores) */
+FP_INLINE void mul_ql3(const double q0[10], const double l0[4], const double q1[10], const double l1[4],
+                       const double q2[10], const double l2[4], double c[20])
 {
-    c[0] += q[0] * l[0];
-    c[1] += q[3] * l[1];
-    c[2] += q[0] * l[1] + q[1] * l[0];
-    c[3] += q[1] * l[1] + q[3] * l[0];
-    c[4] += q[0] * l[2] + q[2] * l[0];
-    c[5] += q[0] * l[3] + q[6] * l[0];
-    c[6] += q[3] * l[2] + q[4] * l[1];
-    c[7] += q[3] * l[3] + q[7] * l[1];
-    c[8] += q[1] * l[2] + q[2] * l[1] + q[4] * l[0];
-    c[9] += q[1] * l[3] + q[6] * l[1] + q[7] * l[0];
-    c[10] += q[2] * l[2] + q[5] * l[0];
-    c[11] += q[2] * l[3] + q[6] * l[2] + q[8] * l[0];
-    c[12] += q[6] * l[3] + q[9] * l[0];
-    c[13] += q[4] * l[2] + q[5] * l[1];
-    c[14] += q[4] * l[3] + q[7] * l[2] + q[8] * l[1];
-    c[15] += q[7] * l[3] + q[9] * l[1];
-    c[16] += q[5] * l[2];
-    c[17] += q[5] * l[3] + q[8] * l[2];
-    c[18] += q[8] * l[3] + q[9] * l[2];
-    c[19] += q[9] * l[3];
+    c[0] = (q0[0] * l0[0] + q1[0] * l1[0]) + q2[0] * l2[0];
+    c[1] = (q0[3] * l0[1] + q1[3] * l1[1]) + q2[3] * l2[1];
+    c[2] = ((q0[0] * l0[1] + q0[1] * l0[0]) + (q1[0] * l1[1] + q1[1] * l1[0])) + (q2[0] * l2[1] + q2[1] * l2[0]);
+    c[3] = ((q0[1] * l0[1] + q0[3] * l0[0]) + (q1[1] * l1[1] + q1[3] * l1[0])) + (q2[1] * l2[1] + q2[3] * l2[0]);
+    c[4] = ((q0[0] * l0[2] + q0[2] * l0[0]) + (q1[0] * l1[2] + q1[2] * l1[0])) + (q2[0] * l2[2] + q2[2] * l2[0]);
+    c[5] = ((q0[0] * l0[3] + q0[6] * l0[0]) + (q1[0] * l1[3] + q1[6] * l1[0])) + (q2[0] * l2[3] + q2[6] * l2[0]);
+    c[6] = ((q0[3] * l0[2] + q0[4] * l0[1]) + (q1[3] * l1[2] + q1[4] * l1[1])) + (q2[3] * l2[2] + q2[4] * l2[1]);
+    c[7] = ((q0[3] * l0[3] + q0[7] * l0[1]) + (q1[3] * l1[3] + q1[7] * l1[1])) + (q2[3] * l2[3] + q2[7] * l2[1]);
+    c[8] = ((q0[1] * l0[2] + q0[2] * l0[1] + q0[4] * l0[0]) + (q1[1] * l1[2] + q1[2] * l1[1] + q1[4] * l1[0])) + (q2[1] * l2[2] + q2[2] * l2[1] + q2[4] * l2[0]);
+    c[9] = ((q0[1] * l0[3] + q0[6] * l0[1] + q0[7] * l0[0]) + (q1[1] * l1[3] + q1[6] * l1[1] + q1[7] * l1[0])) + (q2[1] * l2[3] + q2[6] * l2[1] + q2[7] * l2[0]);
+    c[10] = ((q0[2] * l0[2] + q0[5] * l0[0]) + (q1[2] * l1[2] + q1[5] * l1[0])) + (q2[2] * l2[2] + q2[5] * l2[0]);
+    c[11] = ((q0[2] * l0[3] + q0[6] * l0[2] + q0[8] * l0[0]) + (q1[2] * l1[3] + q1[6] * l1[2] + q1[8] * l1[0])) + (q2[2] * l2[3] + q2[6] * l2[2] + q2[8] * l2[0]);
+    c[12] = ((q0[6] * l0[3] + q0[9] * l0[0]) + (q1[6] * l1[3] + q1[9] * l1[0])) + (q2[6] * l2[3] + q2[9] * l2[0]);
+    c[13] = ((q0[4] * l0[2] + q0[5] * l0[1]) + (q1[4] * l1[2] + q1[5] * l1[1])) + (q2[4] * l2[2] + q2[5] * l2[1]);
+    c[14] = ((q0[4] * l0[3] + q0[7] * l0[2] + q0[8] * l0[1]) + (q1[4] * l1[3] + q1[7] * l1[2] + q1[8] * l1[1])) + (q2[4] * l2[3] + q2[7] * l2[2] + q2[8] * l2[1]);
+    c[15] = ((q0[7] * l0[3] + q0[9] * l0[1]) + (q1[7] * l1[3] + q1[9] * l1[1])) + (q2[7] * l2[3] + q2[9] * l2[1]);
+    c[16] = (q0[5] * l0[2] + q1[5] * l1[2]) + q2[5] * l2[2];
+    c[17] = ((q0[5] * l0[3] + q0[8] * l0[2]) + (q1[5] * l1[3] + q1[8] * l1[2])) + (q2[5] * l2[3] + q2[8] * l2[2]);
+    c[18] = ((q0[8] * l0[3] + q0[9] * l0[2]) + (q1[8] * l1[3] + q1[9] * l1[2])) + (q2[8] * l2[3] + q2[9] * l2[2]);
+    c[19] = (q0[9] * l0[3] + q1[9] * l1[3]) + q2[9] * l2[3];
+}
+
+/* q = a0 b0 + a1 b1 + a2 b2 (three linear-times-linear products), per monomial in mul_ll's terms,
+ * summed in the same order as an accumulation from 0 */
+FP_INLINE void mul_ll3(const double a0[4], const double b0[4], const double a1[4], const double b1[4],
+                       const double a2[4], const double b2[4], double q[10])
+{
+    q[0] = (a0[0] * b0[0] + a1[0] * b1[0]) + a2[0] * b2[0];
+    q[1] = ((a0[0] * b0[1] + a0[1] * b0[0]) + (a1[0] * b1[1] + a1[1] * b1[0])) + (a2[0] * b2[1] + a2[1] * b2[0]);
+    q[2] = ((a0[0] * b0[2] + a0[2] * b0[0]) + (a1[0] * b1[2] + a1[2] * b1[0])) + (a2[0] * b2[2] + a2[2] * b2[0]);
+    q[3] = (a0[1] * b0[1] + a1[1] * b1[1]) + a2[1] * b2[1];
+    q[4] = ((a0[1] * b0[2] + a0[2] * b0[1]) + (a1[1] * b1[2] + a1[2] * b1[1])) + (a2[1] * b2[2] + a2[2] * b2[1]);
+    q[5] = (a0[2] * b0[2] + a1[2] * b1[2]) + a2[2] * b2[2];
+    q[6] = ((a0[0] * b0[3] + a0[3] * b0[0]) + (a1[0] * b1[3] + a1[3] * b1[0])) + (a2[0] * b2[3] + a2[3] * b2[0]);
+    q[7] = ((a0[1] * b0[3] + a0[3] * b0[1]) + (a1[1] * b1[3] + a1[3] * b1[1])) + (a2[1] * b2[3] + a2[3] * b2[1]);
+    q[8] = ((a0[2] * b0[3] + a0[3] * b0[2]) + (a1[2] * b1[3] + a1[3] * b1[2])) + (a2[2] * b2[3] + a2[3] * b2[2]);
+    q[9] = (a0[3] * b0[3] + a1[3] * b1[3]) + a2[3] * b2[3];
 }
 
 /* ascending-coefficient polynomial product: r (deg da+db) = a * b */
@@ -165,34 +186,26 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
         L[k][3] = N[3][k];
     }
     double M[10][20];
-    memset(M, 0, sizeof M);
     /* E E^T (symmetric, quadratic entries) */
     double EEt[3][3][10];
     for (int i = 0; i < 3; ++i) {
         for (int j = i; j < 3; ++j) {
-            double acc[10] = {0}, q[10];
-            for (int k = 0; k < 3; ++k) {
-                mul_ll(L[3 * i + k], L[3 * j + k], q);
-                for (int m = 0; m < 10; ++m)
-                    acc[m] += q[m];
-            }
-            memcpy(EEt[i][j], acc, sizeof acc);
-            memcpy(EEt[j][i], acc, sizeof acc);
+            mul_ll3(L[3 * i], L[3 * j], L[3 * i + 1], L[3 * j + 1], L[3 * i + 2], L[3 * j + 2], EEt[i][j]);
+            if (j != i)
+                memcpy(EEt[j][i], EEt[i][j], sizeof EEt[i][j]);
         }
     }
-    double tr[10];
-    for (int m = 0; m < 10; ++m)
-        tr[m] = EEt[0][0][m] + EEt[1][1][m] + EEt[2][2][m];
-    /* Aq = 2 E E^T - tr I ; rows 0..8: (Aq E)_ij */
-    for (int i = 0; i < 3; ++i) {
-        double Aq[3][10];
-        for (int k = 0; k < 3; ++k)
-            for (int m = 0; m < 10; ++m)
-                Aq[k][m] = 2.0 * EEt[i][k][m] - (i == k ? tr[m] : 0.0);
-        for (int j = 0; j < 3; ++j)
+    /* Aq = 2 E E^T - tr I (symmetric); rows 0..8: (Aq E)_ij */
+    double Aq[3][3][10];
+    for (int m = 0; m < 10; ++m) {
+        double tr = EEt[0][0][m] + EEt[1][1][m] + EEt[2][2][m];
+        for (int i = 0; i < 3; ++i)
             for (int k = 0; k < 3; ++k)
-                mul_ql_acc(Aq[k], L[3 * k + j], M[3 * i + j]);
+                Aq[i][k][m] = 2.0 * EEt[i][k][m] - (i == k ? tr : 0.0);
     }
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            mul_ql3(Aq[i][0], L[j], Aq[i][1], L[3 + j], Aq[i][2], L[6 + j], M[3 * i + j]);
     /* row 9: det E = sum_j E_0j * cofactor_0j */
     {
         double c0[10], c1[10], c2[10], t0[10], t1[10];
@@ -208,9 +221,7 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
         mul_ll(L[4], L[6], t1);
         for (int m = 0; m < 10; ++m)
             c2[m] = t0[m] - t1[m];
-        mul_ql_acc(c0, L[0], M[9]);
-        mul_ql_acc(c1, L[1], M[9]);
-        mul_ql_acc(c2, L[2], M[9]);
+        mul_ql3(c0, L[0], c1, L[1], c2, L[2], M[9]);
     }
     /* Elimination of the first 10 monomials: LU with partial pivoting (row swaps keep the
      * monomial order of the unknowns), then back-substitution for the last 6 rows only: B(z)
@@ -321,8 +332,8 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
                 Bz[r][c] = peval(B[r][c], c == 2 ? 4 : 3, z);
         double best[3] = {0, 0, 0}, bn = 0.0;
         for (int a = 0; a < 3; ++a) {
-            double cr[3];
-            tvo_la_cross(Bz[a], Bz[(a + 1) % 3], cr);
+            const double *u = Bz[a], *w = Bz[a == 2 ? 0 : a + 1];
+            double cr[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
             double nn = cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2];
             if (nn > bn) {
                 bn = nn;

@@ -4,6 +4,7 @@
 #include "tinyvo/dmath.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <string.h>
 
 /* The root finder's helpers are inlined into a body specialised for degree 10 (the 5-point
@@ -665,19 +666,29 @@ int tvo_la_poly_real_roots(const double *c, int deg, double *roots)
         a[i] = c[i] / c[deg];
     /* Fujiwara's bound |root| <= 2 max_i |a[deg-i]|^(1/i), rounded up to a power of two with
      * integer exponent arithmetic (no pow): r = 2^k with k*i >= exponent of |a[deg-i]|. It is
-     * usually far tighter than Cauchy's 1 + max |a[i]|, which saves bisection levels. */
+     * usually far tighter than Cauchy's 1 + max |a[i]|, which saves bisection levels. The exponents
+     * are read from the IEEE-754 bits (frexp's e for normal numbers; a subnormal counts as 2^-1022,
+     * which can only widen the bound), and the bound is built the same way: the values frexp and
+     * ldexp gave, without their two libm calls per coefficient. */
     int k2 = -1022;
     for (int i = 1; i <= deg; ++i) {
         double v = fabs(a[deg - i]);
         if (v == 0.0)
             continue;
-        int e;
-        frexp(v, &e); /* v < 2^e */
+        uint64_t bits;
+        memcpy(&bits, &v, sizeof bits);
+        int e = (int)((bits >> 52) & 0x7ff) - 1022; /* v < 2^e */
         int k = e >= 0 ? (e + i - 1) / i : -((-e) / i);
         if (k > k2)
             k2 = k;
     }
-    double bound = ldexp(2.0, k2 < -60 ? -60 : k2);
+    if (k2 < -60)
+        k2 = -60;
+    if (k2 > 1022)
+        k2 = 1022;
+    uint64_t bbits = (uint64_t)(k2 + 1 + 1023) << 52; /* 2^(k2+1) */
+    double bound;
+    memcpy(&bound, &bbits, sizeof bound);
     if (deg == 10)
         return roots_monic(a, 10, bound, roots);
     return roots_monic(a, deg, bound, roots);
