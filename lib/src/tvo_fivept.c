@@ -21,6 +21,14 @@
 #else
 #define FP_INLINE static inline
 #endif
+/* The larger written-out helpers (constraint rows, Householder steps) are inlined for speed, but
+ * left to the compiler in size-optimised builds (-Os, the Cortex-M configuration): ~3 KB less
+ * code there; same operations either way. */
+#if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
+#define FP_INLINE_BIG static inline __attribute__((always_inline))
+#else
+#define FP_INLINE_BIG static inline
+#endif
 
 /* monomial order: 0 x^3, 1 y^3, 2 x^2y, 3 xy^2, 4 x^2z, 5 x^2, 6 y^2z, 7 y^2, 8 xyz, 9 xy,
  *                 10 xz^2, 11 xz, 12 x, 13 yz^2, 14 yz, 15 y, 16 z^3, 17 z^2, 18 z, 19 1
@@ -44,7 +52,7 @@ FP_INLINE void mul_ll(const double a[4], const double b[4], double q[10])
  * written out: per monomial, the sum over each product's terms, then the three sums in order (the
  * same operations as accumulating the products one by one into a zeroed row, without its loads and
  * stores) */
-FP_INLINE void mul_ql3(const double q0[10], const double l0[4], const double q1[10], const double l1[4],
+FP_INLINE_BIG void mul_ql3(const double q0[10], const double l0[4], const double q1[10], const double l1[4],
                        const double q2[10], const double l2[4], double c[20])
 {
     c[0] = (q0[0] * l0[0] + q1[0] * l1[0]) + q2[0] * l2[0];
@@ -105,55 +113,73 @@ FP_INLINE double peval(const double *c, int deg, double t)
     return v;
 }
 
-/* 4-dim null space of the 5x9 matrix A (rows) as the last 4 columns of Q in A^T = Q R. */
+/* Householder step k of the QR factorisation of A^T, on the rows of A (row j of A is column j of
+ * A^T): reflector v[k] (entries k..8), beta[k] = 2 / |v|^2, applied to rows k..4. Of row k only the
+ * diagonal entry is computed (the rank check's R_kk; the entries it zeroes are never read). Called
+ * with constant k, so that every loop has constant bounds. Returns 0 on rank loss. */
+FP_INLINE_BIG int hh_step(double A[5][9], double v[5][9], double beta[5], int k)
+{
+    double norm = 0.0;
+    for (int i = k; i < 9; ++i)
+        norm += A[k][i] * A[k][i];
+    norm = sqrt(norm);
+    if (!(norm > 1e-300))
+        return 0;
+    double alpha = A[k][k] > 0.0 ? -norm : norm;
+    for (int i = k; i < 9; ++i)
+        v[k][i] = A[k][i];
+    v[k][k] -= alpha;
+    double vv = 0.0;
+    for (int i = k; i < 9; ++i)
+        vv += v[k][i] * v[k][i];
+    if (!(vv > 1e-300))
+        return 0;
+    beta[k] = 2.0 / vv;
+    for (int j = k; j < 5; ++j) {
+        double d = 0.0;
+        for (int i = k; i < 9; ++i)
+            d += v[k][i] * A[j][i];
+        d *= beta[k];
+        if (j == k) {
+            A[k][k] -= d * v[k][k];
+            continue;
+        }
+        for (int i = k; i < 9; ++i)
+            A[j][i] -= d * v[k][i];
+    }
+    /* rank check: the diagonal of R must not vanish relative to the row scale (R_00 is final
+     * after step 0) */
+    return fabs(A[k][k]) > 1e-10 * fabs(A[0][0]);
+}
+
+/* e = H_k e (reflector k of hh_step), constant k */
+FP_INLINE_BIG void hh_apply(double e[9], double v[5][9], const double beta[5], int k)
+{
+    double d = 0.0;
+    for (int i = k; i < 9; ++i)
+        d += v[k][i] * e[i];
+    d *= beta[k];
+    for (int i = k; i < 9; ++i)
+        e[i] -= d * v[k][i];
+}
+
+/* 4-dim null space of the 5x9 matrix A (rows; overwritten) as the last 4 columns of Q in
+ * A^T = Q R. */
 static int null_space_5x9(double A[5][9], double N[4][9])
 {
-    double M[9][5]; /* A^T */
     double v[5][9];
     double beta[5];
-    for (int i = 0; i < 9; ++i)
-        for (int j = 0; j < 5; ++j)
-            M[i][j] = A[j][i];
-    for (int k = 0; k < 5; ++k) {
-        double norm = 0.0;
-        for (int i = k; i < 9; ++i)
-            norm += M[i][k] * M[i][k];
-        norm = sqrt(norm);
-        if (!(norm > 1e-300))
-            return 0;
-        double alpha = M[k][k] > 0.0 ? -norm : norm;
-        for (int i = 0; i < 9; ++i)
-            v[k][i] = (i < k) ? 0.0 : M[i][k];
-        v[k][k] -= alpha;
-        double vv = 0.0;
-        for (int i = k; i < 9; ++i)
-            vv += v[k][i] * v[k][i];
-        if (!(vv > 1e-300))
-            return 0;
-        beta[k] = 2.0 / vv;
-        for (int j = k; j < 5; ++j) {
-            double d = 0.0;
-            for (int i = k; i < 9; ++i)
-                d += v[k][i] * M[i][j];
-            d *= beta[k];
-            for (int i = k; i < 9; ++i)
-                M[i][j] -= d * v[k][i];
-        }
-        /* rank check: the diagonal of R must not vanish relative to the row scale */
-        if (!(fabs(M[k][k]) > 1e-10 * fabs(M[0][0])))
-            return 0;
-    }
+    if (!hh_step(A, v, beta, 0) || !hh_step(A, v, beta, 1) || !hh_step(A, v, beta, 2) ||
+        !hh_step(A, v, beta, 3) || !hh_step(A, v, beta, 4))
+        return 0;
     for (int c = 0; c < 4; ++c) {
         double e[9] = {0};
         e[5 + c] = 1.0;
-        for (int k = 4; k >= 0; --k) {
-            double d = 0.0;
-            for (int i = k; i < 9; ++i)
-                d += v[k][i] * e[i];
-            d *= beta[k];
-            for (int i = k; i < 9; ++i)
-                e[i] -= d * v[k][i];
-        }
+        hh_apply(e, v, beta, 4);
+        hh_apply(e, v, beta, 3);
+        hh_apply(e, v, beta, 2);
+        hh_apply(e, v, beta, 1);
+        hh_apply(e, v, beta, 0);
         memcpy(N[c], e, sizeof e);
     }
     return 1;
@@ -164,16 +190,18 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
     if (x1 == NULL || x2 == NULL || E == NULL)
         return 0;
     double A[5][9];
+    double nf = 0.0; /* sum of A_ij * 0: exactly 0 when every entry is finite, NaN otherwise */
     for (int i = 0; i < 5; ++i) {
         double a[3] = {x1[i][0], x1[i][1], 1.0};
         double b[3] = {x2[i][0], x2[i][1], 1.0};
         for (int r = 0; r < 3; ++r)
-            for (int c = 0; c < 3; ++c)
+            for (int c = 0; c < 3; ++c) {
                 A[i][3 * r + c] = b[r] * a[c];
-        for (int j = 0; j < 9; ++j)
-            if (!isfinite(A[i][j]))
-                return 0;
+                nf += A[i][3 * r + c] * 0.0;
+            }
     }
+    if (nf != 0.0)
+        return 0;
     double N[4][9];
     if (!null_space_5x9(A, N))
         return 0;
@@ -234,12 +262,12 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
                 scale = fabs(M[r][k]);
     if (!(scale > 1e-300) || !isfinite(scale))
         return 0;
-    /* Rows are addressed through pointers (a pivot swap exchanges two pointers). The update of a
-     * row starts at an even column (c itself when c is even: that entry is eliminated and never
-     * read again), so the loop runs over whole pairs of columns. */
     double *row[10];
     for (int r = 0; r < 10; ++r)
         row[r] = M[r];
+    /* Rows are addressed through pointers (a pivot swap exchanges two pointers). The update of a
+     * row starts at an even column (c itself when c is even: that entry is eliminated and never
+     * read again), so the loop runs over whole pairs of columns. */
     for (int c = 0; c < 10; ++c) {
         int p = c;
         double pv = fabs(row[c][c]);
