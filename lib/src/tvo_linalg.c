@@ -7,6 +7,13 @@
 #include <stdint.h>
 #include <string.h>
 
+/* SSE2: the degree-10 Newton iterations evaluate p and p' in the two lanes of one register;
+ * TVO_LINALG_NO_SIMD (and every other target) uses the C loop, same operations per lane. */
+#if defined(__SSE2__) && !defined(TVO_LINALG_NO_SIMD)
+#include <emmintrin.h>
+#define LA_SSE2 1
+#endif
+
 /* The root finder's helpers are inlined into a body specialised for degree 10 (the 5-point
  * solver's case: loops over the degree unroll, same operations in the same order). */
 #if defined(__GNUC__)
@@ -536,20 +543,43 @@ LA_INLINE double refine_root(const double *a, int deg, double lo, double hi)
  * whose error is of the order of the step squared for a simple root (1e-13 cost ~1 more iteration
  * per root for no difference that matters: the hypotheses are scored and refined afterwards). */
     double x = 0.5 * (lo + hi), dx_old = hi - lo, dx = dx_old;
-    double da[10]; /* p' (degree 10 only) */
-    if (deg == 10)
-        for (int i = 0; i < 10; ++i)
-            da[i] = (double)(i + 1) * a[i + 1];
+    /* degree 10: p and p' side by side, pd[i] = {a[i], i+1 coefficient of p'} (p' padded with a
+     * zero degree-10 coefficient, which adds an exact 0) */
+    double pd[11][2];
+    if (deg == 10) {
+        for (int i = 0; i < 10; ++i) {
+            pd[i][0] = a[i];
+            pd[i][1] = (double)(i + 1) * a[i + 1];
+        }
+        pd[10][0] = a[10];
+        pd[10][1] = 0.0;
+    }
     for (int it = 0; it < 100; ++it) {
         double f, df;
         if (deg == 10) {
             /* Estrin's scheme: p and p' in a few independent chains (Horner's single chain of 10
-             * dependent multiply-adds per polynomial was most of the solver's time) */
-            double x2 = x * x, x4 = x2 * x2, x8 = x4 * x4;
-            f = ((a[0] + a[1] * x) + (a[2] + a[3] * x) * x2) +
-                ((a[4] + a[5] * x) + (a[6] + a[7] * x) * x2) * x4 + ((a[8] + a[9] * x) + a[10] * x2) * x8;
-            df = ((da[0] + da[1] * x) + (da[2] + da[3] * x) * x2) +
-                 ((da[4] + da[5] * x) + (da[6] + da[7] * x) * x2) * x4 + (da[8] + da[9] * x) * x8;
+             * dependent multiply-adds per polynomial was most of the solver's time), the two
+             * polynomials in the two lanes of an SSE2 register (same operations per lane) */
+#ifdef LA_SSE2
+            __m128d X = _mm_set1_pd(x);
+            __m128d X2 = _mm_mul_pd(X, X), X4 = _mm_mul_pd(X2, X2), X8 = _mm_mul_pd(X4, X4);
+#define LA_LIN(i) _mm_add_pd(_mm_loadu_pd(pd[i]), _mm_mul_pd(_mm_loadu_pd(pd[(i) + 1]), X))
+            __m128d u0 = _mm_add_pd(LA_LIN(0), _mm_mul_pd(LA_LIN(2), X2));
+            __m128d u1 = _mm_add_pd(LA_LIN(4), _mm_mul_pd(LA_LIN(6), X2));
+            __m128d u2 = _mm_add_pd(LA_LIN(8), _mm_mul_pd(_mm_loadu_pd(pd[10]), X2));
+#undef LA_LIN
+            __m128d r = _mm_add_pd(_mm_add_pd(u0, _mm_mul_pd(u1, X4)), _mm_mul_pd(u2, X8));
+            f = _mm_cvtsd_f64(r);
+            df = _mm_cvtsd_f64(_mm_unpackhi_pd(r, r));
+#else
+            double x2 = x * x, x4 = x2 * x2, x8 = x4 * x4, v[2];
+            for (int l = 0; l < 2; ++l)
+                v[l] = ((pd[0][l] + pd[1][l] * x) + (pd[2][l] + pd[3][l] * x) * x2) +
+                       ((pd[4][l] + pd[5][l] * x) + (pd[6][l] + pd[7][l] * x) * x2) * x4 +
+                       ((pd[8][l] + pd[9][l] * x) + pd[10][l] * x2) * x8;
+            f = v[0];
+            df = v[1];
+#endif
         } else {
             f = a[deg];
             df = 0.0;
