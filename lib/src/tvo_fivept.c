@@ -14,6 +14,13 @@
 #include <math.h>
 #include <string.h>
 
+/* SSE2: two constraint rows per pass (one per lane); TVO_FIVEPT_NO_SIMD (and every other target)
+ * uses the C code, same operations per row. */
+#if defined(__SSE2__) && !defined(TVO_FIVEPT_NO_SIMD)
+#include <emmintrin.h>
+#define FP_SSE2 1
+#endif
+
 /* The polynomial helpers below are called ~50 times per solve: always inline them (GCC kept them
  * out of line; inlined, a solve takes ~2 % fewer instructions, same results). */
 #if defined(__GNUC__)
@@ -76,6 +83,75 @@ FP_INLINE_BIG void mul_ql3(const double q0[10], const double l0[4], const double
     c[18] = ((q0[8] * l0[3] + q0[9] * l0[2]) + (q1[8] * l1[3] + q1[9] * l1[2])) + (q2[8] * l2[3] + q2[9] * l2[2]);
     c[19] = (q0[9] * l0[3] + q1[9] * l1[3]) + q2[9] * l2[3];
 }
+
+#ifdef FP_SSE2
+/* mul_ql3 for two rows at once: lane 0 of the quadratics Q[k] and linear factors Lv[k] gives row c0,
+ * lane 1 row c1; the operations of mul_ql3 in each lane */
+FP_INLINE_BIG void mul_ql3_pair(const __m128d Q[3][10], const __m128d Lv[3][4], double c0[20], double c1[20])
+{
+    __m128d r;
+    r = _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][0], Lv[0][0]), _mm_mul_pd(Q[1][0], Lv[1][0])), _mm_mul_pd(Q[2][0], Lv[2][0]));
+    _mm_storel_pd(c0 + 0, r);
+    _mm_storeh_pd(c1 + 0, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][3], Lv[0][1]), _mm_mul_pd(Q[1][3], Lv[1][1])), _mm_mul_pd(Q[2][3], Lv[2][1]));
+    _mm_storel_pd(c0 + 1, r);
+    _mm_storeh_pd(c1 + 1, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][0], Lv[0][1]), _mm_mul_pd(Q[0][1], Lv[0][0])), _mm_add_pd(_mm_mul_pd(Q[1][0], Lv[1][1]), _mm_mul_pd(Q[1][1], Lv[1][0]))), _mm_add_pd(_mm_mul_pd(Q[2][0], Lv[2][1]), _mm_mul_pd(Q[2][1], Lv[2][0])));
+    _mm_storel_pd(c0 + 2, r);
+    _mm_storeh_pd(c1 + 2, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][1], Lv[0][1]), _mm_mul_pd(Q[0][3], Lv[0][0])), _mm_add_pd(_mm_mul_pd(Q[1][1], Lv[1][1]), _mm_mul_pd(Q[1][3], Lv[1][0]))), _mm_add_pd(_mm_mul_pd(Q[2][1], Lv[2][1]), _mm_mul_pd(Q[2][3], Lv[2][0])));
+    _mm_storel_pd(c0 + 3, r);
+    _mm_storeh_pd(c1 + 3, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][0], Lv[0][2]), _mm_mul_pd(Q[0][2], Lv[0][0])), _mm_add_pd(_mm_mul_pd(Q[1][0], Lv[1][2]), _mm_mul_pd(Q[1][2], Lv[1][0]))), _mm_add_pd(_mm_mul_pd(Q[2][0], Lv[2][2]), _mm_mul_pd(Q[2][2], Lv[2][0])));
+    _mm_storel_pd(c0 + 4, r);
+    _mm_storeh_pd(c1 + 4, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][0], Lv[0][3]), _mm_mul_pd(Q[0][6], Lv[0][0])), _mm_add_pd(_mm_mul_pd(Q[1][0], Lv[1][3]), _mm_mul_pd(Q[1][6], Lv[1][0]))), _mm_add_pd(_mm_mul_pd(Q[2][0], Lv[2][3]), _mm_mul_pd(Q[2][6], Lv[2][0])));
+    _mm_storel_pd(c0 + 5, r);
+    _mm_storeh_pd(c1 + 5, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][3], Lv[0][2]), _mm_mul_pd(Q[0][4], Lv[0][1])), _mm_add_pd(_mm_mul_pd(Q[1][3], Lv[1][2]), _mm_mul_pd(Q[1][4], Lv[1][1]))), _mm_add_pd(_mm_mul_pd(Q[2][3], Lv[2][2]), _mm_mul_pd(Q[2][4], Lv[2][1])));
+    _mm_storel_pd(c0 + 6, r);
+    _mm_storeh_pd(c1 + 6, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][3], Lv[0][3]), _mm_mul_pd(Q[0][7], Lv[0][1])), _mm_add_pd(_mm_mul_pd(Q[1][3], Lv[1][3]), _mm_mul_pd(Q[1][7], Lv[1][1]))), _mm_add_pd(_mm_mul_pd(Q[2][3], Lv[2][3]), _mm_mul_pd(Q[2][7], Lv[2][1])));
+    _mm_storel_pd(c0 + 7, r);
+    _mm_storeh_pd(c1 + 7, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][1], Lv[0][2]), _mm_mul_pd(Q[0][2], Lv[0][1])), _mm_mul_pd(Q[0][4], Lv[0][0])), _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[1][1], Lv[1][2]), _mm_mul_pd(Q[1][2], Lv[1][1])), _mm_mul_pd(Q[1][4], Lv[1][0]))), _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[2][1], Lv[2][2]), _mm_mul_pd(Q[2][2], Lv[2][1])), _mm_mul_pd(Q[2][4], Lv[2][0])));
+    _mm_storel_pd(c0 + 8, r);
+    _mm_storeh_pd(c1 + 8, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][1], Lv[0][3]), _mm_mul_pd(Q[0][6], Lv[0][1])), _mm_mul_pd(Q[0][7], Lv[0][0])), _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[1][1], Lv[1][3]), _mm_mul_pd(Q[1][6], Lv[1][1])), _mm_mul_pd(Q[1][7], Lv[1][0]))), _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[2][1], Lv[2][3]), _mm_mul_pd(Q[2][6], Lv[2][1])), _mm_mul_pd(Q[2][7], Lv[2][0])));
+    _mm_storel_pd(c0 + 9, r);
+    _mm_storeh_pd(c1 + 9, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][2], Lv[0][2]), _mm_mul_pd(Q[0][5], Lv[0][0])), _mm_add_pd(_mm_mul_pd(Q[1][2], Lv[1][2]), _mm_mul_pd(Q[1][5], Lv[1][0]))), _mm_add_pd(_mm_mul_pd(Q[2][2], Lv[2][2]), _mm_mul_pd(Q[2][5], Lv[2][0])));
+    _mm_storel_pd(c0 + 10, r);
+    _mm_storeh_pd(c1 + 10, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][2], Lv[0][3]), _mm_mul_pd(Q[0][6], Lv[0][2])), _mm_mul_pd(Q[0][8], Lv[0][0])), _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[1][2], Lv[1][3]), _mm_mul_pd(Q[1][6], Lv[1][2])), _mm_mul_pd(Q[1][8], Lv[1][0]))), _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[2][2], Lv[2][3]), _mm_mul_pd(Q[2][6], Lv[2][2])), _mm_mul_pd(Q[2][8], Lv[2][0])));
+    _mm_storel_pd(c0 + 11, r);
+    _mm_storeh_pd(c1 + 11, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][6], Lv[0][3]), _mm_mul_pd(Q[0][9], Lv[0][0])), _mm_add_pd(_mm_mul_pd(Q[1][6], Lv[1][3]), _mm_mul_pd(Q[1][9], Lv[1][0]))), _mm_add_pd(_mm_mul_pd(Q[2][6], Lv[2][3]), _mm_mul_pd(Q[2][9], Lv[2][0])));
+    _mm_storel_pd(c0 + 12, r);
+    _mm_storeh_pd(c1 + 12, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][4], Lv[0][2]), _mm_mul_pd(Q[0][5], Lv[0][1])), _mm_add_pd(_mm_mul_pd(Q[1][4], Lv[1][2]), _mm_mul_pd(Q[1][5], Lv[1][1]))), _mm_add_pd(_mm_mul_pd(Q[2][4], Lv[2][2]), _mm_mul_pd(Q[2][5], Lv[2][1])));
+    _mm_storel_pd(c0 + 13, r);
+    _mm_storeh_pd(c1 + 13, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][4], Lv[0][3]), _mm_mul_pd(Q[0][7], Lv[0][2])), _mm_mul_pd(Q[0][8], Lv[0][1])), _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[1][4], Lv[1][3]), _mm_mul_pd(Q[1][7], Lv[1][2])), _mm_mul_pd(Q[1][8], Lv[1][1]))), _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[2][4], Lv[2][3]), _mm_mul_pd(Q[2][7], Lv[2][2])), _mm_mul_pd(Q[2][8], Lv[2][1])));
+    _mm_storel_pd(c0 + 14, r);
+    _mm_storeh_pd(c1 + 14, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][7], Lv[0][3]), _mm_mul_pd(Q[0][9], Lv[0][1])), _mm_add_pd(_mm_mul_pd(Q[1][7], Lv[1][3]), _mm_mul_pd(Q[1][9], Lv[1][1]))), _mm_add_pd(_mm_mul_pd(Q[2][7], Lv[2][3]), _mm_mul_pd(Q[2][9], Lv[2][1])));
+    _mm_storel_pd(c0 + 15, r);
+    _mm_storeh_pd(c1 + 15, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][5], Lv[0][2]), _mm_mul_pd(Q[1][5], Lv[1][2])), _mm_mul_pd(Q[2][5], Lv[2][2]));
+    _mm_storel_pd(c0 + 16, r);
+    _mm_storeh_pd(c1 + 16, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][5], Lv[0][3]), _mm_mul_pd(Q[0][8], Lv[0][2])), _mm_add_pd(_mm_mul_pd(Q[1][5], Lv[1][3]), _mm_mul_pd(Q[1][8], Lv[1][2]))), _mm_add_pd(_mm_mul_pd(Q[2][5], Lv[2][3]), _mm_mul_pd(Q[2][8], Lv[2][2])));
+    _mm_storel_pd(c0 + 17, r);
+    _mm_storeh_pd(c1 + 17, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][8], Lv[0][3]), _mm_mul_pd(Q[0][9], Lv[0][2])), _mm_add_pd(_mm_mul_pd(Q[1][8], Lv[1][3]), _mm_mul_pd(Q[1][9], Lv[1][2]))), _mm_add_pd(_mm_mul_pd(Q[2][8], Lv[2][3]), _mm_mul_pd(Q[2][9], Lv[2][2])));
+    _mm_storel_pd(c0 + 18, r);
+    _mm_storeh_pd(c1 + 18, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][9], Lv[0][3]), _mm_mul_pd(Q[1][9], Lv[1][3])), _mm_mul_pd(Q[2][9], Lv[2][3]));
+    _mm_storel_pd(c0 + 19, r);
+    _mm_storeh_pd(c1 + 19, r);
+}
+#endif
 
 /* q = a0 b0 + a1 b1 + a2 b2 (three linear-times-linear products), per monomial in mul_ll's terms,
  * summed in the same order as an accumulation from 0 */
@@ -231,9 +307,11 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
             for (int k = 0; k < 3; ++k)
                 Aq[i][k][m] = 2.0 * EEt[i][k][m] - (i == k ? tr : 0.0);
     }
+#ifndef FP_SSE2
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j)
             mul_ql3(Aq[i][0], L[j], Aq[i][1], L[3 + j], Aq[i][2], L[6 + j], M[3 * i + j]);
+#endif
     /* row 9: det E = sum_j E_0j * cofactor_0j */
     {
         double c0[10], c1[10], c2[10], t0[10], t1[10];
@@ -249,7 +327,36 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
         mul_ll(L[4], L[6], t1);
         for (int m = 0; m < 10; ++m)
             c2[m] = t0[m] - t1[m];
+#ifdef FP_SSE2
+        /* rows in pairs, one per lane: (j, 3 + j) for j = 0, 1, 2, then (6, 7), then (8, 9) */
+        __m128d Q[3][10], Lv[3][4];
+        for (int j = 0; j < 3; ++j) {
+            for (int k = 0; k < 3; ++k) {
+                for (int m = 0; m < 10; ++m)
+                    Q[k][m] = _mm_set_pd(Aq[1][k][m], Aq[0][k][m]);
+                for (int b = 0; b < 4; ++b)
+                    Lv[k][b] = _mm_set1_pd(L[3 * k + j][b]);
+            }
+            mul_ql3_pair((const __m128d(*)[10])Q, (const __m128d(*)[4])Lv, M[j], M[3 + j]);
+        }
+        for (int k = 0; k < 3; ++k) {
+            for (int m = 0; m < 10; ++m)
+                Q[k][m] = _mm_set1_pd(Aq[2][k][m]);
+            for (int b = 0; b < 4; ++b)
+                Lv[k][b] = _mm_set_pd(L[3 * k + 1][b], L[3 * k][b]);
+        }
+        mul_ql3_pair((const __m128d(*)[10])Q, (const __m128d(*)[4])Lv, M[6], M[7]);
+        const double *cof[3] = {c0, c1, c2};
+        for (int k = 0; k < 3; ++k) {
+            for (int m = 0; m < 10; ++m)
+                Q[k][m] = _mm_set_pd(cof[k][m], Aq[2][k][m]);
+            for (int b = 0; b < 4; ++b)
+                Lv[k][b] = _mm_set_pd(L[k][b], L[3 * k + 2][b]);
+        }
+        mul_ql3_pair((const __m128d(*)[10])Q, (const __m128d(*)[4])Lv, M[8], M[9]);
+#else
         mul_ql3(c0, L[0], c1, L[1], c2, L[2], M[9]);
+#endif
     }
     /* Elimination of the first 10 monomials: LU with partial pivoting (row swaps keep the
      * monomial order of the unknowns), then back-substitution for the last 6 rows only: B(z)

@@ -521,13 +521,11 @@ LA_INLINE void sturm_build(sturm_chain *s, const double *a, int deg)
     }
 }
 
-LA_INLINE double refine_root(const double *a, int deg, double lo, double hi)
+LA_INLINE double refine_root(const double *a, int deg, double lo, double hi, double flo, double fhi)
 {
-    /* the root lies in (lo, hi] */
-    double fhi = poly_eval(a, deg, hi);
+    /* the root lies in (lo, hi]; flo = p(lo), fhi = p(hi) (the caller's values) */
     if (fhi == 0.0)
         return hi;
-    double flo = poly_eval(a, deg, lo);
     if (flo == 0.0) { /* lo is a different root, excluded: step just inside */
         lo += 1e-9 * (hi - lo);
         flo = poly_eval(a, deg, lo);
@@ -637,7 +635,7 @@ LA_INLINE int roots_monic(const double *a, int deg, double bound, double *roots)
         if (cnt == 1) {
             double flo = poly_eval(a, deg, lo), fhi = poly_eval(a, deg, hi);
             if ((flo > 0.0) != (fhi > 0.0) || flo == 0.0 || fhi == 0.0 || depth >= 64) {
-                roots[nroots++] = refine_root(a, deg, lo, hi);
+                roots[nroots++] = refine_root(a, deg, lo, hi, flo, fhi);
                 continue;
             }
         } else if (depth >= 64 || !(hi - lo > 1e-14 * (1.0 + fabs(mid)))) {
