@@ -395,15 +395,70 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
             double f = rr[c] * inv;
             if (f == 0.0)
                 continue;
+#ifdef FP_SSE2
+            /* the pairs of columns k0..19, unrolled (entry point by k0) */
+            const __m128d fv = _mm_set1_pd(f);
+#define FP_UPD(k) _mm_storeu_pd(rr + (k), _mm_sub_pd(_mm_loadu_pd(rr + (k)), _mm_mul_pd(fv, _mm_loadu_pd(pr + (k)))))
+            switch (k0) {
+            case 0:
+                FP_UPD(0);
+                /* fall through */
+            case 2:
+                FP_UPD(2);
+                /* fall through */
+            case 4:
+                FP_UPD(4);
+                /* fall through */
+            case 6:
+                FP_UPD(6);
+                /* fall through */
+            case 8:
+                FP_UPD(8);
+                /* fall through */
+            case 10:
+                FP_UPD(10);
+                /* fall through */
+            case 12:
+                FP_UPD(12);
+                /* fall through */
+            case 14:
+                FP_UPD(14);
+                /* fall through */
+            case 16:
+                FP_UPD(16);
+                /* fall through */
+            case 18:
+                FP_UPD(18);
+            default:
+                break;
+            }
+#undef FP_UPD
+#else
             for (int k = k0; k < 20; k += 2) {
                 rr[k] -= f * pr[k];
                 rr[k + 1] -= f * pr[k + 1];
             }
+#endif
         }
     }
     for (int r = 9; r >= 4; --r) {
         double *rr = row[r];
         double inv = 1.0 / rr[r];
+#ifdef FP_SSE2
+        /* the five column pairs in registers, rows r+1..9 subtracted in the same order */
+        __m128d v[5];
+        for (int q = 0; q < 5; ++q)
+            v[q] = _mm_loadu_pd(rr + 10 + 2 * q);
+        for (int j = r + 1; j < 10; ++j) {
+            const __m128d fj = _mm_set1_pd(rr[j]);
+            const double *rj = row[j] + 10;
+            for (int q = 0; q < 5; ++q)
+                v[q] = _mm_sub_pd(v[q], _mm_mul_pd(fj, _mm_loadu_pd(rj + 2 * q)));
+        }
+        const __m128d iv = _mm_set1_pd(inv);
+        for (int q = 0; q < 5; ++q)
+            _mm_storeu_pd(rr + 10 + 2 * q, _mm_mul_pd(v[q], iv));
+#else
         for (int k = 10; k < 20; k += 2) {
             double v0 = rr[k], v1 = rr[k + 1];
             for (int j = r + 1; j < 10; ++j) {
@@ -413,6 +468,7 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
             rr[k] = v0 * inv;
             rr[k + 1] = v1 * inv;
         }
+#endif
     }
     /* B(z): rows from (x^2z, x^2), (y^2z, y^2), (xyz, xy); ascending coefficients in z */
     double B[3][3][5];
