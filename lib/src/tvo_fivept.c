@@ -189,6 +189,7 @@ FP_INLINE double peval(const double *c, int deg, double t)
     return v;
 }
 
+#ifndef FP_SSE2
 /* Householder step k of the QR factorisation of A^T, on the rows of A (row j of A is column j of
  * A^T): reflector v[k] (entries k..8), beta[k] = 2 / |v|^2, applied to rows k..4. Of row k only the
  * diagonal entry is computed (the rank check's R_kk; the entries it zeroes are never read). Called
@@ -238,10 +239,13 @@ FP_INLINE_BIG void hh_apply(double e[9], double v[5][9], const double beta[5], i
     for (int i = k; i < 9; ++i)
         e[i] -= d * v[k][i];
 }
+#endif
 
+#ifndef FP_SSE2
 /* 4-dim null space of the 5x9 matrix A (rows; overwritten) as the last 4 columns of Q in
- * A^T = Q R. */
-static int null_space_5x9(double A[5][9], double N[4][9])
+ * A^T = Q R, returned transposed: L[i][c] = entry i of null vector c (the entries of E as linear
+ * polynomials in x, y, z, 1). */
+static int null_space_5x9(double A[5][9], double L[9][4])
 {
     double v[5][9];
     double beta[5];
@@ -256,10 +260,105 @@ static int null_space_5x9(double A[5][9], double N[4][9])
         hh_apply(e, v, beta, 2);
         hh_apply(e, v, beta, 1);
         hh_apply(e, v, beta, 0);
-        memcpy(N[c], e, sizeof e);
+        for (int i = 0; i < 9; ++i)
+            L[i][c] = e[i];
     }
     return 1;
 }
+#else
+/* step k (constant) of the SSE2 Householder QR on M = A^T */
+FP_INLINE_BIG int hh_step_sse2(double M[9][6], double v[5][9], double beta[5], int k)
+{
+    double norm = 0.0;
+    for (int i = k; i < 9; ++i)
+        norm += M[i][k] * M[i][k];
+    norm = sqrt(norm);
+    if (!(norm > 1e-300))
+        return 0;
+    double alpha = M[k][k] > 0.0 ? -norm : norm;
+    for (int i = k; i < 9; ++i)
+        v[k][i] = M[i][k];
+    v[k][k] -= alpha;
+    double vv = 0.0;
+    for (int i = k; i < 9; ++i)
+        vv += v[k][i] * v[k][i];
+    if (!(vv > 1e-300))
+        return 0;
+    beta[k] = 2.0 / vv;
+    double d = 0.0;
+    for (int i = k; i < 9; ++i)
+        d += v[k][i] * M[i][k];
+    d *= beta[k];
+    M[k][k] -= d * v[k][k];
+    const __m128d bk = _mm_set1_pd(beta[k]);
+    for (int j = k + 1; j <= 4; j += 2) { /* columns j, j + 1 (5: zero padding) */
+        __m128d D = _mm_setzero_pd();
+        for (int i = k; i < 9; ++i)
+            D = _mm_add_pd(D, _mm_mul_pd(_mm_set1_pd(v[k][i]), _mm_loadu_pd(M[i] + j)));
+        D = _mm_mul_pd(D, bk);
+        for (int i = k; i < 9; ++i)
+            _mm_storeu_pd(M[i] + j, _mm_sub_pd(_mm_loadu_pd(M[i] + j), _mm_mul_pd(D, _mm_set1_pd(v[k][i]))));
+    }
+    /* rank check: the diagonal of R must not vanish relative to the row scale */
+    if (!(fabs(M[k][k]) > 1e-10 * fabs(M[0][0])))
+        return 0;
+    return 1;
+}
+
+/* reflector k (constant) applied to the unit vectors in pairs */
+FP_INLINE_BIG void hh_apply_sse2(__m128d E01[9], __m128d E23[9], double v[5][9], const double beta[5], int k)
+{
+    __m128d D01 = _mm_setzero_pd(), D23 = _mm_setzero_pd();
+    for (int i = k; i < 9; ++i) {
+        const __m128d vi = _mm_set1_pd(v[k][i]);
+        D01 = _mm_add_pd(D01, _mm_mul_pd(vi, E01[i]));
+        D23 = _mm_add_pd(D23, _mm_mul_pd(vi, E23[i]));
+    }
+    const __m128d bk = _mm_set1_pd(beta[k]);
+    D01 = _mm_mul_pd(D01, bk);
+    D23 = _mm_mul_pd(D23, bk);
+    for (int i = k; i < 9; ++i) {
+        const __m128d vi = _mm_set1_pd(v[k][i]);
+        E01[i] = _mm_sub_pd(E01[i], _mm_mul_pd(D01, vi));
+        E23[i] = _mm_sub_pd(E23[i], _mm_mul_pd(D23, vi));
+    }
+}
+
+/* SSE2 version of the same: A^T is stored with the columns of R in pairs (M[i][j], M[i][j + 1]),
+ * so a reflector is applied to two columns per instruction, and to the four unit vectors in two
+ * pairs (lanes: null vectors 0, 1 and 2, 3). Each lane does the operations of the C version in
+ * the same order (the sums over i run in ascending i per lane), so the results are the same. */
+static int null_space_5x9(double A[5][9], double L[9][4])
+{
+    double M[9][6];
+    double v[5][9], beta[5];
+    for (int i = 0; i < 9; ++i) {
+        for (int j = 0; j < 5; ++j)
+            M[i][j] = A[j][i];
+        M[i][5] = 0.0;
+    }
+    if (!hh_step_sse2(M, v, beta, 0) || !hh_step_sse2(M, v, beta, 1) || !hh_step_sse2(M, v, beta, 2) ||
+        !hh_step_sse2(M, v, beta, 3) || !hh_step_sse2(M, v, beta, 4))
+        return 0;
+    __m128d E01[9], E23[9];
+    for (int i = 0; i < 9; ++i)
+        E01[i] = E23[i] = _mm_setzero_pd();
+    E01[5] = _mm_set_pd(0.0, 1.0);
+    E01[6] = _mm_set_pd(1.0, 0.0);
+    E23[7] = _mm_set_pd(0.0, 1.0);
+    E23[8] = _mm_set_pd(1.0, 0.0);
+    hh_apply_sse2(E01, E23, v, beta, 4);
+    hh_apply_sse2(E01, E23, v, beta, 3);
+    hh_apply_sse2(E01, E23, v, beta, 2);
+    hh_apply_sse2(E01, E23, v, beta, 1);
+    hh_apply_sse2(E01, E23, v, beta, 0);
+    for (int i = 0; i < 9; ++i) {
+        _mm_storeu_pd(L[i], E01[i]);
+        _mm_storeu_pd(L[i] + 2, E23[i]);
+    }
+    return 1;
+}
+#endif
 
 int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10][9])
 {
@@ -278,17 +377,10 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
     }
     if (nf != 0.0)
         return 0;
-    double N[4][9];
-    if (!null_space_5x9(A, N))
-        return 0;
     /* entries of E as linear polynomials in (x, y, z, 1) */
     double L[9][4];
-    for (int k = 0; k < 9; ++k) {
-        L[k][0] = N[0][k];
-        L[k][1] = N[1][k];
-        L[k][2] = N[2][k];
-        L[k][3] = N[3][k];
-    }
+    if (!null_space_5x9(A, L))
+        return 0;
     double M[10][20];
     /* E E^T (symmetric, quadratic entries) */
     double EEt[3][3][10];
@@ -536,7 +628,7 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
         double x = best[0] / best[2], y = best[1] / best[2];
         double e[9], nrm = 0.0;
         for (int i = 0; i < 9; ++i) {
-            e[i] = x * N[0][i] + y * N[1][i] + z * N[2][i] + N[3][i];
+            e[i] = x * L[i][0] + y * L[i][1] + z * L[i][2] + L[i][3];
             nrm += e[i] * e[i];
         }
         nrm = sqrt(nrm);
