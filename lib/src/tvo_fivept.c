@@ -180,6 +180,18 @@ FP_INLINE void pmul(const double *a, int da, const double *b, int db, double *r)
             r[i + j] += a[i] * b[j];
 }
 
+#ifdef FP_SSE2
+/* pmul in two lanes (two products at once, pmul's operations per lane) */
+FP_INLINE void pmul2(const __m128d *a, int da, const __m128d *b, int db, __m128d *r)
+{
+    for (int i = 0; i <= da + db; ++i)
+        r[i] = _mm_setzero_pd();
+    for (int i = 0; i <= da; ++i)
+        for (int j = 0; j <= db; ++j)
+            r[i + j] = _mm_add_pd(r[i + j], _mm_mul_pd(a[i], b[j]));
+}
+#endif
+
 /* Horner, as tvo_la_poly_eval (same operations), inlined */
 FP_INLINE double peval(const double *c, int deg, double t)
 {
@@ -485,8 +497,6 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
         for (int r = c + 1; r < 10; ++r) {
             double *rr = row[r];
             double f = rr[c] * inv;
-            if (f == 0.0)
-                continue;
 #ifdef FP_SSE2
             /* the pairs of columns k0..19, unrolled (entry point by k0) */
             const __m128d fv = _mm_set1_pd(f);
@@ -585,7 +595,50 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
         B[r][2][4] = -b[16];
     }
     /* det B: degrees 3, 3, 4 per column */
-    double p1[8], p2[8], m0[8], m1[8], m2[8], d0[12], d1[12], d2[12], poly[11];
+    double poly[11];
+#ifdef FP_SSE2
+    {
+        /* the products in pairs, one per lane (the C code's operations per lane):
+         * (B11 B22, B10 B22) - (B12 B21, B12 B20) = (m0, m1); B10 B21 - B11 B20 = m2 (lanes of one
+         * product pair); (B00 m0, B01 m1) = (d0, d1); d2 = B02 m2 in C */
+        __m128d a[5], b[8], r[12], m01[8];
+        double m2[8], d2[12], p1[8], p2[8];
+        for (int i = 0; i <= 3; ++i)
+            a[i] = _mm_set_pd(B[1][0][i], B[1][1][i]);
+        for (int j = 0; j <= 4; ++j)
+            b[j] = _mm_set1_pd(B[2][2][j]);
+        pmul2(a, 3, b, 4, m01);
+        for (int i = 0; i <= 4; ++i)
+            a[i] = _mm_set1_pd(B[1][2][i]);
+        for (int j = 0; j <= 3; ++j)
+            b[j] = _mm_set_pd(B[2][0][j], B[2][1][j]);
+        pmul2(a, 4, b, 3, r);
+        for (int i = 0; i <= 7; ++i)
+            m01[i] = _mm_sub_pd(m01[i], r[i]);
+        for (int i = 0; i <= 3; ++i) {
+            a[i] = _mm_set_pd(B[1][1][i], B[1][0][i]);
+            b[i] = _mm_set_pd(B[2][0][i], B[2][1][i]);
+        }
+        pmul2(a, 3, b, 3, r);
+        for (int i = 0; i <= 6; ++i) {
+            _mm_storel_pd(p1 + i, r[i]);
+            _mm_storeh_pd(p2 + i, r[i]);
+            m2[i] = p1[i] - p2[i];
+        }
+        m2[7] = 0.0;
+        for (int i = 0; i <= 3; ++i)
+            a[i] = _mm_set_pd(B[0][1][i], B[0][0][i]);
+        pmul2(a, 3, m01, 7, r);
+        pmul(B[0][2], 4, m2, 6, d2);
+        for (int i = 0; i <= 10; ++i) {
+            double d0, d1;
+            _mm_storel_pd(&d0, r[i]);
+            _mm_storeh_pd(&d1, r[i]);
+            poly[i] = d0 - d1 + d2[i];
+        }
+    }
+#else
+    double p1[8], p2[8], m0[8], m1[8], m2[8], d0[12], d1[12], d2[12];
     pmul(B[1][1], 3, B[2][2], 4, p1);
     pmul(B[1][2], 4, B[2][1], 3, p2);
     for (int i = 0; i <= 7; ++i)
@@ -604,6 +657,7 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
     pmul(B[0][2], 4, m2, 6, d2);
     for (int i = 0; i <= 10; ++i)
         poly[i] = d0[i] - d1[i] + d2[i];
+#endif
     double roots[10];
     int nr = tvo_la_poly_real_roots(poly, 10, roots);
     int ns = 0;
