@@ -170,6 +170,45 @@ FP_INLINE void mul_ll3(const double a0[4], const double b0[4], const double a1[4
     q[9] = (a0[3] * b0[3] + a1[3] * b1[3]) + a2[3] * b2[3];
 }
 
+#ifdef FP_SSE2
+/* mul_ll3 for two results at once (lane 0 -> qa, lane 1 -> qb), mul_ll3's operations per lane */
+FP_INLINE_BIG void mul_ll3_pair(const __m128d A0[4], const __m128d B0[4], const __m128d A1[4], const __m128d B1[4],
+                                const __m128d A2[4], const __m128d B2[4], double qa[10], double qb[10])
+{
+    __m128d r;
+    r = _mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[0], B0[0]), _mm_mul_pd(A1[0], B1[0])), _mm_mul_pd(A2[0], B2[0]));
+    _mm_storel_pd(qa + 0, r);
+    _mm_storeh_pd(qb + 0, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[0], B0[1]), _mm_mul_pd(A0[1], B0[0])), _mm_add_pd(_mm_mul_pd(A1[0], B1[1]), _mm_mul_pd(A1[1], B1[0]))), _mm_add_pd(_mm_mul_pd(A2[0], B2[1]), _mm_mul_pd(A2[1], B2[0])));
+    _mm_storel_pd(qa + 1, r);
+    _mm_storeh_pd(qb + 1, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[0], B0[2]), _mm_mul_pd(A0[2], B0[0])), _mm_add_pd(_mm_mul_pd(A1[0], B1[2]), _mm_mul_pd(A1[2], B1[0]))), _mm_add_pd(_mm_mul_pd(A2[0], B2[2]), _mm_mul_pd(A2[2], B2[0])));
+    _mm_storel_pd(qa + 2, r);
+    _mm_storeh_pd(qb + 2, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[1], B0[1]), _mm_mul_pd(A1[1], B1[1])), _mm_mul_pd(A2[1], B2[1]));
+    _mm_storel_pd(qa + 3, r);
+    _mm_storeh_pd(qb + 3, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[1], B0[2]), _mm_mul_pd(A0[2], B0[1])), _mm_add_pd(_mm_mul_pd(A1[1], B1[2]), _mm_mul_pd(A1[2], B1[1]))), _mm_add_pd(_mm_mul_pd(A2[1], B2[2]), _mm_mul_pd(A2[2], B2[1])));
+    _mm_storel_pd(qa + 4, r);
+    _mm_storeh_pd(qb + 4, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[2], B0[2]), _mm_mul_pd(A1[2], B1[2])), _mm_mul_pd(A2[2], B2[2]));
+    _mm_storel_pd(qa + 5, r);
+    _mm_storeh_pd(qb + 5, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[0], B0[3]), _mm_mul_pd(A0[3], B0[0])), _mm_add_pd(_mm_mul_pd(A1[0], B1[3]), _mm_mul_pd(A1[3], B1[0]))), _mm_add_pd(_mm_mul_pd(A2[0], B2[3]), _mm_mul_pd(A2[3], B2[0])));
+    _mm_storel_pd(qa + 6, r);
+    _mm_storeh_pd(qb + 6, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[1], B0[3]), _mm_mul_pd(A0[3], B0[1])), _mm_add_pd(_mm_mul_pd(A1[1], B1[3]), _mm_mul_pd(A1[3], B1[1]))), _mm_add_pd(_mm_mul_pd(A2[1], B2[3]), _mm_mul_pd(A2[3], B2[1])));
+    _mm_storel_pd(qa + 7, r);
+    _mm_storeh_pd(qb + 7, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[2], B0[3]), _mm_mul_pd(A0[3], B0[2])), _mm_add_pd(_mm_mul_pd(A1[2], B1[3]), _mm_mul_pd(A1[3], B1[2]))), _mm_add_pd(_mm_mul_pd(A2[2], B2[3]), _mm_mul_pd(A2[3], B2[2])));
+    _mm_storel_pd(qa + 8, r);
+    _mm_storeh_pd(qb + 8, r);
+    r = _mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[3], B0[3]), _mm_mul_pd(A1[3], B1[3])), _mm_mul_pd(A2[3], B2[3]));
+    _mm_storel_pd(qa + 9, r);
+    _mm_storeh_pd(qb + 9, r);
+}
+#endif
+
 /* ascending-coefficient polynomial product: r (deg da+db) = a * b */
 FP_INLINE void pmul(const double *a, int da, const double *b, int db, double *r)
 {
@@ -396,6 +435,25 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
     double M[10][20];
     /* E E^T (symmetric, quadratic entries) */
     double EEt[3][3][10];
+#ifdef FP_SSE2
+    {
+        /* the six entries in pairs, one per lane: (00, 01), (02, 11), (12, 22) */
+        static const int ij[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
+        for (int p = 0; p < 6; p += 2) {
+            const int ia = ij[p][0], ja = ij[p][1], ib = ij[p + 1][0], jb = ij[p + 1][1];
+            __m128d Av[3][4], Bv[3][4];
+            for (int k = 0; k < 3; ++k)
+                for (int c = 0; c < 4; ++c) {
+                    Av[k][c] = _mm_set_pd(L[3 * ib + k][c], L[3 * ia + k][c]);
+                    Bv[k][c] = _mm_set_pd(L[3 * jb + k][c], L[3 * ja + k][c]);
+                }
+            mul_ll3_pair(Av[0], Bv[0], Av[1], Bv[1], Av[2], Bv[2], EEt[ia][ja], EEt[ib][jb]);
+        }
+        for (int i = 0; i < 3; ++i)
+            for (int j = i + 1; j < 3; ++j)
+                memcpy(EEt[j][i], EEt[i][j], sizeof EEt[i][j]);
+    }
+#else
     for (int i = 0; i < 3; ++i) {
         for (int j = i; j < 3; ++j) {
             mul_ll3(L[3 * i], L[3 * j], L[3 * i + 1], L[3 * j + 1], L[3 * i + 2], L[3 * j + 2], EEt[i][j]);
@@ -403,6 +461,7 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
                 memcpy(EEt[j][i], EEt[i][j], sizeof EEt[i][j]);
         }
     }
+#endif
     /* Aq = 2 E E^T - tr I (symmetric); rows 0..8: (Aq E)_ij */
     double Aq[3][3][10];
     for (int m = 0; m < 10; ++m) {

@@ -428,6 +428,30 @@ LA_INLINE int sturm_changes(const sturm_chain *s, int n, double t)
     return sign_changes(f, s->len);
 }
 
+/* one step of the fast chain: u = p(k-1) (degree d + 1), v = p(k) (degree d) -> w = p(k+1);
+ * 0 when the remainder is not generic */
+LA_INLINE int sturm_fast_step(sturm_chain *s, const double *u, const double *v, double *w, int k, int d)
+{
+    double q1 = u[d + 1] / v[d];
+    double q0 = (u[d] - q1 * v[d - 1]) / v[d];
+    double m = 0.0;
+    for (int j = 0; j < d; ++j) {
+        double r = u[j] - q0 * v[j] - (j > 0 ? q1 * v[j - 1] : 0.0);
+        w[j] = r;
+        if (fabs(r) > m)
+            m = fabs(r);
+    }
+    double lead = fabs(w[d - 1]);
+    if (!(lead > 1e-10 * m) || !isfinite(q0) || !isfinite(q1))
+        return 0; /* degree drops by more than one (or an exact division): general chain */
+    for (int j = 0; j < d; ++j)
+        w[j] = -w[j] / lead; /* p(k+1) = -rem / |lead|, so p(k-1) = (q0 + q1 t) p(k) - lead p(k+1) */
+    s->q[k][0] = q0;
+    s->q[k][1] = q1;
+    s->q[k][2] = -lead;
+    return 1;
+}
+
 /* fast chain of a monic polynomial a of degree deg >= 2; 0 when some remainder is not generic */
 LA_INLINE int sturm_build_fast(sturm_chain *s, const double *a, int deg)
 {
@@ -438,29 +462,25 @@ LA_INLINE int sturm_build_fast(sturm_chain *s, const double *a, int deg)
     for (int i = 1; i <= deg; ++i)
         v[i - 1] = (double)i * a[i] / (double)deg; /* p' / deg: monic */
     s->n = deg;
-    for (int k = 1; k < deg; ++k) {
-        int d = deg - k; /* deg v; deg u = d + 1 */
-        double q1 = u[d + 1] / v[d];
-        double q0 = (u[d] - q1 * v[d - 1]) / v[d];
-        double m = 0.0;
-        for (int j = 0; j < d; ++j) {
-            double r = u[j] - q0 * v[j] - (j > 0 ? q1 * v[j - 1] : 0.0);
-            w[j] = r;
-            if (fabs(r) > m)
-                m = fabs(r);
+    if (deg == 10) {
+        /* the same steps with constant k (constant loop bounds), buffers rotating as below */
+        if (!sturm_fast_step(s, buf[0], buf[1], buf[2], 1, 9) || !sturm_fast_step(s, buf[1], buf[2], buf[0], 2, 8) ||
+            !sturm_fast_step(s, buf[2], buf[0], buf[1], 3, 7) || !sturm_fast_step(s, buf[0], buf[1], buf[2], 4, 6) ||
+            !sturm_fast_step(s, buf[1], buf[2], buf[0], 5, 5) || !sturm_fast_step(s, buf[2], buf[0], buf[1], 6, 4) ||
+            !sturm_fast_step(s, buf[0], buf[1], buf[2], 7, 3) || !sturm_fast_step(s, buf[1], buf[2], buf[0], 8, 2) ||
+            !sturm_fast_step(s, buf[2], buf[0], buf[1], 9, 1))
+            return 0;
+        u = buf[0]; /* after 9 steps: u = p(9), v = p(10) */
+        v = buf[1];
+    } else {
+        for (int k = 1; k < deg; ++k) {
+            if (!sturm_fast_step(s, u, v, w, k, deg - k))
+                return 0;
+            double *tmp = u;
+            u = v;
+            v = w;
+            w = tmp;
         }
-        double lead = fabs(w[d - 1]);
-        if (!(lead > 1e-10 * m) || !isfinite(q0) || !isfinite(q1))
-            return 0; /* degree drops by more than one (or an exact division): general chain */
-        for (int j = 0; j < d; ++j)
-            w[j] = -w[j] / lead; /* p(k+1) = -rem / |lead|, so p(k-1) = (q0 + q1 t) p(k) - lead p(k+1) */
-        s->q[k][0] = q0;
-        s->q[k][1] = q1;
-        s->q[k][2] = -lead;
-        double *tmp = u;
-        u = v;
-        v = w;
-        w = tmp;
     }
     /* now u = p(deg-1) (linear), v = p(deg) (constant) */
     s->lin[0] = u[0];
@@ -592,18 +612,16 @@ LA_INLINE double refine_root(const double *a, int deg, double lo, double hi, dou
             lo = x;
         else
             hi = x;
-        double xn = x - f / df;
-        if (df != 0.0 && fabs(xn - x) <= 1e-10 * (1.0 + fabs(x)))
+        /* f != 0 here, so df == 0 gives an infinite xn, which fails the convergence test and the
+         * bracket test (no separate df == 0 tests) */
+        double xn = x - f / df, ax = 1.0 + fabs(x);
+        if (fabs(xn - x) <= 1e-10 * ax)
             return xn; /* converged (tested first: the bracket may still be wide on one side) */
-        if (df == 0.0 || !(xn > lo && xn < hi) || fabs(2.0 * f) > fabs(dx_old * df)) {
-            dx_old = dx;
+        if (!(xn > lo && xn < hi) || fabs(2.0 * f) > fabs(dx_old * df))
             xn = 0.5 * (lo + hi);
-            dx = xn - x;
-        } else {
-            dx_old = dx;
-            dx = xn - x;
-        }
-        if (fabs(dx) <= 1e-13 * (1.0 + fabs(x)) || hi - lo <= 1e-15 * (1.0 + fabs(x)))
+        dx_old = dx;
+        dx = xn - x;
+        if (fabs(dx) <= 1e-13 * ax || hi - lo <= 1e-15 * ax)
             return xn;
         x = xn;
     }
