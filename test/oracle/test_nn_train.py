@@ -152,7 +152,7 @@ def test_calibration_rule1_reproduces_golden_models():
     assert nnfmt.write(model) == ref
     with pytest.raises(ValueError):
         quant.quantize_model([quant.random_float_branch(np.random.default_rng(0), 0, "relu", sizes=(4,))],
-                             quant.synthetic_features(np.random.default_rng(0), 50), calibration=3)
+                             quant.synthetic_features(np.random.default_rng(0), 50), calibration=4)
 
 
 def test_int8_aware_stage3():

@@ -73,8 +73,8 @@ def main(argv=None):
     ap.add_argument("-o", "--out", required=True)
     ap.add_argument("--golden", default=None, help="also write golden vectors here")
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--calibration", type=int, default=quant.CALIBRATION_DEFAULT, choices=[1, 2],
-                    help="quantisation calibration rule (quant.py; 1: files exported before rule 2)")
+    ap.add_argument("--calibration", type=int, default=quant.CALIBRATION_DEFAULT, choices=[1, 2, 3],
+                    help="quantisation calibration rule (quant.py; 1: files exported before rule 2; 3: tried)")
     args = ap.parse_args(argv)
     branches, meta = quant.load_checkpoint(args.checkpoint)
     if args.dataset == "synthetic":

@@ -60,6 +60,9 @@ class FloatBranch:
     # [clip_lo, clip_hi] (train.py --input-clip); the int8 input stage then implements the same clamp
     clip_lo: np.ndarray = None
     clip_hi: np.ndarray = None
+    # optional per hidden layer upper bound of a relu (PACT, train.pact_finetune): the float model's hidden
+    # layer k is min(relu(a), act_clip[k]); the exporter (rule 2) requantises it over exactly [0, act_clip[k]]
+    act_clip: List[float] = None
 
     def normalise(self, features: np.ndarray) -> np.ndarray:
         f = np.asarray(features, np.float32)[:, self.feature_ids]
@@ -76,6 +79,8 @@ class FloatBranch:
             a = x @ np.asarray(w, np.float64).T + np.asarray(b, np.float64)
             last = k == len(self.weights) - 1
             x = a if last else activate(self.activation, a)
+            if not last and self.act_clip is not None:
+                x = np.minimum(x, float(self.act_clip[k]))
             trace.append((a, x))
         return trace
 
@@ -144,6 +149,12 @@ def make_lut(act: str, in_scale: float, in_zp: int, out_scale: float, out_zp: in
 #      float ones, relu channels on the rows where the float channel is positive) to map the int8 inputs the
 #      interpreter really gives that layer to the float model's pre-activations, before they are quantised.
 #   Rule 2's settings were chosen on the training sequences only (models/MODEL_CARD.md, "Quantisation").
+#   A relu branch whose float model clips its hidden layers (FloatBranch.act_clip, PACT fine-tuning:
+#   train.pact_finetune) is requantised over exactly [0, act_clip[k]] instead (no headroom): the int8
+#   saturation then is the float model's clip.
+#   3 (not a default; tried, models/MODEL_CARD.md "Quantisation"): rule 2 with each layer's weights rounded
+#      one input at a time with the least-squares compensation of the others and the bias (_sequential_round,
+#      GPTQ-like) instead of to the nearest level.
 CALIBRATION_DEFAULT = 2
 RELU_HEADROOM = 0.75
 REFIT_RIDGE = 0.01
@@ -205,7 +216,8 @@ def equalise_inputs(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0,
                        biases=[b0, *fb.biases[1:]], activation=fb.activation, out_scale=fb.out_scale,
                        out_offset=fb.out_offset,
                        clip_lo=None if fb.clip_lo is None else np.full(len(ns), e_lo),
-                       clip_hi=None if fb.clip_hi is None else np.full(len(ns), e_hi))
+                       clip_hi=None if fb.clip_hi is None else np.full(len(ns), e_hi),
+                       act_clip=None if fb.act_clip is None else list(fb.act_clip))
 
 
 def _range(v: np.ndarray, pct: float):
@@ -235,17 +247,48 @@ def _refit_layer(w: np.ndarray, b: np.ndarray, x: np.ndarray, target: np.ndarray
     return sol[:, :m], sol[:, m]
 
 
+def _sequential_round(w: np.ndarray, b: np.ndarray, s_w: np.ndarray, x: np.ndarray, mask=None, damp: float = 0.01):
+    """Rule 3's weight rounding (GPTQ / optimal brain quantisation, one output channel at a time): the
+    channel's int8 inputs x (dequantised, N x m) give the Hessian H = X^T X of its squared pre-activation
+    error (X = [x 1]: the bias is a continuous column, never rounded); weights are rounded to their channel's
+    levels (s_w, clamped to +-127) one input at a time, each rounding error compensated by the inputs not yet
+    rounded and by the bias (the least-squares update through the Cholesky factor of H^-1). mask (N, n_out):
+    the rows of each channel (relu: where the float channel is positive), as the re-fit. Returns (w, b): w
+    on the int8 levels (w / s_w integral), b continuous."""
+    n, m = x.shape
+    X = np.hstack([x, np.ones((n, 1))])
+    w, b = np.array(w, np.float64), np.array(b, np.float64)
+    for o in range(w.shape[0]):
+        Xo = X if mask is None else X[mask[:, o]]
+        H = Xo.T @ Xo
+        H += damp * max(float(np.mean(np.diag(H))), 1e-12) * np.eye(m + 1)
+        U = np.linalg.cholesky(np.linalg.inv(H)).T  # H^-1 = U^T U, U upper triangular
+        v = np.append(w[o], b[o])
+        for j in range(m):
+            q = float(np.clip(np.rint(v[j] / s_w[o]), -127, 127)) * s_w[o]
+            e = (v[j] - q) / U[j, j]
+            v[j] = q
+            v[j + 1:] -= e * U[j, j + 1:]
+        w[o], b[o] = v[:m], v[m]
+    return w, b
+
+
 def quantize_branch(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0, equalise: bool = True,
                     calibration: int = CALIBRATION_DEFAULT) -> nnfmt.Branch:
     """pct: clip calibration ranges at the pct / 100-pct percentiles (0 = min/max). A branch with an
     input domain (clip_lo/clip_hi) gets it as its int8 input range (equalise_inputs): the int8 input
     stage's clamp is then the model's own clamp (rule 2: within the features' own range). calibration:
     the rule (1 or 2, see CALIBRATION_DEFAULT)."""
-    if calibration not in (1, 2):
-        raise ValueError(f"calibration rule {calibration}: 1 or 2")
+    if calibration not in (1, 2, 3):
+        raise ValueError(f"calibration rule {calibration}: 1, 2 or 3")
     rule2 = calibration >= 2
     if fb.clip_lo is not None and not equalise:
         raise ValueError("a branch with an input domain is quantised with equalise=True")
+    if fb.act_clip is not None:
+        if not rule2 or fb.activation != "relu":
+            raise ValueError("a branch with clipped relu layers (act_clip) is quantised with rule 2, relu only")
+        if len(fb.act_clip) != len(fb.weights) - 1 or not all(math.isfinite(c) and c > 0 for c in fb.act_clip):
+            raise ValueError(f"act_clip {fb.act_clip}: one finite bound > 0 per hidden layer")
     if equalise:
         fb = equalise_inputs(fb, calib, pct, calibration)
     trace = fb.forward_all(calib)
@@ -272,6 +315,8 @@ def quantize_branch(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0, equali
             w, b = _refit_layer(w, b, (xq.astype(np.float64) - zp_in) * s_in, pre_f, REFIT_RIDGE, mask)
         amax = np.abs(w).max(axis=1)
         s_w = np.where(amax > 0, amax / 127.0, 1.0)
+        if calibration >= 3:
+            w, b = _sequential_round(w, b, s_w, (xq.astype(np.float64) - zp_in) * s_in, mask)
         wq = np.clip(np.rint(w / s_w[:, None]), -127, 127).astype(np.int8)
         acc_scale = s_in * s_w
         bq = np.clip(np.rint(b / acc_scale), -(2**30), 2**30).astype(np.int32)
@@ -286,6 +331,8 @@ def quantize_branch(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0, equali
                 # int8 levels, so the requantised range is [0, hi] (zero point -128) and the table is the
                 # identity (same range after the activation): no level is spent on values relu zeroes
                 lo_pre, hi_pre = 0.0, hi_pre * (1.0 + RELU_HEADROOM)
+                if fb.act_clip is not None:  # a clipped relu (PACT): the range is the float model's own clip,
+                    hi_pre = float(fb.act_clip[k])  # no headroom: saturation is exact, only rounding remains
             s_out, zp_out = asym_params(lo_pre, hi_pre)
             mult, shift = zip(*(quantize_multiplier(r) for r in acc_scale / s_out))
             L = nnfmt.Layer(w=wq, bias=bq, act=fb.activation, out_kind=nnfmt.OUT_S8, in_zp=zp_in,
@@ -359,6 +406,8 @@ def save_checkpoint(path, branches: Sequence[FloatBranch], meta: dict) -> None:
         if b.clip_lo is not None:
             arrays[f"b{i}_clip_lo"] = np.asarray(b.clip_lo, np.float64)
             arrays[f"b{i}_clip_hi"] = np.asarray(b.clip_hi, np.float64)
+        if b.act_clip is not None:
+            arrays[f"b{i}_act_clip"] = np.asarray(b.act_clip, np.float64)
         meta["branches"].append({"dof": int(b.dof), "feature_ids": [int(x) for x in b.feature_ids],
                                  "activation": b.activation, "n_layers": len(b.weights),
                                  "out_scale": float(b.out_scale), "out_offset": float(b.out_offset)})
@@ -381,5 +430,6 @@ def load_checkpoint(path):
             biases=[z[f"b{i}_b{k}"].astype(np.float64) for k in range(m["n_layers"])],
             activation=m["activation"], out_scale=m["out_scale"], out_offset=m["out_offset"],
             clip_lo=z[f"b{i}_clip_lo"] if f"b{i}_clip_lo" in z else None,
-            clip_hi=z[f"b{i}_clip_hi"] if f"b{i}_clip_hi" in z else None))
+            clip_hi=z[f"b{i}_clip_hi"] if f"b{i}_clip_hi" in z else None,
+            act_clip=[float(c) for c in z[f"b{i}_act_clip"]] if f"b{i}_act_clip" in z else None))
     return branches, meta

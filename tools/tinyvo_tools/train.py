@@ -17,7 +17,10 @@ makes it (`--qat-mode`): `fq` trains the fake-quantised forward pass (inputs on 
 weights per output channel, hidden layers requantised with the exporter's ranges, recalibrated on the
 training rows every epoch; straight-through gradients), `noise` the float pass with uniform noise of one
 int8 step on inputs and hidden pre-activations, `consist` the float pass plus `--qat-weight` x the mean
-squared difference between the fake-quantised and the float output. Input normalisation (mean/std) and target normalisation are fitted on the training rows only and
+squared difference between the fake-quantised and the float output. `--pact-epochs N` (off by default;
+instead of stage 3): PACT, each hidden relu clipped at a trained bound (pact_finetune; `python -m
+tinyvo_tools.pact` applies it to a checkpoint, with 0 epochs the bound is the training rows' maximum, as
+in the shipped step model). Input normalisation (mean/std) and target normalisation are fitted on the training rows only and
 stored in the checkpoint (tinyvo_tools.quant.save_checkpoint); export.py quantises it.
 Seeded: same data + seed -> same checkpoint (single-threaded torch).
 """
@@ -169,16 +172,113 @@ def _qat_forward(net, x, col_scale, calib, activation: str, noise_gen=None):
     return h
 
 
+def _pact_module(alpha: float):
+    """A relu clipped at a trained bound (PACT, Choi et al. 2018): y = relu(x) - relu(x - alpha) =
+    clamp(x, 0, alpha) for alpha > 0; the gradient reaches alpha where x > alpha."""
+    torch = _torch()
+
+    class Pact(torch.nn.Module):
+        def __init__(self, a):
+            super().__init__()
+            self.alpha = torch.nn.Parameter(torch.tensor(float(a)))
+
+        def forward(self, x):
+            return torch.relu(x) - torch.relu(x - self.alpha)
+
+    return Pact(alpha)
+
+
+def _net_from_branch(fb: "quant.FloatBranch"):
+    torch = _torch()
+    sizes = tuple(w.shape[0] for w in fb.weights[:-1])
+    net = build_branch(len(fb.feature_ids), fb.activation, sizes)
+    lin = [m for m in net if isinstance(m, torch.nn.Linear)]
+    with torch.no_grad():
+        for m, w, b in zip(lin, fb.weights, fb.biases):
+            m.weight.copy_(torch.from_numpy(np.asarray(w, np.float32)))
+            m.bias.copy_(torch.from_numpy(np.asarray(b, np.float32)))
+    return net
+
+
+def pact_finetune(branches, features: np.ndarray, targets: np.ndarray, *, epochs: int = 10, lr: float = 1e-4,
+                  decay: float = 0.0, init: float = 1.0, alpha_lr: Optional[float] = None, batch: int = 256, seed: int = 0,
+                  huber_delta: float = 1.0, progress: bool = True):
+    """PACT fine-tuning of the relu branches among `branches` (quant.FloatBranch; others returned as they
+    are): every hidden relu becomes min(relu(a), alpha_k) with alpha_k a trained parameter initialised to
+    init x the layer's largest pre-activation on `features` (the training rows: with init >= 1 the function
+    on them is unchanged at the start); then all weights and bounds are fine-tuned together for `epochs`
+    (RMSprop at lr, the bounds at alpha_lr (default 100 x lr: an RMSprop step moves a parameter by about its
+    learning rate, and a bound is O(1..10) where a weight is O(0.1)), the trainer's Huber loss on the branch's
+    normalised target, plus decay x sum alpha_k^2, PACT's L2 term that trades clipping against resolution). Returns new FloatBranches with act_clip set:
+    the float model then clips exactly where the int8 interpreter saturates (quant.quantize_branch).
+    Seeded and single-threaded like train()."""
+    torch = _torch()
+    from tqdm import tqdm
+    torch.manual_seed(seed)
+    torch.set_num_threads(1)
+    rng = np.random.default_rng(seed)
+    targets = targets_with_step(targets)
+    out = []
+    for fb in branches:
+        if fb.activation != "relu":
+            out.append(fb)
+            continue
+        net = _net_from_branch(fb)
+        xn = torch.from_numpy(fb.normalise(features).astype(np.float32))
+        yn = torch.from_numpy(((targets[:, fb.dof] - fb.out_offset) / fb.out_scale).astype(np.float32))
+        mods = list(net)
+        with torch.no_grad():
+            h = xn
+            for k in range(0, len(mods) - 1, 2):
+                pre = mods[k](h)
+                prev = fb.act_clip[k // 2] if fb.act_clip is not None else float("inf")
+                net[k + 1] = _pact_module(min(float(pre.max()) * init, prev))
+                h = net[k + 1](pre)
+        alphas = [m.alpha for m in net if not isinstance(m, torch.nn.Linear)]
+        others = [p for m in net if isinstance(m, torch.nn.Linear) for p in m.parameters()]
+        opt = torch.optim.RMSprop([{"params": others},
+                                   {"params": alphas, "lr": alpha_lr if alpha_lr is not None else 100.0 * lr}], lr=lr)
+        loss_fn = torch.nn.HuberLoss(delta=huber_delta)
+        n = len(xn)
+        bar = tqdm(range(epochs), desc=f"PACT fine-tuning {nnfmt.DOFS[fb.dof]}", disable=not progress, leave=True)
+        for _ in bar:
+            perm = torch.from_numpy(rng.permutation(n))
+            total = 0.0
+            for s in range(0, n, batch):
+                idx = perm[s:s + batch]
+                opt.zero_grad()
+                loss = loss_fn(net(xn[idx])[:, 0], yn[idx]) + decay * sum(a ** 2 for a in alphas)
+                loss.backward()
+                opt.step()
+                with torch.no_grad():  # a bound stays > 0 (a zero bound would be a dead layer)
+                    for a in alphas:
+                        a.clamp_(min=1e-3)
+                total += float(loss) * len(idx)
+            bar.set_postfix(loss=f"{total / n:.4f}", alpha="/".join(f"{float(a):.2f}" for a in alphas))
+        lin = [m for m in net if isinstance(m, torch.nn.Linear)]
+        out.append(quant.FloatBranch(
+            dof=fb.dof, feature_ids=list(fb.feature_ids), norm_scale=fb.norm_scale, norm_offset=fb.norm_offset,
+            weights=[m.weight.detach().numpy().astype(np.float64) for m in lin],
+            biases=[m.bias.detach().numpy().astype(np.float64) for m in lin],
+            activation=fb.activation, out_scale=fb.out_scale, out_offset=fb.out_offset,
+            clip_lo=fb.clip_lo, clip_hi=fb.clip_hi, act_clip=[float(a.detach()) for a in alphas]))
+    return out
+
+
 def train(features: np.ndarray, targets: np.ndarray, activations: Dict[int, str], *,
           sizes=DEFAULT_SIZES, epochs: int = 100, joint_epochs: int = 20, batch: int = 256,
           lr: float = 2e-4, joint_lr: Optional[float] = None, seed: int = 0, feature_ids=None,
           dofs: Sequence[int] = range(6), progress: bool = True, huber_delta: float = 1.0,
           input_clip: float = 0.0, input_clip_margin: float = 0.25, qat_epochs: int = 0,
-          qat_lr: Optional[float] = None, qat_mode: str = "fq", qat_weight: float = 100.0):
+          qat_lr: Optional[float] = None, qat_mode: str = "fq", qat_weight: float = 100.0,
+          pact_epochs: int = 0, pact_lr: Optional[float] = None, pact_decay: float = 0.0, pact_init: float = 1.0):
     """Returns a list of quant.FloatBranch (one per DoF in `dofs`).
 
     qat_epochs > 0: stage 3 (module docstring), all branches together, RMSprop at qat_lr (default lr / 10),
     qat_mode in QAT_MODES, qat_weight the weight of the consistency term (mode consist).
+
+    pact_epochs > 0 (instead of stage 3): pact_finetune after stage 2 on the same rows (lr pact_lr, default
+    lr / 10; pact_decay, pact_init: its decay and init).
 
     input_clip > 0: the model's input domain. Each normalised input is clamped to its training
     [input_clip, 100 - input_clip] percentile range widened by input_clip_margin of its width on each side
@@ -244,6 +344,8 @@ def train(features: np.ndarray, targets: np.ndarray, activations: Dict[int, str]
                 opt.step()
                 total += float(loss) * len(idx)
             bar.set_postfix(loss=f"{total / n:.4f}")
+    if qat_epochs > 0 and pact_epochs > 0:
+        raise ValueError("stage 3 (qat_epochs) and PACT (pact_epochs) are alternatives")
     if qat_epochs > 0:  # stage 3: fine-tuning against int8 rounding
         if qat_mode not in QAT_MODES:
             raise ValueError(f"qat_mode {qat_mode}: one of {QAT_MODES}")
@@ -294,6 +396,10 @@ def train(features: np.ndarray, targets: np.ndarray, activations: Dict[int, str]
             biases=[m.bias.detach().numpy().astype(np.float64) for m in lin],
             activation=activations[d], out_scale=float(t_std[d]), out_offset=float(t_mean[d]),
             clip_lo=clip_lo, clip_hi=clip_hi))
+    if pact_epochs > 0:
+        branches = pact_finetune(branches, features, targets, epochs=pact_epochs,
+                                 lr=pact_lr if pact_lr is not None else lr * 0.1, decay=pact_decay, init=pact_init,
+                                 batch=batch, seed=seed, huber_delta=huber_delta, progress=progress)
     return branches
 
 
@@ -319,6 +425,11 @@ def main(argv=None):
     ap.add_argument("--qat-lr", type=float, default=None, help="its learning rate (default: lr / 10)")
     ap.add_argument("--qat-mode", default="fq", choices=QAT_MODES)
     ap.add_argument("--qat-weight", type=float, default=100.0, help="consistency weight (--qat-mode consist)")
+    ap.add_argument("--pact-epochs", type=int, default=0,
+                    help="PACT fine-tuning epochs after stage 2 (relu branches clip at trained bounds; 0: off)")
+    ap.add_argument("--pact-lr", type=float, default=None, help="its learning rate (default: lr / 10)")
+    ap.add_argument("--pact-decay", type=float, default=0.0, help="its L2 weight on the bounds")
+    ap.add_argument("--pact-init", type=float, default=1.0, help="initial bound: this x the layer's training max")
     args = ap.parse_args(argv)
     if args.dataset == "synthetic":
         f, t, seq = synthetic_dataset(np.random.default_rng(args.seed), 20000)
@@ -334,14 +445,16 @@ def main(argv=None):
                      batch=args.batch, lr=args.lr, seed=args.seed,
                      input_clip=args.input_clip, input_clip_margin=args.input_clip_margin,
                      qat_epochs=args.qat_epochs, qat_lr=args.qat_lr, qat_mode=args.qat_mode,
-                     qat_weight=args.qat_weight)
+                     qat_weight=args.qat_weight, pact_epochs=args.pact_epochs, pact_lr=args.pact_lr,
+                     pact_decay=args.pact_decay, pact_init=args.pact_init)
     quant.save_checkpoint(args.out, branches, {
         "tinyvo_tools": __version__, "dataset": args.dataset, "val_sequences": val,
         "train_sequences": sorted(set(seq[tr].tolist())), "sizes": list(sizes), "epochs": args.epochs,
         "joint_epochs": args.joint_epochs, "lr": args.lr, "batch": args.batch, "seed": args.seed,
         "input_clip": args.input_clip,
         "input_clip_margin": args.input_clip_margin, "qat_epochs": args.qat_epochs, "qat_lr": args.qat_lr,
-        "qat_mode": args.qat_mode, "qat_weight": args.qat_weight,
+        "qat_mode": args.qat_mode, "qat_weight": args.qat_weight, "pact_epochs": args.pact_epochs,
+        "pact_lr": args.pact_lr, "pact_decay": args.pact_decay, "pact_init": args.pact_init,
         "feature_layout_id": nnfmt.FEAT_LAYOUT_ID})
     print(f"wrote {args.out}: {len(branches)} branches, trained on {int(tr.sum())} rows")
 

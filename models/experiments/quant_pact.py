@@ -1,0 +1,131 @@
+"""PACT fine-tuning of the step-length model (train.pact_finetune: each hidden relu clipped at a trained
+bound, the exporter's rule 2 then requantising over exactly [0, bound] with no headroom), judged on the
+TRAINING sequences only (models/MODEL_CARD.md, "Quantisation"): leave one sequence out, the protocol of
+quant_finetune.py.
+
+    cd tools && ../.venv/bin/python ../models/experiments/quant_pact.py \
+        --dataset ../out/model/scale2/dataset.npz --features ../out/model/scale2/features \
+        --seq-root ../out/model/seq --out ../out/model/pact/loso
+
+For each training sequence h: a relu log-step branch is trained on the other four (40 + 10 epochs, lr 1e-3,
+seed 0, input domain 0.5 %: quant_finetune.py's "none", i.e. the shipped configuration), then each PACT
+configuration fine-tunes a copy of it on the same four; every model is exported with the exporter's default
+calibration (rule 2) on those four and evaluated on h: int8-vs-float gap (% of the std of |t| over the
+training rows, pooled over the five h), held-out step RMSE of the float branch, h's ATE SE(3) with the scale
+filter a = 0.01 (the shipped use) with the float and with the int8 step, and the trained bounds.
+Pass rule (fixed before the run): pooled gap < 2 % AND mean held-out ATE float <= the shipped configuration's
+(first row), int8 <= its int8, held-out step RMSE <= its; among those passing, the lowest mean int8 ATE.
+Validation sequences are not read.
+"""
+import argparse
+import json
+import os
+import sys
+
+import numpy as np
+
+from tinyvo_tools import nnfmt, quant, tables, train
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from relscale_experiments import filter_steps, seq_data  # noqa: E402
+
+TRAIN = ["MH_01", "MH_02", "MH_03", "V1_01", "V2_01"]
+# (label, pact_finetune keyword arguments or None for the unclipped model, exporter calibration rule);
+# rule 2 = the exporter's (unclipped relu: 0.75 headroom; clipped: exactly [0, bound]), rule 3 = rule 2 with
+# sequential (GPTQ-like) weight rounding (quant._sequential_round)
+P1 = dict(epochs=20, lr=1e-4, alpha_lr=5e-2, decay=1e-3)
+P2 = dict(epochs=20, lr=1e-4, alpha_lr=5e-2, decay=1e-2)
+P0 = dict(epochs=10, lr=1e-4, alpha_lr=1e-2, decay=0.0)
+CONFIGS = [("none (shipped configuration), rule 2", None, 2),
+           ("none, rule 3", None, 3),
+           ("PACT 10 ep, bounds lr 1e-2, decay 0, rule 2", P0, 2),
+           ("PACT 20 ep, bounds lr 5e-2, decay 1e-3, rule 2", P1, 2),
+           ("PACT 20 ep, bounds lr 5e-2, decay 1e-3, rule 3", P1, 3),
+           ("PACT 20 ep, bounds lr 5e-2, decay 1e-2, rule 2", P2, 2),
+           ("PACT 20 ep, bounds lr 5e-2, decay 1e-2, rule 3", P2, 3),
+           # second round (after the first found no pass): a control for the fine-tuning alone (no clip: the
+           # bounds start at 1e9 and do not move; exported unclipped, rule 2 with headroom), and PACT with the
+           # weights frozen (lr 0: the float model changes only by its clip)
+           ("control: fine-tuning 20 ep lr 1e-4, no clip, rule 2", dict(epochs=20, lr=1e-4, alpha_lr=0.0, init=1e9), 2),
+           ("PACT bounds only (weights frozen), 20 ep, bounds lr 5e-2, decay 1e-3, rule 2",
+            dict(epochs=20, lr=0.0, alpha_lr=5e-2, decay=1e-3), 2),
+           ("PACT bounds only (weights frozen), 20 ep, bounds lr 5e-2, decay 1e-2, rule 2",
+            dict(epochs=20, lr=0.0, alpha_lr=5e-2, decay=1e-2), 2),
+           # third round: the float model clipped at its training maximum (no training: epochs 0; the
+           # saturation mismatch alone removed), and bounds-only PACT with a smaller decay
+           ("clip at the training max (no training), rule 2", dict(epochs=0), 2),
+           ("PACT bounds only (weights frozen), 20 ep, bounds lr 5e-2, decay 1e-4, rule 2",
+            dict(epochs=20, lr=0.0, alpha_lr=5e-2, decay=1e-4), 2)]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    for k in ("dataset", "features", "seq-root"):
+        ap.add_argument(f"--{k}", required=True)
+    ap.add_argument("--out", required=True, help="folder for the trajectories and results.json")
+    ap.add_argument("--configs", default="", help="comma-separated indices into CONFIGS (default: all)")
+    a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    configs = [CONFIGS[int(i)] for i in a.configs.split(",")] if a.configs else CONFIGS
+    f, t, seq = train.load_dataset(a.dataset)
+    step = train.targets_with_step(t)[:, nnfmt.OUT_STEP].astype(np.float64)
+    std = step[np.isin(seq, TRAIN)].std()
+    data = {n: seq_data(a.features, a.seq_root, n) for n in TRAIN}
+    acc = {label: dict(sq=[], w=[], rm=[], ate_f=[], ate_q=[], bounds=[]) for label, _, _ in configs}
+    for h in TRAIN:
+        rest, ho = np.isin(seq, [n for n in TRAIN if n != h]), seq == h
+        base = train.train(f[rest], t[rest], {nnfmt.DOF_LOG_STEP: "relu"}, epochs=40, joint_epochs=10, lr=1e-3,
+                           seed=0, dofs=[nnfmt.DOF_LOG_STEP], progress=False, input_clip=0.5)
+        sd, fr, T_wc, _ = data[h]
+        x = fr["features"].astype(np.float32)
+        raw = np.hstack([fr["features"][:, 3:6], fr["features"][:, 0:3]])
+        pact = {}
+        for ci, (label, kw, rule) in enumerate(configs):
+            key = json.dumps(kw, sort_keys=True)
+            if kw is not None and key not in pact:
+                pact[key] = train.pact_finetune(base, f[rest], t[rest], seed=0, progress=False, **kw)
+            br = base if kw is None else pact[key]
+            if kw is not None and kw.get("init", 1.0) >= 1e9:  # the control: no clip in effect, exported unclipped
+                br = [quant.FloatBranch(**{**vars(b), "act_clip": None}) for b in br]
+            model = quant.quantize_model(br, f[rest], calibration=rule)
+            fl = quant.float_run(br, f[ho])[:, nnfmt.OUT_STEP]
+            q = nnfmt.reference_run(model, f[ho])[:, nnfmt.OUT_STEP].astype(np.float64)
+            r = acc[label]
+            r["sq"].append(float(np.mean((q - fl) ** 2)))
+            r["w"].append(int(ho.sum()))
+            r["rm"].append(float(np.mean((fl - step[ho]) ** 2)))
+            r["bounds"].append(br[0].act_clip)
+            for n, lst, tag in ((quant.float_run(br, x)[:, nnfmt.OUT_STEP], r["ate_f"], "float"),
+                                (nnfmt.reference_run(model, x)[:, nnfmt.OUT_STEP].astype(np.float64), r["ate_q"],
+                                 "int8")):
+                tp = os.path.join(a.out, f"{h}.{ci}.{tag}.txt")
+                tables.integrate(fr["t_ns"], fr["state"], raw, filter_steps(fr["state"], fr["rel_scale"], n, 0.01),
+                                 T_wc[0], tp)
+                lst.append(tables.evaluate(tp, sd)["ate_se3_m"])
+            print(f"{h} {label}: gap {100 * np.sqrt(r['sq'][-1]) / std:.2f} %, ATE float {r['ate_f'][-1]:.3f} "
+                  f"int8 {r['ate_q'][-1]:.3f}, bounds {br[0].act_clip}", flush=True)
+    res = {}
+    print("| configuration | gap pooled % | held-out step RMSE m | ATE float " + " / ".join(TRAIN) +
+          " | mean float / int8 |")
+    for label, _, _ in configs:
+        r = acc[label]
+        res[label] = {"gap_pooled_pct": 100 * float(np.sqrt(np.average(r["sq"], weights=r["w"]))) / std,
+                      "gap_per_seq_pct": [100 * float(np.sqrt(v)) / std for v in r["sq"]],
+                      "heldout_step_rmse_m": float(np.sqrt(np.average(r["rm"], weights=r["w"]))),
+                      "ate_float": r["ate_f"], "ate_int8": r["ate_q"], "bounds": r["bounds"],
+                      "ate_float_mean": float(np.mean(r["ate_f"])), "ate_int8_mean": float(np.mean(r["ate_q"]))}
+        v = res[label]
+        print(f"| {label} | {v['gap_pooled_pct']:.2f} | {v['heldout_step_rmse_m']:.5f} | " +
+              " / ".join(f"{x:.3f}" for x in r["ate_f"]) + f" | {v['ate_float_mean']:.3f} / {v['ate_int8_mean']:.3f} |")
+    b0 = res[configs[0][0]]
+    ok = [lab for lab, v in res.items() if v["gap_pooled_pct"] < 2.0 and v["ate_float_mean"] <= b0["ate_float_mean"]
+          and v["ate_int8_mean"] <= b0["ate_int8_mean"] and v["heldout_step_rmse_m"] <= b0["heldout_step_rmse_m"]]
+    res["passing"] = ok
+    res["chosen"] = min(ok, key=lambda lab: res[lab]["ate_int8_mean"]) if ok else None
+    print("passing:", ok, "chosen:", res["chosen"])
+    with open(os.path.join(a.out, "results.json"), "w", encoding="utf-8") as fh:
+        json.dump(res, fh, indent=1)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,56 @@
+"""Clip the relu layers of a trained checkpoint (PACT-style bounds, train.pact_finetune) and write a new one.
+
+    python -m tinyvo_tools.pact MODEL.ckpt.npz DATASET.npz -o CLIPPED.ckpt.npz [--dofs log_step]
+           [--epochs 0] [--lr 1e-4] [--alpha-lr 5e-2] [--decay 0] [--init 1.0]
+
+Rows: the checkpoint's training rows (DATASET rows outside its val_sequences). Each hidden relu of the
+branches kept (--dofs; default all) becomes min(relu(a), bound), bound = init x the layer's largest
+pre-activation on those rows; --epochs > 0 then fine-tunes weights and bounds (PACT, train.pact_finetune).
+With --epochs 0 (the shipped step model, models/MODEL_CARD.md "Quantisation") the float function is
+unchanged wherever no hidden activation exceeds the training rows' largest, and the exporter (rule 2)
+requantises each clipped layer over exactly [0, bound]: the int8 saturation is the float model's own clip.
+Then export as usual: python -m tinyvo_tools.export CLIPPED.ckpt.npz DATASET.npz -o MODEL.tvonn
+"""
+from __future__ import annotations
+
+import argparse
+
+from . import __version__, nnfmt, quant, train
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("checkpoint")
+    ap.add_argument("dataset")
+    ap.add_argument("-o", "--out", required=True)
+    ap.add_argument("--dofs", default="", help="DoF names of the branches to keep (default: all)")
+    ap.add_argument("--epochs", type=int, default=0)
+    ap.add_argument("--lr", type=float, default=1e-4)
+    ap.add_argument("--alpha-lr", type=float, default=5e-2)
+    ap.add_argument("--decay", type=float, default=0.0)
+    ap.add_argument("--init", type=float, default=1.0)
+    ap.add_argument("--seed", type=int, default=0)
+    a = ap.parse_args(argv)
+    branches, meta = quant.load_checkpoint(a.checkpoint)
+    if a.dofs:
+        keep = [nnfmt.DOFS.index(d.strip()) for d in a.dofs.split(",") if d.strip()]
+        branches = [b for b in branches if b.dof in keep]
+        if not branches:
+            raise SystemExit(f"no branch of {a.checkpoint} among {a.dofs}")
+    f, t, seq = train.load_dataset(a.dataset)
+    tr, _ = train.split_rows(seq, meta.get("val_sequences") or [])
+    out = train.pact_finetune(branches, f[tr], t[tr], epochs=a.epochs, lr=a.lr, alpha_lr=a.alpha_lr,
+                              decay=a.decay, init=a.init, seed=a.seed, progress=a.epochs > 0)
+    meta = dict(meta)
+    meta["pact"] = {"tinyvo_tools": __version__, "from": str(a.checkpoint), "epochs": a.epochs, "lr": a.lr,
+                    "alpha_lr": a.alpha_lr, "decay": a.decay, "init": a.init, "seed": a.seed,
+                    "rows": int(tr.sum())}
+    meta.pop("branches", None)
+    quant.save_checkpoint(a.out, out, meta)
+    for b in out:
+        print(f"{nnfmt.DOFS[b.dof]}: relu bounds {b.act_clip}")
+    print(f"wrote {a.out} ({int(tr.sum())} rows)")
+
+
+if __name__ == "__main__":
+    main()
