@@ -93,11 +93,11 @@ typedef struct tvo_relpose {
 } tvo_relpose;
 
 /* Minimal 5-point solver (Nister's formulation: null space of the 5x9 epipolar system,
- * Gauss-Jordan on the 10x20 cubic constraints, degree-10 hidden-variable polynomial solved by
+ * LU elimination of the 10x20 cubic constraints, degree-10 hidden-variable polynomial solved by
  * Sturm sequences). x1, x2: normalised coordinates of 5 correspondences (x2^T E x1 = 0).
  * Writes up to 10 essential matrices (row-major, Frobenius norm 1) to E and returns how many;
- * 0 for a degenerate sample or NULL pointers. Cost ~29k instructions (~5.5 us median on the
- * development machine). */
+ * 0 for a degenerate sample or NULL pointers. Cost ~19k instructions (x86-64 SSE2; ~4 us median
+ * on the development machine; docs/geometry.md). */
 int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10][9]);
 
 /* Normalised 8-point: E from >= 8 correspondences (Hartley-normalised; exactly 8: null vector of
@@ -121,7 +121,7 @@ size_t tvo_relpose_scratch_size(int32_t max_points);
  * TVO_ERR_NO_MEMORY (scratch too small), TVO_ERR_NOT_FINITE (a NaN/Inf coordinate),
  * TVO_ERR_RANGE (|coordinate| > 1e6), TVO_ERR_DEGENERATE (fewer than 5 distinct points or all
  * points collinear in one image); on error *out is R = I, t = 0, LOW_CONFIDENCE and the mask is 0.
- * Cost: ~3.2M instructions (~0.6-0.9 ms) for 300 points with 30 % outliers (see docs/geometry.md); bounded
+ * Cost: ~2.7M instructions (~0.5 ms) for 300 points with 30 % outliers (see docs/geometry.md); bounded
  * by cfg->max_iters. */
 tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg, const tvo_point2d *x1,
                                 const tvo_point2d *x2, int32_t n, tvo_relpose *out,
