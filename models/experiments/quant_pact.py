@@ -6,6 +6,7 @@ quant_finetune.py.
     cd tools && ../.venv/bin/python ../models/experiments/quant_pact.py \
         --dataset ../out/model/scale2/dataset.npz --features ../out/model/scale2/features \
         --seq-root ../out/model/seq --out ../out/model/pact/loso
+    ... --decompose ../out/model/pact/relu_step.ckpt.npz     # only the gap's sources (decompose())
 
 For each training sequence h: a relu log-step branch is trained on the other four (40 + 10 epochs, lr 1e-3,
 seed 0, input domain 0.5 %: quant_finetune.py's "none", i.e. the shipped configuration), then each PACT
@@ -58,13 +59,58 @@ CONFIGS = [("none (shipped configuration), rule 2", None, 2),
             dict(epochs=20, lr=0.0, alpha_lr=5e-2, decay=1e-4), 2)]
 
 
+def decompose(dataset, checkpoint):
+    """Where the gap of a step checkpoint's rule-2 export comes from, on the training rows: the int8 path
+    emulated in float64 with the file's integer weights and requantisation ranges, each rounding (inputs,
+    hidden layer k) removed in turn (the clamps kept); prints the gap % of the std of |t| of each variant."""
+    f, t, seq = train.load_dataset(dataset)
+    tr = np.isin(seq, TRAIN)
+    x_tr = f[tr]
+    b = [x for x in quant.load_checkpoint(checkpoint)[0] if x.dof == nnfmt.DOF_LOG_STEP][0]
+    std = train.targets_with_step(t)[tr, nnfmt.OUT_STEP].astype(np.float64).std()
+    fl = quant.float_run([b], x_tr)[:, nnfmt.OUT_STEP]
+    qb = quant.quantize_branch(b, x_tr)
+    fe = quant.equalise_inputs(b, x_tr)
+    n = len(qb.layers)
+
+    def emulate(r_in, r_hidden):
+        x = fe.normalise(x_tr)
+        if r_in:
+            x = (np.clip(np.rint(x / qb.in_scale) + qb.in_zp, -128, 127) - qb.in_zp) * qb.in_scale
+        for k, L in enumerate(qb.layers):
+            if k == n - 1:  # float32 output: accumulator x scale
+                ws = np.asarray(L.scale, np.float64) / L.in_scale
+            else:  # requantisation multiplier = in_scale * w_scale / out_scale
+                ws = L.mult.astype(np.float64) * 2.0 ** (-L.shift.astype(np.float64)) * L.out_scale / L.in_scale
+            a = x @ (L.w.astype(np.float64) * ws[:, None]).T + L.bias.astype(np.float64) * ws * L.in_scale
+            if k == n - 1:
+                return np.exp(np.clip(a[:, 0] * qb.out_scale + qb.out_offset, nnfmt.LOG_STEP_MIN, nnfmt.LOG_STEP_MAX))
+            a = np.clip(a, (-128 - L.out_zp) * L.out_scale, (127 - L.out_zp) * L.out_scale)
+            x = np.maximum(np.rint(a / L.out_scale) * L.out_scale if r_hidden[k] else a, 0.0)
+
+    def gap(y):
+        return 100.0 * float(np.sqrt(np.mean((y - fl) ** 2))) / std
+
+    q = nnfmt.reference_run(nnfmt.Model(branches=[qb]), x_tr)[:, nnfmt.OUT_STEP]
+    allr = [True] * (n - 1)
+    print(f"int8 file {gap(q):.2f} %, emulated {gap(emulate(True, allr)):.2f} %, without input rounding "
+          f"{gap(emulate(False, allr)):.2f} %, " + ", ".join(
+              f"without hidden layer {k}'s {gap(emulate(True, [j != k for j in range(n - 1)])):.2f} %"
+              for k in range(n - 1)) + f", no rounding but the weights' {gap(emulate(False, [False] * (n - 1))):.2f} %")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     for k in ("dataset", "features", "seq-root"):
         ap.add_argument(f"--{k}", required=True)
-    ap.add_argument("--out", required=True, help="folder for the trajectories and results.json")
+    ap.add_argument("--out", default="", help="folder for the trajectories and results.json")
     ap.add_argument("--configs", default="", help="comma-separated indices into CONFIGS (default: all)")
+    ap.add_argument("--decompose", default=None, metavar="CHECKPOINT",
+                    help="only print where the rule-2 gap of this step checkpoint comes from (decompose())")
     a = ap.parse_args()
+    if a.decompose:
+        decompose(a.dataset, a.decompose)
+        return
     os.makedirs(a.out, exist_ok=True)
     configs = [CONFIGS[int(i)] for i in a.configs.split(",")] if a.configs else CONFIGS
     f, t, seq = train.load_dataset(a.dataset)
