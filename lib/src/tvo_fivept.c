@@ -55,159 +55,83 @@ FP_INLINE void mul_ll(const double a[4], const double b[4], double q[10])
     q[9] = a[3] * b[3];
 }
 
-/* c = q0 l0 + q1 l1 + q2 l2 (three quadratic-times-linear products, cubic monomial order above),
- * written out: per monomial, the sum over each product's terms, then the three sums in order (the
- * same operations as accumulating the products one by one into a zeroed row, without its loads and
- * stores) */
-FP_INLINE_BIG void mul_ql3(const double q0[10], const double l0[4], const double q1[10], const double l1[4],
-                       const double q2[10], const double l2[4], double c[20])
-{
-    c[0] = (q0[0] * l0[0] + q1[0] * l1[0]) + q2[0] * l2[0];
-    c[1] = (q0[3] * l0[1] + q1[3] * l1[1]) + q2[3] * l2[1];
-    c[2] = ((q0[0] * l0[1] + q0[1] * l0[0]) + (q1[0] * l1[1] + q1[1] * l1[0])) + (q2[0] * l2[1] + q2[1] * l2[0]);
-    c[3] = ((q0[1] * l0[1] + q0[3] * l0[0]) + (q1[1] * l1[1] + q1[3] * l1[0])) + (q2[1] * l2[1] + q2[3] * l2[0]);
-    c[4] = ((q0[0] * l0[2] + q0[2] * l0[0]) + (q1[0] * l1[2] + q1[2] * l1[0])) + (q2[0] * l2[2] + q2[2] * l2[0]);
-    c[5] = ((q0[0] * l0[3] + q0[6] * l0[0]) + (q1[0] * l1[3] + q1[6] * l1[0])) + (q2[0] * l2[3] + q2[6] * l2[0]);
-    c[6] = ((q0[3] * l0[2] + q0[4] * l0[1]) + (q1[3] * l1[2] + q1[4] * l1[1])) + (q2[3] * l2[2] + q2[4] * l2[1]);
-    c[7] = ((q0[3] * l0[3] + q0[7] * l0[1]) + (q1[3] * l1[3] + q1[7] * l1[1])) + (q2[3] * l2[3] + q2[7] * l2[1]);
-    c[8] = ((q0[1] * l0[2] + q0[2] * l0[1] + q0[4] * l0[0]) + (q1[1] * l1[2] + q1[2] * l1[1] + q1[4] * l1[0])) + (q2[1] * l2[2] + q2[2] * l2[1] + q2[4] * l2[0]);
-    c[9] = ((q0[1] * l0[3] + q0[6] * l0[1] + q0[7] * l0[0]) + (q1[1] * l1[3] + q1[6] * l1[1] + q1[7] * l1[0])) + (q2[1] * l2[3] + q2[6] * l2[1] + q2[7] * l2[0]);
-    c[10] = ((q0[2] * l0[2] + q0[5] * l0[0]) + (q1[2] * l1[2] + q1[5] * l1[0])) + (q2[2] * l2[2] + q2[5] * l2[0]);
-    c[11] = ((q0[2] * l0[3] + q0[6] * l0[2] + q0[8] * l0[0]) + (q1[2] * l1[3] + q1[6] * l1[2] + q1[8] * l1[0])) + (q2[2] * l2[3] + q2[6] * l2[2] + q2[8] * l2[0]);
-    c[12] = ((q0[6] * l0[3] + q0[9] * l0[0]) + (q1[6] * l1[3] + q1[9] * l1[0])) + (q2[6] * l2[3] + q2[9] * l2[0]);
-    c[13] = ((q0[4] * l0[2] + q0[5] * l0[1]) + (q1[4] * l1[2] + q1[5] * l1[1])) + (q2[4] * l2[2] + q2[5] * l2[1]);
-    c[14] = ((q0[4] * l0[3] + q0[7] * l0[2] + q0[8] * l0[1]) + (q1[4] * l1[3] + q1[7] * l1[2] + q1[8] * l1[1])) + (q2[4] * l2[3] + q2[7] * l2[2] + q2[8] * l2[1]);
-    c[15] = ((q0[7] * l0[3] + q0[9] * l0[1]) + (q1[7] * l1[3] + q1[9] * l1[1])) + (q2[7] * l2[3] + q2[9] * l2[1]);
-    c[16] = (q0[5] * l0[2] + q1[5] * l1[2]) + q2[5] * l2[2];
-    c[17] = ((q0[5] * l0[3] + q0[8] * l0[2]) + (q1[5] * l1[3] + q1[8] * l1[2])) + (q2[5] * l2[3] + q2[8] * l2[2]);
-    c[18] = ((q0[8] * l0[3] + q0[9] * l0[2]) + (q1[8] * l1[3] + q1[9] * l1[2])) + (q2[8] * l2[3] + q2[9] * l2[2]);
-    c[19] = (q0[9] * l0[3] + q1[9] * l1[3]) + q2[9] * l2[3];
-}
-
+/* Lanes: the constraint-row formulas below are written once over fp_v, a double on portable
+ * builds (one row per call) and an SSE2 register of two doubles on SSE2 builds (two rows per call,
+ * one per lane), with the same operations in the same order in every lane (bit-identical rows). */
 #ifdef FP_SSE2
-/* mul_ql3 for two rows at once: lane 0 of the quadratics Q[k] and linear factors Lv[k] gives row c0,
- * lane 1 row c1; the operations of mul_ql3 in each lane */
-FP_INLINE_BIG void mul_ql3_pair(const __m128d Q[3][10], const __m128d Lv[3][4], double c0[20], double c1[20])
-{
-    __m128d r;
-    r = _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][0], Lv[0][0]), _mm_mul_pd(Q[1][0], Lv[1][0])), _mm_mul_pd(Q[2][0], Lv[2][0]));
-    _mm_storel_pd(c0 + 0, r);
-    _mm_storeh_pd(c1 + 0, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][3], Lv[0][1]), _mm_mul_pd(Q[1][3], Lv[1][1])), _mm_mul_pd(Q[2][3], Lv[2][1]));
-    _mm_storel_pd(c0 + 1, r);
-    _mm_storeh_pd(c1 + 1, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][0], Lv[0][1]), _mm_mul_pd(Q[0][1], Lv[0][0])), _mm_add_pd(_mm_mul_pd(Q[1][0], Lv[1][1]), _mm_mul_pd(Q[1][1], Lv[1][0]))), _mm_add_pd(_mm_mul_pd(Q[2][0], Lv[2][1]), _mm_mul_pd(Q[2][1], Lv[2][0])));
-    _mm_storel_pd(c0 + 2, r);
-    _mm_storeh_pd(c1 + 2, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][1], Lv[0][1]), _mm_mul_pd(Q[0][3], Lv[0][0])), _mm_add_pd(_mm_mul_pd(Q[1][1], Lv[1][1]), _mm_mul_pd(Q[1][3], Lv[1][0]))), _mm_add_pd(_mm_mul_pd(Q[2][1], Lv[2][1]), _mm_mul_pd(Q[2][3], Lv[2][0])));
-    _mm_storel_pd(c0 + 3, r);
-    _mm_storeh_pd(c1 + 3, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][0], Lv[0][2]), _mm_mul_pd(Q[0][2], Lv[0][0])), _mm_add_pd(_mm_mul_pd(Q[1][0], Lv[1][2]), _mm_mul_pd(Q[1][2], Lv[1][0]))), _mm_add_pd(_mm_mul_pd(Q[2][0], Lv[2][2]), _mm_mul_pd(Q[2][2], Lv[2][0])));
-    _mm_storel_pd(c0 + 4, r);
-    _mm_storeh_pd(c1 + 4, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][0], Lv[0][3]), _mm_mul_pd(Q[0][6], Lv[0][0])), _mm_add_pd(_mm_mul_pd(Q[1][0], Lv[1][3]), _mm_mul_pd(Q[1][6], Lv[1][0]))), _mm_add_pd(_mm_mul_pd(Q[2][0], Lv[2][3]), _mm_mul_pd(Q[2][6], Lv[2][0])));
-    _mm_storel_pd(c0 + 5, r);
-    _mm_storeh_pd(c1 + 5, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][3], Lv[0][2]), _mm_mul_pd(Q[0][4], Lv[0][1])), _mm_add_pd(_mm_mul_pd(Q[1][3], Lv[1][2]), _mm_mul_pd(Q[1][4], Lv[1][1]))), _mm_add_pd(_mm_mul_pd(Q[2][3], Lv[2][2]), _mm_mul_pd(Q[2][4], Lv[2][1])));
-    _mm_storel_pd(c0 + 6, r);
-    _mm_storeh_pd(c1 + 6, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][3], Lv[0][3]), _mm_mul_pd(Q[0][7], Lv[0][1])), _mm_add_pd(_mm_mul_pd(Q[1][3], Lv[1][3]), _mm_mul_pd(Q[1][7], Lv[1][1]))), _mm_add_pd(_mm_mul_pd(Q[2][3], Lv[2][3]), _mm_mul_pd(Q[2][7], Lv[2][1])));
-    _mm_storel_pd(c0 + 7, r);
-    _mm_storeh_pd(c1 + 7, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][1], Lv[0][2]), _mm_mul_pd(Q[0][2], Lv[0][1])), _mm_mul_pd(Q[0][4], Lv[0][0])), _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[1][1], Lv[1][2]), _mm_mul_pd(Q[1][2], Lv[1][1])), _mm_mul_pd(Q[1][4], Lv[1][0]))), _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[2][1], Lv[2][2]), _mm_mul_pd(Q[2][2], Lv[2][1])), _mm_mul_pd(Q[2][4], Lv[2][0])));
-    _mm_storel_pd(c0 + 8, r);
-    _mm_storeh_pd(c1 + 8, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][1], Lv[0][3]), _mm_mul_pd(Q[0][6], Lv[0][1])), _mm_mul_pd(Q[0][7], Lv[0][0])), _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[1][1], Lv[1][3]), _mm_mul_pd(Q[1][6], Lv[1][1])), _mm_mul_pd(Q[1][7], Lv[1][0]))), _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[2][1], Lv[2][3]), _mm_mul_pd(Q[2][6], Lv[2][1])), _mm_mul_pd(Q[2][7], Lv[2][0])));
-    _mm_storel_pd(c0 + 9, r);
-    _mm_storeh_pd(c1 + 9, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][2], Lv[0][2]), _mm_mul_pd(Q[0][5], Lv[0][0])), _mm_add_pd(_mm_mul_pd(Q[1][2], Lv[1][2]), _mm_mul_pd(Q[1][5], Lv[1][0]))), _mm_add_pd(_mm_mul_pd(Q[2][2], Lv[2][2]), _mm_mul_pd(Q[2][5], Lv[2][0])));
-    _mm_storel_pd(c0 + 10, r);
-    _mm_storeh_pd(c1 + 10, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][2], Lv[0][3]), _mm_mul_pd(Q[0][6], Lv[0][2])), _mm_mul_pd(Q[0][8], Lv[0][0])), _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[1][2], Lv[1][3]), _mm_mul_pd(Q[1][6], Lv[1][2])), _mm_mul_pd(Q[1][8], Lv[1][0]))), _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[2][2], Lv[2][3]), _mm_mul_pd(Q[2][6], Lv[2][2])), _mm_mul_pd(Q[2][8], Lv[2][0])));
-    _mm_storel_pd(c0 + 11, r);
-    _mm_storeh_pd(c1 + 11, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][6], Lv[0][3]), _mm_mul_pd(Q[0][9], Lv[0][0])), _mm_add_pd(_mm_mul_pd(Q[1][6], Lv[1][3]), _mm_mul_pd(Q[1][9], Lv[1][0]))), _mm_add_pd(_mm_mul_pd(Q[2][6], Lv[2][3]), _mm_mul_pd(Q[2][9], Lv[2][0])));
-    _mm_storel_pd(c0 + 12, r);
-    _mm_storeh_pd(c1 + 12, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][4], Lv[0][2]), _mm_mul_pd(Q[0][5], Lv[0][1])), _mm_add_pd(_mm_mul_pd(Q[1][4], Lv[1][2]), _mm_mul_pd(Q[1][5], Lv[1][1]))), _mm_add_pd(_mm_mul_pd(Q[2][4], Lv[2][2]), _mm_mul_pd(Q[2][5], Lv[2][1])));
-    _mm_storel_pd(c0 + 13, r);
-    _mm_storeh_pd(c1 + 13, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][4], Lv[0][3]), _mm_mul_pd(Q[0][7], Lv[0][2])), _mm_mul_pd(Q[0][8], Lv[0][1])), _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[1][4], Lv[1][3]), _mm_mul_pd(Q[1][7], Lv[1][2])), _mm_mul_pd(Q[1][8], Lv[1][1]))), _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[2][4], Lv[2][3]), _mm_mul_pd(Q[2][7], Lv[2][2])), _mm_mul_pd(Q[2][8], Lv[2][1])));
-    _mm_storel_pd(c0 + 14, r);
-    _mm_storeh_pd(c1 + 14, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][7], Lv[0][3]), _mm_mul_pd(Q[0][9], Lv[0][1])), _mm_add_pd(_mm_mul_pd(Q[1][7], Lv[1][3]), _mm_mul_pd(Q[1][9], Lv[1][1]))), _mm_add_pd(_mm_mul_pd(Q[2][7], Lv[2][3]), _mm_mul_pd(Q[2][9], Lv[2][1])));
-    _mm_storel_pd(c0 + 15, r);
-    _mm_storeh_pd(c1 + 15, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][5], Lv[0][2]), _mm_mul_pd(Q[1][5], Lv[1][2])), _mm_mul_pd(Q[2][5], Lv[2][2]));
-    _mm_storel_pd(c0 + 16, r);
-    _mm_storeh_pd(c1 + 16, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][5], Lv[0][3]), _mm_mul_pd(Q[0][8], Lv[0][2])), _mm_add_pd(_mm_mul_pd(Q[1][5], Lv[1][3]), _mm_mul_pd(Q[1][8], Lv[1][2]))), _mm_add_pd(_mm_mul_pd(Q[2][5], Lv[2][3]), _mm_mul_pd(Q[2][8], Lv[2][2])));
-    _mm_storel_pd(c0 + 17, r);
-    _mm_storeh_pd(c1 + 17, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][8], Lv[0][3]), _mm_mul_pd(Q[0][9], Lv[0][2])), _mm_add_pd(_mm_mul_pd(Q[1][8], Lv[1][3]), _mm_mul_pd(Q[1][9], Lv[1][2]))), _mm_add_pd(_mm_mul_pd(Q[2][8], Lv[2][3]), _mm_mul_pd(Q[2][9], Lv[2][2])));
-    _mm_storel_pd(c0 + 18, r);
-    _mm_storeh_pd(c1 + 18, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_mul_pd(Q[0][9], Lv[0][3]), _mm_mul_pd(Q[1][9], Lv[1][3])), _mm_mul_pd(Q[2][9], Lv[2][3]));
-    _mm_storel_pd(c0 + 19, r);
-    _mm_storeh_pd(c1 + 19, r);
-}
+typedef __m128d fp_v;
+#define FP_ADD(a, b) _mm_add_pd(a, b)
+#define FP_MUL(a, b) _mm_mul_pd(a, b)
+#else
+typedef double fp_v;
+#define FP_ADD(a, b) ((a) + (b))
+#define FP_MUL(a, b) ((a) * (b))
+#endif
+/* terms of one product x * y of coefficient arrays: one, two or three index pairs summed left to
+ * right; FP_SUM3 adds the same term group of three products (x0 y0, x1 y1, x2 y2) in order */
+#define FP_T1(x, y, a, b) FP_MUL((x)[a], (y)[b])
+#define FP_T2(x, y, a, b, c, d) FP_ADD(FP_T1(x, y, a, b), FP_T1(x, y, c, d))
+#define FP_T3(x, y, a, b, c, d, e, f) FP_ADD(FP_T2(x, y, a, b, c, d), FP_T1(x, y, e, f))
+#define FP_SUM3(T, ...) FP_ADD(FP_ADD(T(x0, y0, __VA_ARGS__), T(x1, y1, __VA_ARGS__)), T(x2, y2, __VA_ARGS__))
+/* result k: lane 0 to lo[k], lane 1 to hi[k] (portable builds: the one value to lo[k]) */
+#ifdef FP_SSE2
+#define FP_OUT(k, v)                                                                              \
+    do {                                                                                          \
+        const fp_v r_ = (v);                                                                      \
+        _mm_storel_pd(lo + (k), r_);                                                              \
+        _mm_storeh_pd(hi + (k), r_);                                                              \
+    } while (0)
+#else
+#define FP_OUT(k, v) (lo[k] = (v))
 #endif
 
-/* q = a0 b0 + a1 b1 + a2 b2 (three linear-times-linear products), per monomial in mul_ll's terms,
- * summed in the same order as an accumulation from 0 */
-FP_INLINE void mul_ll3(const double a0[4], const double b0[4], const double a1[4], const double b1[4],
-                       const double a2[4], const double b2[4], double q[10])
+/* c = x0 y0 + x1 y1 + x2 y2: three quadratic (x, order above) times linear (y) products, cubic
+ * monomial order above; per monomial the sum over each product's terms, then the three sums in
+ * order (the operations of accumulating the products one by one into a zeroed row, without its
+ * loads and stores) */
+FP_INLINE_BIG void mul_ql3(const fp_v x0[10], const fp_v y0[4], const fp_v x1[10], const fp_v y1[4],
+                           const fp_v x2[10], const fp_v y2[4], double lo[20], double hi[20])
 {
-    q[0] = (a0[0] * b0[0] + a1[0] * b1[0]) + a2[0] * b2[0];
-    q[1] = ((a0[0] * b0[1] + a0[1] * b0[0]) + (a1[0] * b1[1] + a1[1] * b1[0])) + (a2[0] * b2[1] + a2[1] * b2[0]);
-    q[2] = ((a0[0] * b0[2] + a0[2] * b0[0]) + (a1[0] * b1[2] + a1[2] * b1[0])) + (a2[0] * b2[2] + a2[2] * b2[0]);
-    q[3] = (a0[1] * b0[1] + a1[1] * b1[1]) + a2[1] * b2[1];
-    q[4] = ((a0[1] * b0[2] + a0[2] * b0[1]) + (a1[1] * b1[2] + a1[2] * b1[1])) + (a2[1] * b2[2] + a2[2] * b2[1]);
-    q[5] = (a0[2] * b0[2] + a1[2] * b1[2]) + a2[2] * b2[2];
-    q[6] = ((a0[0] * b0[3] + a0[3] * b0[0]) + (a1[0] * b1[3] + a1[3] * b1[0])) + (a2[0] * b2[3] + a2[3] * b2[0]);
-    q[7] = ((a0[1] * b0[3] + a0[3] * b0[1]) + (a1[1] * b1[3] + a1[3] * b1[1])) + (a2[1] * b2[3] + a2[3] * b2[1]);
-    q[8] = ((a0[2] * b0[3] + a0[3] * b0[2]) + (a1[2] * b1[3] + a1[3] * b1[2])) + (a2[2] * b2[3] + a2[3] * b2[2]);
-    q[9] = (a0[3] * b0[3] + a1[3] * b1[3]) + a2[3] * b2[3];
+    (void)hi; /* NULL on portable builds */
+    FP_OUT(0, FP_SUM3(FP_T1, 0, 0));
+    FP_OUT(1, FP_SUM3(FP_T1, 3, 1));
+    FP_OUT(2, FP_SUM3(FP_T2, 0, 1, 1, 0));
+    FP_OUT(3, FP_SUM3(FP_T2, 1, 1, 3, 0));
+    FP_OUT(4, FP_SUM3(FP_T2, 0, 2, 2, 0));
+    FP_OUT(5, FP_SUM3(FP_T2, 0, 3, 6, 0));
+    FP_OUT(6, FP_SUM3(FP_T2, 3, 2, 4, 1));
+    FP_OUT(7, FP_SUM3(FP_T2, 3, 3, 7, 1));
+    FP_OUT(8, FP_SUM3(FP_T3, 1, 2, 2, 1, 4, 0));
+    FP_OUT(9, FP_SUM3(FP_T3, 1, 3, 6, 1, 7, 0));
+    FP_OUT(10, FP_SUM3(FP_T2, 2, 2, 5, 0));
+    FP_OUT(11, FP_SUM3(FP_T3, 2, 3, 6, 2, 8, 0));
+    FP_OUT(12, FP_SUM3(FP_T2, 6, 3, 9, 0));
+    FP_OUT(13, FP_SUM3(FP_T2, 4, 2, 5, 1));
+    FP_OUT(14, FP_SUM3(FP_T3, 4, 3, 7, 2, 8, 1));
+    FP_OUT(15, FP_SUM3(FP_T2, 7, 3, 9, 1));
+    FP_OUT(16, FP_SUM3(FP_T1, 5, 2));
+    FP_OUT(17, FP_SUM3(FP_T2, 5, 3, 8, 2));
+    FP_OUT(18, FP_SUM3(FP_T2, 8, 3, 9, 2));
+    FP_OUT(19, FP_SUM3(FP_T1, 9, 3));
 }
 
-#ifdef FP_SSE2
-/* mul_ll3 for two results at once (lane 0 -> qa, lane 1 -> qb), mul_ll3's operations per lane */
-FP_INLINE_BIG void mul_ll3_pair(const __m128d A0[4], const __m128d B0[4], const __m128d A1[4], const __m128d B1[4],
-                                const __m128d A2[4], const __m128d B2[4], double qa[10], double qb[10])
+/* q = x0 y0 + x1 y1 + x2 y2: three linear-times-linear products per quadratic monomial (mul_ll's
+ * terms), summed in the same order as an accumulation from 0 */
+FP_INLINE_BIG void mul_ll3(const fp_v x0[4], const fp_v y0[4], const fp_v x1[4], const fp_v y1[4],
+                           const fp_v x2[4], const fp_v y2[4], double lo[10], double hi[10])
 {
-    __m128d r;
-    r = _mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[0], B0[0]), _mm_mul_pd(A1[0], B1[0])), _mm_mul_pd(A2[0], B2[0]));
-    _mm_storel_pd(qa + 0, r);
-    _mm_storeh_pd(qb + 0, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[0], B0[1]), _mm_mul_pd(A0[1], B0[0])), _mm_add_pd(_mm_mul_pd(A1[0], B1[1]), _mm_mul_pd(A1[1], B1[0]))), _mm_add_pd(_mm_mul_pd(A2[0], B2[1]), _mm_mul_pd(A2[1], B2[0])));
-    _mm_storel_pd(qa + 1, r);
-    _mm_storeh_pd(qb + 1, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[0], B0[2]), _mm_mul_pd(A0[2], B0[0])), _mm_add_pd(_mm_mul_pd(A1[0], B1[2]), _mm_mul_pd(A1[2], B1[0]))), _mm_add_pd(_mm_mul_pd(A2[0], B2[2]), _mm_mul_pd(A2[2], B2[0])));
-    _mm_storel_pd(qa + 2, r);
-    _mm_storeh_pd(qb + 2, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[1], B0[1]), _mm_mul_pd(A1[1], B1[1])), _mm_mul_pd(A2[1], B2[1]));
-    _mm_storel_pd(qa + 3, r);
-    _mm_storeh_pd(qb + 3, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[1], B0[2]), _mm_mul_pd(A0[2], B0[1])), _mm_add_pd(_mm_mul_pd(A1[1], B1[2]), _mm_mul_pd(A1[2], B1[1]))), _mm_add_pd(_mm_mul_pd(A2[1], B2[2]), _mm_mul_pd(A2[2], B2[1])));
-    _mm_storel_pd(qa + 4, r);
-    _mm_storeh_pd(qb + 4, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[2], B0[2]), _mm_mul_pd(A1[2], B1[2])), _mm_mul_pd(A2[2], B2[2]));
-    _mm_storel_pd(qa + 5, r);
-    _mm_storeh_pd(qb + 5, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[0], B0[3]), _mm_mul_pd(A0[3], B0[0])), _mm_add_pd(_mm_mul_pd(A1[0], B1[3]), _mm_mul_pd(A1[3], B1[0]))), _mm_add_pd(_mm_mul_pd(A2[0], B2[3]), _mm_mul_pd(A2[3], B2[0])));
-    _mm_storel_pd(qa + 6, r);
-    _mm_storeh_pd(qb + 6, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[1], B0[3]), _mm_mul_pd(A0[3], B0[1])), _mm_add_pd(_mm_mul_pd(A1[1], B1[3]), _mm_mul_pd(A1[3], B1[1]))), _mm_add_pd(_mm_mul_pd(A2[1], B2[3]), _mm_mul_pd(A2[3], B2[1])));
-    _mm_storel_pd(qa + 7, r);
-    _mm_storeh_pd(qb + 7, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[2], B0[3]), _mm_mul_pd(A0[3], B0[2])), _mm_add_pd(_mm_mul_pd(A1[2], B1[3]), _mm_mul_pd(A1[3], B1[2]))), _mm_add_pd(_mm_mul_pd(A2[2], B2[3]), _mm_mul_pd(A2[3], B2[2])));
-    _mm_storel_pd(qa + 8, r);
-    _mm_storeh_pd(qb + 8, r);
-    r = _mm_add_pd(_mm_add_pd(_mm_mul_pd(A0[3], B0[3]), _mm_mul_pd(A1[3], B1[3])), _mm_mul_pd(A2[3], B2[3]));
-    _mm_storel_pd(qa + 9, r);
-    _mm_storeh_pd(qb + 9, r);
+    (void)hi; /* NULL on portable builds */
+    FP_OUT(0, FP_SUM3(FP_T1, 0, 0));
+    FP_OUT(1, FP_SUM3(FP_T2, 0, 1, 1, 0));
+    FP_OUT(2, FP_SUM3(FP_T2, 0, 2, 2, 0));
+    FP_OUT(3, FP_SUM3(FP_T1, 1, 1));
+    FP_OUT(4, FP_SUM3(FP_T2, 1, 2, 2, 1));
+    FP_OUT(5, FP_SUM3(FP_T1, 2, 2));
+    FP_OUT(6, FP_SUM3(FP_T2, 0, 3, 3, 0));
+    FP_OUT(7, FP_SUM3(FP_T2, 1, 3, 3, 1));
+    FP_OUT(8, FP_SUM3(FP_T2, 2, 3, 3, 2));
+    FP_OUT(9, FP_SUM3(FP_T1, 3, 3));
 }
-#endif
 
 /* ascending-coefficient polynomial product: r (deg da+db) = a * b */
 FP_INLINE void pmul(const double *a, int da, const double *b, int db, double *r)
@@ -447,7 +371,7 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
                     Av[k][c] = _mm_set_pd(L[3 * ib + k][c], L[3 * ia + k][c]);
                     Bv[k][c] = _mm_set_pd(L[3 * jb + k][c], L[3 * ja + k][c]);
                 }
-            mul_ll3_pair(Av[0], Bv[0], Av[1], Bv[1], Av[2], Bv[2], EEt[ia][ja], EEt[ib][jb]);
+            mul_ll3(Av[0], Bv[0], Av[1], Bv[1], Av[2], Bv[2], EEt[ia][ja], EEt[ib][jb]);
         }
         for (int i = 0; i < 3; ++i)
             for (int j = i + 1; j < 3; ++j)
@@ -456,7 +380,7 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
 #else
     for (int i = 0; i < 3; ++i) {
         for (int j = i; j < 3; ++j) {
-            mul_ll3(L[3 * i], L[3 * j], L[3 * i + 1], L[3 * j + 1], L[3 * i + 2], L[3 * j + 2], EEt[i][j]);
+            mul_ll3(L[3 * i], L[3 * j], L[3 * i + 1], L[3 * j + 1], L[3 * i + 2], L[3 * j + 2], EEt[i][j], NULL);
             if (j != i)
                 memcpy(EEt[j][i], EEt[i][j], sizeof EEt[i][j]);
         }
@@ -473,7 +397,7 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
 #ifndef FP_SSE2
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j)
-            mul_ql3(Aq[i][0], L[j], Aq[i][1], L[3 + j], Aq[i][2], L[6 + j], M[3 * i + j]);
+            mul_ql3(Aq[i][0], L[j], Aq[i][1], L[3 + j], Aq[i][2], L[6 + j], M[3 * i + j], NULL);
 #endif
     /* row 9: det E = sum_j E_0j * cofactor_0j */
     {
@@ -500,7 +424,7 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
                 for (int b = 0; b < 4; ++b)
                     Lv[k][b] = _mm_set1_pd(L[3 * k + j][b]);
             }
-            mul_ql3_pair((const __m128d(*)[10])Q, (const __m128d(*)[4])Lv, M[j], M[3 + j]);
+            mul_ql3(Q[0], Lv[0], Q[1], Lv[1], Q[2], Lv[2], M[j], M[3 + j]);
         }
         for (int k = 0; k < 3; ++k) {
             for (int m = 0; m < 10; ++m)
@@ -508,7 +432,7 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
             for (int b = 0; b < 4; ++b)
                 Lv[k][b] = _mm_set_pd(L[3 * k + 1][b], L[3 * k][b]);
         }
-        mul_ql3_pair((const __m128d(*)[10])Q, (const __m128d(*)[4])Lv, M[6], M[7]);
+        mul_ql3(Q[0], Lv[0], Q[1], Lv[1], Q[2], Lv[2], M[6], M[7]);
         const double *cof[3] = {c0, c1, c2};
         for (int k = 0; k < 3; ++k) {
             for (int m = 0; m < 10; ++m)
@@ -516,9 +440,9 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
             for (int b = 0; b < 4; ++b)
                 Lv[k][b] = _mm_set_pd(L[k][b], L[3 * k + 2][b]);
         }
-        mul_ql3_pair((const __m128d(*)[10])Q, (const __m128d(*)[4])Lv, M[8], M[9]);
+        mul_ql3(Q[0], Lv[0], Q[1], Lv[1], Q[2], Lv[2], M[8], M[9]);
 #else
-        mul_ql3(c0, L[0], c1, L[1], c2, L[2], M[9]);
+        mul_ql3(c0, L[0], c1, L[1], c2, L[2], M[9], NULL);
 #endif
     }
     /* Elimination of the first 10 monomials: LU with partial pivoting (row swaps keep the
