@@ -164,6 +164,27 @@ FP_INLINE double peval(const double *c, int deg, double t)
     return v;
 }
 
+/* Householder reflector k from x = v[k][k..8] (the column being reduced, filled by the caller), in
+ * place: v[k][k] -= alpha with alpha = -sign(x_k) |x|, beta[k] = 2 / |v|^2. Both QR versions below
+ * use it. Returns 0 on rank loss (|x| or |v| vanishes). */
+FP_INLINE int hh_reflector(double v[5][9], double beta[5], int k)
+{
+    double norm = 0.0;
+    for (int i = k; i < 9; ++i)
+        norm += v[k][i] * v[k][i];
+    norm = sqrt(norm);
+    if (!(norm > 1e-300))
+        return 0;
+    v[k][k] -= v[k][k] > 0.0 ? -norm : norm;
+    double vv = 0.0;
+    for (int i = k; i < 9; ++i)
+        vv += v[k][i] * v[k][i];
+    if (!(vv > 1e-300))
+        return 0;
+    beta[k] = 2.0 / vv;
+    return 1;
+}
+
 #ifndef FP_SSE2
 /* Householder step k of the QR factorisation of A^T, on the rows of A (row j of A is column j of
  * A^T): reflector v[k] (entries k..8), beta[k] = 2 / |v|^2, applied to rows k..4. Of row k only the
@@ -171,22 +192,10 @@ FP_INLINE double peval(const double *c, int deg, double t)
  * with constant k, so that every loop has constant bounds. Returns 0 on rank loss. */
 FP_INLINE_BIG int hh_step(double A[5][9], double v[5][9], double beta[5], int k)
 {
-    double norm = 0.0;
-    for (int i = k; i < 9; ++i)
-        norm += A[k][i] * A[k][i];
-    norm = sqrt(norm);
-    if (!(norm > 1e-300))
-        return 0;
-    double alpha = A[k][k] > 0.0 ? -norm : norm;
     for (int i = k; i < 9; ++i)
         v[k][i] = A[k][i];
-    v[k][k] -= alpha;
-    double vv = 0.0;
-    for (int i = k; i < 9; ++i)
-        vv += v[k][i] * v[k][i];
-    if (!(vv > 1e-300))
+    if (!hh_reflector(v, beta, k))
         return 0;
-    beta[k] = 2.0 / vv;
     for (int j = k; j < 5; ++j) {
         double d = 0.0;
         for (int i = k; i < 9; ++i)
@@ -244,22 +253,10 @@ static int null_space_5x9(double A[5][9], double L[9][4])
 /* step k (constant) of the SSE2 Householder QR on M = A^T */
 FP_INLINE_BIG int hh_step_sse2(double M[9][6], double v[5][9], double beta[5], int k)
 {
-    double norm = 0.0;
-    for (int i = k; i < 9; ++i)
-        norm += M[i][k] * M[i][k];
-    norm = sqrt(norm);
-    if (!(norm > 1e-300))
-        return 0;
-    double alpha = M[k][k] > 0.0 ? -norm : norm;
     for (int i = k; i < 9; ++i)
         v[k][i] = M[i][k];
-    v[k][k] -= alpha;
-    double vv = 0.0;
-    for (int i = k; i < 9; ++i)
-        vv += v[k][i] * v[k][i];
-    if (!(vv > 1e-300))
+    if (!hh_reflector(v, beta, k))
         return 0;
-    beta[k] = 2.0 / vv;
     double d = 0.0;
     for (int i = k; i < 9; ++i)
         d += v[k][i] * M[i][k];
