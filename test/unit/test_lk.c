@@ -395,6 +395,31 @@ static void expect_simd_kernel(const tvo_lk_config *c)
     assert_string_equal(tvo_lk_kernel_name(&p), "portable");
 }
 
+/* Tracks the n points p0 (n <= 300) with c's SIMD kernels (checking they are the ones compiled in)
+ * and with the portable ones, both starting from guess when c.use_initial_flow (else guess may be
+ * NULL), and asserts bit-identical positions, statuses and errors. */
+static void expect_simd_matches_portable(tvo_lk_config c, const tvo_point2f *p0, const tvo_point2f *guess, int n)
+{
+    static tvo_point2f p1[300], q1[300];
+    static uint8_t s1[300], s2[300];
+    static float e1[300], e2[300];
+    static uint8_t big_scratch[1 << 17];
+    assert_true(n <= 300);
+    assert_true(tvo_lk_scratch_size(&c) <= sizeof(big_scratch));
+    if (guess != NULL) {
+        memcpy(p1, guess, sizeof(p1[0]) * (size_t)n);
+        memcpy(q1, guess, sizeof(q1[0]) * (size_t)n);
+    }
+    c.force_portable = 0;
+    expect_simd_kernel(&c);
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, s1, e1, n, big_scratch, sizeof(big_scratch)), TVO_OK);
+    c.force_portable = 1;
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, q1, s2, e2, n, big_scratch, sizeof(big_scratch)), TVO_OK);
+    assert_memory_equal(p1, q1, sizeof(p1[0]) * (size_t)n);
+    assert_memory_equal(s1, s2, sizeof(s1[0]) * (size_t)n);
+    assert_memory_equal(e1, e2, sizeof(e1[0]) * (size_t)n);
+}
+
 static void test_kernel_name(void **state)
 {
     tvo_lk_config c;
@@ -419,10 +444,7 @@ static void test_kernel_name(void **state)
  * every tail length of the 8-pixel groups and with border windows. */
 static void test_portable_and_simd_identical(void **state)
 {
-    static tvo_point2f p0[300], p1[300], q1[300];
-    static uint8_t s1[300], s2[300];
-    static float e1[300], e2[300];
-    static uint8_t big_scratch[1 << 17];
+    static tvo_point2f p0[300];
     static const int wins[] = { 3, 7, 9, 11, 13, 15, 17, 21, 23, 31, 63 };
     uint64_t seed = 777;
     (void)state;
@@ -435,17 +457,7 @@ static void test_portable_and_simd_identical(void **state)
         tvo_lk_config c = F.cfg;
         c.win_size = wins[k];
         c.fb_check = 1;
-        assert_true(tvo_lk_scratch_size(&c) <= sizeof(big_scratch));
-        c.force_portable = 0;
-        expect_simd_kernel(&c);
-        assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, s1, e1, 300, big_scratch, sizeof(big_scratch)),
-                         TVO_OK);
-        c.force_portable = 1;
-        assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, q1, s2, e2, 300, big_scratch, sizeof(big_scratch)),
-                         TVO_OK);
-        assert_memory_equal(p1, q1, sizeof(p1));
-        assert_memory_equal(s1, s2, sizeof(s1));
-        assert_memory_equal(e1, e2, sizeof(e1));
+        expect_simd_matches_portable(c, p0, NULL, 300);
     }
 }
 
@@ -477,50 +489,35 @@ static void extreme_images(int variant, uint64_t *seed)
 
 static void test_portable_and_simd_identical_extreme(void **state)
 {
-    static tvo_point2f p0[200], p1[200], q1[200];
-    static uint8_t s1[200], s2[200];
-    static float e1[200], e2[200];
-    static uint8_t big_scratch[1 << 17];
+    static tvo_point2f p0[200];
     static const int wins[] = { 21, 33, 47, 63 };
     tvo_image ia = tvo_image_make(W, H, W, F.a), ib = tvo_image_make(W, H, W, F.b);
     uint64_t seed = 4242;
     (void)state;
     build(3, 0.0, 0.0);
     for (int variant = 0; variant < 2; ++variant) {
-    extreme_images(variant, &seed);
-    assert_int_equal(tvo_pyramid_build(&F.pa, &ia), TVO_OK);
-    assert_int_equal(tvo_pyramid_build(&F.pb, &ib), TVO_OK);
-    for (int i = 0; i < 200; ++i) {
-        if (variant == 0) {
-            p0[i].x = (float)((double)(tvo_test_rand(&seed) >> 11) / 9007199254740992.0 * (W + 20) - 10);
-            p0[i].y = (float)((double)(tvo_test_rand(&seed) >> 11) / 9007199254740992.0 * (H + 20) - 10);
-        } else {
-            p0[i].x = (float)(10 + (i % 20) * 7);
-            p0[i].y = (float)(10 + (i / 20) * 10);
+        extreme_images(variant, &seed);
+        assert_int_equal(tvo_pyramid_build(&F.pa, &ia), TVO_OK);
+        assert_int_equal(tvo_pyramid_build(&F.pb, &ib), TVO_OK);
+        for (int i = 0; i < 200; ++i) {
+            if (variant == 0) {
+                p0[i].x = (float)((double)(tvo_test_rand(&seed) >> 11) / 9007199254740992.0 * (W + 20) - 10);
+                p0[i].y = (float)((double)(tvo_test_rand(&seed) >> 11) / 9007199254740992.0 * (H + 20) - 10);
+            } else {
+                p0[i].x = (float)(10 + (i % 20) * 7);
+                p0[i].y = (float)(10 + (i / 20) * 10);
+            }
         }
-    }
-    for (size_t k = 0; k < sizeof(wins) / sizeof(wins[0]); ++k) {
-        tvo_lk_config c = F.cfg;
-        c.win_size = wins[k];
-        c.fb_check = 1;
-        c.min_eig_threshold = 0.0f; /* keep every window, however odd */
-        assert_true(tvo_lk_scratch_size(&c) <= sizeof(big_scratch));
-        c.force_portable = 0;
-        expect_simd_kernel(&c);
-        assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, s1, e1, 200, big_scratch, sizeof(big_scratch)),
-                         TVO_OK);
-        c.force_portable = 1;
-        assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, q1, s2, e2, 200, big_scratch, sizeof(big_scratch)),
-                         TVO_OK);
-        assert_memory_equal(p1, q1, sizeof(p1));
-        assert_memory_equal(s1, s2, sizeof(s1));
-        assert_memory_equal(e1, e2, sizeof(e1));
-    }
+        for (size_t k = 0; k < sizeof(wins) / sizeof(wins[0]); ++k) {
+            tvo_lk_config c = F.cfg;
+            c.win_size = wins[k];
+            c.fb_check = 1;
+            c.min_eig_threshold = 0.0f; /* keep every window, however odd */
+            expect_simd_matches_portable(c, p0, NULL, 200);
+        }
     }
 }
 
-/* OpenCV's bilinear weights as tvo_lk.c computes them (lk_weights): the rounded w00, w01, w10 can add
- * up to 2^14 + 1, and then w11 = -1. */
 static int lk_test_round(float v)
 {
     int i = (int)v;
@@ -546,9 +543,7 @@ static void test_portable_and_simd_identical_negative_weight(void **state)
                                    { 1869, 107 }, { 27, 11867 }, { 9, 20046 } };
     enum { NF = sizeof(frac) / sizeof(frac[0]), NP = NF * 4 };
     static const int wins[] = { 9, 15, 21, 31 };
-    tvo_point2f p0[NP], p1[NP], q1[NP];
-    uint8_t s1[NP], s2[NP];
-    float e1[NP], e2[NP];
+    tvo_point2f p0[NP], guess[NP];
     (void)state;
     build(1, 1.5, -0.75);
     for (int k = 0; k < NP; ++k) {
@@ -565,15 +560,8 @@ static void test_portable_and_simd_identical_negative_weight(void **state)
         c.use_initial_flow = 1; /* guess = the point moved by whole pixels: same fractions */
         c.max_iters = 3;
         for (int k = 0; k < NP; ++k)
-            p1[k] = q1[k] = (tvo_point2f){ p0[k].x + 2.f, p0[k].y - 1.f };
-        c.force_portable = 0;
-        expect_simd_kernel(&c);
-        assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, s1, e1, NP, F.scratch, sizeof(F.scratch)), TVO_OK);
-        c.force_portable = 1;
-        assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, q1, s2, e2, NP, F.scratch, sizeof(F.scratch)), TVO_OK);
-        assert_memory_equal(p1, q1, sizeof(p1));
-        assert_memory_equal(s1, s2, sizeof(s1));
-        assert_memory_equal(e1, e2, sizeof(e1));
+            guess[k] = (tvo_point2f){ p0[k].x + 2.f, p0[k].y - 1.f };
+        expect_simd_matches_portable(c, p0, guess, NP);
     }
 }
 
