@@ -135,30 +135,13 @@ typedef struct tvo_g_model {
 
 static inline int tvo_g_load_model(tvo_g_model *m, const char *name)
 {
-    char path[1024];
-    const char *src = getenv("TVO_SOURCE_DIR");
-    FILE *f;
-    long sz;
-    size_t need = 0;
+    size_t sz = 0, need = 0;
     memset(m, 0, sizeof *m);
-    snprintf(path, sizeof path, "%s/test/data/nn/%s", src != NULL ? src : ".", name);
-    f = fopen(path, "rb");
-    if (f == NULL)
-        return 0;
-    if (fseek(f, 0, SEEK_END) != 0 || (sz = ftell(f)) <= 0 || fseek(f, 0, SEEK_SET) != 0) {
-        fclose(f);
-        return 0;
-    }
-    m->file = malloc((size_t)sz);
-    if (m->file == NULL || fread(m->file, 1, (size_t)sz, f) != (size_t)sz) {
-        fclose(f);
-        return 0;
-    }
-    fclose(f);
-    if (tvo_nn_required_size(m->file, (size_t)sz, &need) != TVO_OK)
+    m->file = tvo_test_read_nn_file(name, 0, &sz);
+    if (m->file == NULL || tvo_nn_required_size(m->file, sz, &need) != TVO_OK)
         return 0;
     m->mem = malloc(need);
-    return m->mem != NULL && tvo_nn_load(&m->nn, m->file, (size_t)sz, m->mem, need) == TVO_OK;
+    return m->mem != NULL && tvo_nn_load(&m->nn, m->file, sz, m->mem, need) == TVO_OK;
 }
 
 static inline void tvo_g_free_model(tvo_g_model *m)

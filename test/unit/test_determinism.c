@@ -441,33 +441,10 @@ static void test_relpose(void **state)
     assert_true(check_digest("relpose", "EXPECT_RELPOSE", d.h, EXPECT_RELPOSE));
 }
 
-static void *read_model(size_t *size)
-{
-    const char *src = getenv("TVO_SOURCE_DIR");
-    char path[4096];
-    FILE *fp;
-    void *buf = NULL;
-    long len;
-    snprintf(path, sizeof(path), "%s/test/data/nn/paper.tvonn", src != NULL ? src : ".");
-    fp = fopen(path, "rb");
-    if (fp == NULL)
-        return NULL;
-    if (fseek(fp, 0, SEEK_END) == 0 && (len = ftell(fp)) > 0 && fseek(fp, 0, SEEK_SET) == 0) {
-        buf = malloc((size_t)len);
-        if (buf != NULL && fread(buf, 1, (size_t)len, fp) != (size_t)len) {
-            free(buf);
-            buf = NULL;
-        }
-        *size = (size_t)len;
-    }
-    fclose(fp);
-    return buf;
-}
-
 static void test_nn(void **state)
 {
     size_t fsize = 0, need = 0;
-    void *file = read_model(&fsize), *mem;
+    void *file = tvo_test_read_nn_file("paper.tvonn", 0, &fsize), *mem;
     tvo_nn *nn = NULL;
     uint64_t rs = 0x6a09e667f3bcc909ULL;
     digest d;

@@ -12,22 +12,8 @@ typedef struct blob {
 
 static blob read_file(const char *name)
 {
-    blob b = {NULL, 0};
-    char path[4096];
-    const char *src = getenv("TVO_SOURCE_DIR");
-    FILE *fp;
-    long n;
-    snprintf(path, sizeof path, "%s/test/data/nn/%s", src != NULL ? src : ".", name);
-    fp = fopen(path, "rb");
-    if (fp == NULL)
-        return b;
-    fseek(fp, 0, SEEK_END);
-    n = ftell(fp);
-    fseek(fp, 0, SEEK_SET);
-    b.data = (uint8_t *)malloc((size_t)n + 64u);
-    if (b.data != NULL && fread(b.data, 1, (size_t)n, fp) == (size_t)n)
-        b.size = (size_t)n;
-    fclose(fp);
+    blob b;
+    b.data = tvo_test_read_nn_file(name, 64u, &b.size);
     return b;
 }
 

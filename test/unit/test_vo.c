@@ -377,27 +377,13 @@ static void test_scale_filter(void **state)
 /* A weights file of test/data/nn loaded into malloc'd memory (NULL if missing). */
 static tvo_nn *load_nn(const char *name, void **mem)
 {
-    char path[4096];
-    const char *src = getenv("TVO_SOURCE_DIR");
-    FILE *fp;
-    long n;
-    uint8_t *buf;
-    size_t need = 0;
+    size_t n = 0, need = 0;
+    uint8_t *buf = tvo_test_read_nn_file(name, 0, &n);
     tvo_nn *nn = NULL;
     *mem = NULL;
-    snprintf(path, sizeof path, "%s/test/data/nn/%s", src != NULL ? src : ".", name);
-    fp = fopen(path, "rb");
-    if (fp == NULL)
-        return NULL;
-    fseek(fp, 0, SEEK_END);
-    n = ftell(fp);
-    fseek(fp, 0, SEEK_SET);
-    buf = (uint8_t *)malloc((size_t)n);
-    if (buf != NULL && fread(buf, 1, (size_t)n, fp) == (size_t)n &&
-        tvo_nn_required_size(buf, (size_t)n, &need) == TVO_OK && (*mem = malloc(need)) != NULL &&
-        tvo_nn_load(&nn, buf, (size_t)n, *mem, need) != TVO_OK)
+    if (buf != NULL && tvo_nn_required_size(buf, n, &need) == TVO_OK && (*mem = malloc(need)) != NULL &&
+        tvo_nn_load(&nn, buf, n, *mem, need) != TVO_OK)
         nn = NULL;
-    fclose(fp);
     free(buf);
     return nn;
 }
