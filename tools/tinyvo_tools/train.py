@@ -200,6 +200,32 @@ def _net_from_branch(fb: "quant.FloatBranch"):
     return net
 
 
+def _fit(opt, batch_loss, n: int, epochs: int, rng, batch: int, desc: str, progress: bool, *,
+         before_epoch=None, after_step=None, postfix=None):
+    """The trainer's epoch loop, shared by every stage: per epoch a permutation of the n rows from rng, then
+    mini-batches of `batch` rows, each one optimiser step on batch_loss(idx) (a scalar tensor);
+    before_epoch() runs at the start of each epoch, after_step() after each step; the progress bar shows
+    the epoch's mean loss and postfix()'s items."""
+    torch = _torch()
+    from tqdm import tqdm
+    bar = tqdm(range(epochs), desc=desc, disable=not progress, leave=True)
+    for _ in bar:
+        if before_epoch is not None:
+            before_epoch()
+        perm = torch.from_numpy(rng.permutation(n))
+        total = 0.0
+        for s in range(0, n, batch):
+            idx = perm[s:s + batch]
+            opt.zero_grad()
+            loss = batch_loss(idx)
+            loss.backward()
+            opt.step()
+            if after_step is not None:
+                after_step()
+            total += float(loss) * len(idx)
+        bar.set_postfix(loss=f"{total / n:.4f}", **(postfix() if postfix is not None else {}))
+
+
 def pact_finetune(branches, features: np.ndarray, targets: np.ndarray, *, epochs: int = 10, lr: float = 1e-4,
                   decay: float = 0.0, init: float = 1.0, alpha_lr: Optional[float] = None, batch: int = 256, seed: int = 0,
                   huber_delta: float = 1.0, progress: bool = True):
@@ -213,7 +239,6 @@ def pact_finetune(branches, features: np.ndarray, targets: np.ndarray, *, epochs
     the float model then clips exactly where the int8 interpreter saturates (quant.quantize_branch).
     Seeded and single-threaded like train()."""
     torch = _torch()
-    from tqdm import tqdm
     torch.manual_seed(seed)
     torch.set_num_threads(1)
     rng = np.random.default_rng(seed)
@@ -239,22 +264,16 @@ def pact_finetune(branches, features: np.ndarray, targets: np.ndarray, *, epochs
         opt = torch.optim.RMSprop([{"params": others},
                                    {"params": alphas, "lr": alpha_lr if alpha_lr is not None else 100.0 * lr}], lr=lr)
         loss_fn = torch.nn.HuberLoss(delta=huber_delta)
-        n = len(xn)
-        bar = tqdm(range(epochs), desc=f"PACT fine-tuning {nnfmt.DOFS[fb.dof]}", disable=not progress, leave=True)
-        for _ in bar:
-            perm = torch.from_numpy(rng.permutation(n))
-            total = 0.0
-            for s in range(0, n, batch):
-                idx = perm[s:s + batch]
-                opt.zero_grad()
-                loss = loss_fn(net(xn[idx])[:, 0], yn[idx]) + decay * sum(a ** 2 for a in alphas)
-                loss.backward()
-                opt.step()
-                with torch.no_grad():  # a bound stays > 0 (a zero bound would be a dead layer)
-                    for a in alphas:
-                        a.clamp_(min=1e-3)
-                total += float(loss) * len(idx)
-            bar.set_postfix(loss=f"{total / n:.4f}", alpha="/".join(f"{float(a):.2f}" for a in alphas))
+        def keep_positive(alphas=alphas):
+            with torch.no_grad():  # a bound stays > 0 (a zero bound would be a dead layer)
+                for a in alphas:
+                    a.clamp_(min=1e-3)
+
+        _fit(opt, lambda idx, net=net, xn=xn, yn=yn, alphas=alphas:
+             loss_fn(net(xn[idx])[:, 0], yn[idx]) + decay * sum(a ** 2 for a in alphas),
+             len(xn), epochs, rng, batch, f"PACT fine-tuning {nnfmt.DOFS[fb.dof]}", progress,
+             after_step=keep_positive,
+             postfix=lambda alphas=alphas: {"alpha": "/".join(f"{float(a):.2f}" for a in alphas)})
         lin = [m for m in net if isinstance(m, torch.nn.Linear)]
         out.append(quant.FloatBranch(
             dof=fb.dof, feature_ids=list(fb.feature_ids), norm_scale=fb.norm_scale, norm_offset=fb.norm_offset,
@@ -286,7 +305,6 @@ def train(features: np.ndarray, targets: np.ndarray, activations: Dict[int, str]
     The int8 input stage maps exactly that range to its 256 levels, so rare outliers (a 30 deg
     twisted-pair rotation among 0.5 deg ones) no longer set the int8 step of every other row."""
     torch = _torch()
-    from tqdm import tqdm
     torch.manual_seed(seed)
     torch.set_num_threads(1)
     rng = np.random.default_rng(seed)
@@ -315,35 +333,14 @@ def train(features: np.ndarray, targets: np.ndarray, activations: Dict[int, str]
     for d in dofs:  # stage 1: one branch at a time
         net = build_branch(len(ids), activations[d], sizes)
         opt = torch.optim.RMSprop(net.parameters(), lr=lr)
-        bar = tqdm(range(epochs), desc=f"branch {nnfmt.DOFS[d]} ({activations[d]})", disable=not progress,
-                   leave=True)
-        for _ in bar:
-            perm = torch.from_numpy(rng.permutation(n))
-            total = 0.0
-            for s in range(0, n, batch):
-                idx = perm[s:s + batch]
-                opt.zero_grad()
-                loss = loss_fn(net(xn[idx])[:, 0], yn[idx, d])
-                loss.backward()
-                opt.step()
-                total += float(loss) * len(idx)
-            bar.set_postfix(loss=f"{total / n:.4f}")
+        _fit(opt, lambda idx, net=net, d=d: loss_fn(net(xn[idx])[:, 0], yn[idx, d]), n, epochs, rng, batch,
+             f"branch {nnfmt.DOFS[d]} ({activations[d]})", progress)
         nets[d] = net
     if joint_epochs > 0:  # stage 2: combined fine-tuning
         params = [p for net in nets.values() for p in net.parameters()]
         opt = torch.optim.RMSprop(params, lr=joint_lr if joint_lr is not None else lr * 0.25)
-        bar = tqdm(range(joint_epochs), desc="joint fine-tuning", disable=not progress, leave=True)
-        for _ in bar:
-            perm = torch.from_numpy(rng.permutation(n))
-            total = 0.0
-            for s in range(0, n, batch):
-                idx = perm[s:s + batch]
-                opt.zero_grad()
-                loss = sum(loss_fn(net(xn[idx])[:, 0], yn[idx, d]) for d, net in nets.items())
-                loss.backward()
-                opt.step()
-                total += float(loss) * len(idx)
-            bar.set_postfix(loss=f"{total / n:.4f}")
+        _fit(opt, lambda idx: sum(loss_fn(net(xn[idx])[:, 0], yn[idx, d]) for d, net in nets.items()), n,
+             joint_epochs, rng, batch, "joint fine-tuning", progress)
     if qat_epochs > 0 and pact_epochs > 0:
         raise ValueError("stage 3 (qat_epochs) and PACT (pact_epochs) are alternatives")
     if qat_epochs > 0:  # stage 3: fine-tuning against int8 rounding
@@ -363,30 +360,28 @@ def train(features: np.ndarray, targets: np.ndarray, activations: Dict[int, str]
         gen = torch.Generator().manual_seed(seed) if qat_mode == "noise" else None
         params = [p for net in nets.values() for p in net.parameters()]
         opt = torch.optim.RMSprop(params, lr=qat_lr if qat_lr is not None else lr * 0.1)
-        bar = tqdm(range(qat_epochs), desc=f"int8-aware fine-tuning ({qat_mode})", disable=not progress, leave=True)
-        for _ in bar:
-            calib = {d: _qat_calibrate(net, xn, activations[d]) for d, net in nets.items()}
-            perm = torch.from_numpy(rng.permutation(n))
-            total = 0.0
-            for s in range(0, n, batch):
-                idx = perm[s:s + batch]
-                opt.zero_grad()
-                loss = 0.0
-                for d, net in nets.items():
-                    xq, col, step = qin[d]
-                    if qat_mode == "noise":
-                        x = xn[idx] + (torch.rand((len(idx), xn.shape[1]), generator=gen) - 0.5) * step
-                        loss = loss + loss_fn(_qat_forward(net, x, col, calib[d], activations[d], gen)[:, 0], yn[idx, d])
-                    elif qat_mode == "fq":
-                        loss = loss + loss_fn(_qat_forward(net, xq[idx], col, calib[d], activations[d])[:, 0], yn[idx, d])
-                    else:
-                        yf = net(xn[idx])[:, 0]
-                        yq = _qat_forward(net, xq[idx], col, calib[d], activations[d])[:, 0]
-                        loss = loss + loss_fn(yf, yn[idx, d]) + qat_weight * ((yq - yf) ** 2).mean()
-                loss.backward()
-                opt.step()
-                total += float(loss) * len(idx)
-            bar.set_postfix(loss=f"{total / n:.4f}")
+        calib = {}
+
+        def recalibrate():  # the int8 ranges of the current weights, once per epoch
+            calib.update({d: _qat_calibrate(net, xn, activations[d]) for d, net in nets.items()})
+
+        def qat_loss(idx):
+            loss = 0.0
+            for d, net in nets.items():
+                xq, col, step = qin[d]
+                if qat_mode == "noise":
+                    x = xn[idx] + (torch.rand((len(idx), xn.shape[1]), generator=gen) - 0.5) * step
+                    loss = loss + loss_fn(_qat_forward(net, x, col, calib[d], activations[d], gen)[:, 0], yn[idx, d])
+                elif qat_mode == "fq":
+                    loss = loss + loss_fn(_qat_forward(net, xq[idx], col, calib[d], activations[d])[:, 0], yn[idx, d])
+                else:
+                    yf = net(xn[idx])[:, 0]
+                    yq = _qat_forward(net, xq[idx], col, calib[d], activations[d])[:, 0]
+                    loss = loss + loss_fn(yf, yn[idx, d]) + qat_weight * ((yq - yf) ** 2).mean()
+            return loss
+
+        _fit(opt, qat_loss, n, qat_epochs, rng, batch, f"int8-aware fine-tuning ({qat_mode})", progress,
+             before_epoch=recalibrate)
     branches = []
     for d, net in nets.items():
         lin = [m for m in net if isinstance(m, torch.nn.Linear)]
