@@ -153,16 +153,29 @@ static double sampson2(const double E[9], const tvo_point2d *p1, const tvo_point
     return t.e * t.e / d;
 }
 
+#ifdef RP_SSE2
+/* Correspondences a (p1a <-> p2a) and b (p1b <-> p2b) in lanes 0 and 1: x1 and y1 of image 1 in a0
+ * and a1, x2 and y2 of image 2 in b0 and b1 (the SSE2 loops below all start this way). */
+static inline void rp_load2(const tvo_point2d *p1a, const tvo_point2d *p2a, const tvo_point2d *p1b,
+                            const tvo_point2d *p2b, __m128d *a0, __m128d *a1, __m128d *b0, __m128d *b1)
+{
+    const __m128d pa = _mm_loadu_pd(&p1a->x), pb = _mm_loadu_pd(&p1b->x); /* (x, y) */
+    const __m128d qa = _mm_loadu_pd(&p2a->x), qb = _mm_loadu_pd(&p2b->x);
+    *a0 = _mm_unpacklo_pd(pa, pb);
+    *a1 = _mm_unpackhi_pd(pa, pb);
+    *b0 = _mm_unpacklo_pd(qa, qb);
+    *b1 = _mm_unpackhi_pd(qa, qb);
+}
+#endif
+
 /* sampson2 of the points (p1a, p2a) and (p1b, p2b): r[0], r[1]. SSE2: both in the two lanes with
  * sampson2's operations in the same order (bit-identical). */
 static inline void sampson2_2(const double E[9], const tvo_point2d *p1a, const tvo_point2d *p2a,
                               const tvo_point2d *p1b, const tvo_point2d *p2b, double r[2])
 {
 #ifdef RP_SSE2
-    __m128d pa = _mm_loadu_pd(&p1a->x), pb = _mm_loadu_pd(&p1b->x);
-    __m128d qa = _mm_loadu_pd(&p2a->x), qb = _mm_loadu_pd(&p2b->x);
-    __m128d a0 = _mm_unpacklo_pd(pa, pb), a1 = _mm_unpackhi_pd(pa, pb);
-    __m128d b0 = _mm_unpacklo_pd(qa, qb), b1 = _mm_unpackhi_pd(qa, qb);
+    __m128d a0, a1, b0, b1;
+    rp_load2(p1a, p2a, p1b, p2b, &a0, &a1, &b0, &b1);
     __m128d E0 = _mm_set1_pd(E[0]), E1 = _mm_set1_pd(E[1]), E3 = _mm_set1_pd(E[3]), E4 = _mm_set1_pd(E[4]);
     __m128d ex0 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(E0, a0), _mm_mul_pd(E1, a1)), _mm_set1_pd(E[2]));
     __m128d ex1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(E3, a0), _mm_mul_pd(E4, a1)), _mm_set1_pd(E[5]));
@@ -232,10 +245,8 @@ static double msac_cost(const double E[9], const tvo_point2d *x1, const tvo_poin
             int32_t j = i + stride;
             if (j >= n)
                 j -= n;
-            __m128d p0 = _mm_loadu_pd(&x1[i].x), p1 = _mm_loadu_pd(&x1[j].x); /* (x, y) */
-            __m128d q0 = _mm_loadu_pd(&x2[i].x), q1 = _mm_loadu_pd(&x2[j].x);
-            __m128d a0 = _mm_unpacklo_pd(p0, p1), a1 = _mm_unpackhi_pd(p0, p1);
-            __m128d b0 = _mm_unpacklo_pd(q0, q1), b1 = _mm_unpackhi_pd(q0, q1);
+            __m128d a0, a1, b0, b1;
+            rp_load2(&x1[i], &x2[i], &x1[j], &x2[j], &a0, &a1, &b0, &b1);
             __m128d ex0 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(E0, a0), _mm_mul_pd(E1, a1)), E2);
             __m128d ex1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(E3, a0), _mm_mul_pd(E4, a1)), E5);
             __m128d ex2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(E6, a0), _mm_mul_pd(E7, a1)), E8);
@@ -510,10 +521,8 @@ static double lm_pass(const double Rp[9], const double tp[3], const double b1p[3
                 ++j;
             if (j >= n)
                 break; /* at most one masked point left: the C loop below */
-            __m128d p0 = _mm_loadu_pd(&x1[i].x), p1 = _mm_loadu_pd(&x1[j].x);
-            __m128d r0 = _mm_loadu_pd(&x2[i].x), r1 = _mm_loadu_pd(&x2[j].x);
-            __m128d a0 = _mm_unpacklo_pd(p0, p1), a1 = _mm_unpackhi_pd(p0, p1);
-            __m128d q0 = _mm_unpacklo_pd(r0, r1), q1 = _mm_unpackhi_pd(r0, r1);
+            __m128d a0, a1, q0, q1;
+            rp_load2(&x1[i], &x2[i], &x1[j], &x2[j], &a0, &a1, &q0, &q1);
             __m128d u0 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R0, a0), _mm_mul_pd(R1, a1)), R2);
             __m128d u1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R3, a0), _mm_mul_pd(R4, a1)), R5);
             __m128d u2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R6, a0), _mm_mul_pd(R7, a1)), R8);
