@@ -46,12 +46,7 @@ static int callgrind_mode(void)
     static scene sc;
     double a[5][2], b[5][2], E[10][9];
     make_scene(&sc, 1, 5, 20.0, 1.0, 0.0, 0.0, 0);
-    for (int i = 0; i < 5; ++i) {
-        a[i][0] = sc.x1[i].x;
-        a[i][1] = sc.x1[i].y;
-        b[i][0] = sc.x2[i].x;
-        b[i][1] = sc.x2[i].y;
-    }
+    scene_arrays(&sc, 5, a, b);
     int sink = 0;
     for (int k = 0; k < 1000; ++k)
         sink += tvo_essential_5pt((const double (*)[2])a, (const double (*)[2])b, E);
@@ -84,12 +79,7 @@ int main(int argc, char **argv)
     scene sc;
     make_scene(&sc, 1, 5, 20.0, 1.0, 0.0, 0.0, 0);
     double a[5][2], b[5][2], E[10][9], rep[20];
-    for (int i = 0; i < 5; ++i) {
-        a[i][0] = sc.x1[i].x;
-        a[i][1] = sc.x1[i].y;
-        b[i][0] = sc.x2[i].x;
-        b[i][1] = sc.x2[i].y;
-    }
+    scene_arrays(&sc, 5, a, b);
     volatile int sink = 0;
     for (int r = 0; r < 20; ++r) {
         double t0 = now_s();

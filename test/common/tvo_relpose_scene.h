@@ -89,6 +89,17 @@ static void make_scene(scene *sc, uint64_t seed, int n, double max_deg, double b
     }
 }
 
+/* The first n correspondences of sc as the minimal solvers' arrays: a[i] = x1[i], b[i] = x2[i]. */
+static void scene_arrays(const scene *sc, int n, double (*a)[2], double (*b)[2])
+{
+    for (int i = 0; i < n; ++i) {
+        a[i][0] = sc->x1[i].x;
+        a[i][1] = sc->x1[i].y;
+        b[i][0] = sc->x2[i].x;
+        b[i][1] = sc->x2[i].y;
+    }
+}
+
 static double t_err_deg(const double a[3], const double b[3])
 {
     double d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];

@@ -19,12 +19,7 @@ static void test_fivept_noise_free(void **state)
         scene sc;
         make_scene(&sc, 1000 + trial, 5, 30.0, 1.0, 0.0, 0.0, 0);
         double a[5][2], b[5][2], E[10][9];
-        for (int i = 0; i < 5; ++i) {
-            a[i][0] = sc.x1[i].x;
-            a[i][1] = sc.x1[i].y;
-            b[i][0] = sc.x2[i].x;
-            b[i][1] = sc.x2[i].y;
-        }
+        scene_arrays(&sc, 5, a, b);
         int ns = tvo_essential_5pt((const double (*)[2])a, (const double (*)[2])b, E);
         assert_true(ns >= 0 && ns <= 10);
         /* ground-truth E, normalised, compared up to sign */
@@ -440,12 +435,7 @@ static void test_eightpt_paths(void **state)
         scene sc;
         make_scene(&sc, 7000 + seed, 9, 20.0, 1.0, 0.0, 0.0, 0);
         double a[9][2], b[9][2], E8[9], E9[9], Et[9], S[9];
-        for (int i = 0; i < 9; ++i) {
-            a[i][0] = sc.x1[i].x;
-            a[i][1] = sc.x1[i].y;
-            b[i][0] = sc.x2[i].x;
-            b[i][1] = sc.x2[i].y;
-        }
+        scene_arrays(&sc, 9, a, b);
         assert_int_equal(tvo_essential_8pt((const double (*)[2])a, (const double (*)[2])b, 8, E8), 1);
         assert_int_equal(tvo_essential_8pt((const double (*)[2])a, (const double (*)[2])b, 9, E9), 1);
         tvo_la_skew(sc.t, S);
@@ -471,12 +461,7 @@ static void test_eightpt_paths(void **state)
         /* planar, noise-free: the 8x9 system has rank 6 */
         scene pl;
         make_scene(&pl, 9000 + seed, 8, 20.0, 1.0, 0.0, 0.0, 1);
-        for (int i = 0; i < 8; ++i) {
-            a[i][0] = pl.x1[i].x;
-            a[i][1] = pl.x1[i].y;
-            b[i][0] = pl.x2[i].x;
-            b[i][1] = pl.x2[i].y;
-        }
+        scene_arrays(&pl, 8, a, b);
         assert_int_equal(tvo_essential_8pt((const double (*)[2])a, (const double (*)[2])b, 8, E8), 0);
     }
     assert_int_equal(checked, 200);
