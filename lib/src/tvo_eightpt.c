@@ -33,6 +33,23 @@ static int hartley(const double (*x)[2], int32_t n, double T[9])
     return 1;
 }
 
+/* Row i of the epipolar system on Hartley-normalised points: x2n^T F x1n = 0 in F's 9 entries. */
+static void epi_row(const double (*x1)[2], const double (*x2)[2], int32_t i, const double T1[9], const double T2[9],
+                    double r[9])
+{
+    const double a0 = T1[0] * x1[i][0] + T1[2], a1 = T1[4] * x1[i][1] + T1[5];
+    const double b0 = T2[0] * x2[i][0] + T2[2], b1 = T2[4] * x2[i][1] + T2[5];
+    r[0] = b0 * a0;
+    r[1] = b0 * a1;
+    r[2] = b0;
+    r[3] = b1 * a0;
+    r[4] = b1 * a1;
+    r[5] = b1;
+    r[6] = a0;
+    r[7] = a1;
+    r[8] = 1.0;
+}
+
 /* Null vector of the 8x9 system A f = 0 by Gaussian elimination with complete pivoting (~400
  * multiply-adds; the Jacobi eigen-decomposition of the normal matrix costs ~20x more). Returns 0
  * when the rank is below 8: a pivot below 1e-10 of the first (largest) one, e.g. points on a plane
@@ -106,9 +123,8 @@ static int null_vector_normal(const double (*x1)[2], const double (*x2)[2], int3
     double AtA[81];
     memset(AtA, 0, sizeof AtA);
     for (int32_t i = 0; i < n; ++i) {
-        double a0 = T1[0] * x1[i][0] + T1[2], a1 = T1[4] * x1[i][1] + T1[5];
-        double b0 = T2[0] * x2[i][0] + T2[2], b1 = T2[4] * x2[i][1] + T2[5];
-        double r[9] = {b0 * a0, b0 * a1, b0, b1 * a0, b1 * a1, b1, a0, a1, 1.0};
+        double r[9];
+        epi_row(x1, x2, i, T1, T2, r);
         for (int p = 0; p < 9; ++p)
             for (int q = p; q < 9; ++q)
                 AtA[9 * p + q] += r[p] * r[q];
@@ -139,12 +155,8 @@ int tvo_essential_8pt(const double (*x1)[2], const double (*x2)[2], int32_t n, d
     double Fn[9];
     if (n == 8) {
         double A[8][9];
-        for (int32_t i = 0; i < 8; ++i) {
-            double a0 = T1[0] * x1[i][0] + T1[2], a1 = T1[4] * x1[i][1] + T1[5];
-            double b0 = T2[0] * x2[i][0] + T2[2], b1 = T2[4] * x2[i][1] + T2[5];
-            const double r[9] = {b0 * a0, b0 * a1, b0, b1 * a0, b1 * a1, b1, a0, a1, 1.0};
-            memcpy(A[i], r, sizeof r);
-        }
+        for (int32_t i = 0; i < 8; ++i)
+            epi_row(x1, x2, i, T1, T2, A[i]);
         if (!null_vector_8x9(A, Fn))
             return 0;
     } else if (!null_vector_normal(x1, x2, n, T1, T2, Fn)) {
