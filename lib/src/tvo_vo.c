@@ -303,22 +303,9 @@ static void fill_features(const tvo_vo_result *res, float f[TVO_FEAT_COUNT])
     f[TVO_FEAT_ROT_ONLY] = res->state == TVO_VO_ROTATION_ONLY ? 1.0f : 0.0f;
 }
 
-static void cross3(const double a[3], const double b[3], double c[3])
-{
-    c[0] = a[1] * b[2] - a[2] * b[1];
-    c[1] = a[2] * b[0] - a[0] * b[2];
-    c[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 static double dot3(const double a[3], const double b[3])
 {
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void rot_mul(const double R[9], const double x[3], double y[3])
-{
-    for (int r = 0; r < 3; ++r)
-        y[r] = R[3 * r] * x[0] + R[3 * r + 1] * x[1] + R[3 * r + 2] * x[2];
 }
 
 /* Depth along the ray xb (homogeneous, z = 1) in frame b of the point seen along xa in frame a, with
@@ -329,15 +316,15 @@ static double depth_in_b(const double R[9], const double t[3], const double xa[3
                          double sin2_min)
 {
     double a[3], c[3], d[3], c2, lam, nu;
-    rot_mul(R, xa, a);
-    cross3(xb, a, c);
+    tvo_la_mat3_vec(R, xa, a);
+    tvo_la_cross(xb, a, c);
     c2 = dot3(c, c);
     if (!(c2 > sin2_min * dot3(xb, xb) * dot3(a, a)))
         return 0.0;
-    cross3(t, a, d);
+    tvo_la_cross(t, a, d);
     lam = dot3(c, d) / c2;
     /* nu from the same equation crossed with xb from the left: -nu (xb x R xa) = xb x t */
-    cross3(t, xb, d);
+    tvo_la_cross(t, xb, d);
     nu = dot3(c, d) / c2;
     return (lam > 0.0 && nu > 0.0 && isfinite(lam)) ? lam : 0.0;
 }
@@ -358,7 +345,7 @@ static double relative_scale(tvo_vo *vo, const double R[9], const double t[3], i
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c)
             Rt[3 * r + c] = R[3 * c + r];
-    rot_mul(Rt, t, tt);
+    tvo_la_mat3_tvec(R, t, tt);
     tt[0] = -tt[0];
     tt[1] = -tt[1];
     tt[2] = -tt[2];
