@@ -118,3 +118,80 @@ def test_pact_finetune():
         assert L.out_scale == pytest.approx(c / 255.0, rel=1e-6)
     with pytest.raises(ValueError):
         train.train(f, t, {nnfmt.DOF_LOG_STEP: "relu"}, pact_epochs=1, qat_epochs=1, **kw)
+
+
+def _per_channel_forward(fb, feats, m):
+    """min(relu(a_c), m[k][c]) per channel with the branch's own weights: the function clip_relu_channels
+    must give."""
+    x = fb.normalise(feats)
+    for k, (w, b) in enumerate(zip(fb.weights, fb.biases)):
+        a = x @ np.asarray(w, np.float64).T + np.asarray(b, np.float64)
+        if k == len(fb.weights) - 1:
+            return a[:, 0] * fb.out_scale + fb.out_offset
+        x = np.minimum(np.maximum(a, 0.0), m[k][None, :])
+
+
+def test_clip_relu_channels():
+    fb, x = _branch(4)
+    # a dead channel (never active on x), one with a tiny range and a third of layer 0's with a small one
+    fb.biases[0][3] = -1e6
+    fb.weights[0][5] *= 1e-3
+    fb.biases[0][5] *= 1e-3
+    fb.weights[0][8:16] *= 0.05
+    fb.biases[0][8:16] *= 0.05
+    for init in (1.0, 1.25):
+        m = [init * post.max(axis=0) for _, post in fb.forward_all(x)[1:-1]]
+        eq = quant.clip_relu_channels(fb, x, init)
+        assert len(eq.act_clip) == len(fb.weights) - 1
+        assert eq.act_clip == pytest.approx([float(v.max()) for v in m])
+        np.testing.assert_allclose(eq.forward(x), fb.forward(x), rtol=1e-12, atol=1e-12)  # unchanged on the rows
+        xs = x.copy()
+        xs[:, 7] *= 4.0  # beyond the rows: each channel saturates at its own bound
+        np.testing.assert_allclose(eq.forward(xs), _per_channel_forward(fb, xs, m), rtol=1e-10, atol=1e-10)
+        assert not np.allclose(eq.forward(xs), fb.forward(xs))
+        assert np.all(eq.weights[0][3] == 0) and eq.biases[0][3] == 0
+    # equalised: every live channel reaches the layer's bound on the rows (all its int8 levels are used), so
+    # the export follows its float model more closely than the per-layer clip's
+    eq = quant.clip_relu_channels(fb, x)
+    for (_, post), bound in zip(eq.forward_all(x)[1:-1], eq.act_clip):
+        top = post.max(axis=0)
+        np.testing.assert_allclose(top[top > 0], bound, rtol=1e-12)
+    assert (eq.forward_all(x)[1][1].max(axis=0) == 0).sum() == 1  # the dead channel
+    per_layer = quant.FloatBranch(**{**vars(fb), "act_clip": _hidden_max(fb, x)})
+
+    def gap(b):
+        f = b.forward(x)
+        return np.sqrt(np.mean((nnfmt.run_branch(quant.quantize_branch(b, x), x) - f) ** 2)) / f.std()
+
+    assert gap(eq) < 0.9 * gap(per_layer)
+    # bounds of an already clipped branch stay in force
+    tight = quant.FloatBranch(**{**vars(fb), "act_clip": [0.5 * v for v in _hidden_max(fb, x)]})
+    assert all(c <= t + 1e-12 for c, t in zip(quant.clip_relu_channels(tight, x, 2.0).act_clip, tight.act_clip))
+    with pytest.raises(ValueError):
+        quant.clip_relu_channels(fb, x, 0.0)
+    with pytest.raises(ValueError):
+        quant.clip_relu_channels(quant.FloatBranch(**{**vars(fb), "activation": "tanh"}), x)
+
+
+def test_pact_cli_per_channel(tmp_path, capsys):
+    """python -m tinyvo_tools.pact --per-channel: clipped per channel on the checkpoint's training rows (not
+    its validation sequences), the same function there, one bound per hidden layer."""
+    from tinyvo_tools import pact
+    rng = np.random.default_rng(5)
+    f, t, seq = train.synthetic_dataset(rng, 400, sequences=("A", "V"))
+    ds = tmp_path / "d.npz"
+    np.savez(ds, features=f, targets=t, sequence=seq)
+    fb, _ = _branch(6)
+    ck = tmp_path / "m.ckpt.npz"
+    quant.save_checkpoint(ck, [fb], {"val_sequences": ["V"]})
+    out = tmp_path / "c.ckpt.npz"
+    pact.main([str(ck), str(ds), "-o", str(out), "--per-channel"])
+    assert "relu bounds" in capsys.readouterr().out
+    (got,), meta = quant.load_checkpoint(out)
+    (ref,), _ = quant.load_checkpoint(ck)  # the float32 weights as stored
+    tr = seq == "A"
+    want = quant.clip_relu_channels(ref, f[tr])
+    assert meta["pact"]["per_channel"] is True and meta["pact"]["rows"] == int(tr.sum())
+    assert got.act_clip == pytest.approx(want.act_clip, rel=1e-6)
+    np.testing.assert_allclose(got.forward(f[tr]), ref.forward(f[tr]), rtol=1e-5, atol=1e-5)
+    assert not np.allclose(got.act_clip, quant.clip_relu_channels(ref, f).act_clip)  # the V rows not used

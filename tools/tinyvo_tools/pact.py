@@ -1,7 +1,7 @@
 """Clip the relu layers of a trained checkpoint (PACT-style bounds, train.pact_finetune) and write a new one.
 
     python -m tinyvo_tools.pact MODEL.ckpt.npz DATASET.npz -o CLIPPED.ckpt.npz [--dofs log_step]
-           [--epochs 0] [--lr 1e-4] [--alpha-lr 5e-2] [--decay 0] [--init 1.0]
+           [--epochs 0] [--lr 1e-4] [--alpha-lr 5e-2] [--decay 0] [--init 1.0] [--per-channel]
 
 Rows: the checkpoint's training rows (DATASET rows outside its val_sequences). Each hidden relu of the
 branches kept (--dofs; default all) becomes min(relu(a), bound), bound = init x the layer's largest
@@ -9,6 +9,9 @@ pre-activation on those rows; --epochs > 0 then fine-tunes weights and bounds (P
 With --epochs 0 (the shipped step model, models/MODEL_CARD.md "Quantisation") the float function is
 unchanged wherever no hidden activation exceeds the training rows' largest, and the exporter (rule 2)
 requantises each clipped layer over exactly [0, bound]: the int8 saturation is the float model's own clip.
+--per-channel then clips each hidden CHANNEL at its own largest activation on those rows (x init with
+--epochs 0; the trained bound stays in force) and rescales it to the layer's bound (quant.clip_relu_channels:
+every channel gets the layer's 256 int8 levels).
 Then export as usual: python -m tinyvo_tools.export CLIPPED.ckpt.npz DATASET.npz -o MODEL.tvonn
 """
 from __future__ import annotations
@@ -30,6 +33,8 @@ def main(argv=None):
     ap.add_argument("--decay", type=float, default=0.0)
     ap.add_argument("--init", type=float, default=1.0)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--per-channel", action="store_true",
+                    help="clip each hidden channel at its own training maximum, equalised (quant.clip_relu_channels)")
     a = ap.parse_args(argv)
     branches, meta = quant.load_checkpoint(a.checkpoint)
     if a.dofs:
@@ -41,10 +46,13 @@ def main(argv=None):
     tr, _ = train.split_rows(seq, meta.get("val_sequences") or [])
     out = train.pact_finetune(branches, f[tr], t[tr], epochs=a.epochs, lr=a.lr, alpha_lr=a.alpha_lr,
                               decay=a.decay, init=a.init, seed=a.seed, progress=a.epochs > 0)
+    if a.per_channel:
+        out = [quant.clip_relu_channels(b, f[tr], a.init if a.epochs == 0 else 1.0) if b.activation == "relu" else b
+               for b in out]
     meta = dict(meta)
     meta["pact"] = {"tinyvo_tools": __version__, "from": str(a.checkpoint), "epochs": a.epochs, "lr": a.lr,
                     "alpha_lr": a.alpha_lr, "decay": a.decay, "init": a.init, "seed": a.seed,
-                    "rows": int(tr.sum())}
+                    "per_channel": a.per_channel, "rows": int(tr.sum())}
     meta.pop("branches", None)
     quant.save_checkpoint(a.out, out, meta)
     for b in out:

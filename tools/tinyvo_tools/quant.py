@@ -220,6 +220,40 @@ def equalise_inputs(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0,
                        act_clip=None if fb.act_clip is None else list(fb.act_clip))
 
 
+def clip_relu_channels(fb: FloatBranch, features: np.ndarray, init: float = 1.0) -> FloatBranch:
+    """Per-channel clipped relu layers, as a branch with one bound per layer (act_clip). Each hidden channel c
+    of layer k becomes min(relu(a_c), m_c) with m_c = init x its largest activation on `features` (the
+    training rows; with init >= 1 the function on them is unchanged), and is then rescaled by B_k / m_c
+    (B_k = max_c m_c; relu and min commute with a positive scale), layer k + 1's column c absorbing
+    m_c / B_k: the same float function, now with one bound B_k for the whole layer, so the exporter (rule 2)
+    spends all 256 int8 levels of [0, B_k] on every channel instead of the few a channel with a small range
+    reaches under a per-layer bound. A channel never active on `features` (m_c = 0) is set to 0 (weights and
+    bias), as its clip at 0 would. Relu branches only; an existing act_clip stays in force (m_c is at most
+    the layer's bound)."""
+    if fb.activation != "relu":
+        raise ValueError("clip_relu_channels: relu branches only")
+    if not (math.isfinite(init) and init > 0):
+        raise ValueError(f"clip_relu_channels: init {init} must be finite and > 0")
+    trace = fb.forward_all(np.atleast_2d(features))
+    w = [np.array(x, np.float64) for x in fb.weights]
+    b = [np.array(x, np.float64) for x in fb.biases]
+    bounds = []
+    for k in range(len(w) - 1):
+        m = trace[k + 1][1].max(axis=0) * init
+        if fb.act_clip is not None:
+            m = np.minimum(m, float(fb.act_clip[k]))
+        dead = ~(m > 0)
+        bound = float(m.max()) if not dead.all() else 1.0
+        s = np.where(dead, 1.0, bound / np.where(dead, 1.0, m))
+        w[k] *= s[:, None]
+        b[k] *= s
+        w[k][dead] = 0.0
+        b[k][dead] = 0.0
+        w[k + 1] /= s[None, :]
+        bounds.append(bound)
+    return FloatBranch(**{**vars(fb), "weights": w, "biases": b, "act_clip": bounds})
+
+
 def _range(v: np.ndarray, pct: float):
     if pct > 0:
         return np.percentile(v, pct), np.percentile(v, 100 - pct)
