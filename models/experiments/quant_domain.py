@@ -28,17 +28,17 @@ seed-averaged held-out step RMSE at most 1.01 x the reference's. Among passing c
 seed-averaged mean int8 ATE. Validation sequences are not read.
 """
 import argparse
-import json
 import os
 import sys
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
-from tinyvo_tools import nnfmt, quant, tables, train
+from tinyvo_tools import nnfmt, quant, train
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from relscale_experiments import filter_steps, seq_data  # noqa: E402
+from quant_pact import judge_heldout, record_choice  # noqa: E402
+from relscale_experiments import seq_data  # noqa: E402
 
 TRAIN = ["MH_01", "MH_02", "MH_03", "V1_01", "V2_01"]
 SEEDS = [0, 1, 2]
@@ -56,9 +56,7 @@ def run_seed(args):
     out = {}
     for h in TRAIN:
         rest, ho = np.isin(seq, [n for n in TRAIN if n != h]), seq == h
-        sd, fr, T_wc, _ = seq_data(a.features, a.seq_root, h)
-        x = fr["features"].astype(np.float32)
-        raw = np.hstack([fr["features"][:, 3:6], fr["features"][:, 0:3]])
+        seqd = seq_data(a.features, a.seq_root, h)
         for dom in DOMAINS:
             base = train.train(f[rest], t[rest], {nnfmt.DOF_LOG_STEP: "relu"}, epochs=40, joint_epochs=10,
                                lr=1e-3, seed=seed, dofs=[nnfmt.DOF_LOG_STEP], progress=False, input_clip=dom)
@@ -67,21 +65,10 @@ def run_seed(args):
                     br = train.pact_finetune(base, f[rest], t[rest], epochs=0, seed=seed, progress=False)
                 else:
                     br = [quant.clip_relu_channels(b, f[rest]) for b in base]
-                model = quant.quantize_model(br, f[rest])
-                fl = quant.float_run(br, f[ho])[:, nnfmt.OUT_STEP]
-                q = nnfmt.reference_run(model, f[ho])[:, nnfmt.OUT_STEP].astype(np.float64)
-                ate = []
-                for tag, s in (("float", quant.float_run(br, x)[:, nnfmt.OUT_STEP]),
-                               ("int8", nnfmt.reference_run(model, x)[:, nnfmt.OUT_STEP].astype(np.float64))):
-                    tp = os.path.join(a.out, f"{h}.s{seed}.d{dom}.{clip}.{tag}.txt")
-                    tables.integrate(fr["t_ns"], fr["state"], raw, filter_steps(fr["state"], fr["rel_scale"], s, 0.01),
-                                     T_wc[0], tp)
-                    ate.append(tables.evaluate(tp, sd)["ate_se3_m"])
-                out.setdefault(f"{dom}/{clip}", []).append(
-                    dict(seq=h, sq=float(np.mean((q - fl) ** 2)), w=int(ho.sum()),
-                         se=float(np.mean((fl - step[ho]) ** 2)), ate_f=ate[0], ate_q=ate[1]))
-                print(f"seed {seed} {h} domain {dom} % {clip} clip: gap {100 * np.sqrt(np.mean((q - fl) ** 2)) / a.std:.2f} %,"
-                      f" ATE float {ate[0]:.3f} int8 {ate[1]:.3f}", flush=True)
+                j = judge_heldout(br, f[rest], f[ho], step[ho], seqd, os.path.join(a.out, f"{h}.s{seed}.d{dom}.{clip}"))
+                out.setdefault(f"{dom}/{clip}", []).append(dict(seq=h, **j))
+                print(f"seed {seed} {h} domain {dom} % {clip} clip: gap {100 * np.sqrt(j['sq']) / a.std:.2f} %,"
+                      f" ATE float {j['ate_f']:.3f} int8 {j['ate_q']:.3f}", flush=True)
     return seed, out
 
 
@@ -118,11 +105,7 @@ def main():
     ref = res[f"{REFERENCE[0]}/{REFERENCE[1]}"]
     ok = [k for k, v in res.items() if v["gap"] < 1.6 and v["ate_q"] <= 1.02 * ref["ate_q"]
           and v["rmse"] <= 1.01 * ref["rmse"]]
-    res["passing"] = ok
-    res["chosen"] = min(ok, key=lambda k: res[k]["ate_q"]) if ok else None
-    print("passing:", ok, "chosen:", res["chosen"])
-    with open(os.path.join(a.out, "results.json"), "w", encoding="utf-8") as fh:
-        json.dump(res, fh, indent=1)
+    record_choice(res, ok, lambda k: res[k]["ate_q"], a.out)
 
 
 if __name__ == "__main__":

@@ -16,10 +16,11 @@ import sys
 
 import numpy as np
 
-from tinyvo_tools import nnfmt, quant, tables, train
+from tinyvo_tools import nnfmt, quant, train
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from relscale_experiments import filter_steps, seq_data  # noqa: E402
+from quant_pact import judge_heldout  # noqa: E402
+from relscale_experiments import seq_data  # noqa: E402
 
 TRAIN = ["MH_01", "MH_02", "MH_03", "V1_01", "V2_01"]
 C_DEG = 0.01
@@ -54,24 +55,14 @@ def main():
         rest, ho = np.isin(seq, [n for n in TRAIN if n != h]), seq == h
         base = train.train(f[rest], t[rest], {nnfmt.DOF_LOG_STEP: "relu"}, epochs=40, joint_epochs=10, lr=1e-3,
                            seed=0, dofs=[nnfmt.DOF_LOG_STEP], progress=False, input_clip=a.input_clip)
-        sd, fr, T_wc, _ = seq_data(a.features, a.seq_root, h)
-        x = tf(fr["features"])
-        raw = np.hstack([fr["features"][:, 3:6], fr["features"][:, 0:3]])
+        seqd = seq_data(a.features, a.seq_root, h)
+        x = tf(seqd[1]["features"])
         for lab, r in acc.items():
             br = (train.pact_finetune(base, f[rest], t[rest], seed=0, progress=False, epochs=0) if lab == "layer"
                   else [quant.clip_relu_channels(b, f[rest]) for b in base])
-            model = quant.quantize_model(br, f[rest])
-            fl = quant.float_run(br, f[ho])[:, nnfmt.OUT_STEP]
-            q = nnfmt.reference_run(model, f[ho])[:, nnfmt.OUT_STEP].astype(np.float64)
-            r["sq"].append(float(np.mean((q - fl) ** 2)))
-            r["w"].append(int(ho.sum()))
-            r["se"].append(float(np.mean((fl - step[ho]) ** 2)))
-            for lst, tag, s in ((r["ate_f"], "float", quant.float_run(br, x)[:, nnfmt.OUT_STEP]),
-                                (r["ate_q"], "int8", nnfmt.reference_run(model, x)[:, nnfmt.OUT_STEP].astype(np.float64))):
-                tp = os.path.join(a.out, f"{a.transform}.{h}.{lab}.{tag}.txt")
-                tables.integrate(fr["t_ns"], fr["state"], raw, filter_steps(fr["state"], fr["rel_scale"], s, 0.01),
-                                 T_wc[0], tp)
-                lst.append(tables.evaluate(tp, sd)["ate_se3_m"])
+            j = judge_heldout(br, f[rest], f[ho], step[ho], seqd, os.path.join(a.out, f"{a.transform}.{h}.{lab}"), x=x)
+            for k in r:
+                r[k].append(j[k])
     for lab, r in acc.items():
         print(f"| {a.transform}, domain {a.input_clip:g} %, {lab} clip | "
               f"{100 * np.sqrt(np.average(r['sq'], weights=r['w'])) / std:.2f} | "

@@ -35,7 +35,7 @@ def main():
     data = {n: seq_data(a.features, a.seq_root, n) for n in TRAIN + VAL}
 
     def used(n):  # the frames the integration composes with a translation
-        return np.isin(data[n][1]["state"], (dsmod.STATE_OK,)) & (np.arange(len(data[n][3])) > 0)
+        return (data[n][1]["state"] == dsmod.STATE_OK) & (np.arange(len(data[n][3])) > 0)
 
     const = float(np.mean(np.concatenate([data[n][3][used(n)] for n in TRAIN])))
     rows = {}
@@ -54,19 +54,21 @@ def main():
         net = nnfmt.reference_run(model, fr["features"].astype(np.float32))[:, nnfmt.OUT_STEP].astype(np.float64)
         filt = filter_steps(fr["state"], fr["rel_scale"], net, 0.01)
         k = u & (gs > 1e-4)
+        rel = fr["rel_scale"][k][1:]  # r_k against the ground-truth ratio, consecutive used frames, r_k available
+        rel_gt = (gs[k][1:] / gs[k][:-1])[rel > 0]
         print(f"{n}: mean gt step {level:.4f} m (training mean {const:.4f}); per-frame RMS log error of the step: "
               f"network {np.sqrt(np.mean(np.log(net[k] / gs[k]) ** 2)):.3f}, network + filter a = 0.01 "
               f"{np.sqrt(np.mean(np.log(filt[k] / gs[k]) ** 2)):.3f}, relative scale r_k (where available) "
-              f"{np.sqrt(np.mean(np.log(fr['rel_scale'][k][1:][fr['rel_scale'][k][1:] > 0] / (gs[k][1:] / gs[k][:-1])[fr['rel_scale'][k][1:] > 0]) ** 2)) if k.sum() > 2 else float('nan'):.3f} (consecutive used frames)")
+              f"{np.sqrt(np.mean(np.log(rel[rel > 0] / rel_gt) ** 2)):.3f} (consecutive used frames)")
         r = rows.setdefault
         r("ground-truth step", []).append(ate(n, gs, "gt"))
         r("training mean step (the constant prior)", []).append(ate(n, np.full(len(gs), const), "const"))
         r("oracle level: the sequence's own mean step, constant", []).append(ate(n, np.full(len(gs), level), "level"))
-        best = min((ate(n, filter_steps(fr["state"], fr["rel_scale"], np.full(len(gs), level), al), f"lvlf{al}"), al)
-                   for al in ALPHAS)
-        r("oracle level as the filter's prior, best a per sequence (a)", []).append(best)
-        r("oracle level as the filter's prior, a = 0.01", []).append(
-            ate(n, filter_steps(fr["state"], fr["rel_scale"], np.full(len(gs), level), 0.01), "lvlf"))
+        by_a = {al: ate(n, filter_steps(fr["state"], fr["rel_scale"], np.full(len(gs), level), al), f"lvlf{al}")
+                for al in ALPHAS}
+        r("oracle level as the filter's prior, best a per sequence (a)", []).append(
+            min((v, al) for al, v in by_a.items()))
+        r("oracle level as the filter's prior, a = 0.01", []).append(by_a[0.01])
         rng = np.random.default_rng(0)
         for sg in SIGMAS:
             v = [ate(n, gs * np.exp(sg * rng.standard_normal(len(gs))), f"noise{sg}") for _ in range(NOISE_SEEDS)]
