@@ -13,7 +13,7 @@ activation ranges on calibration (training) features and produces an nnfmt.Model
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import List, Sequence
 
 import numpy as np
@@ -211,13 +211,12 @@ def equalise_inputs(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0,
     no = np.asarray(fb.norm_offset, np.float64) * a + c
     w0 = np.asarray(fb.weights[0], np.float64) / a[None, :]
     b0 = np.asarray(fb.biases[0], np.float64) - w0 @ c
-    return FloatBranch(dof=fb.dof, feature_ids=list(fb.feature_ids), norm_scale=ns.astype(np.float32),
-                       norm_offset=no.astype(np.float32), weights=[w0, *fb.weights[1:]],
-                       biases=[b0, *fb.biases[1:]], activation=fb.activation, out_scale=fb.out_scale,
-                       out_offset=fb.out_offset,
-                       clip_lo=None if fb.clip_lo is None else np.full(len(ns), e_lo),
-                       clip_hi=None if fb.clip_hi is None else np.full(len(ns), e_hi),
-                       act_clip=None if fb.act_clip is None else list(fb.act_clip))
+    # every other field (activation, output de-normalisation, relu clips, ...) carries over unchanged
+    return replace(fb, feature_ids=list(fb.feature_ids), norm_scale=ns.astype(np.float32),
+                   norm_offset=no.astype(np.float32), weights=[w0, *fb.weights[1:]], biases=[b0, *fb.biases[1:]],
+                   clip_lo=None if fb.clip_lo is None else np.full(len(ns), e_lo),
+                   clip_hi=None if fb.clip_hi is None else np.full(len(ns), e_hi),
+                   act_clip=None if fb.act_clip is None else list(fb.act_clip))
 
 
 def clip_relu_channels(fb: FloatBranch, features: np.ndarray, init: float = 1.0) -> FloatBranch:
@@ -251,7 +250,7 @@ def clip_relu_channels(fb: FloatBranch, features: np.ndarray, init: float = 1.0)
         b[k][dead] = 0.0
         w[k + 1] /= s[None, :]
         bounds.append(bound)
-    return FloatBranch(**{**vars(fb), "weights": w, "biases": b, "act_clip": bounds})
+    return replace(fb, weights=w, biases=b, act_clip=bounds)
 
 
 def _range(v: np.ndarray, pct: float):
