@@ -205,6 +205,18 @@ def test_builtin_trajectories_are_enclosed_and_clear_of_boxes(name):
         assert ang.max() > 2.0 and np.median(ang) < ang.max() / 2
 
 
+def test_low_room_of_a_short_trajectory_near_the_floor():
+    # A few frames of a drone still on the floor give a room about 2.1 m high; a tall wall panel drawn
+    # for it has no valid height interval (numpy raised "high - low < 0" for 6 of these 40 seeds).
+    P = np.array([[0.0, 0.0, 0.1], [0.05, 0.02, 0.12]])
+    for seed in range(40):
+        sc = synth.make_scene(P, seed=seed, **SMALL)
+        assert sc.room_hi[2] - sc.room_lo[2] < 2.2
+        for b0, b1 in zip(sc.box_lo, sc.box_hi):
+            assert np.all(b0 >= sc.room_lo) and np.all(b1 <= sc.room_hi)
+            assert synth._box_distance(P, b0, b1).min() >= 0.45
+
+
 def test_bad_arguments(tmp_path):
     with pytest.raises(ValueError):
         synth.builtin_trajectory("nope", 10)

@@ -368,6 +368,8 @@ def make_scene(positions, seed: int = 0, texture_size: int = 1024, texel_m: floa
             b0 = np.zeros(3)
             b0[ax] = lo[ax] if side == 0 else hi[ax] - depth
             b0[1 - ax] = rng.uniform(lo[1 - ax], hi[1 - ax] - s[1 - ax])
+            if kind == "panel" and s[2] > size[2] - 0.4:
+                continue  # a low room (a short trajectory near the floor): no room for this panel
             b0[2] = lo[2] if kind == "shelf" else rng.uniform(lo[2] + 0.3, hi[2] - s[2] - 0.1)
         else:  # hanging from the ceiling
             s = rng.uniform([0.3, 0.3, 0.2], [1.0, 1.0, 0.8])
