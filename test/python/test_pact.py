@@ -184,7 +184,7 @@ def test_pact_cli_per_channel(tmp_path, capsys):
     fb, _ = _branch(6)
     ck = tmp_path / "m.ckpt.npz"
     quant.save_checkpoint(ck, [fb], {"val_sequences": ["V"]})
-    out = tmp_path / "c.ckpt.npz"
+    out = tmp_path / "new" / "c.ckpt.npz"  # output folders are created (the model card's commands rely on it)
     pact.main([str(ck), str(ds), "-o", str(out), "--per-channel"])
     assert "relu bounds" in capsys.readouterr().out
     (got,), meta = quant.load_checkpoint(out)
@@ -195,3 +195,6 @@ def test_pact_cli_per_channel(tmp_path, capsys):
     assert got.act_clip == pytest.approx(want.act_clip, rel=1e-6)
     np.testing.assert_allclose(got.forward(f[tr]), ref.forward(f[tr]), rtol=1e-5, atol=1e-5)
     assert not np.allclose(got.act_clip, quant.clip_relu_channels(ref, f).act_clip)  # the V rows not used
+    from tinyvo_tools import export
+    export.main([str(out), str(ds), "-o", str(tmp_path / "m" / "c.tvonn")])
+    assert nnfmt.read((tmp_path / "m" / "c.tvonn").read_bytes()).branches

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 
 import numpy as np
 
@@ -47,6 +48,8 @@ def export(branches, meta, features, targets, seq, out_path, golden_path=None, n
         raise ValueError("no training rows to calibrate on")
     model = quant.quantize_model(branches, features[tr], calibration=calibration)
     data = nnfmt.write(model)
+    if os.path.dirname(str(out_path)):
+        os.makedirs(os.path.dirname(str(out_path)), exist_ok=True)
     with open(out_path, "wb") as fh:
         fh.write(data)
     evalrows = va if va.any() else tr

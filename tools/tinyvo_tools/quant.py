@@ -13,6 +13,7 @@ activation ranges on calibration (training) features and produces an nnfmt.Model
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field, replace
 from typing import List, Sequence
 
@@ -445,6 +446,8 @@ def save_checkpoint(path, branches: Sequence[FloatBranch], meta: dict) -> None:
                                  "activation": b.activation, "n_layers": len(b.weights),
                                  "out_scale": float(b.out_scale), "out_offset": float(b.out_offset)})
     arrays["meta"] = np.array(json.dumps(meta))
+    if os.path.dirname(str(path)):
+        os.makedirs(os.path.dirname(str(path)), exist_ok=True)
     with open(path, "wb") as fh:
         np.savez(fh, **arrays)
 
