@@ -39,6 +39,9 @@ for p in cmake ninja-build qemu-user libspng-dev; do installed "$p" || need+=("$
 for t in "${TARGETS[@]}"; do
   a=$(debarch "$t")
   installed "gcc-${t%-neon}" || need+=("gcc-${t%-neon}")
+  # the target's C runtime and headers (crt1.o, crti.o, libc.so): only a Recommends of the cross gcc,
+  # which --no-install-recommends leaves out
+  installed "libc6-dev-$a-cross" || need+=("libc6-dev-$a-cross")
   installed "libcmocka-dev:$a" || need+=("libcmocka-dev:$a")
   installed "libspng0:$a" || need+=("libspng0:$a")
 done
