@@ -39,6 +39,7 @@ typedef struct options {
     enum scale_mode scale;
     double alpha, step; /* --scale-alpha (< 0: not given), --step */
     int body_frame, strict, quiet, print_memory;
+    int keyframe; /* --keyframe 0|1 (< 0: the library's default) */
     long max_frames;
 } options;
 
@@ -67,6 +68,7 @@ static void usage(FILE *f)
             "                       the dataset builder: t_ns,state,relpose_flags,\n"
             "                       pose_status,inliers,<feature names>,rel_scale,\n"
             "                       rel_scale_points\n"
+            "  --keyframe 0|1       keyframe rotation on or off (vo.h; default: the library's)\n"
             "  --max-frames N       stop after N frames\n"
             "  --strict             exit non-zero at the first bad frame instead of skipping it\n"
             "  --quiet              no progress line\n"
@@ -81,6 +83,7 @@ static int parse_args(int argc, char **argv, options *o)
     o->alpha = -1.0;
     o->step = -1.0;
     o->max_frames = -1;
+    o->keyframe = -1;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -160,6 +163,14 @@ static int parse_args(int argc, char **argv, options *o)
             o->max_frames = strtol(v, &end, 10);
             if (end == v || *end != '\0' || o->max_frames < 0) {
                 fprintf(stderr, "tvo_replay: --max-frames needs a non-negative integer (got '%s')\n", v);
+                return -1;
+            }
+        } else if (!strcmp(a, "--keyframe")) {
+            NEED_VALUE();
+            if (!strcmp(v, "0") || !strcmp(v, "1"))
+                o->keyframe = v[0] - '0';
+            else {
+                fprintf(stderr, "tvo_replay: --keyframe must be 0 or 1 (got '%s')\n", v);
                 return -1;
             }
         } else if (!strcmp(a, "--strict")) {
@@ -259,6 +270,7 @@ int main(int argc, char **argv)
     uint8_t *frame = NULL;
     double *timing[TVO_STAGE_COUNT + 1] = { 0 };
     long counts_state[TVO_VO_STATE_COUNT] = { 0 }, counts_skip[SKIP_COUNT] = { 0 };
+    long keyframe_frames = 0; /* frames whose rotation is the keyframe rotation */
     long n_frames, processed = 0, gaps = 0, gt_missing = 0, timed = 0;
     int64_t t_last = INT64_MIN, period_ns;
     int have_gt, have_prev_gt = 0, rc = 1, tty;
@@ -290,6 +302,8 @@ int main(int argc, char **argv)
 
     tvo_vo_config_default(&cfg, tvo_euroc_camera(seq));
     cfg.clock = clock_cb;
+    if (o.keyframe >= 0)
+        cfg.keyframe = o.keyframe;
     vo_size = tvo_vo_required_size(&cfg);
     if (vo_size == 0) {
         fprintf(stderr, "tvo_replay: the camera of %s is not usable (check sensor.yaml)\n", o.euroc);
@@ -417,6 +431,8 @@ int main(int argc, char **argv)
             continue;
         }
         counts_state[res.state]++;
+        if (res.keyframe_age > 0)
+            keyframe_frames++;
         if (feat != NULL) {
             fprintf(feat, "%lld,%d,%d,%d,%d", (long long)t_ns, (int)res.state, (int)res.relpose_flags,
                     (int)res.pose_status, (int)res.inliers);
@@ -542,7 +558,7 @@ int main(int argc, char **argv)
                     gt_missing);
             for (int k = 0; k < TVO_VO_STATE_COUNT; ++k)
                 fprintf(js, "%s\"%s\": %ld", k ? ", " : "", state_names[k], counts_state[k]);
-            fprintf(js, "},\n  \"timing_us\": {\n");
+            fprintf(js, "},\n  \"keyframe_rotation_frames\": %ld,\n  \"timing_us\": {\n", keyframe_frames);
             for (int s = 0; s <= TVO_STAGE_COUNT; ++s) {
                 double med, p90;
                 percentiles(timing[s], timed, &med, &p90);

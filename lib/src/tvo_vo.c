@@ -31,6 +31,16 @@ struct tvo_vo {
     uint8_t *has0;            /* [max_tracks] */
     double R0[9], t0[3];
     int32_t has_pose0;
+    /* keyframe rotation (cfg.keyframe): each track's normalised position in the keyframe K (valid where
+       hask[i]), the K -> cur correspondences of one frame (kx1, kx2, kmask), and the rotation of the
+       previous frame relative to K (X_prev = R_pK X_K; valid while has_kf) */
+    tvo_point2d *xk;          /* [max_tracks] */
+    uint8_t *hask;            /* [max_tracks] */
+    tvo_point2d *kx1, *kx2;   /* [max_tracks] */
+    uint8_t *kmask;           /* [max_tracks] */
+    double R_pK[9];
+    int32_t has_kf;
+    int32_t kf_age;           /* frames from K to the previous frame */
     void *scratch;
     size_t scratch_size;
 };
@@ -69,6 +79,11 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     /* rotation-only below 0.15 deg of rotation-compensated parallax: about 4x the noise floor of
        0.3 px tracking noise at f = 460 px; pure rotation measures ~0.005 deg in test_vo */
     cfg->relpose.min_parallax_deg = 0.02;
+    cfg->keyframe = 1;
+    cfg->keyframe_min_tracks = 100;
+    cfg->keyframe_max_parallax_deg = 5.0;
+    cfg->keyframe_max_rot_deg = 10.0;
+    cfg->keyframe_translation = 1;
     cfg->clock = NULL;
     cfg->clock_user = NULL;
 }
@@ -90,6 +105,16 @@ static int config_valid(const tvo_vo_config *cfg)
     if (cfg->min_scale_points < 3) /* above max_tracks: never available */
         return 0;
     if (!(cfg->scale_min_parallax_deg > 0.0 && cfg->scale_min_parallax_deg <= 10.0))
+        return 0;
+    if (cfg->keyframe != 0 && cfg->keyframe != 1)
+        return 0;
+    if (cfg->keyframe_min_tracks < 0) /* above max_tracks: a new keyframe every frame */
+        return 0;
+    if (!(cfg->keyframe_max_parallax_deg > 0.0 && cfg->keyframe_max_parallax_deg <= 90.0))
+        return 0;
+    if (!(cfg->keyframe_max_rot_deg > 0.0 && cfg->keyframe_max_rot_deg <= 180.0))
+        return 0;
+    if (cfg->keyframe_translation != 0 && cfg->keyframe_translation != 1)
         return 0;
     if (cfg->lk.max_level < 0 || cfg->lk.max_level + 1 > TVO_MAX_PYR_LEVELS)
         return 0;
@@ -123,6 +148,8 @@ static size_t layout_size(const tvo_vo_config *cfg)
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_corner))));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))));   /* x0 */
     s = tvo_size_add(s, tvo_arena_round(n));                                       /* has0 */
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))) * 3); /* xk kx1 kx2 */
+    s = tvo_size_add(s, tvo_arena_round(n) * 2);                                   /* hask kmask */
     s = tvo_size_add(s, tvo_arena_round(scratch_need(cfg)));
     return tvo_size_add(s, TVO_ARENA_ALIGN); /* slack for an unaligned block */
 }
@@ -176,12 +203,18 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg, void *mem, size_t
     vo->corners = (tvo_corner *)tvo_arena_alloc(&a, n * sizeof(tvo_corner));
     vo->x0 = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
     vo->has0 = (uint8_t *)tvo_arena_alloc(&a, n);
+    vo->xk = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
+    vo->kx1 = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
+    vo->kx2 = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
+    vo->hask = (uint8_t *)tvo_arena_alloc(&a, n);
+    vo->kmask = (uint8_t *)tvo_arena_alloc(&a, n);
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
     vo->scratch_size = scratch_need(cfg);
     vo->scratch = tvo_arena_alloc(&a, vo->scratch_size);
     if (vo->pts == NULL || vo->next == NULL || vo->st == NULL || vo->ok1 == NULL || vo->ok2 == NULL ||
         vo->mask == NULL || vo->x1 == NULL || vo->x2 == NULL || vo->corners == NULL ||
-        vo->x0 == NULL || vo->has0 == NULL || vo->scratch == NULL)
+        vo->x0 == NULL || vo->has0 == NULL || vo->xk == NULL || vo->kx1 == NULL || vo->kx2 == NULL ||
+        vo->hask == NULL || vo->kmask == NULL || vo->scratch == NULL)
         return TVO_ERR_NO_MEMORY;
     *out = vo;
     return TVO_OK;
@@ -195,6 +228,7 @@ void tvo_vo_reset(tvo_vo *vo)
     vo->n = 0;
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
     vo->has_pose0 = 0;
+    vo->has_kf = 0;
 }
 
 static int64_t now_ns(const tvo_vo *vo)
@@ -230,6 +264,7 @@ static int32_t detect_append(tvo_vo *vo, const tvo_pyramid *pyr, int32_t thresho
         vo->pts[vo->n + i].x = vo->corners[i].x;
         vo->pts[vo->n + i].y = vo->corners[i].y;
         vo->has0[vo->n + i] = 0; /* a new track has no earlier position */
+        vo->hask[vo->n + i] = 0; /* ...and none in the keyframe */
     }
     vo->n += got;
     return got;
@@ -374,6 +409,129 @@ static double relative_scale(tvo_vo *vo, const double R[9], const double t[3], i
     return tvo_la_select_kth(ratio, k, k / 2);
 }
 
+/* ---- keyframe rotation ------------------------------------------------------------------------- */
+
+/* A keyframe rotation further than this from the frame-to-frame prediction (this frame's rotation
+ * composed with the previous frame's R_pK) is not trusted, and a new keyframe is taken. */
+#define TVO_VO_KF_CHECK_DEG 2.0
+
+enum { KF_NONE = 0, KF_USED = 1, KF_FAILED = 2 };
+
+/* Make the current frame the keyframe: every carried track's position (vo->pts, pixels) undistorted
+ * into xk (hask 0 where that fails); the next frame's R_pK is the identity. */
+static void keyframe_set(tvo_vo *vo)
+{
+    vo->has_kf = 0;
+    if (vo->n <= 0 ||
+        tvo_camera_undistort(&vo->cfg.camera, vo->pts, vo->xk, vo->hask, vo->n) != TVO_OK)
+        return;
+    memset(vo->R_pK, 0, sizeof(vo->R_pK));
+    vo->R_pK[0] = vo->R_pK[4] = vo->R_pK[8] = 1.0;
+    vo->has_kf = 1;
+    vo->kf_age = 0;
+}
+
+/* The rotation K -> cur (X_cur = R_cK X_K) from the tracks seen since the keyframe: those of the m
+ * current tracks with hask[i] that are inliers of this frame's pose rp (vo->mask), estimated with the
+ * frame's relpose config rc. KF_USED (R_cK written, the estimate's outliers lose their keyframe
+ * position) when it is trustworthy and better placed than the frame-to-frame estimate: neither low
+ * confidence nor ambiguous, at least cfg.min_pose_tracks inliers and half of the correspondences,
+ * within TVO_VO_KF_CHECK_DEG of the frame-to-frame prediction rp.R R_pK and, with a translation,
+ * within the frame-to-frame rotation check of its own rotation-only model; for a frame with a
+ * translation also more parallax than rp (a frame-to-frame rotation-only frame takes any).
+ * KF_FAILED when it is not trustworthy (take a new keyframe), KF_NONE when it is fine but not better.
+ * *kpar gets its parallax (0 when none ran). Uses vo->scratch. */
+static int keyframe_rotation(tvo_vo *vo, const tvo_relpose_config *rc, int32_t m, const tvo_relpose *rp,
+                             tvo_vo_state state, double R_cK[9], double *kpar)
+{
+    tvo_relpose kp;
+    double Rpred[9], d;
+    int32_t k = 0;
+    *kpar = 0.0;
+    for (int32_t i = 0; i < m; ++i) {
+        if (vo->mask[i] && vo->hask[i]) {
+            vo->kx1[k] = vo->xk[i];
+            vo->kx2[k] = vo->x2[i];
+            ++k;
+        }
+    }
+    if (k < vo->cfg.min_pose_tracks)
+        return KF_FAILED;
+    if (tvo_relpose_estimate(rc, vo->kx1, vo->kx2, k, &kp, vo->kmask, vo->scratch, vo->scratch_size) != TVO_OK)
+        return KF_FAILED;
+    *kpar = kp.parallax_deg;
+    if ((kp.flags & (TVO_RELPOSE_FLAG_LOW_CONFIDENCE | TVO_RELPOSE_FLAG_AMBIGUOUS)) ||
+        kp.inliers < vo->cfg.min_pose_tracks || 2 * kp.inliers < k)
+        return KF_FAILED;
+    tvo_la_mat3_mul(rp->R, vo->R_pK, Rpred);
+    d = tvo_la_rot_dist(kp.R, Rpred) * (180.0 / 3.14159265358979323846);
+    if (d > TVO_VO_KF_CHECK_DEG)
+        return KF_FAILED;
+    if (!(kp.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY)) {
+        const double dr = tvo_la_rot_dist(kp.R, kp.R_rot) * (180.0 / 3.14159265358979323846);
+        const double lim = TVO_VO_ROT_CHECK_RATIO * kp.parallax_deg;
+        if (dr > (lim > TVO_VO_ROT_CHECK_MIN_DEG ? lim : TVO_VO_ROT_CHECK_MIN_DEG))
+            return KF_FAILED;
+    }
+    if (state == TVO_VO_OK && !(kp.parallax_deg > rp->parallax_deg))
+        return KF_NONE;
+    for (int32_t i = 0, j = 0; i < m; ++i) {
+        if (vo->mask[i] && vo->hask[i]) {
+            if (!vo->kmask[j])
+                vo->hask[i] = 0;
+            ++j;
+        }
+    }
+    memcpy(R_cK, kp.R, sizeof(kp.R));
+    return KF_USED;
+}
+
+/* The unit translation t of X_cur = R X_prev + t with R fixed, from the inliers (vo->mask) of the m
+ * correspondences x1 -> x2: x2^T [t]x R x1 = 0 is linear in t, each point gives a row a = (R x1) x x2
+ * with a . t = 0, and t is the eigenvector of the smallest eigenvalue of sum a a^T (3x3); its sign is
+ * the one that puts more points in front of both cameras. (Weighting the rows by the inverse Sampson
+ * denominators, iterated 3 times, did not do better on the EuRoC renders.) 1 when t was written. */
+static int translation_given_rotation(const tvo_vo *vo, const double R[9], int32_t m, double t[3])
+{
+    double A[9] = { 0 }, w[3], V[9], u[3], un[3], nrm;
+    int32_t k = 0, front = 0, back = 0;
+    for (int32_t i = 0; i < m; ++i) {
+        double x1[3], x2[3], Rx[3], a[3];
+        if (!vo->mask[i])
+            continue;
+        x1[0] = vo->x1[i].x; x1[1] = vo->x1[i].y; x1[2] = 1.0;
+        x2[0] = vo->x2[i].x; x2[1] = vo->x2[i].y; x2[2] = 1.0;
+        tvo_la_mat3_vec(R, x1, Rx);
+        tvo_la_cross(Rx, x2, a);
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c)
+                A[3 * r + c] += a[r] * a[c];
+        ++k;
+    }
+    /* w[1] > 0: the null direction is unique */
+    if (k < 5 || tvo_la_sym_eig(A, 3, w, V) != TVO_OK || !(w[1] > 0.0) || !isfinite(w[2]))
+        return 0;
+    u[0] = V[0]; u[1] = V[3]; u[2] = V[6];
+    nrm = sqrt(dot3(u, u));
+    if (!(nrm > 0.0) || !isfinite(nrm))
+        return 0;
+    for (int c = 0; c < 3; ++c) {
+        u[c] /= nrm;
+        un[c] = -u[c];
+    }
+    for (int32_t i = 0; i < m; ++i) {
+        double x1[3], x2[3];
+        if (!vo->mask[i])
+            continue;
+        x1[0] = vo->x1[i].x; x1[1] = vo->x1[i].y; x1[2] = 1.0;
+        x2[0] = vo->x2[i].x; x2[1] = vo->x2[i].y; x2[2] = 1.0;
+        front += depth_in_b(R, u, x1, x2, 0.0) > 0.0;
+        back += depth_in_b(R, un, x1, x2, 0.0) > 0.0;
+    }
+    memcpy(t, back > front ? un : u, sizeof(u));
+    return 1;
+}
+
 /* Keep the entries i with keep[i] != 0 of the parallel track arrays, in order. */
 static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
 {
@@ -387,6 +545,8 @@ static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
         vo->x2[m] = vo->x2[i];
         vo->x0[m] = vo->x0[i];
         vo->has0[m] = vo->has0[i];
+        vo->xk[m] = vo->xk[i];
+        vo->hask[m] = vo->hask[i];
         ++m;
     }
     return m;
@@ -399,6 +559,8 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
     int64_t t0, t1;
     const int32_t w = vo != NULL ? vo->cfg.camera.width : 0, h = vo != NULL ? vo->cfg.camera.height : 0;
     int32_t m, pose0_next = 0; /* whether this frame's pose is a unit translation for the next rel_scale */
+    int kf = KF_NONE;          /* what the keyframe rotation did this frame */
+    double kpar = 0.0;         /* its parallax */
     if (res == NULL)
         return TVO_ERR_NULL;
     result_clear(res, TVO_VO_LOST);
@@ -505,6 +667,7 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
         } else {
             /* rp: X_cur = R X_prev + t, i.e. T_cur_prev; report T_prev_cur */
             tvo_pose T_cur_prev;
+            double Rf[9], tf[3]; /* the frame-to-frame pose (the relative scale's geometry) */
             if (ambiguous)
                 res->state = resolve_ambiguous(vo, rc, m, &rp);
             else
@@ -518,6 +681,28 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
                     res->state = TVO_VO_ROTATION_ONLY;
                 }
             }
+            memcpy(Rf, rp.R, sizeof(Rf));
+            memcpy(tf, rp.t, sizeof(tf));
+            if (vo->cfg.keyframe && vo->has_kf) {
+                double R_cK[9];
+                if (vo->kf_age >= 1)
+                    kf = keyframe_rotation(vo, &rc, m, &rp, res->state, R_cK, &kpar);
+                if (kf == KF_USED) {
+                    tvo_la_mat3_mul_bt(R_cK, vo->R_pK, rp.R); /* R_cp = R_cK R_pK^T */
+                    if (res->state == TVO_VO_OK && vo->cfg.keyframe_translation) {
+                        /* the 5-point direction belongs to the 5-point rotation: re-fit it to the new one */
+                        double tn[3];
+                        if (translation_given_rotation(vo, rp.R, m, tn))
+                            memcpy(rp.t, tn, sizeof(tn));
+                    }
+                    memcpy(vo->R_pK, R_cK, sizeof(R_cK));
+                    res->keyframe_age = vo->kf_age + 1;
+                } else {
+                    tvo_la_mat3_mul(rp.R, vo->R_pK, R_cK); /* chain: R_cK = R_cp R_pK */
+                    memcpy(vo->R_pK, R_cK, sizeof(R_cK));
+                }
+                vo->kf_age++;
+            }
             memcpy(T_cur_prev.R, rp.R, sizeof(rp.R));
             memcpy(T_cur_prev.t, rp.t, sizeof(rp.t));
             res->T_prev_cur = tvo_pose_inverse(&T_cur_prev);
@@ -527,11 +712,11 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
             if (res->state == TVO_VO_ROTATION_ONLY)
                 res->T_prev_cur.t[0] = res->T_prev_cur.t[1] = res->T_prev_cur.t[2] = 0.0;
             else
-                memcpy(vo->t_dir, rp.t, sizeof(vo->t_dir));
+                memcpy(vo->t_dir, tf, sizeof(vo->t_dir)); /* the twins' prior: frame-to-frame directions */
             /* carry the inliers (the outliers are bad tracks) */
             m = compact(vo, m, vo->mask);
             if (res->state == TVO_VO_OK && vo->has_pose0)
-                res->rel_scale = relative_scale(vo, rp.R, rp.t, m, &res->rel_scale_points);
+                res->rel_scale = relative_scale(vo, Rf, tf, m, &res->rel_scale_points);
             for (int32_t i = 0; i < m; ++i) {
                 vo->pts[i] = vo->next[i];
                 vo->x0[i] = vo->x1[i]; /* frame k-1 becomes k-2 of the next frame */
@@ -539,8 +724,8 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
             }
             vo->n = m;
             if (res->state == TVO_VO_OK) {
-                memcpy(vo->R0, rp.R, sizeof(vo->R0));
-                memcpy(vo->t0, rp.t, sizeof(vo->t0));
+                memcpy(vo->R0, Rf, sizeof(vo->R0));
+                memcpy(vo->t0, tf, sizeof(vo->t0));
                 pose0_next = 1;
             }
             if (!tvo_pose_is_finite(&res->T_prev_cur)) { /* cannot happen by contract; never emit it */
@@ -560,6 +745,21 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
     res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
 
 done:
+    if (vo->cfg.keyframe) {
+        /* a new keyframe after a frame without a pose, when the keyframe estimate failed, when too few
+           tracks seen in K survive, or when K is far (parallax or rotation) from this frame */
+        int renew = !vo->has_kf || kf == KF_FAILED ||
+                    (res->state != TVO_VO_OK && res->state != TVO_VO_ROTATION_ONLY);
+        if (!renew) {
+            int32_t nk = 0;
+            for (int32_t i = 0; i < vo->n; ++i)
+                nk += vo->hask[i];
+            renew = nk < vo->cfg.keyframe_min_tracks || kpar > vo->cfg.keyframe_max_parallax_deg ||
+                    tvo_la_rot_angle(vo->R_pK) * (180.0 / 3.14159265358979323846) > vo->cfg.keyframe_max_rot_deg;
+        }
+        if (renew)
+            keyframe_set(vo);
+    }
     vo->has_pose0 = pose0_next;
     if (res->state == TVO_VO_OK)
         vo->t_dir_age = 0;

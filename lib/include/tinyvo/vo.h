@@ -11,7 +11,9 @@
  * For 752x480 with the default configuration this is about 1.1 MB (see the README for the figure
  * printed by `tvo_replay --print-memory`); of it, max_tracks * 17 bytes (rounded, 5.2 KB for 300 tracks)
  * keep each track's position in the frame before the previous one, for the relative scale
- * (tvo_vo_result.rel_scale). Not thread-safe: one tvo_vo per thread.
+ * (tvo_vo_result.rel_scale), and max_tracks * 50 bytes (rounded, 15 KB for 300 tracks) its position in
+ * the keyframe plus one frame's keyframe correspondences (cfg.keyframe; allocated whether it is on or
+ * not). Not thread-safe: one tvo_vo per thread.
  */
 #ifndef TINYVO_VO_H
 #define TINYVO_VO_H
@@ -74,6 +76,22 @@ typedef struct tvo_vo_config {
                                    than this -> not available; >= 3 (above max_tracks: never); default 20 */
     double scale_min_parallax_deg; /* ...a track is usable when both of its pairs (k-2,k-1) and (k-1,k) see it
                                    with at least this ray angle, in degrees, (0, 10]; default 0.1 */
+    /* keyframe rotation: the tracks keep their normalised position in a keyframe K; each frame also
+       estimates K -> cur from the tracks seen since K (same relpose config), and when that estimate is
+       trustworthy (not low-confidence or ambiguous, >= min_pose_tracks inliers and half of the tracks,
+       within 2 deg of the chained frame-to-frame rotation) and has more parallax than the frame-to-frame
+       one (any, on a rotation-only frame), the frame's rotation is R_cK R_pK^T (R_pK: K -> previous
+       frame), so the chained rotation does not drift between keyframes */
+    int32_t keyframe;           /* 1: on, 0: frame-to-frame only; default 1 */
+    int32_t keyframe_min_tracks;/* a new keyframe when fewer tracks seen in K survive; >= 0 (above
+                                   max_tracks: every frame, which turns the keyframe rotation off);
+                                   default 100 */
+    double keyframe_max_parallax_deg; /* ...or when the K -> cur parallax exceeds this, (0, 90]; default 5 */
+    double keyframe_max_rot_deg;/* ...or the K -> cur rotation, (0, 180]; default 10 */
+    int32_t keyframe_translation; /* 1: on a frame with the keyframe rotation, the translation direction is
+                                   re-fitted to it (R fixed, t linear: smallest eigenvector of the 3x3
+                                   normal matrix of the rows (R x1) x x2 over the inliers, sign by
+                                   cheirality); 0: the 5-point direction is kept; default 1 */
     tvo_clock_fn clock;         /* optional (NULL: no timings) */
     void *clock_user;
 } tvo_vo_config;
@@ -105,6 +123,8 @@ typedef struct tvo_vo_result {
                                   than cfg.min_scale_points tracks have enough parallax and positive depth in
                                   both pairs (e.g. most tracks re-detected). Otherwise finite and > 0. */
     int32_t rel_scale_points;  /* tracks the median used (may be > 0 with rel_scale 0: too few of them) */
+    int32_t keyframe_age;      /* > 0: the rotation is the keyframe rotation, K being this many frames back;
+                                  0: frame-to-frame */
     int64_t stage_ns[TVO_STAGE_COUNT];
 } tvo_vo_result;
 
