@@ -3,8 +3,10 @@
 #   1. Release build with -Werror, all ctest tests (unit, port, guarantees, fuzz-corpus replays; -j2)
 #   2. the OpenCV oracle tests (pytest, test/oracle) and the Python tool tests (test/python) against it
 #   3. an ASan+UBSan build running the ctest tests again
-#   4. cppcheck + clang-tidy with the checked-in configuration (tools/run-static.sh)
-#   5. aarch64 / armhf cross builds, their tests under qemu-user (tools/run-cross.sh)
+#   4. a -Os (MinSizeRel) build running the ctest tests again, and the Cortex-M size report
+#      (tools/size-report.sh: arm-none-eabi core builds, link check, Cortex-M7 .text <= 64 KiB)
+#   5. cppcheck + clang-tidy with the checked-in configuration (tools/run-static.sh)
+#   6. aarch64 / armhf cross builds, their tests under qemu-user (tools/run-cross.sh)
 # Tests that need ../shared/data skip with a message when it is absent.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -27,6 +29,14 @@ cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DTVO_SANITIZE=ON -DT
 cmake --build build/asan -j$JOBS
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build/asan -j$JOBS --output-on-failure
+
+echo "== -Os build (the Cortex-M optimisation level) + unit tests: same digests as the -O3 build"
+cmake -S . -B build/minsize -G Ninja -DCMAKE_BUILD_TYPE=MinSizeRel -DTVO_WERROR=ON -DTVO_BUILD_BENCH=OFF >/dev/null
+cmake --build build/minsize -j$JOBS
+ctest --test-dir build/minsize -j$JOBS --output-on-failure
+
+echo "== Cortex-M7 / M4 core builds, link check, M7 .text <= 64 KiB (tools/size-report.sh)"
+TVO_WERROR=ON bash tools/size-report.sh
 
 echo "== static analysis (cppcheck + clang-tidy, tools/run-static.sh; ~3 min)"
 bash tools/run-static.sh

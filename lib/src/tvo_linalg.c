@@ -741,8 +741,12 @@ int tvo_la_poly_real_roots(const double *c, int deg, double *roots)
     uint64_t bbits = (uint64_t)(k2 + 1 + 1023) << 52; /* 2^(k2+1) */
     double bound;
     memcpy(&bound, &bbits, sizeof bound);
+#if !defined(__OPTIMIZE_SIZE__)
+    /* a second body with the degree constant (the 5-point solver's case: loops unroll); -Os builds
+       (Cortex-M) keep only the general body, which takes the same degree-10 branches at run time */
     if (deg == 10)
         return roots_monic(a, 10, bound, roots);
+#endif
     return roots_monic(a, deg, bound, roots);
 }
 

@@ -314,7 +314,7 @@ static tvo_status set_format(tvo_v4l2 *cam, const tvo_v4l2_config *cfg)
         return TVO_OK;
     }
     {
-        char buf[150];
+        char buf[160]; /* the longest message is 155 bytes; cam->message holds 160 */
         snprintf(buf, sizeof buf, "no usable pixel format (want GREY, NV12, YU12 or YUYV%s%s%s)",
                  refused ? "; driver refused them" : "", seen_len ? "; driver offers " : "", seen);
         set_msg(cam, buf, 0);
