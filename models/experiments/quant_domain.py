@@ -7,7 +7,9 @@ on the TRAINING sequences only, leave one sequence out, averaged over three trai
         --seq-root ../out/model/seq --out ../out/model/pact/domain        # ~15 min on 2 cores (--jobs 2)
 
 Session 14 ran it unchanged on the dataset rebuilt with the then current front end (40 s on its machine): domain
-1 % with per-layer clips passes and is the configuration of the shipped file since (card, "Input domain 1 %").
+1 % with per-layer clips passed (card, "Input domain 1 %"); after the keyframe rotation, on the dataset of that
+front end, 1 % layer / 1 % channel / 2 % layer pass and 2 % layer is chosen: the shipped file (card, "Shipped
+file (session 14)").
 
 Why: in the shipped model (input domain 0.5 %, relu layers clipped at the layer's training maximum) the
 largest single term of the int8 gap is the rounding of the parallax input: its domain [0, 1.615] deg is set
