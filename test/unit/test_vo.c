@@ -588,6 +588,26 @@ static void test_bad_input(void **state)
     bad = f->cfg;
     bad.pose_threshold_px = -1.0;
     assert_int_equal(tvo_vo_required_size(&bad), 0);
+    /* keyframe rotation settings out of their documented ranges (vo.h) */
+    {
+        tvo_vo_config kb[7];
+        for (int i = 0; i < 7; ++i)
+            kb[i] = f->cfg;
+        kb[0].keyframe = 2;
+        kb[1].keyframe = -1;
+        kb[2].keyframe_min_tracks = -1;
+        kb[3].keyframe_max_parallax_deg = 0.0;
+        kb[4].keyframe_max_parallax_deg = NAN;
+        kb[5].keyframe_max_rot_deg = 181.0;
+        kb[6].keyframe_translation = 3;
+        for (int i = 0; i < 7; ++i) {
+            assert_int_equal(tvo_vo_required_size(&kb[i]), 0);
+            assert_int_equal(tvo_vo_init(&vo2, &kb[i], f->mem, 10), TVO_ERR_ARG);
+        }
+        bad = f->cfg;
+        bad.keyframe = 0; /* off is valid and needs the same memory (the buffers are there either way) */
+        assert_int_equal(tvo_vo_required_size(&bad), tvo_vo_required_size(&f->cfg));
+    }
 
     /* trajectory integration refuses non-finite input and keeps its state */
     {
