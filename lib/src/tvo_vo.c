@@ -58,6 +58,17 @@ struct tvo_vo {
 #define TVO_VO_ROT_CHECK_RATIO 10.0
 #define TVO_VO_ROT_CHECK_MIN_DEG 2.0
 
+#define TVO_VO_DEG_PER_RAD (180.0 / 3.14159265358979323846)
+
+/* The check above on a pose p with a translation: 1 when its rotation is too far from its own
+ * rotation-only model. */
+static int rotation_check_fails(const tvo_relpose *p)
+{
+    const double d = tvo_la_rot_dist(p->R, p->R_rot) * TVO_VO_DEG_PER_RAD;
+    const double lim = TVO_VO_ROT_CHECK_RATIO * p->parallax_deg;
+    return d > (lim > TVO_VO_ROT_CHECK_MIN_DEG ? lim : TVO_VO_ROT_CHECK_MIN_DEG);
+}
+
 void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
 {
     if (cfg == NULL)
@@ -464,15 +475,11 @@ static int keyframe_rotation(tvo_vo *vo, const tvo_relpose_config *rc, int32_t m
         kp.inliers < vo->cfg.min_pose_tracks || 2 * kp.inliers < k)
         return KF_FAILED;
     tvo_la_mat3_mul(rp->R, vo->R_pK, Rpred);
-    d = tvo_la_rot_dist(kp.R, Rpred) * (180.0 / 3.14159265358979323846);
+    d = tvo_la_rot_dist(kp.R, Rpred) * TVO_VO_DEG_PER_RAD;
     if (d > TVO_VO_KF_CHECK_DEG)
         return KF_FAILED;
-    if (!(kp.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY)) {
-        const double dr = tvo_la_rot_dist(kp.R, kp.R_rot) * (180.0 / 3.14159265358979323846);
-        const double lim = TVO_VO_ROT_CHECK_RATIO * kp.parallax_deg;
-        if (dr > (lim > TVO_VO_ROT_CHECK_MIN_DEG ? lim : TVO_VO_ROT_CHECK_MIN_DEG))
-            return KF_FAILED;
-    }
+    if (!(kp.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY) && rotation_check_fails(&kp))
+        return KF_FAILED;
     if (state == TVO_VO_OK && !(kp.parallax_deg > rp->parallax_deg))
         return KF_NONE;
     for (int32_t i = 0, j = 0; i < m; ++i) {
@@ -672,14 +679,10 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
                 res->state = resolve_ambiguous(vo, rc, m, &rp);
             else
                 res->state = (rp.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY) ? TVO_VO_ROTATION_ONLY : TVO_VO_OK;
-            if (res->state == TVO_VO_OK) {
-                const double d = tvo_la_rot_dist(rp.R, rp.R_rot) * (180.0 / 3.14159265358979323846);
-                const double lim = TVO_VO_ROT_CHECK_RATIO * rp.parallax_deg;
-                if (d > (lim > TVO_VO_ROT_CHECK_MIN_DEG ? lim : TVO_VO_ROT_CHECK_MIN_DEG)) {
-                    memcpy(rp.R, rp.R_rot, sizeof(rp.R));
-                    rp.t[0] = rp.t[1] = rp.t[2] = 0.0;
-                    res->state = TVO_VO_ROTATION_ONLY;
-                }
+            if (res->state == TVO_VO_OK && rotation_check_fails(&rp)) {
+                memcpy(rp.R, rp.R_rot, sizeof(rp.R));
+                rp.t[0] = rp.t[1] = rp.t[2] = 0.0;
+                res->state = TVO_VO_ROTATION_ONLY;
             }
             memcpy(Rf, rp.R, sizeof(Rf));
             memcpy(tf, rp.t, sizeof(tf));
@@ -755,7 +758,7 @@ done:
             for (int32_t i = 0; i < vo->n; ++i)
                 nk += vo->hask[i];
             renew = nk < vo->cfg.keyframe_min_tracks || kpar > vo->cfg.keyframe_max_parallax_deg ||
-                    tvo_la_rot_angle(vo->R_pK) * (180.0 / 3.14159265358979323846) > vo->cfg.keyframe_max_rot_deg;
+                    tvo_la_rot_angle(vo->R_pK) * TVO_VO_DEG_PER_RAD > vo->cfg.keyframe_max_rot_deg;
         }
         if (renew)
             keyframe_set(vo);
