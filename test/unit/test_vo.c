@@ -318,8 +318,8 @@ static void test_relative_scale_rotation_only(void **state)
  * 40 frames of 3 cm, 0.5 deg/frame: 0.11 deg off, 0.27 deg on at the end; 30 frames of pure rotation:
  * 0.027 / 0.031 deg;
  * with +-8 grey levels of noise, 60 frames of 2 cm: 0.35 / 0.22 deg, 40 frames of 5 cm: 0.12 / 0.43 deg.
- * The gain measured on the EuRoC renders (docs/geometry.md, "Keyframe rotation") comes from frame-to-frame rotation errors
- * of ~0.1-0.3 deg per step that do not average out. */
+ * The gain measured on the EuRoC renders (docs/geometry.md, "Keyframe rotation") comes from
+ * frame-to-frame rotation errors of ~0.1-0.3 deg per step that do not average out. */
 static void run_chain(int keyframe, int frames, double step, int noise, double *end_err, double *max_dir_err,
                       int *kf_frames)
 {
