@@ -67,18 +67,20 @@ CONFIGS = [("none (shipped configuration), rule 2", None, 2),
             dict(epochs=0, per_channel=1.25), 2)]
 
 
-def judge_heldout(br, calib, f_ho, step_ho, seqd, prefix, calibration=quant.CALIBRATION_DEFAULT, x=None):
+def judge_heldout(br, calib, f_ho, step_ho, seqd, prefix, calibration=quant.CALIBRATION_DEFAULT, x=None,
+                  hidden_copies=None):
     """One step model (list of FloatBranch) judged on a held-out training sequence, the measures of this
     script, quant_domain.py and quant_transform.py: exported with `calibration` calibrated on `calib` (the
     other sequences' rows); on the held-out dataset rows f_ho the squared int8-vs-float gap and the float
     model's squared step error against step_ho; the held-out sequence's ATE SE(3) with the scale filter
     a = 0.01 (the shipped use) with the float and with the int8 step, trajectories written to
     PREFIX.float.txt / PREFIX.int8.txt. seqd: seq_data() of the sequence; x: the per-frame features the
-    model reads (default: seqd's csv features). -> dict(sq, w, se, ate_f, ate_q)."""
+    model reads (default: seqd's csv features); hidden_copies: the exporter's (quant.quantize_branch).
+    -> dict(sq, w, se, ate_f, ate_q)."""
     sd, fr, T_wc, _ = seqd
     x = fr["features"].astype(np.float32) if x is None else x
     raw = np.hstack([fr["features"][:, 3:6], fr["features"][:, 0:3]])
-    model = quant.quantize_model(br, calib, calibration=calibration)
+    model = quant.quantize_model(br, calib, calibration=calibration, hidden_copies=hidden_copies)
     fl = quant.float_run(br, f_ho)[:, nnfmt.OUT_STEP]
     q = nnfmt.reference_run(model, f_ho)[:, nnfmt.OUT_STEP].astype(np.float64)
     r = dict(sq=float(np.mean((q - fl) ** 2)), w=int(len(f_ho)), se=float(np.mean((fl - step_ho) ** 2)))

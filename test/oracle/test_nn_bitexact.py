@@ -128,6 +128,23 @@ def test_random_inputs_per_activation(tvo, act):
     assert_bits_equal(out, ref[:, :6])
 
 
+def test_random_inputs_hidden_copies(tvo):
+    """A clipped relu log-step branch exported with hidden-channel copies (quant.copy_offsets: 3 / 2 copies of
+    the two hidden layers' channels, biases offset by fractions of a level), 10,000 random inputs."""
+    rng = np.random.default_rng(4000)
+    calib = quant.synthetic_features(rng, 1000)
+    fb = quant.random_float_branch(rng, nnfmt.DOF_LOG_STEP, "relu", sizes=(48, 16))
+    fb.act_clip = [float(post.max()) for _, post in fb.forward_all(calib)[1:-1]]
+    model = quant.quantize_model([fb], calib, hidden_copies=[3, 2])
+    assert [L.n_out for L in model.branches[0].layers] == [144, 32, 1]
+    data = nnfmt.write(model)
+    c = CModel(tvo, data)
+    x = random_inputs(rng, 10000)
+    out, st = c.run(x, n_out=nnfmt.OUT_COUNT)
+    assert (st == 0).all()
+    assert_bits_equal(out, nnfmt.reference_run(model, x))
+
+
 @pytest.mark.parametrize("act", quant.nnfmt.ACTS[1:])
 @pytest.mark.parametrize("code", [nnfmt.DOF_STEP, nnfmt.DOF_LOG_STEP])
 def test_random_inputs_step(tvo, act, code):

@@ -1,6 +1,7 @@
 """Exporter: float checkpoint -> int8 weights file (docs/weights-format.md) + golden vectors + report.
 
     python -m tinyvo_tools.export model.ckpt.npz DATASET.npz -o model.tvonn [--golden model.golden]
+        [--hidden-copies 1,2,2]
 
 Activation ranges are calibrated on the training rows of DATASET (the sequences the checkpoint was
 trained on; its validation sequences are never used for calibration). The report compares the
@@ -39,21 +40,22 @@ def compare(model: nnfmt.Model, branches, features: np.ndarray, targets: np.ndar
 
 
 def export(branches, meta, features, targets, seq, out_path, golden_path=None, n_golden=256, seed=0,
-           calibration=quant.CALIBRATION_DEFAULT):
-    """Quantise (calibration rule: quant.CALIBRATION_DEFAULT), write the weights file (and golden vectors);
-    return the report dict."""
+           calibration=quant.CALIBRATION_DEFAULT, hidden_copies=None):
+    """Quantise (calibration rule: quant.CALIBRATION_DEFAULT; hidden_copies: quant.quantize_branch's), write
+    the weights file (and golden vectors); return the report dict."""
     val = meta.get("val_sequences") or []
     tr, va = train.split_rows(seq, val)
     if not tr.any():
         raise ValueError("no training rows to calibrate on")
-    model = quant.quantize_model(branches, features[tr], calibration=calibration)
+    model = quant.quantize_model(branches, features[tr], calibration=calibration, hidden_copies=hidden_copies)
     data = nnfmt.write(model)
     if os.path.dirname(str(out_path)):
         os.makedirs(os.path.dirname(str(out_path)), exist_ok=True)
     with open(out_path, "wb") as fh:
         fh.write(data)
     evalrows = va if va.any() else tr
-    rep = {"file": str(out_path), "bytes": len(data), "calibration": calibration, "macs": model.macs, "output_mask": model.output_mask,
+    rep = {"file": str(out_path), "bytes": len(data), "calibration": calibration, "hidden_copies": hidden_copies,
+           "macs": model.macs, "output_mask": model.output_mask,
            "calibration_rows": int(tr.sum()), "eval_rows": int(evalrows.sum()),
            "eval_split": "validation" if va.any() else "training",
            "per_dof": compare(model, branches, features[evalrows], targets[evalrows])}
@@ -78,13 +80,26 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--calibration", type=int, default=quant.CALIBRATION_DEFAULT, choices=[1, 2, 3],
                     help="quantisation calibration rule (quant.py; 1: files exported before rule 2; 3: tried)")
+    ap.add_argument("--hidden-copies", default=None, metavar="K1,K2,...",
+                    help="copies of each hidden layer's channels (relu branches, rule 2 or 3; quant.copy_offsets): "
+                         "k times finer int8 levels for that layer at k times its MACs and the next layer's")
     args = ap.parse_args(argv)
+    copies = None
+    if args.hidden_copies:
+        try:
+            copies = [int(v) for v in args.hidden_copies.split(",")]
+        except ValueError:
+            ap.error(f"--hidden-copies {args.hidden_copies!r}: comma-separated integers")
     branches, meta = quant.load_checkpoint(args.checkpoint)
     if args.dataset == "synthetic":
         f, t, seq = train.synthetic_dataset(np.random.default_rng(meta.get("seed", 0)), 20000)
     else:
         f, t, seq = train.load_dataset(args.dataset)
-    rep = export(branches, meta, f, t, seq, args.out, args.golden, seed=args.seed, calibration=args.calibration)
+    try:
+        rep = export(branches, meta, f, t, seq, args.out, args.golden, seed=args.seed, calibration=args.calibration,
+                     hidden_copies=copies)
+    except ValueError as e:
+        ap.error(str(e))
     print(json.dumps(rep, indent=2))
 
 

@@ -307,15 +307,33 @@ def _sequential_round(w: np.ndarray, b: np.ndarray, s_w: np.ndarray, x: np.ndarr
     return w, b
 
 
+def copy_offsets(k: int) -> np.ndarray:
+    """The k offsets, in int8 levels, of a channel's copies (hidden_copies): (j - (k - 1) / 2) / k, j < k,
+    centred. By Hermite's identity (sum_j floor(x + j / k) = floor(k x)) the sum of the k copies'
+    round-to-nearest levels, rint(u + o_j), is rint(k u): k copies of one int8 channel read with weight
+    w / k each are one channel with k times finer levels over the same range, and their saturation at the
+    range's ends is the channel's (all copies reach level -128 / 127 together)."""
+    return (np.arange(k) - (k - 1) / 2.0) / k
+
+
 def quantize_branch(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0, equalise: bool = True,
-                    calibration: int = CALIBRATION_DEFAULT) -> nnfmt.Branch:
+                    calibration: int = CALIBRATION_DEFAULT, hidden_copies=None) -> nnfmt.Branch:
     """pct: clip calibration ranges at the pct / 100-pct percentiles (0 = min/max). A branch with an
     input domain (clip_lo/clip_hi) gets it as its int8 input range (equalise_inputs): the int8 input
     stage's clamp is then the model's own clamp (rule 2: within the features' own range). calibration:
-    the rule (1 or 2, see CALIBRATION_DEFAULT)."""
+    the rule (1 or 2, see CALIBRATION_DEFAULT). hidden_copies: per hidden layer, the number k >= 1 of int8
+    copies of each of its channels (copy_offsets: the copies' biases are offset by a fraction of a level,
+    the next layer reads each with 1 / k of the channel's weight): k times finer levels for that layer's
+    output at k times its MACs and those of the next layer; the float model is unchanged (rule 2 only)."""
     if calibration not in (1, 2, 3):
         raise ValueError(f"calibration rule {calibration}: 1, 2 or 3")
     rule2 = calibration >= 2
+    n = len(fb.weights)
+    copies = [1] * (n - 1) if hidden_copies is None else [int(c) for c in hidden_copies]
+    if len(copies) != n - 1 or any(c < 1 for c in copies):
+        raise ValueError(f"hidden_copies {hidden_copies}: one count >= 1 per hidden layer ({n - 1})")
+    if any(c > 1 for c in copies) and not (rule2 and fb.activation == "relu"):
+        raise ValueError("hidden_copies: relu branches under calibration rule 2 or 3 only (identity tables)")
     if fb.clip_lo is not None and not equalise:
         raise ValueError("a branch with an input domain is quantised with equalise=True")
     if fb.act_clip is not None:
@@ -337,12 +355,14 @@ def quantize_branch(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0, equali
                       norm_offset=np.asarray(fb.norm_offset, np.float32),
                       in_scale=s_in, in_zp=zp_in, out_scale=float(np.float32(fb.out_scale)),
                       out_offset=float(np.float32(fb.out_offset)))
-    n = len(fb.weights)
     relu2 = rule2 and fb.activation == "relu"
+    k_in = 1  # copies of each channel of the layer's input (those of the previous hidden layer)
     xq = nnfmt.quantize_input(br, calib) if rule2 else None  # the int8 inputs of the layer being quantised
     for k, (w, b) in enumerate(zip(fb.weights, fb.biases)):
         w = np.asarray(w, np.float64)
         b = np.asarray(b, np.float64)
+        if k_in > 1:  # the input channels come in k_in copies (blocks of n_in): each read with w / k_in
+            w = np.tile(w / k_in, (1, k_in))
         if rule2:
             pre_f = trace[k + 1][0]
             mask = (pre_f > 0) if (relu2 and k < n - 1) else None
@@ -378,6 +398,12 @@ def quantize_branch(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0, equali
                 s_act, zp_act = (s_out, zp_out) if relu2 else asym_params(*_range(post, pct))
                 L.act_zp, L.act_scale = zp_act, s_act
                 L.lut = make_lut(fb.activation, s_out, zp_out, s_act, zp_act)
+            if copies[k] > 1:  # the channels in copies[k] blocks, biases offset by copy_offsets levels
+                off = np.rint(copy_offsets(copies[k])[:, None] * s_out / acc_scale[None, :])
+                L.w = np.tile(L.w, (copies[k], 1))
+                L.bias = np.clip(L.bias[None, :].astype(np.float64) + off, -(2**30), 2**30).astype(np.int32).ravel()
+                L.mult, L.shift = np.tile(L.mult, copies[k]), np.tile(L.shift, copies[k])
+            k_in = copies[k]
             s_in, zp_in = L.act_scale, L.act_zp
             if xq is not None:
                 xq = np.clip(nnfmt.requantize(nnfmt.fc_acc(L, xq), L.mult, L.shift) + L.out_zp, -128, 127)
@@ -387,8 +413,8 @@ def quantize_branch(fb: FloatBranch, calib: np.ndarray, pct: float = 0.0, equali
 
 
 def quantize_model(branches: Sequence[FloatBranch], calib: np.ndarray, pct: float = 0.0,
-                   equalise: bool = True, calibration: int = CALIBRATION_DEFAULT) -> nnfmt.Model:
-    return nnfmt.Model(branches=[quantize_branch(b, np.atleast_2d(calib), pct, equalise, calibration)
+                   equalise: bool = True, calibration: int = CALIBRATION_DEFAULT, hidden_copies=None) -> nnfmt.Model:
+    return nnfmt.Model(branches=[quantize_branch(b, np.atleast_2d(calib), pct, equalise, calibration, hidden_copies)
                                  for b in branches])
 
 
