@@ -40,6 +40,7 @@ typedef struct options {
     double alpha, step; /* --scale-alpha (< 0: not given), --step */
     int body_frame, strict, quiet, print_memory;
     int keyframe; /* --keyframe 0|1 (< 0: the library's default) */
+    int track_prediction; /* --track-prediction 0|1 (< 0: the library's default) */
     long max_frames;
 } options;
 
@@ -69,6 +70,9 @@ static void usage(FILE *f)
             "                       pose_status,inliers,<feature names>,rel_scale,\n"
             "                       rel_scale_points\n"
             "  --keyframe 0|1       keyframe rotation on or off (vo.h; default: the library's)\n"
+            "  --track-prediction 0|1\n"
+            "                       LK guesses from the previous frame's rotation on or off\n"
+            "                       (vo.h; default: the library's)\n"
             "  --max-frames N       stop after N frames\n"
             "  --strict             exit non-zero at the first bad frame instead of skipping it\n"
             "  --quiet              no progress line\n"
@@ -84,6 +88,7 @@ static int parse_args(int argc, char **argv, options *o)
     o->step = -1.0;
     o->max_frames = -1;
     o->keyframe = -1;
+    o->track_prediction = -1;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -171,6 +176,14 @@ static int parse_args(int argc, char **argv, options *o)
                 o->keyframe = v[0] - '0';
             else {
                 fprintf(stderr, "tvo_replay: --keyframe must be 0 or 1 (got '%s')\n", v);
+                return -1;
+            }
+        } else if (!strcmp(a, "--track-prediction")) {
+            NEED_VALUE();
+            if (!strcmp(v, "0") || !strcmp(v, "1"))
+                o->track_prediction = v[0] - '0';
+            else {
+                fprintf(stderr, "tvo_replay: --track-prediction must be 0 or 1 (got '%s')\n", v);
                 return -1;
             }
         } else if (!strcmp(a, "--strict")) {
@@ -304,6 +317,8 @@ int main(int argc, char **argv)
     cfg.clock = clock_cb;
     if (o.keyframe >= 0)
         cfg.keyframe = o.keyframe;
+    if (o.track_prediction >= 0)
+        cfg.track_prediction = o.track_prediction;
     vo_size = tvo_vo_required_size(&cfg);
     if (vo_size == 0) {
         fprintf(stderr, "tvo_replay: the camera of %s is not usable (check sensor.yaml)\n", o.euroc);

@@ -1225,12 +1225,14 @@ tvo_status tvo_lk_track(const tvo_lk_config *cfg, const tvo_pyramid *prev, const
     for (i = 0; i < n; ++i) {
         float x0 = prev_pts[i].x, y0 = prev_pts[i].y;
         float nx = next_pts[i].x, ny = next_pts[i].y;
+        const float gx = nx - x0, gy = ny - y0; /* the guess's displacement (use_initial_flow) */
         float e = 0.f;
         int ok = lk_track_point(&prm, prev, next, top, x0, y0, cfg->use_initial_flow != 0, &nx, &ny, &wk,
                                 err != NULL ? &e : NULL);
         if (ok && cfg->fb_check) {
-            float bx = nx, by = ny, ddx, ddy;
-            int back = lk_track_point(&prm, next, prev, top, nx, ny, 0, &bx, &by, &wk, NULL);
+            /* the way back starts at the guess's displacement reversed (no displacement without a guess) */
+            float bx = cfg->use_initial_flow ? nx - gx : nx, by = cfg->use_initial_flow ? ny - gy : ny, ddx, ddy;
+            int back = lk_track_point(&prm, next, prev, top, nx, ny, cfg->use_initial_flow != 0, &bx, &by, &wk, NULL);
             ddx = bx - x0;
             ddy = by - y0;
             if (!back || !((double)ddx * ddx + (double)ddy * ddy <=

@@ -41,6 +41,13 @@ struct tvo_vo {
     double R_pK[9];
     int32_t has_kf;
     int32_t kf_age;           /* frames from K to the previous frame */
+    /* track prediction (cfg.track_prediction): the last frame's rotation (X_prev = R_pred X_prevprev),
+       its frame interval, valid while has_pred; r2_max: the squared normalised radius (x 1.21) of the
+       farthest image corner, beyond which a predicted point is not distorted back */
+    double R_pred[9];
+    int64_t dt_pred;
+    int32_t has_pred;
+    double r2_max;
     void *scratch;
     size_t scratch_size;
 };
@@ -95,6 +102,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->keyframe_max_parallax_deg = 5.0;
     cfg->keyframe_max_rot_deg = 10.0;
     cfg->keyframe_translation = 1;
+    cfg->track_prediction = 1;
     cfg->clock = NULL;
     cfg->clock_user = NULL;
 }
@@ -126,6 +134,8 @@ static int config_valid(const tvo_vo_config *cfg)
     if (!(cfg->keyframe_max_rot_deg > 0.0 && cfg->keyframe_max_rot_deg <= 180.0))
         return 0;
     if (cfg->keyframe_translation != 0 && cfg->keyframe_translation != 1)
+        return 0;
+    if (cfg->track_prediction != 0 && cfg->track_prediction != 1)
         return 0;
     if (cfg->lk.max_level < 0 || cfg->lk.max_level + 1 > TVO_MAX_PYR_LEVELS)
         return 0;
@@ -220,6 +230,13 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg, void *mem, size_t
     vo->hask = (uint8_t *)tvo_arena_alloc(&a, n);
     vo->kmask = (uint8_t *)tvo_arena_alloc(&a, n);
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
+    for (int i = 0; i < 4; ++i) {
+        tvo_point2d c;
+        if (tvo_camera_undistort_point(&cfg->camera, (i & 1) ? cfg->camera.width - 1 : 0,
+                                       (i & 2) ? cfg->camera.height - 1 : 0, &c) == TVO_OK &&
+            1.21 * (c.x * c.x + c.y * c.y) > vo->r2_max)
+            vo->r2_max = 1.21 * (c.x * c.x + c.y * c.y);
+    }
     vo->scratch_size = scratch_need(cfg);
     vo->scratch = tvo_arena_alloc(&a, vo->scratch_size);
     if (vo->pts == NULL || vo->next == NULL || vo->st == NULL || vo->ok1 == NULL || vo->ok2 == NULL ||
@@ -240,6 +257,7 @@ void tvo_vo_reset(tvo_vo *vo)
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
     vo->has_pose0 = 0;
     vo->has_kf = 0;
+    vo->has_pred = 0;
 }
 
 static int64_t now_ns(const tvo_vo *vo)
@@ -559,6 +577,44 @@ static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
     return m;
 }
 
+/* LK's initial guesses (cfg.track_prediction): each track moved by the last frame's rotation, scaled to
+ * this frame's interval (constant angular velocity; points at infinity, so no depth is needed), in
+ * vo->next; a track whose prediction leaves the camera's domain keeps its position as guess. 0 when no
+ * prediction applies (no last rotation, or an interval outside [1/2, 2] x the last one). */
+static int predict_tracks(tvo_vo *vo, int64_t dt)
+{
+    double v[3], R[9], ratio;
+    if (!vo->cfg.track_prediction || !vo->has_pred || vo->dt_pred <= 0 || dt <= 0)
+        return 0;
+    ratio = (double)dt / (double)vo->dt_pred;
+    if (!(ratio >= 0.5 && ratio <= 2.0) ||
+        tvo_camera_undistort(&vo->cfg.camera, vo->pts, vo->x1, vo->ok1, vo->n) != TVO_OK)
+        return 0;
+    tvo_rot_to_rotvec(vo->R_pred, v);
+    v[0] *= ratio;
+    v[1] *= ratio;
+    v[2] *= ratio;
+    tvo_rotvec_to_rot(v, R);
+    for (int32_t i = 0; i < vo->n; ++i) {
+        const double x = vo->x1[i].x, y = vo->x1[i].y;
+        const double d0 = R[0] * x + R[1] * y + R[2], d1 = R[3] * x + R[4] * y + R[5],
+                     d2 = R[6] * x + R[7] * y + R[8];
+        tvo_point2d q;
+        double u, w;
+        vo->next[i] = vo->pts[i];
+        if (!vo->ok1[i] || !(d2 > 1e-3))
+            continue;
+        q.x = d0 / d2;
+        q.y = d1 / d2;
+        if (q.x * q.x + q.y * q.y <= vo->r2_max &&
+            tvo_camera_distort_point(&vo->cfg.camera, &q, &u, &w) == TVO_OK) {
+            vo->next[i].x = (float)u;
+            vo->next[i].y = (float)w;
+        }
+    }
+    return 1;
+}
+
 tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_vo_result *res)
 {
     tvo_status st;
@@ -566,6 +622,7 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
     int64_t t0, t1;
     const int32_t w = vo != NULL ? vo->cfg.camera.width : 0, h = vo != NULL ? vo->cfg.camera.height : 0;
     int32_t m, pose0_next = 0; /* whether this frame's pose is a unit translation for the next rel_scale */
+    int32_t pred_next = 0;     /* whether this frame's rotation predicts the next frame's tracks */
     int kf = KF_NONE;          /* what the keyframe rotation did this frame */
     double kpar = 0.0;         /* its parallax */
     if (res == NULL)
@@ -606,8 +663,12 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
 
     /* 1. track */
     t1 = now_ns(vo);
-    st = tvo_lk_track(&vo->cfg.lk, pp, pc, vo->pts, vo->next, vo->st, NULL, vo->n, vo->scratch,
-                      vo->scratch_size);
+    {
+        tvo_lk_config lkc = vo->cfg.lk;
+        if (predict_tracks(vo, res->dt_ns))
+            lkc.use_initial_flow = 1;
+        st = tvo_lk_track(&lkc, pp, pc, vo->pts, vo->next, vo->st, NULL, vo->n, vo->scratch, vo->scratch_size);
+    }
     if (st != TVO_OK)
         memset(vo->st, 0, (size_t)vo->n);
     for (int32_t i = 0; i < vo->n; ++i) {
@@ -708,6 +769,8 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
             }
             memcpy(T_cur_prev.R, rp.R, sizeof(rp.R));
             memcpy(T_cur_prev.t, rp.t, sizeof(rp.t));
+            memcpy(vo->R_pred, rp.R, sizeof(rp.R));
+            pred_next = 1;
             res->T_prev_cur = tvo_pose_inverse(&T_cur_prev);
             res->relpose_flags = rp.flags;
             res->inliers = rp.inliers;
@@ -736,6 +799,7 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
                 res->state = TVO_VO_LOST;
                 res->rel_scale = TVO_VO_REL_SCALE_NONE;
                 pose0_next = 0;
+                pred_next = 0;
             }
         }
     }
@@ -764,6 +828,8 @@ done:
             keyframe_set(vo);
     }
     vo->has_pose0 = pose0_next;
+    vo->has_pred = pred_next;
+    vo->dt_pred = res->dt_ns;
     if (res->state == TVO_VO_OK)
         vo->t_dir_age = 0;
     else if (vo->t_dir_age <= TVO_VO_PRIOR_FRAMES)

@@ -21,7 +21,9 @@
  *     [0, width-1] x [0, height-1] (stricter than OpenCV, which keeps such points);
  *   - the window is too flat (min eigenvalue below min_eig_threshold, or det(G) < FLT_EPSILON);
  *   - with fb_check: tracking back from the found position does not return within fb_max_error px
- *     of the start (or the backward track is lost itself).
+ *     of the start (or the backward track is lost itself); with use_initial_flow the way back starts
+ *     from the guess's displacement reversed (found position - (guess - start)), without it at zero
+ *     displacement, so a guessed large motion is checked as far as it was tracked.
  * At coarser levels a failure only means that level adds nothing (OpenCV's behaviour). */
 #ifndef TINYVO_LK_H
 #define TINYVO_LK_H

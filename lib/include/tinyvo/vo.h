@@ -92,6 +92,10 @@ typedef struct tvo_vo_config {
                                    re-fitted to it (R fixed, t linear: smallest eigenvector of the 3x3
                                    normal matrix of the rows (R x1) x x2 over the inliers, sign by
                                    cheirality); 0: the 5-point direction is kept; default 1 */
+    int32_t track_prediction;   /* 1: LK starts each track where the previous frame's rotation (scaled to
+                                   this frame's interval; constant angular velocity, points at infinity)
+                                   moves it, when the previous frame had a pose and the intervals are
+                                   within 2x; 0: at its previous position; default 1 */
     tvo_clock_fn clock;         /* optional (NULL: no timings) */
     void *clock_user;
 } tvo_vo_config;
