@@ -1,10 +1,12 @@
 """Synthetic EuRoC/ASL sequences: a seeded, textured 3D room rendered along a trajectory.
 
     python -m tinyvo_tools.synth --out DIR [--trajectory FILE | --builtin NAME] [--frames N]
-                                 [--seed S] [--noise SIGMA] [--blur SIGMA] [--start-time SEC]
+                                 [--camera euroc|kitti|tum] [--seed S] [--noise SIGMA] [--blur SIGMA]
+                                 [--start-time SEC]
 
-writes DIR/mav0/cam0/data/<t_ns>.png (8-bit grey, 752x480), mav0/cam0/data.csv, mav0/cam0/sensor.yaml
-(EuRoC cam0 intrinsics, radial-tangential distortion, T_BS, 20 Hz) and
+writes DIR/mav0/cam0/data/<t_ns>.png (8-bit grey, 752x480 for the default camera), mav0/cam0/data.csv,
+mav0/cam0/sensor.yaml (EuRoC cam0 intrinsics, radial-tangential distortion, T_BS, 20 Hz; or another
+preset, CAMERAS) and
 mav0/state_groundtruth_estimate0/data.csv (body poses T_W_B at the image timestamps).
 
 How it renders (see docs/synth.md):
@@ -23,12 +25,13 @@ How it renders (see docs/synth.md):
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import struct
 import sys
 import time
 import zlib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -566,7 +569,21 @@ class Renderer:
 # trajectories
 
 
-BUILTINS = ("handheld", "rotation", "line")
+BUILTINS = ("handheld", "rotation", "line", "drive")
+
+# Camera presets (--camera). euroc: the EuRoC cam0 of the real data (radial-tangential, 20 Hz); kitti: a
+# pinhole with KITTI's cam0 intrinsics (sequences 00-02) and frame size, 10 Hz; tum: a 640x480 pinhole at
+# 30 Hz with the nominal intrinsics of the TUM RGB-D benchmark. All keep EuRoC's T_BS, so that a EuRoC
+# body trajectory moves each of them as it moved cam0.
+CAMERAS = {
+    "euroc": CameraInfo(),
+    "kitti": CameraInfo(width=1241, height=376, intrinsics=(718.856, 718.856, 607.1928, 185.2157),
+                        distortion_model="none", distortion=(0.0, 0.0, 0.0, 0.0), rate_hz=10.0,
+                        comment="KITTI-like pinhole (cam0 intrinsics of KITTI odometry 00-02)"),
+    "tum": CameraInfo(width=640, height=480, intrinsics=(525.0, 525.0, 319.5, 239.5),
+                      distortion_model="none", distortion=(0.0, 0.0, 0.0, 0.0), rate_hz=30.0,
+                      comment="TUM RGB-D-like pinhole (nominal intrinsics)"),
+}
 
 
 def _look_rotation(yaw, pitch, roll):
@@ -590,7 +607,9 @@ def builtin_trajectory(name: str, n_frames: int, rate_hz: float = 20.0, seed: in
     """A generated body trajectory (T_W_B, so that T_W_B @ T_BS is the intended camera motion).
     handheld: walking round a loop at ~0.6 m/s with sway, bob and look-around, every ~8 s a fast pan with
     little translation (rotation-heavy part); rotation: standing still, panning and tilting;
-    line: walking straight, looking ahead."""
+    line: walking straight, looking ahead; drive: a car's camera 1.65 m above the floor going round a
+    40 x 25 m ellipse at 7.7-12.3 m/s (turn radius 15.6-64 m, yaw rate 11-29 deg/s), with slight pitch and roll
+    (a parking-garage drive, KITTI's speed)."""
     if name not in BUILTINS:
         raise ValueError(f"unknown builtin trajectory {name!r} (choose from {', '.join(BUILTINS)})")
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 0x7EA7]))
@@ -629,9 +648,17 @@ def builtin_trajectory(name: str, n_frames: int, rate_hz: float = 20.0, seed: in
         yaw = np.radians(70) * np.sin(2 * np.pi * tt / 6.0) + look
         pitch = pitch + np.radians(12) * np.sin(2 * np.pi * tt / 4.3)
         pos = np.stack([0.01 * sway, 0.01 * bob, 1.5 + 0.0 * tt], 1)
-    else:  # line
+    elif name == "line":
         yaw = 0.3 * look
         pos = np.stack([-3.0 + 0.5 * tt, sway, 1.5 + bob], 1)
+    else:  # drive
+        a, b = 40.0, 25.0
+        th = 10.0 * tt / (0.5 * (a + b))
+        heading = np.arctan2(b * np.cos(th), -a * np.sin(th))
+        yaw = heading + 0.05 * look
+        pitch = 0.1 * pitch + np.radians(0.4)
+        roll = 0.1 * roll
+        pos = np.stack([a * np.cos(th), b * np.sin(th), 1.65 + 0.2 * bob], 1)
     Twc = np.tile(np.eye(4), (n_frames, 1, 1))
     Twc[:, :3, :3] = _look_rotation(yaw, pitch, roll)
     Twc[:, :3, 3] = pos
@@ -760,6 +787,9 @@ def main(argv=None) -> int:
     src = ap.add_mutually_exclusive_group()
     src.add_argument("--trajectory", help="EuRoC ground truth csv/txt (body poses, ns) or TUM (camera poses, s)")
     src.add_argument("--builtin", choices=BUILTINS, help="generated trajectory (default: handheld)")
+    ap.add_argument("--camera", choices=sorted(CAMERAS), default="euroc",
+                    help="camera preset: frame size, intrinsics, distortion, frame rate (default euroc)")
+    ap.add_argument("--rate", type=float, default=None, help="frame rate in Hz instead of the preset's")
     ap.add_argument("--frames", type=int, default=None, help="number of frames (default: all / 600 for builtin)")
     ap.add_argument("--seed", type=int, default=0, help="scene, texture, noise and builtin-trajectory seed")
     ap.add_argument("--noise", type=float, default=1.5, help="Gaussian noise sigma, grey levels (default 1.5)")
@@ -771,12 +801,16 @@ def main(argv=None) -> int:
         ap.error("--frames must be positive")
     if a.noise < 0 or a.blur < 0:
         ap.error("--noise and --blur must be >= 0")
+    if a.rate is not None and not (math.isfinite(a.rate) and 0.1 <= a.rate <= 1000.0):
+        ap.error("--rate must be in [0.1, 1000] Hz")
+    cam = replace(CAMERAS[a.camera], rate_hz=a.rate or CAMERAS[a.camera].rate_hz)
     if a.trajectory:
         traj = load_trajectory(a.trajectory)
     else:
-        n = (a.frames or 600) + int(np.ceil(max(a.start_time, 0) * 20)) + 1
-        traj = builtin_trajectory(a.builtin or "handheld", n, seed=a.seed)
-    info = render_sequence(a.out, traj, a.frames, a.seed, a.noise, a.blur, a.start_time, progress=not a.quiet)
+        n = (a.frames or 600) + int(np.ceil(max(a.start_time, 0) * cam.rate_hz)) + 1
+        traj = builtin_trajectory(a.builtin or "handheld", n, rate_hz=cam.rate_hz, seed=a.seed)
+    info = render_sequence(a.out, traj, a.frames, a.seed, a.noise, a.blur, a.start_time, cam=cam,
+                           progress=not a.quiet)
     if not a.quiet:
         print(f"synth: {info['frames']} frames -> {a.out}/mav0 ({info['boxes']} boxes, "
               f"render {info['render_fps']:.1f} frames/s, with PNG writing {info['total_fps']:.1f} frames/s wall, "
