@@ -42,7 +42,7 @@ from relscale_experiments import seq_data  # noqa: E402
 TRAIN = ["MH_01", "MH_02", "MH_03", "V1_01", "V2_01"]
 SEEDS = [0, 1, 2]
 CANDIDATES = [(1, 1, 1), (1, 1, 2), (1, 2, 1), (1, 2, 2), (2, 2, 2), (1, 4, 4)]  # copies per hidden layer
-DOMAIN = 2.0
+DOMAIN = 2.0  # the shipped recipe's input domain (quant_domain.py's choice); --domain for another
 
 
 def run_seed(args):
@@ -54,8 +54,11 @@ def run_seed(args):
         rest, ho = np.isin(seq, [n for n in TRAIN if n != h]), seq == h
         seqd = seq_data(a.features, a.seq_root, h)
         base = train.train(f[rest], t[rest], {nnfmt.DOF_LOG_STEP: "relu"}, epochs=40, joint_epochs=10,
-                           lr=1e-3, seed=seed, dofs=[nnfmt.DOF_LOG_STEP], progress=False, input_clip=DOMAIN)
-        br = train.pact_finetune(base, f[rest], t[rest], epochs=0, seed=seed, progress=False)
+                           lr=1e-3, seed=seed, dofs=[nnfmt.DOF_LOG_STEP], progress=False, input_clip=a.domain)
+        if a.clip == "layer":
+            br = train.pact_finetune(base, f[rest], t[rest], epochs=0, seed=seed, progress=False)
+        else:
+            br = [quant.clip_relu_channels(b, f[rest]) for b in base]
         for c in CANDIDATES:
             key = ",".join(map(str, c))
             j = judge_heldout(br, f[rest], f[ho], step[ho], seqd, os.path.join(a.out, f"{h}.s{seed}.c{key}"),
@@ -72,6 +75,9 @@ def main():
     for k in ("dataset", "features", "seq-root", "out"):
         ap.add_argument(f"--{k}", required=True)
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--domain", type=float, default=DOMAIN, help="the trainer's input domain, %% (default 2)")
+    ap.add_argument("--clip", choices=["layer", "channel"], default="layer",
+                    help="relu clip at the training maximum of each layer (default) / of each channel")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     f, t, seq = train.load_dataset(a.dataset)
