@@ -102,7 +102,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->keyframe_max_parallax_deg = 5.0;
     cfg->keyframe_max_rot_deg = 10.0;
     cfg->keyframe_translation = 1;
-    cfg->track_prediction = 1;
+    cfg->track_prediction = 0; /* on: larger motion per frame tracked, but the EuRoC renders got worse */
     cfg->clock = NULL;
     cfg->clock_user = NULL;
 }
@@ -587,13 +587,14 @@ static int predict_tracks(tvo_vo *vo, int64_t dt)
     if (!vo->cfg.track_prediction || !vo->has_pred || vo->dt_pred <= 0 || dt <= 0)
         return 0;
     ratio = (double)dt / (double)vo->dt_pred;
-    if (!(ratio >= 0.5 && ratio <= 2.0) ||
-        tvo_camera_undistort(&vo->cfg.camera, vo->pts, vo->x1, vo->ok1, vo->n) != TVO_OK)
+    if (!(ratio >= 0.5 && ratio <= 2.0))
         return 0;
     tvo_rot_to_rotvec(vo->R_pred, v);
     v[0] *= ratio;
     v[1] *= ratio;
     v[2] *= ratio;
+    if (tvo_camera_undistort(&vo->cfg.camera, vo->pts, vo->x1, vo->ok1, vo->n) != TVO_OK)
+        return 0;
     tvo_rotvec_to_rot(v, R);
     for (int32_t i = 0; i < vo->n; ++i) {
         const double x = vo->x1[i].x, y = vo->x1[i].y;

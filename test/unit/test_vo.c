@@ -424,7 +424,7 @@ static void run_fast_yaw(int predict, int frames, int *posed, double *max_err)
     tvo_pose prev = tvo_pose_identity();
     assert_non_null(px);
     tvo_vo_config_default(&cfg, &cam);
-    assert_int_equal(cfg.track_prediction, 1);
+    assert_int_equal(cfg.track_prediction, 0);
     cfg.lk.max_level = 0;
     cfg.track_prediction = predict;
     mem = malloc(tvo_vo_required_size(&cfg));

@@ -95,7 +95,9 @@ typedef struct tvo_vo_config {
     int32_t track_prediction;   /* 1: LK starts each track where the previous frame's rotation (scaled to
                                    this frame's interval; constant angular velocity, points at infinity)
                                    moves it, when the previous frame had a pose and the intervals are
-                                   within 2x; 0: at its previous position; default 1 */
+                                   within 2x; 0: at its previous position. For cameras whose frames move
+                                   further than LK reaches (low frame rates, vehicles, fast pans);
+                                   default 0 (docs/geometry.md, "Track prediction") */
     tvo_clock_fn clock;         /* optional (NULL: no timings) */
     void *clock_user;
 } tvo_vo_config;
