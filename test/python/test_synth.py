@@ -254,6 +254,11 @@ def test_bad_arguments(tmp_path):
         synth.main(["--out", str(tmp_path), "--frames", "0"])
     with pytest.raises(SystemExit):
         synth.main(["--out", str(tmp_path), "--noise", "-1"])
+    for rate in ("0", "-5", "nan", "inf", "5000"):
+        with pytest.raises(SystemExit):
+            synth.main(["--out", str(tmp_path), "--rate", rate])
+    with pytest.raises(SystemExit):
+        synth.main(["--out", str(tmp_path), "--camera", "nope"])
     sc = room_scene()
     with pytest.raises(ValueError):
         synth.Renderer(sc, CAM).render(look_pose([10.0, 0, 1], 0))  # outside the room
