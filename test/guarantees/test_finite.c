@@ -35,6 +35,8 @@ static int runner_open(runner *r, int32_t w, int32_t h)
     r->w = w;
     r->h = h;
     tvo_vo_config_default(&cfg, &cam);
+    static int opened = 0;
+    cfg.track_prediction = opened++ & 1; /* every other VO opened with the track prediction on */
     while (cfg.lk.max_level >= 0 && (need = tvo_vo_required_size(&cfg)) == 0)
         cfg.lk.max_level--;
     if (need == 0)
