@@ -149,6 +149,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
     }
     tvo_vo_config_default(&cfg, &cam);
+    cfg.track_prediction = (hdr[0] / 81) & 1; /* hdr[0]'s bits above the width's */
     cfg.max_tracks = 16 + hdr[4];
     cfg.min_tracks = cfg.max_tracks * 2 / 3;
     cfg.min_pose_tracks = 8 + hdr[4] % 23;
