@@ -233,9 +233,10 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg, void *mem, size_t
     for (int i = 0; i < 4; ++i) {
         tvo_point2d c;
         if (tvo_camera_undistort_point(&cfg->camera, (i & 1) ? cfg->camera.width - 1 : 0,
-                                       (i & 2) ? cfg->camera.height - 1 : 0, &c) == TVO_OK &&
-            1.21 * (c.x * c.x + c.y * c.y) > vo->r2_max)
-            vo->r2_max = 1.21 * (c.x * c.x + c.y * c.y);
+                                       (i & 2) ? cfg->camera.height - 1 : 0, &c) == TVO_OK) {
+            const double r2 = 1.21 * (c.x * c.x + c.y * c.y); /* (1.1 x the corner's radius)^2 */
+            vo->r2_max = r2 > vo->r2_max ? r2 : vo->r2_max;
+        }
     }
     vo->scratch_size = scratch_need(cfg);
     vo->scratch = tvo_arena_alloc(&a, vo->scratch_size);
@@ -567,6 +568,7 @@ static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
         vo->pts[m] = vo->pts[i];
         vo->next[m] = vo->next[i];
         vo->x1[m] = vo->x1[i];
+        vo->ok1[m] = vo->ok1[i]; /* with keep == ok1 too: ok1[i] is read before any ok1[m <= i] is written */
         vo->x2[m] = vo->x2[i];
         vo->x0[m] = vo->x0[i];
         vo->has0[m] = vo->has0[i];
@@ -579,8 +581,9 @@ static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
 
 /* LK's initial guesses (cfg.track_prediction): each track moved by the last frame's rotation, scaled to
  * this frame's interval (constant angular velocity; points at infinity, so no depth is needed), in
- * vo->next; a track whose prediction leaves the camera's domain keeps its position as guess. 0 when no
- * prediction applies (no last rotation, or an interval outside [1/2, 2] x the last one). */
+ * vo->next; a track whose prediction leaves the camera's domain keeps its position as guess. The tracks'
+ * undistorted positions stay in x1 / ok1 (step 2 of tvo_vo_process uses them). 0 when no prediction
+ * applies (no last rotation, or an interval outside [1/2, 2] x the last one). */
 static int predict_tracks(tvo_vo *vo, int64_t dt)
 {
     double v[3], R[9], ratio;
@@ -624,6 +627,7 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
     const int32_t w = vo != NULL ? vo->cfg.camera.width : 0, h = vo != NULL ? vo->cfg.camera.height : 0;
     int32_t m, pose0_next = 0; /* whether this frame's pose is a unit translation for the next rel_scale */
     int32_t pred_next = 0;     /* whether this frame's rotation predicts the next frame's tracks */
+    int predicted = 0;         /* whether LK started from predicted positions (x1 / ok1 then hold pts') */
     int kf = KF_NONE;          /* what the keyframe rotation did this frame */
     double kpar = 0.0;         /* its parallax */
     if (res == NULL)
@@ -666,7 +670,8 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
     t1 = now_ns(vo);
     {
         tvo_lk_config lkc = vo->cfg.lk;
-        if (predict_tracks(vo, res->dt_ns))
+        predicted = predict_tracks(vo, res->dt_ns);
+        if (predicted)
             lkc.use_initial_flow = 1;
         st = tvo_lk_track(&lkc, pp, pc, vo->pts, vo->next, vo->st, NULL, vo->n, vo->scratch, vo->scratch_size);
     }
@@ -684,7 +689,8 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
     /* 2. undistort both ends to normalised coordinates */
     t1 = now_ns(vo);
     if (m > 0) {
-        tvo_camera_undistort(&vo->cfg.camera, vo->pts, vo->x1, vo->ok1, m);
+        if (!predicted) /* else x1 / ok1 are the prediction's, compacted with the tracks */
+            tvo_camera_undistort(&vo->cfg.camera, vo->pts, vo->x1, vo->ok1, m);
         tvo_camera_undistort(&vo->cfg.camera, vo->next, vo->x2, vo->ok2, m);
         for (int32_t i = 0; i < m; ++i)
             vo->ok1[i] = (uint8_t)(vo->ok1[i] && vo->ok2[i]);
