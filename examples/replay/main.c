@@ -79,6 +79,17 @@ static void usage(FILE *f)
             "  --print-memory       print the VO working-memory size for the sequence and exit\n");
 }
 
+/* A 0|1 switch's value into *out; -1 with a message naming the option otherwise. */
+static int parse_switch(const char *opt, const char *v, int *out)
+{
+    if (strcmp(v, "0") != 0 && strcmp(v, "1") != 0) {
+        fprintf(stderr, "tvo_replay: %s must be 0 or 1 (got '%s')\n", opt, v);
+        return -1;
+    }
+    *out = v[0] - '0';
+    return 0;
+}
+
 static int parse_args(int argc, char **argv, options *o)
 {
     memset(o, 0, sizeof(*o));
@@ -170,22 +181,10 @@ static int parse_args(int argc, char **argv, options *o)
                 fprintf(stderr, "tvo_replay: --max-frames needs a non-negative integer (got '%s')\n", v);
                 return -1;
             }
-        } else if (!strcmp(a, "--keyframe")) {
+        } else if (!strcmp(a, "--keyframe") || !strcmp(a, "--track-prediction")) {
             NEED_VALUE();
-            if (!strcmp(v, "0") || !strcmp(v, "1"))
-                o->keyframe = v[0] - '0';
-            else {
-                fprintf(stderr, "tvo_replay: --keyframe must be 0 or 1 (got '%s')\n", v);
+            if (parse_switch(a, v, !strcmp(a, "--keyframe") ? &o->keyframe : &o->track_prediction) != 0)
                 return -1;
-            }
-        } else if (!strcmp(a, "--track-prediction")) {
-            NEED_VALUE();
-            if (!strcmp(v, "0") || !strcmp(v, "1"))
-                o->track_prediction = v[0] - '0';
-            else {
-                fprintf(stderr, "tvo_replay: --track-prediction must be 0 or 1 (got '%s')\n", v);
-                return -1;
-            }
         } else if (!strcmp(a, "--strict")) {
             o->strict = 1;
         } else if (!strcmp(a, "--quiet")) {
