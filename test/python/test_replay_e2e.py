@@ -86,6 +86,11 @@ def test_replay_scale_propagate(replayed, tmp_path):
         r = subprocess.run([str(REPLAY), "--euroc", str(seq), "--out", str(tmp_path / "x.txt"), *bad],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         assert r.returncode != 0, bad
+    for opt in ("--keyframe", "--track-prediction"):  # 0|1 switches: anything else is refused by name
+        for v in ("2", "x", ""):
+            r = subprocess.run([str(REPLAY), "--euroc", str(seq), "--out", str(tmp_path / "x.txt"), opt, v],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            assert r.returncode == 2 and f"{opt} must be 0 or 1" in r.stderr, (opt, v, r.stderr)
 
 
 def test_bench_alternating_runs(replayed, tmp_path):
