@@ -209,19 +209,15 @@ static void test_fb_check_with_guess(void **state)
         assert_int_equal(tvo_pyramid_build(&F.pb, &ib), TVO_OK);
     }
     F.cfg.use_initial_flow = 1;
-    for (int i = 0; i < 2; ++i)
-        q1[i] = (tvo_point2f){ q0[i].x + 9.0f, q0[i].y - 4.0f };
-    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, q0, q1, st, NULL, 2, F.scratch, sizeof(F.scratch)),
-                     TVO_OK);
-    assert_int_equal(st[0], TVO_LK_LOST);
-    assert_int_equal(st[1], TVO_LK_TRACKED);
-    F.cfg.fb_check = 0; /* the forward track alone is accepted: the check is what rejects it */
-    for (int i = 0; i < 2; ++i)
-        q1[i] = (tvo_point2f){ q0[i].x + 9.0f, q0[i].y - 4.0f };
-    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, q0, q1, st, NULL, 2, F.scratch, sizeof(F.scratch)),
-                     TVO_OK);
-    assert_int_equal(st[0], TVO_LK_TRACKED);
-    assert_int_equal(st[1], TVO_LK_TRACKED);
+    for (int check = 1; check >= 0; --check) { /* without the check the occluded point is accepted */
+        F.cfg.fb_check = check;
+        for (int i = 0; i < 2; ++i)
+            q1[i] = (tvo_point2f){ q0[i].x + 9.0f, q0[i].y - 4.0f };
+        assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, q0, q1, st, NULL, 2, F.scratch, sizeof(F.scratch)),
+                         TVO_OK);
+        assert_int_equal(st[0], check ? TVO_LK_LOST : TVO_LK_TRACKED);
+        assert_int_equal(st[1], TVO_LK_TRACKED);
+    }
 }
 
 static void test_points_outside_and_at_borders(void **state)
