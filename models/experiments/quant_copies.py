@@ -36,6 +36,7 @@ import numpy as np
 from tinyvo_tools import nnfmt, quant, train
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from quant_domain import clipped, seed_summary  # noqa: E402
 from quant_pact import judge_heldout, record_choice  # noqa: E402
 from relscale_experiments import seq_data  # noqa: E402
 
@@ -55,10 +56,7 @@ def run_seed(args):
         seqd = seq_data(a.features, a.seq_root, h)
         base = train.train(f[rest], t[rest], {nnfmt.DOF_LOG_STEP: "relu"}, epochs=40, joint_epochs=10,
                            lr=1e-3, seed=seed, dofs=[nnfmt.DOF_LOG_STEP], progress=False, input_clip=a.domain)
-        if a.clip == "layer":
-            br = train.pact_finetune(base, f[rest], t[rest], epochs=0, seed=seed, progress=False)
-        else:
-            br = [quant.clip_relu_channels(b, f[rest]) for b in base]
+        br = clipped(base, f[rest], t[rest], a.clip, seed)
         for c in CANDIDATES:
             key = ",".join(map(str, c))
             j = judge_heldout(br, f[rest], f[ho], step[ho], seqd, os.path.join(a.out, f"{h}.s{seed}.c{key}"),
@@ -90,10 +88,7 @@ def main():
     for c in CANDIDATES:
         key = ",".join(map(str, c))
         per = [runs[s][key] for s in SEEDS]
-        gap = [100 * np.sqrt(np.average([r["sq"] for r in p], weights=[r["w"] for r in p])) / a.std for p in per]
-        af = [np.mean([r["ate_f"] for r in p]) for p in per]
-        aq = [np.mean([r["ate_q"] for r in p]) for p in per]
-        seqq = np.mean([[r["ate_q"] for r in p] for p in per], axis=0)
+        gap, _, af, aq, seqq = seed_summary(per, a.std)
         res[key] = dict(gap=float(np.mean(gap)), gap_seeds=[float(g) for g in gap], ate_f=float(np.mean(af)),
                         ate_q=float(np.mean(aq)), ate_q_seeds=[float(v) for v in aq],
                         ate_q_seq=[float(v) for v in seqq], macs=int(per[0][0]["macs"]), runs=per)

@@ -52,6 +52,25 @@ CLIPS = ["layer", "channel"]      # relu clip at the training maximum of each la
 REFERENCE = (0.5, "layer")
 
 
+def clipped(base, f, t, clip, seed):
+    """The relu clip of this script (and quant_copies.py): at the training maximum of each layer ("layer",
+    pact_finetune with 0 epochs) or of each channel ("channel", clip_relu_channels), on the rows f, t."""
+    if clip == "layer":
+        return train.pact_finetune(base, f, t, epochs=0, seed=seed, progress=False)
+    return [quant.clip_relu_channels(b, f) for b in base]
+
+
+def seed_summary(per, std):
+    """per: for each seed, the judge_heldout dicts of the held-out sequences. -> pooled gap % (of std),
+    held-out step RMSE, mean ATE float, mean ATE int8 per seed, and the seed-mean int8 ATE per sequence."""
+    gap = [100 * np.sqrt(np.average([r["sq"] for r in p], weights=[r["w"] for r in p])) / std for p in per]
+    rmse = [np.sqrt(np.average([r["se"] for r in p], weights=[r["w"] for r in p])) for p in per]
+    af = [np.mean([r["ate_f"] for r in p]) for p in per]
+    aq = [np.mean([r["ate_q"] for r in p]) for p in per]
+    seqq = np.mean([[r["ate_q"] for r in p] for p in per], axis=0)
+    return gap, rmse, af, aq, seqq
+
+
 def run_seed(args):
     """All (domain, clip) configurations for one seed: per held-out sequence the squared gap, rows, squared
     step error, ATE float / int8."""
@@ -66,10 +85,7 @@ def run_seed(args):
             base = train.train(f[rest], t[rest], {nnfmt.DOF_LOG_STEP: "relu"}, epochs=40, joint_epochs=10,
                                lr=1e-3, seed=seed, dofs=[nnfmt.DOF_LOG_STEP], progress=False, input_clip=dom)
             for clip in CLIPS:
-                if clip == "layer":
-                    br = train.pact_finetune(base, f[rest], t[rest], epochs=0, seed=seed, progress=False)
-                else:
-                    br = [quant.clip_relu_channels(b, f[rest]) for b in base]
+                br = clipped(base, f[rest], t[rest], clip, seed)
                 j = judge_heldout(br, f[rest], f[ho], step[ho], seqd, os.path.join(a.out, f"{h}.s{seed}.d{dom}.{clip}"))
                 out.setdefault(f"{dom}/{clip}", []).append(dict(seq=h, **j))
                 print(f"seed {seed} {h} domain {dom} % {clip} clip: gap {100 * np.sqrt(j['sq']) / a.std:.2f} %,"
@@ -95,11 +111,7 @@ def main():
         for clip in CLIPS:
             key = f"{dom}/{clip}"
             per = [runs[s][key] for s in SEEDS]
-            gap = [100 * np.sqrt(np.average([r["sq"] for r in p], weights=[r["w"] for r in p])) / a.std for p in per]
-            rmse = [np.sqrt(np.average([r["se"] for r in p], weights=[r["w"] for r in p])) for p in per]
-            af = [np.mean([r["ate_f"] for r in p]) for p in per]
-            aq = [np.mean([r["ate_q"] for r in p]) for p in per]
-            seqq = np.mean([[r["ate_q"] for r in p] for p in per], axis=0)
+            gap, rmse, af, aq, seqq = seed_summary(per, a.std)
             res[key] = dict(gap=float(np.mean(gap)), gap_seeds=[float(g) for g in gap], rmse=float(np.mean(rmse)),
                             ate_f=float(np.mean(af)), ate_q=float(np.mean(aq)), ate_q_seeds=[float(v) for v in aq],
                             ate_q_seq=[float(v) for v in seqq], runs=per)
