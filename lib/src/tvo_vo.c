@@ -8,6 +8,7 @@
 #include "tinyvo/dmath.h"
 #include "tinyvo/linalg.h"
 #include "tinyvo/pyramid.h"
+#include "tvo_map.h"
 
 struct tvo_vo {
     tvo_vo_config cfg;
@@ -48,6 +49,16 @@ struct tvo_vo {
     int64_t dt_pred;
     int32_t has_pred;
     double r2_max;
+    /* track identity (tvo_vo_tracks) and the local map's per-track state (tvo_map.h): landmark, the
+       keyframe and position a track waits in for its triangulation, its map inlier flag */
+    uint32_t *id;             /* [max_tracks] */
+    int32_t *age;             /* [max_tracks] */
+    int32_t *lm, *tri_kf;     /* [max_tracks] */
+    tvo_point2d *tri_x;       /* [max_tracks] */
+    uint8_t *minl;            /* [max_tracks] */
+    uint32_t next_id;
+    tvo_map map;
+    tvo_pose T_c_w;           /* the last frame's pose in the VO's world (world -> camera) */
     void *scratch;
     size_t scratch_size;
 };
@@ -103,6 +114,16 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->keyframe_max_rot_deg = 10.0;
     cfg->keyframe_translation = 1;
     cfg->track_prediction = 0; /* on: larger motion per frame tracked, but the EuRoC renders got worse */
+    cfg->map = 1;
+    cfg->map_window = 6;
+    cfg->map_max_landmarks = 2 * cfg->max_tracks;
+    cfg->map_min_points = 20;
+    cfg->map_init_parallax_deg = 1.0;
+    cfg->map_tri_parallax_deg = 0.5;
+    cfg->map_kf_baseline = 0.1;
+    cfg->map_kf_points_ratio = 0.6;
+    cfg->map_kf_max_frames = 30;
+    cfg->map_ba_iterations = 5;
     cfg->clock = NULL;
     cfg->clock_user = NULL;
 }
@@ -139,6 +160,23 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (cfg->lk.max_level < 0 || cfg->lk.max_level + 1 > TVO_MAX_PYR_LEVELS)
         return 0;
+    if (cfg->map != 0 && cfg->map != 1)
+        return 0;
+    if (cfg->map_window < 3 || cfg->map_window > TVO_VO_MAX_WINDOW)
+        return 0;
+    if (cfg->map_max_landmarks < 16 || cfg->map_max_landmarks > 100000)
+        return 0;
+    if (cfg->map_min_points < 6 || cfg->map_min_points > cfg->max_tracks)
+        return 0;
+    if (!(cfg->map_init_parallax_deg > 0.0 && cfg->map_init_parallax_deg <= 30.0) ||
+        !(cfg->map_tri_parallax_deg > 0.0 && cfg->map_tri_parallax_deg <= 30.0))
+        return 0;
+    if (!(cfg->map_kf_baseline > 0.0 && cfg->map_kf_baseline <= 10.0) ||
+        !(cfg->map_kf_points_ratio >= 0.0 && cfg->map_kf_points_ratio <= 1.0))
+        return 0;
+    if (cfg->map_kf_max_frames < 1 || cfg->map_kf_max_frames > 100000 || cfg->map_ba_iterations < 1 ||
+        cfg->map_ba_iterations > 100)
+        return 0;
     return 1;
 }
 
@@ -148,9 +186,11 @@ static size_t scratch_need(const tvo_vo_config *cfg)
     size_t b = tvo_lk_scratch_size(&cfg->lk);
     size_t c = tvo_relpose_scratch_size(cfg->max_tracks);
     size_t d = tvo_size_mul((size_t)cfg->max_tracks, sizeof(double)); /* depth ratios (rel_scale) */
+    size_t e = cfg->map ? tvo_map_scratch_size(cfg) : 0;
     size_t m = a > b ? a : b;
     m = m > c ? m : c;
-    return m > d ? m : d;
+    m = m > d ? m : d;
+    return m > e ? m : e;
 }
 
 /* Bytes tvo_vo_init() carves out of the caller's block, in the order it carves them. */
@@ -171,6 +211,11 @@ static size_t layout_size(const tvo_vo_config *cfg)
     s = tvo_size_add(s, tvo_arena_round(n));                                       /* has0 */
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))) * 3); /* xk kx1 kx2 */
     s = tvo_size_add(s, tvo_arena_round(n) * 2);                                   /* hask kmask */
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(int32_t))) * 4);   /* id age lm tri_kf */
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))));   /* tri_x */
+    s = tvo_size_add(s, tvo_arena_round(n));                                       /* minl */
+    if (cfg->map)
+        s = tvo_size_add(s, tvo_map_layout_size(cfg));
     s = tvo_size_add(s, tvo_arena_round(scratch_need(cfg)));
     return tvo_size_add(s, TVO_ARENA_ALIGN); /* slack for an unaligned block */
 }
@@ -229,6 +274,21 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg, void *mem, size_t
     vo->kx2 = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
     vo->hask = (uint8_t *)tvo_arena_alloc(&a, n);
     vo->kmask = (uint8_t *)tvo_arena_alloc(&a, n);
+    vo->id = (uint32_t *)tvo_arena_alloc(&a, n * sizeof(uint32_t));
+    vo->age = (int32_t *)tvo_arena_alloc(&a, n * sizeof(int32_t));
+    vo->lm = (int32_t *)tvo_arena_alloc(&a, n * sizeof(int32_t));
+    vo->tri_kf = (int32_t *)tvo_arena_alloc(&a, n * sizeof(int32_t));
+    vo->tri_x = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
+    vo->minl = (uint8_t *)tvo_arena_alloc(&a, n);
+    if (vo->id == NULL || vo->age == NULL || vo->lm == NULL || vo->tri_kf == NULL || vo->tri_x == NULL ||
+        vo->minl == NULL)
+        return TVO_ERR_NO_MEMORY;
+    if (cfg->map) {
+        tvo_status ms = tvo_map_init(&vo->map, cfg, &a);
+        if (ms != TVO_OK)
+            return ms;
+    }
+    vo->T_c_w = tvo_pose_identity();
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
     for (int i = 0; i < 4; ++i) {
         tvo_point2d c;
@@ -258,6 +318,11 @@ void tvo_vo_reset(tvo_vo *vo)
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
     vo->has_pose0 = 0;
     vo->has_kf = 0;
+    if (vo->cfg.map) {
+        if (vo->map.active)
+            vo->map.losses++;
+        tvo_map_clear(&vo->map);
+    }
     vo->has_pred = 0;
 }
 
@@ -271,6 +336,7 @@ static void result_clear(tvo_vo_result *res, tvo_vo_state state)
     memset(res, 0, sizeof(*res));
     res->state = state;
     res->T_prev_cur = tvo_pose_identity();
+    res->T_w_c = tvo_pose_identity();
 }
 
 /* Detect corners on pyramid level 0 of `pyr` with FAST threshold `threshold`, avoiding the n current
@@ -295,6 +361,11 @@ static int32_t detect_append(tvo_vo *vo, const tvo_pyramid *pyr, int32_t thresho
         vo->pts[vo->n + i].y = vo->corners[i].y;
         vo->has0[vo->n + i] = 0; /* a new track has no earlier position */
         vo->hask[vo->n + i] = 0; /* ...and none in the keyframe */
+        vo->id[vo->n + i] = vo->next_id++;
+        vo->age[vo->n + i] = 0;
+        vo->lm[vo->n + i] = -1;
+        vo->tri_kf[vo->n + i] = -1;
+        vo->minl[vo->n + i] = 0;
     }
     vo->n += got;
     return got;
@@ -574,6 +645,12 @@ static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
         vo->has0[m] = vo->has0[i];
         vo->xk[m] = vo->xk[i];
         vo->hask[m] = vo->hask[i];
+        vo->id[m] = vo->id[i];
+        vo->age[m] = vo->age[i];
+        vo->lm[m] = vo->lm[i];
+        vo->tri_kf[m] = vo->tri_kf[i];
+        vo->tri_x[m] = vo->tri_x[i];
+        vo->minl[m] = vo->minl[i];
         ++m;
     }
     return m;
@@ -619,6 +696,83 @@ static int predict_tracks(tvo_vo *vo, int64_t dt)
     return 1;
 }
 
+/* ---- local map ---------------------------------------------------------------------------------- */
+
+/* The pose the two-view chain gives this frame (world -> camera): the last pose moved by this frame's
+ * two-view step, its unit translation scaled to the map's last speed (unit steps without a map). */
+static tvo_pose chain_pose(const tvo_vo *vo, const tvo_vo_result *res)
+{
+    tvo_pose step = tvo_pose_identity();
+    if (res->state == TVO_VO_OK || res->state == TVO_VO_ROTATION_ONLY) {
+        double len = 0.0;
+        step = tvo_pose_inverse(&res->T_prev_cur); /* T_cur_prev */
+        /* before the first map the unit is one step per frame, and the first map's baseline continues
+           it (tvo_map.h) */
+        if (res->state == TVO_VO_OK)
+            len = vo->cfg.map && vo->map.speed > 0.0 ? vo->map.speed * (double)res->dt_ns * 1e-9 : 1.0;
+        if (!(len >= 0.0) || !isfinite(len))
+            len = 0.0;
+        for (int c = 0; c < 3; ++c)
+            step.t[c] *= len;
+    }
+    return tvo_pose_compose(&step, &vo->T_c_w);
+}
+
+static tvo_map_tracks map_tracks(tvo_vo *vo)
+{
+    tvo_map_tracks tr;
+    tr.n = vo->n;
+    tr.x = vo->x2;
+    tr.x_ok = vo->ok2;
+    tr.lm = vo->lm;
+    tr.tri_kf = vo->tri_kf;
+    tr.tri_x = vo->tri_x;
+    tr.inlier = vo->minl;
+    return tr;
+}
+
+/* The map's part of a frame, after the two-view step: vo->x2 holds the normalised positions of the
+ * vo->n carried tracks. R_cur_prev: this frame's two-view rotation, or NULL. Sets vo->T_c_w. */
+static void map_step(tvo_vo *vo, tvo_vo_result *res, int64_t t_ns, const double *R_cur_prev)
+{
+    const tvo_pose prior = chain_pose(vo, res);
+    tvo_map_tracks tr;
+    tvo_map_frame mf;
+    if (!vo->cfg.map) {
+        vo->T_c_w = prior;
+        res->map_state = TVO_MAP_OFF;
+        return;
+    }
+    memset(vo->ok2, 1, (size_t)vo->n);
+    tr = map_tracks(vo);
+    if (tvo_map_process(&vo->map, &vo->cfg, &tr, t_ns, R_cur_prev, &prior, vo->scratch, vo->scratch_size,
+                        &mf) != TVO_OK ||
+        !tvo_pose_is_finite(&mf.T_c_w)) {
+        mf.T_c_w = prior;
+        mf.state = TVO_MAP_LOST;
+    }
+    vo->T_c_w = mf.T_c_w;
+    res->map_state = mf.state;
+    res->keyframe = mf.keyframe;
+    res->map_points = mf.points;
+    res->map_new_points = mf.new_points;
+    res->ba_iterations = mf.ba_iterations;
+    res->ba_flags = mf.ba_flags;
+}
+
+/* Tracks from index `first` on were just detected: undistort them into x2 and let the map know. */
+static void map_new_tracks(tvo_vo *vo, int32_t first)
+{
+    tvo_map_tracks tr;
+    if (!vo->cfg.map || first >= vo->n)
+        return;
+    if (tvo_camera_undistort(&vo->cfg.camera, vo->pts + first, vo->x2 + first, vo->ok2 + first,
+                             vo->n - first) != TVO_OK)
+        memset(vo->ok2 + first, 0, (size_t)(vo->n - first));
+    tr = map_tracks(vo);
+    tvo_map_new_tracks(&vo->map, &tr, first);
+}
+
 tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_vo_result *res)
 {
     tvo_status st;
@@ -629,6 +783,8 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
     int32_t pred_next = 0;     /* whether this frame's rotation predicts the next frame's tracks */
     int predicted = 0;         /* whether LK started from predicted positions (x1 / ok1 then hold pts') */
     int kf = KF_NONE;          /* what the keyframe rotation did this frame */
+    double R2v[9];             /* this frame's two-view rotation (X_cur = R X_prev), valid when has_R2v */
+    int has_R2v = 0;
     double kpar = 0.0;         /* its parallax */
     if (res == NULL)
         return TVO_ERR_NULL;
@@ -656,8 +812,14 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
         vo->n = 0;
         res->state = TVO_VO_INITIALISING;
         t1 = now_ns(vo);
+        map_step(vo, res, t_ns, NULL);
+        res->stage_ns[TVO_STAGE_MAP] = now_ns(vo) - t1;
+        t1 = now_ns(vo);
         res->new_corners = redetect(vo, pc);
         res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
+        t1 = now_ns(vo);
+        map_new_tracks(vo, 0);
+        res->stage_ns[TVO_STAGE_MAP] += now_ns(vo) - t1;
         goto done;
     }
     {
@@ -683,6 +845,8 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
             vo->st[i] = 0;
     }
     m = compact(vo, vo->n, vo->st);
+    for (int32_t i = 0; i < m; ++i)
+        vo->age[i]++;
     res->tracked = m;
     res->stage_ns[TVO_STAGE_TRACK] = now_ns(vo) - t1;
 
@@ -777,6 +941,8 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
             memcpy(T_cur_prev.R, rp.R, sizeof(rp.R));
             memcpy(T_cur_prev.t, rp.t, sizeof(rp.t));
             memcpy(vo->R_pred, rp.R, sizeof(rp.R));
+            memcpy(R2v, rp.R, sizeof(rp.R));
+            has_R2v = 1;
             pred_next = 1;
             res->T_prev_cur = tvo_pose_inverse(&T_cur_prev);
             res->relpose_flags = rp.flags;
@@ -807,16 +973,28 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
                 res->rel_scale = TVO_VO_REL_SCALE_NONE;
                 pose0_next = 0;
                 pred_next = 0;
+                has_R2v = 0;
             }
         }
     }
     res->stage_ns[TVO_STAGE_POSE] = now_ns(vo) - t1;
 
-    /* 4. re-detect when tracks run low */
+    /* 4. the local map: the frame's pose in the world */
     t1 = now_ns(vo);
-    if (vo->n < vo->cfg.min_tracks)
-        res->new_corners = redetect(vo, pc);
-    res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
+    map_step(vo, res, t_ns, has_R2v ? R2v : NULL);
+    res->stage_ns[TVO_STAGE_MAP] = now_ns(vo) - t1;
+
+    /* 5. re-detect when tracks run low */
+    t1 = now_ns(vo);
+    {
+        const int32_t before = vo->n;
+        if (vo->n < vo->cfg.min_tracks)
+            res->new_corners = redetect(vo, pc);
+        res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
+        t1 = now_ns(vo);
+        map_new_tracks(vo, before);
+        res->stage_ns[TVO_STAGE_MAP] += now_ns(vo) - t1;
+    }
 
 done:
     if (vo->cfg.keyframe) {
@@ -842,11 +1020,38 @@ done:
     else if (vo->t_dir_age <= TVO_VO_PRIOR_FRAMES)
         vo->t_dir_age++;
     res->tracks = vo->n;
+    res->T_w_c = tvo_pose_inverse(&vo->T_c_w);
+    if (!tvo_pose_is_finite(&res->T_w_c)) { /* cannot happen: every pose taken is checked; never emit it */
+        vo->T_c_w = tvo_pose_identity();
+        res->T_w_c = vo->T_c_w;
+    }
+    if (vo->cfg.map) {
+        res->map_landmarks = vo->map.n_lm;
+        res->map_losses = vo->map.losses;
+    }
     vo->has_prev = 1;
     vo->t_prev = t_ns;
     vo->cur ^= 1;
     fill_features(res, res->features);
     res->stage_ns[TVO_STAGE_TOTAL] = now_ns(vo) - t0;
+    return TVO_OK;
+}
+
+tvo_status tvo_vo_tracks(const tvo_vo *vo, tvo_vo_track *out, int32_t capacity, int32_t *count)
+{
+    if (vo == NULL || count == NULL || (out == NULL && capacity > 0))
+        return TVO_ERR_NULL;
+    if (capacity < 0)
+        return TVO_ERR_ARG;
+    *count = vo->n;
+    for (int32_t i = 0; i < vo->n && i < capacity; ++i) {
+        out[i].x = vo->pts[i].x;
+        out[i].y = vo->pts[i].y;
+        out[i].id = vo->id[i];
+        out[i].age = vo->age[i];
+        out[i].landmark = (uint8_t)(vo->cfg.map && vo->lm[i] >= 0);
+        out[i].inlier = vo->cfg.map && vo->map.active ? vo->minl[i] : (uint8_t)(vo->age[i] > 0);
+    }
     return TVO_OK;
 }
 

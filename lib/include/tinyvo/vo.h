@@ -53,9 +53,27 @@ typedef enum tvo_vo_stage {
     TVO_STAGE_UNDISTORT = 2,
     TVO_STAGE_POSE = 3,
     TVO_STAGE_DETECT = 4,
-    TVO_STAGE_TOTAL = 5,
-    TVO_STAGE_COUNT = 6
+    TVO_STAGE_MAP = 5,         /* the local map: PnP, keyframes, triangulation, bundle adjustment */
+    TVO_STAGE_TOTAL = 6,
+    TVO_STAGE_COUNT = 7
 } tvo_vo_stage;
+
+/* What the local map (cfg.map) made of a frame. */
+typedef enum tvo_vo_map_state {
+    TVO_MAP_OFF = 0,           /* cfg.map = 0: T_w_c is the two-view chain with unit steps */
+    TVO_MAP_INITIALISING = 1,  /* no map yet (first frames, or after a loss): the map waits for a pair of
+                                  frames with enough parallax; T_w_c continues the two-view chain (its
+                                  rotation, and its translation direction times the last map's speed) */
+    TVO_MAP_INITIALISED = 2,   /* this frame and the waiting reference became the map's two first
+                                  keyframes; T_w_c is the new map's */
+    TVO_MAP_TRACKING = 3,      /* T_w_c from PnP on the map's landmarks (and the bundle adjustment when
+                                  the frame is a keyframe) */
+    TVO_MAP_LOST = 4,          /* tracking against the map failed in this frame (too few landmarks still
+                                  tracked, PnP refused, or a map rotation that disagrees with the frame's
+                                  two-view rotation): the map is dropped, T_w_c continues the two-view
+                                  chain, and a new map starts from this frame */
+    TVO_MAP_STATE_COUNT = 5
+} tvo_vo_map_state;
 
 /* A monotonic clock in nanoseconds, supplied by the port layer (lib has no OS access). */
 typedef int64_t (*tvo_clock_fn)(void *user);
@@ -98,6 +116,24 @@ typedef struct tvo_vo_config {
                                    within 2x; 0: at its previous position. For cameras whose frames move
                                    further than LK reaches (low frame rates, vehicles, fast pans);
                                    default 0 (docs/geometry.md, "Track prediction") */
+    /* local map (vo.h header comment, "The local map"): keyframes in a sliding window, landmarks
+       triangulated between them, every frame posed by PnP on the landmarks its tracks carry, and a
+       windowed bundle adjustment at each new keyframe */
+    int32_t map;                /* 1: on; 0: two-view only (the VO of earlier versions); default 1 */
+    int32_t map_window;         /* keyframes in the window, [3, TVO_VO_MAX_WINDOW]; default 6 */
+    int32_t map_max_landmarks;  /* landmark capacity, [16, 100000]; default 2 x max_tracks */
+    int32_t map_min_points;     /* a frame with fewer PnP inliers loses the map, [6, max_tracks]; default 20 */
+    double map_init_parallax_deg; /* the initial pair needs this median parallax, (0, 30]; default 1 */
+    double map_tri_parallax_deg;  /* a track is triangulated when its rays are this far apart, (0, 30];
+                                   default 1 */
+    double map_kf_baseline;     /* a new keyframe when the camera moved more than this x the median depth
+                                   of its landmarks since the last keyframe, (0, 10]; default 0.1 */
+    double map_kf_points_ratio; /* ...or when fewer than this share of the last keyframe's landmarks
+                                   remain inliers, [0, 1]; default 0.6 */
+    int32_t map_kf_max_frames;  /* ...or after this many frames, [1, 100000]; default 30 (and after
+                                   keyframe_max_rot_deg of rotation) */
+    int32_t map_ba_iterations;  /* Levenberg-Marquardt iterations of the bundle adjustment, [1, 100];
+                                   default 5 */
     tvo_clock_fn clock;         /* optional (NULL: no timings) */
     void *clock_user;
 } tvo_vo_config;
@@ -131,8 +167,33 @@ typedef struct tvo_vo_result {
     int32_t rel_scale_points;  /* tracks the median used (may be > 0 with rel_scale 0: too few of them) */
     int32_t keyframe_age;      /* > 0: the rotation is the keyframe rotation, K being this many frames back;
                                   0: frame-to-frame */
+    /* the pose in the VO's world: the camera of the first frame after init is the origin; the unit of
+       length is the first map's initial baseline, and it holds for the whole run (see map_state for
+       where the pose comes from). Always finite. */
+    tvo_pose T_w_c;
+    tvo_vo_map_state map_state;
+    int32_t keyframe;          /* 1 when this frame became a map keyframe */
+    int32_t map_points;        /* landmarks (PnP inliers) this frame's pose used */
+    int32_t map_new_points;    /* landmarks triangulated in this frame */
+    int32_t map_landmarks;     /* landmarks in the map after this frame */
+    int32_t map_losses;        /* map losses since init (TVO_MAP_LOST frames) */
+    int32_t ba_iterations;     /* bundle adjustment iterations in this frame (0: none ran) */
+    int32_t ba_flags;          /* its TVO_BA_FLAG_* (ba.h) */
     int64_t stage_ns[TVO_STAGE_COUNT];
 } tvo_vo_result;
+
+/* Largest map window (keyframes). */
+#define TVO_VO_MAX_WINDOW 16
+
+/* A track as the VO holds it after a frame (tvo_vo_tracks). */
+typedef struct tvo_vo_track {
+    float x, y;                /* position in the last frame, pixels of the raw (distorted) image */
+    uint32_t id;               /* unique per track while the VO lives (wraps after 2^32 tracks) */
+    int32_t age;               /* frames it has been tracked through (0: detected in the last frame) */
+    uint8_t inlier;            /* 1: it supported the last frame's pose (map inlier when the map tracked
+                                  the frame, else an inlier of the two-view pose) */
+    uint8_t landmark;          /* 1: it carries a map landmark */
+} tvo_vo_track;
 
 typedef struct tvo_vo tvo_vo;
 
@@ -148,8 +209,13 @@ tvo_status tvo_vo_init(tvo_vo **vo, const tvo_vo_config *cfg, void *mem, size_t 
  * res->T_prev_cur is always finite. */
 tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_vo_result *res);
 
-/* Forget the tracks: the next frame initialises again (after a gap, a bad frame, ...). */
+/* Forget the tracks: the next frame initialises again (after a gap, a bad frame, ...). The map is
+ * dropped too (counted as a loss when it was tracking); T_w_c continues from the last pose. */
 void tvo_vo_reset(tvo_vo *vo);
+
+/* Read-only view of the current tracks (for drawing or logging): copies min(count, capacity) of them into
+ * out and writes the number the VO holds into *count. TVO_ERR_NULL; out may be NULL with capacity 0. */
+tvo_status tvo_vo_tracks(const tvo_vo *vo, tvo_vo_track *out, int32_t capacity, int32_t *count);
 
 /* The per-DoF networks' refinement of a frame's raw step: *step = res->T_prev_cur with its translation
  * (metres) replaced by the model's tx ty tz when the model provides all three, or by the model's step

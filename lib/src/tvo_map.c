@@ -1,0 +1,928 @@
+/* tinyvo: the VO's local map. See tvo_map.h for the design and vo.h for the configuration. */
+#include "tvo_map.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "tinyvo/dmath.h"
+#include "tinyvo/linalg.h"
+
+#define TVO_MAP_PI 3.14159265358979323846
+
+/* ---- tuning constants (the user-facing ones are in tvo_vo_config; these are fixed) -------------- */
+
+/* A triangulated point must reproject within this many pixels in both of its keyframes. */
+#define TVO_MAP_TRI_MAX_ERR_PX 2.0
+/* ...and lie at least this far in front of both cameras, in units of the baseline between them. */
+#define TVO_MAP_TRI_MIN_DEPTH 1e-3
+/* ...and at most this far (a point beyond it is as good as at infinity: its parallax is noise). */
+#define TVO_MAP_TRI_MAX_DEPTH 1e4
+/* After a bundle adjustment, observations with a larger reprojection error are removed. */
+#define TVO_MAP_BA_MAX_ERR_PX 2.5
+/* PnP inlier threshold, in pixels. */
+#define TVO_MAP_PNP_THRESHOLD_PX 2.0
+/* The initial pair needs this many triangulated landmarks, and this share of the reference's tracks
+ * still tracked; a reference older than TVO_MAP_REF_MAX_FRAMES frames without success is renewed. */
+#define TVO_MAP_INIT_MIN_POINTS 40
+#define TVO_MAP_REF_MAX_FRAMES 60
+/* The initial pair is refused when its rotation is further than max(10 x its parallax, this) from its
+ * own rotation-only model (a wrong epipolar minimum). */
+#define TVO_MAP_INIT_ROT_CHECK_DEG 3.0
+/* A frame pose from the map further than this from the two-view rotation of the frame (when there is
+ * one) is not trusted: the map is dropped (a wrong PnP minimum on few points). */
+#define TVO_MAP_ROT_CHECK_DEG 5.0
+
+/* ---- small vector helpers ----------------------------------------------------------------------- */
+
+static double dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static double deg2rad(double d)
+{
+    return d * (TVO_MAP_PI / 180.0);
+}
+
+/* camera centre of T_c_w: C = -R^T t */
+static void centre(const tvo_pose *T, double C[3])
+{
+    tvo_la_mat3_tvec(T->R, T->t, C);
+    C[0] = -C[0];
+    C[1] = -C[1];
+    C[2] = -C[2];
+}
+
+static double focal(const tvo_vo_config *cfg)
+{
+    return 0.5 * (cfg->camera.fx + cfg->camera.fy);
+}
+
+/* ---- layout ------------------------------------------------------------------------------------- */
+
+size_t tvo_map_layout_size(const tvo_vo_config *cfg)
+{
+    const size_t w = (size_t)cfg->map_window, n = (size_t)cfg->max_tracks, l = (size_t)cfg->map_max_landmarks;
+    size_t s = tvo_arena_round(tvo_size_mul(w, sizeof(tvo_map_kf)));
+    s = tvo_size_add(s, tvo_size_mul(w, tvo_arena_round(tvo_size_mul(n, sizeof(int32_t)))));
+    s = tvo_size_add(s, tvo_size_mul(w, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d)))));
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(l, sizeof(tvo_map_lm))));
+    return s;
+}
+
+/* The per-call scratch of each phase (they never overlap in time). */
+static size_t init_scratch(const tvo_vo_config *cfg)
+{
+    const size_t n = (size_t)cfg->max_tracks;
+    size_t s = tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))) * 2;
+    s = tvo_size_add(s, tvo_arena_round(n));
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(int32_t))));
+    return tvo_size_add(s, tvo_arena_round(tvo_relpose_scratch_size(cfg->max_tracks)));
+}
+
+static size_t track_scratch(const tvo_vo_config *cfg)
+{
+    const size_t n = (size_t)cfg->max_tracks;
+    size_t s = tvo_arena_round(tvo_size_mul(n, 3 * sizeof(double)));
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))));
+    s = tvo_size_add(s, tvo_arena_round(n));
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(int32_t))));
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(double))));
+    return tvo_size_add(s, tvo_arena_round(tvo_pnp_scratch_size(cfg->max_tracks)));
+}
+
+static void ba_config(const tvo_vo_config *cfg, tvo_ba_config *bc)
+{
+    tvo_ba_config_default(bc);
+    bc->max_iterations = cfg->map_ba_iterations;
+    bc->huber = TVO_MAP_BA_MAX_ERR_PX / focal(cfg);
+    bc->max_poses = cfg->map_window;
+    bc->max_points = cfg->map_max_landmarks;
+    bc->max_obs = cfg->map_window * cfg->max_tracks;
+}
+
+static size_t kf_scratch(const tvo_vo_config *cfg)
+{
+    const size_t w = (size_t)cfg->map_window, l = (size_t)cfg->map_max_landmarks;
+    const size_t o = tvo_size_mul(w, (size_t)cfg->max_tracks);
+    tvo_ba_config bc;
+    size_t s;
+    ba_config(cfg, &bc);
+    s = tvo_arena_round(tvo_size_mul(w, sizeof(tvo_pose)));
+    s = tvo_size_add(s, tvo_arena_round(w));
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(l, 3 * sizeof(double))));
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(l, sizeof(int32_t))) * 2);
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(o, sizeof(tvo_ba_obs))));
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(o, sizeof(double))));
+    return tvo_size_add(s, tvo_arena_round(tvo_ba_scratch_size(&bc)));
+}
+
+size_t tvo_map_scratch_size(const tvo_vo_config *cfg)
+{
+    size_t a = init_scratch(cfg), b = track_scratch(cfg), c = kf_scratch(cfg);
+    size_t m = a > b ? a : b;
+    return tvo_size_add(m > c ? m : c, TVO_ARENA_ALIGN);
+}
+
+tvo_status tvo_map_init(tvo_map *m, const tvo_vo_config *cfg, tvo_arena *a)
+{
+    memset(m, 0, sizeof(*m));
+    m->window = cfg->map_window;
+    m->max_tracks = cfg->max_tracks;
+    m->max_lm = cfg->map_max_landmarks;
+    m->kf = (tvo_map_kf *)tvo_arena_alloc(a, (size_t)m->window * sizeof(tvo_map_kf));
+    if (m->kf == NULL)
+        return TVO_ERR_NO_MEMORY;
+    for (int32_t i = 0; i < m->window; ++i) {
+        m->kf[i].obs_lm = (int32_t *)tvo_arena_alloc(a, (size_t)m->max_tracks * sizeof(int32_t));
+        if (m->kf[i].obs_lm == NULL)
+            return TVO_ERR_NO_MEMORY;
+    }
+    for (int32_t i = 0; i < m->window; ++i) {
+        m->kf[i].obs_x = (tvo_point2d *)tvo_arena_alloc(a, (size_t)m->max_tracks * sizeof(tvo_point2d));
+        if (m->kf[i].obs_x == NULL)
+            return TVO_ERR_NO_MEMORY;
+    }
+    m->lm = (tvo_map_lm *)tvo_arena_alloc(a, (size_t)m->max_lm * sizeof(tvo_map_lm));
+    if (m->lm == NULL)
+        return TVO_ERR_NO_MEMORY;
+    tvo_map_clear(m);
+    m->next_kf_id = 0;
+    m->speed = 0.0;
+    m->losses = 0;
+    return TVO_OK;
+}
+
+void tvo_map_clear(tvo_map *m)
+{
+    m->n_kf = 0;
+    m->kf_head = 0;
+    m->n_lm = 0;
+    m->active = 0;
+    m->has_ref = 0;
+    m->has_vel = 0;
+    m->kf_points = 0;
+    m->frames_since_kf = 0;
+    m->cur_kf_id = -1;
+    m->lm_cursor = 0;
+    for (int32_t i = 0; i < m->max_lm; ++i) {
+        m->lm[i].alive = 0;
+        m->lm[i].tracked = 0;
+        m->lm[i].n_obs = 0;
+    }
+}
+
+/* ---- keyframes and landmarks -------------------------------------------------------------------- */
+
+/* the i-th keyframe of the window, oldest first */
+static tvo_map_kf *kf_at(tvo_map *m, int32_t i)
+{
+    return &m->kf[(m->kf_head + i) % m->window];
+}
+
+static tvo_map_kf *kf_by_id(tvo_map *m, int32_t id)
+{
+    for (int32_t i = 0; i < m->n_kf; ++i) {
+        tvo_map_kf *k = kf_at(m, i);
+        if (k->id == id)
+            return k;
+    }
+    return NULL;
+}
+
+static void lm_free(tvo_map *m, int32_t j)
+{
+    if (m->lm[j].alive) {
+        m->lm[j].alive = 0;
+        m->n_lm--;
+    }
+}
+
+/* A free landmark slot, or -1 when the map is full. */
+static int32_t lm_alloc(tvo_map *m)
+{
+    for (int32_t k = 0; k < m->max_lm; ++k) {
+        const int32_t j = (m->lm_cursor + k) % m->max_lm;
+        if (!m->lm[j].alive) {
+            m->lm_cursor = (j + 1) % m->max_lm;
+            m->lm[j].alive = 1;
+            m->lm[j].n_obs = 0;
+            m->lm[j].tracked = 0;
+            m->n_lm++;
+            return j;
+        }
+    }
+    return -1;
+}
+
+static int kf_add_obs(tvo_map *m, tvo_map_kf *k, int32_t j, tvo_point2d x)
+{
+    if (k->n_obs >= m->max_tracks)
+        return 0;
+    k->obs_lm[k->n_obs] = j;
+    k->obs_x[k->n_obs] = x;
+    k->n_obs++;
+    m->lm[j].n_obs++;
+    return 1;
+}
+
+/* Drop the oldest keyframe of the window: its observations go, and landmarks nobody observes or tracks
+ * any more are freed. */
+static void kf_drop_oldest(tvo_map *m)
+{
+    tvo_map_kf *k = kf_at(m, 0);
+    for (int32_t o = 0; o < k->n_obs; ++o) {
+        const int32_t j = k->obs_lm[o];
+        m->lm[j].n_obs--;
+        if (m->lm[j].n_obs <= 0 && !m->lm[j].tracked)
+            lm_free(m, j);
+    }
+    k->n_obs = 0;
+    m->kf_head = (m->kf_head + 1) % m->window;
+    m->n_kf--;
+}
+
+static tvo_map_kf *kf_push(tvo_map *m, const tvo_pose *T_c_w, int64_t t_ns)
+{
+    tvo_map_kf *k;
+    if (m->n_kf == m->window)
+        kf_drop_oldest(m);
+    k = &m->kf[(m->kf_head + m->n_kf) % m->window];
+    m->n_kf++;
+    k->id = m->next_kf_id++;
+    if (m->next_kf_id < 0) /* wrapped after 2^31 keyframes: ids only need to differ within the window */
+        m->next_kf_id = 0;
+    k->t_ns = t_ns;
+    k->T_c_w = *T_c_w;
+    k->n_obs = 0;
+    return k;
+}
+
+/* Mark the landmarks the tracks carry. */
+static void mark_tracked(tvo_map *m, const tvo_map_tracks *tr)
+{
+    for (int32_t j = 0; j < m->max_lm; ++j)
+        m->lm[j].tracked = 0;
+    for (int32_t i = 0; i < tr->n; ++i)
+        if (tr->lm[i] >= 0)
+            m->lm[tr->lm[i]].tracked = 1;
+}
+
+/* The map's speed over its window (units per second), when the window spans time and distance. */
+static void update_speed(tvo_map *m)
+{
+    const tvo_map_kf *a, *b;
+    double ca[3], cb[3], d[3], dist, dt;
+    if (m->n_kf < 2)
+        return;
+    a = kf_at(m, 0);
+    b = kf_at(m, m->n_kf - 1);
+    centre(&a->T_c_w, ca);
+    centre(&b->T_c_w, cb);
+    d[0] = cb[0] - ca[0];
+    d[1] = cb[1] - ca[1];
+    d[2] = cb[2] - ca[2];
+    dist = sqrt(dot3(d, d));
+    dt = (double)(b->t_ns - a->t_ns) * 1e-9;
+    if (dt > 0.0 && dist > 0.0 && isfinite(dist / dt))
+        m->speed = dist / dt;
+}
+
+/* ---- triangulation ------------------------------------------------------------------------------ */
+
+/* Midpoint triangulation of normalised x1 (camera 1) and x2 (camera 2) into world X; 1 when the rays are
+ * at least min_cos apart (cos of the angle below min_cos), the point is in front of both cameras, and it
+ * reprojects within max_err (normalised units) in both. */
+static int triangulate(const tvo_pose *T1, const tvo_pose *T2, tvo_point2d x1, tvo_point2d x2, double min_cos,
+                       double max_err, double X[3])
+{
+    double h1[3] = { x1.x, x1.y, 1.0 }, h2[3] = { x2.x, x2.y, 1.0 }, r1[3], r2[3], c1[3], c2[3], b[3];
+    double a11, a12, a22, b1, b2, det, s1, s2, n1, n2, cosang, base;
+    tvo_la_mat3_tvec(T1->R, h1, r1); /* ray directions in the world */
+    tvo_la_mat3_tvec(T2->R, h2, r2);
+    n1 = sqrt(dot3(r1, r1));
+    n2 = sqrt(dot3(r2, r2));
+    cosang = dot3(r1, r2) / (n1 * n2);
+    if (!(cosang < min_cos))
+        return 0;
+    centre(T1, c1);
+    centre(T2, c2);
+    b[0] = c2[0] - c1[0];
+    b[1] = c2[1] - c1[1];
+    b[2] = c2[2] - c1[2];
+    base = sqrt(dot3(b, b));
+    /* c1 + s1 r1 ~ c2 + s2 r2: least squares in (s1, s2) */
+    a11 = dot3(r1, r1);
+    a12 = -dot3(r1, r2);
+    a22 = dot3(r2, r2);
+    b1 = dot3(r1, b);
+    b2 = -dot3(r2, b);
+    det = a11 * a22 - a12 * a12;
+    if (!(det > 1e-14 * a11 * a22) || !(base > 0.0))
+        return 0;
+    s1 = (b1 * a22 - a12 * b2) / det;
+    s2 = (a11 * b2 - a12 * b1) / det;
+    /* s are depths (the rays have z = 1 in their cameras) */
+    if (!(s1 > TVO_MAP_TRI_MIN_DEPTH * base && s2 > TVO_MAP_TRI_MIN_DEPTH * base) ||
+        !(s1 < TVO_MAP_TRI_MAX_DEPTH * base && s2 < TVO_MAP_TRI_MAX_DEPTH * base))
+        return 0;
+    for (int c = 0; c < 3; ++c)
+        X[c] = 0.5 * ((c1[c] + s1 * r1[c]) + (c2[c] + s2 * r2[c]));
+    {
+        const tvo_pose *T[2] = { T1, T2 };
+        const tvo_point2d *x[2] = { &x1, &x2 };
+        for (int v = 0; v < 2; ++v) {
+            double p[3], ex, ey;
+            tvo_pose_transform_point(T[v], X, p);
+            if (!(p[2] > 0.0))
+                return 0;
+            ex = p[0] / p[2] - x[v]->x;
+            ey = p[1] / p[2] - x[v]->y;
+            if (!(ex * ex + ey * ey < max_err * max_err))
+                return 0;
+        }
+    }
+    return isfinite(X[0]) && isfinite(X[1]) && isfinite(X[2]);
+}
+
+/* ---- scratch carving ---------------------------------------------------------------------------- */
+
+typedef struct carve {
+    tvo_arena a;
+} carve;
+
+static void *take(carve *c, size_t bytes)
+{
+    return tvo_arena_alloc(&c->a, bytes);
+}
+
+/* ---- initialisation ----------------------------------------------------------------------------- */
+
+/* Make this frame the reference of a new map: every track waits in it. */
+static void start_ref(tvo_map *m, tvo_map_tracks *tr, int64_t t_ns, const tvo_pose *T_c_w)
+{
+    tvo_map_clear(m);
+    m->has_ref = 1;
+    m->ref_T_c_w = *T_c_w;
+    m->ref_t_ns = t_ns;
+    m->ref_frames = 0;
+    for (int32_t i = 0; i < tr->n; ++i) {
+        tr->lm[i] = -1;
+        tr->tri_kf[i] = tr->x_ok[i] ? TVO_MAP_REF_ID : -1;
+        tr->tri_x[i] = tr->x[i];
+    }
+}
+
+static void relpose_config(const tvo_vo_config *cfg, tvo_relpose_config *rc)
+{
+    *rc = cfg->relpose;
+    rc->threshold = cfg->pose_threshold_px / focal(cfg);
+}
+
+/* Try to make the map from the reference frame and this one. 1 when made (two keyframes, landmarks). */
+static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
+                    const tvo_pose *T_c_w_chain, void *scratch, size_t scratch_size, tvo_map_frame *out)
+{
+    const int32_t n = tr->n;
+    carve c;
+    tvo_point2d *xa, *xb;
+    uint8_t *mask;
+    int32_t *idx, k = 0, made = 0;
+    void *rs;
+    size_t rs_size = tvo_relpose_scratch_size(cfg->max_tracks);
+    tvo_relpose rp;
+    tvo_relpose_config rc;
+    tvo_pose T_cur_ref, T1;
+    tvo_map_kf *k0, *k1;
+    double baseline, tn;
+    tvo_arena_init(&c.a, scratch, scratch_size);
+    xa = (tvo_point2d *)take(&c, (size_t)n * sizeof(tvo_point2d));
+    xb = (tvo_point2d *)take(&c, (size_t)n * sizeof(tvo_point2d));
+    mask = (uint8_t *)take(&c, (size_t)n);
+    idx = (int32_t *)take(&c, (size_t)n * sizeof(int32_t));
+    rs = take(&c, rs_size);
+    if (xa == NULL || xb == NULL || mask == NULL || idx == NULL || rs == NULL)
+        return 0;
+    for (int32_t i = 0; i < n; ++i) {
+        if (tr->tri_kf[i] == TVO_MAP_REF_ID && tr->x_ok[i]) {
+            xa[k] = tr->tri_x[i];
+            xb[k] = tr->x[i];
+            idx[k] = i;
+            ++k;
+        }
+    }
+    if (k < TVO_MAP_INIT_MIN_POINTS)
+        return 0;
+    relpose_config(cfg, &rc);
+    if (tvo_relpose_estimate(&rc, xa, xb, k, &rp, mask, rs, rs_size) != TVO_OK)
+        return 0;
+    if (rp.flags & (TVO_RELPOSE_FLAG_LOW_CONFIDENCE | TVO_RELPOSE_FLAG_AMBIGUOUS | TVO_RELPOSE_FLAG_ROTATION_ONLY))
+        return 0;
+    if (rp.parallax_deg < cfg->map_init_parallax_deg || rp.inliers < TVO_MAP_INIT_MIN_POINTS ||
+        2 * rp.inliers < k)
+        return 0;
+    {
+        /* the pose's rotation must be near its own rotation-only model, as the VO checks every frame */
+        const double lim = 10.0 * rp.parallax_deg > TVO_MAP_INIT_ROT_CHECK_DEG ? 10.0 * rp.parallax_deg
+                                                                               : TVO_MAP_INIT_ROT_CHECK_DEG;
+        if (tvo_la_rot_dist(rp.R, rp.R_rot) > deg2rad(lim))
+            return 0;
+    }
+    tn = sqrt(dot3(rp.t, rp.t));
+    if (!(tn > 0.0))
+        return 0;
+    /* the baseline: the distance the two-view chain travelled since the reference (its unit: one step
+       per frame before the first map, the last map's speed after a loss), so the new map continues the
+       run's unit */
+    {
+        double cr[3], cc[3], d[3];
+        centre(&m->ref_T_c_w, cr);
+        centre(T_c_w_chain, cc);
+        d[0] = cc[0] - cr[0];
+        d[1] = cc[1] - cr[1];
+        d[2] = cc[2] - cr[2];
+        baseline = sqrt(dot3(d, d));
+        if (!(baseline > 0.0) || !isfinite(baseline))
+            baseline = m->speed > 0.0 ? m->speed * (double)(t_ns - m->ref_t_ns) * 1e-9 : 1.0;
+        if (!(baseline > 0.0) || !isfinite(baseline))
+            baseline = 1.0;
+    }
+    memcpy(T_cur_ref.R, rp.R, sizeof(rp.R));
+    for (int c2 = 0; c2 < 3; ++c2)
+        T_cur_ref.t[c2] = rp.t[c2] / tn * baseline;
+    T1 = tvo_pose_compose(&T_cur_ref, &m->ref_T_c_w);
+    {
+        const tvo_pose T0 = m->ref_T_c_w;
+        const int64_t t0 = m->ref_t_ns;
+        const double min_cos = tvo_dm_cos(deg2rad(cfg->map_tri_parallax_deg));
+        const double max_err = TVO_MAP_TRI_MAX_ERR_PX / focal(cfg);
+        tvo_map_clear(m);
+        k0 = kf_push(m, &T0, t0);
+        k1 = kf_push(m, &T1, t_ns);
+        for (int32_t q = 0; q < k; ++q) {
+            const int32_t i = idx[q];
+            double X[3];
+            int32_t j;
+            if (!mask[q] || !triangulate(&k0->T_c_w, &k1->T_c_w, xa[q], xb[q], min_cos, max_err, X))
+                continue;
+            j = lm_alloc(m);
+            if (j < 0)
+                break;
+            memcpy(m->lm[j].X, X, sizeof(X));
+            (void)kf_add_obs(m, k0, j, xa[q]);
+            (void)kf_add_obs(m, k1, j, xb[q]);
+            tr->lm[i] = j;
+            ++made;
+        }
+        if (made < TVO_MAP_INIT_MIN_POINTS) {
+            /* not enough structure yet: back to waiting on the same reference */
+            for (int32_t i = 0; i < n; ++i)
+                tr->lm[i] = -1;
+            tvo_map_clear(m);
+            m->has_ref = 1;
+            m->ref_T_c_w = T0;
+            m->ref_t_ns = t0;
+            return 0;
+        }
+    }
+    /* the tracks that were not triangulated keep waiting, now in keyframe 0 */
+    for (int32_t i = 0; i < n; ++i) {
+        if (tr->lm[i] >= 0)
+            continue;
+        if (tr->tri_kf[i] == TVO_MAP_REF_ID) {
+            tr->tri_kf[i] = k0->id;
+        } else {
+            tr->tri_kf[i] = tr->x_ok[i] ? k1->id : -1;
+            tr->tri_x[i] = tr->x[i];
+        }
+    }
+    mark_tracked(m, tr);
+    m->active = 1;
+    m->kf_points = made;
+    m->frames_since_kf = 0;
+    m->cur_kf_id = k1->id;
+    m->last_T_c_w = T1;
+    m->last_t_ns = t_ns;
+    m->vel = T_cur_ref; /* the average step over the pair would be better; the next frame replaces it */
+    m->vel_dt_ns = t_ns - m->ref_t_ns;
+    m->has_vel = 1;
+    update_speed(m);
+    out->state = TVO_MAP_INITIALISED;
+    out->keyframe = 1;
+    out->points = made;
+    out->new_points = made;
+    out->T_c_w = T1;
+    for (int32_t i = 0; i < n; ++i)
+        tr->inlier[i] = (uint8_t)(tr->lm[i] >= 0);
+    return 1;
+}
+
+/* ---- tracking ----------------------------------------------------------------------------------- */
+
+/* The predicted pose of this frame: the last pose moved by the last velocity (scaled to this frame's
+ * interval) with the two-view rotation of this frame when there is one. */
+static tvo_pose predict(const tvo_map *m, int64_t t_ns, const double *R_cur_prev)
+{
+    tvo_pose step = m->vel, T;
+    double ratio = 1.0;
+    if (!m->has_vel)
+        step = tvo_pose_identity();
+    if (m->has_vel && m->vel_dt_ns > 0 && t_ns > m->last_t_ns)
+        ratio = (double)(t_ns - m->last_t_ns) / (double)m->vel_dt_ns;
+    if (!(ratio > 0.0 && ratio < 4.0))
+        ratio = 1.0;
+    for (int c = 0; c < 3; ++c)
+        step.t[c] *= ratio;
+    if (R_cur_prev != NULL)
+        memcpy(step.R, R_cur_prev, sizeof(step.R));
+    T = tvo_pose_compose(&step, &m->last_T_c_w);
+    return T;
+}
+
+/* Pose this frame on the landmarks the tracks carry. 1 when posed (T written, tr->inlier set, the
+ * outliers' landmarks unlinked from their tracks); *depth_med gets the inliers' median depth. */
+static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
+                       const double *R_cur_prev, void *scratch, size_t scratch_size, tvo_pose *T,
+                       int32_t *n_in, double *depth_med)
+{
+    const int32_t n = tr->n;
+    carve c;
+    double(*X)[3], *depth;
+    tvo_point2d *x;
+    uint8_t *inl;
+    int32_t *idx, k = 0, ni = 0, nd = 0;
+    void *ps;
+    const size_t ps_size = tvo_pnp_scratch_size(cfg->max_tracks);
+    tvo_pnp_config pc;
+    tvo_status st;
+    *n_in = 0;
+    *depth_med = 0.0;
+    tvo_arena_init(&c.a, scratch, scratch_size);
+    X = (double(*)[3])take(&c, (size_t)n * 3 * sizeof(double));
+    x = (tvo_point2d *)take(&c, (size_t)n * sizeof(tvo_point2d));
+    inl = (uint8_t *)take(&c, (size_t)n);
+    idx = (int32_t *)take(&c, (size_t)n * sizeof(int32_t));
+    depth = (double *)take(&c, (size_t)n * sizeof(double));
+    ps = take(&c, ps_size);
+    if (X == NULL || x == NULL || inl == NULL || idx == NULL || depth == NULL || ps == NULL)
+        return 0;
+    for (int32_t i = 0; i < n; ++i) {
+        tr->inlier[i] = 0;
+        if (tr->lm[i] >= 0 && tr->x_ok[i]) {
+            memcpy(X[k], m->lm[tr->lm[i]].X, sizeof(X[k]));
+            x[k] = tr->x[i];
+            idx[k] = i;
+            ++k;
+        }
+    }
+    if (k < cfg->map_min_points)
+        return 0;
+    tvo_pnp_config_default(&pc);
+    pc.threshold = TVO_MAP_PNP_THRESHOLD_PX / focal(cfg);
+    pc.huber = pc.threshold;
+    pc.min_inliers = cfg->map_min_points;
+    *T = predict(m, t_ns, R_cur_prev);
+    st = tvo_pnp_refine(&pc, (const double(*)[3])X, x, NULL, k, T, inl, &ni, NULL);
+    if (st != TVO_OK || 2 * ni < k) {
+        /* the prediction was too far (a jerk, a wrong velocity): hypothesise from scratch */
+        tvo_pose Tr = *T;
+        st = tvo_pnp_ransac(&pc, (const double(*)[3])X, x, k, &Tr, inl, &ni, ps, ps_size);
+        if (st != TVO_OK)
+            return 0;
+        *T = Tr;
+    }
+    if (ni < cfg->map_min_points)
+        return 0;
+    if (R_cur_prev != NULL) {
+        /* the map's rotation must agree with the frame's own two-view rotation */
+        double Rrel[9];
+        tvo_la_mat3_mul_bt(T->R, m->last_T_c_w.R, Rrel); /* R_cur_prev of the map */
+        if (tvo_la_rot_dist(Rrel, R_cur_prev) > deg2rad(TVO_MAP_ROT_CHECK_DEG))
+            return 0;
+    }
+    for (int32_t q = 0; q < k; ++q) {
+        const int32_t i = idx[q];
+        if (inl[q]) {
+            double p[3];
+            tr->inlier[i] = 1;
+            tvo_pose_transform_point(T, X[q], p);
+            depth[nd++] = p[2];
+        } else {
+            tr->lm[i] = -1; /* an outlier: the track no longer carries the landmark */
+            tr->tri_kf[i] = -1;
+        }
+    }
+    *n_in = ni;
+    if (nd > 0)
+        *depth_med = tvo_la_select_kth(depth, nd, nd / 2);
+    return tvo_pose_is_finite(T);
+}
+
+/* ---- keyframes ---------------------------------------------------------------------------------- */
+
+static int need_keyframe(const tvo_map *m, const tvo_vo_config *cfg, const tvo_pose *T, int32_t n_in,
+                         double depth_med)
+{
+    const tvo_map_kf *k = &m->kf[(m->kf_head + m->n_kf - 1) % m->window];
+    double ck[3], cc[3], d[3], Rrel[9];
+    if (m->frames_since_kf + 1 >= cfg->map_kf_max_frames)
+        return 1;
+    if ((double)n_in < cfg->map_kf_points_ratio * (double)m->kf_points)
+        return 1;
+    centre(&k->T_c_w, ck);
+    centre(T, cc);
+    d[0] = cc[0] - ck[0];
+    d[1] = cc[1] - ck[1];
+    d[2] = cc[2] - ck[2];
+    if (depth_med > 0.0 && sqrt(dot3(d, d)) > cfg->map_kf_baseline * depth_med)
+        return 1;
+    tvo_la_mat3_mul_bt(T->R, k->T_c_w.R, Rrel);
+    return tvo_la_rot_angle(Rrel) > deg2rad(cfg->keyframe_max_rot_deg);
+}
+
+/* Triangulate the waiting tracks against the new keyframe kn; tracks whose first keyframe left the window
+ * (or that had none) start waiting in kn. Returns the landmarks made. */
+static int32_t triangulate_new(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, tvo_map_kf *kn)
+{
+    const double min_cos = tvo_dm_cos(deg2rad(cfg->map_tri_parallax_deg));
+    const double max_err = TVO_MAP_TRI_MAX_ERR_PX / focal(cfg);
+    int32_t made = 0;
+    for (int32_t i = 0; i < tr->n; ++i) {
+        tvo_map_kf *k0;
+        double X[3];
+        int32_t j;
+        if (tr->lm[i] >= 0 || !tr->x_ok[i])
+            continue;
+        k0 = tr->tri_kf[i] >= 0 ? kf_by_id(m, tr->tri_kf[i]) : NULL;
+        if (k0 == NULL || k0 == kn) {
+            tr->tri_kf[i] = kn->id;
+            tr->tri_x[i] = tr->x[i];
+            continue;
+        }
+        if (!triangulate(&k0->T_c_w, &kn->T_c_w, tr->tri_x[i], tr->x[i], min_cos, max_err, X))
+            continue; /* not enough parallax yet (or a bad track): wait for the next keyframe */
+        if (k0->n_obs >= m->max_tracks || kn->n_obs >= m->max_tracks)
+            continue;
+        j = lm_alloc(m);
+        if (j < 0)
+            break;
+        memcpy(m->lm[j].X, X, sizeof(X));
+        (void)kf_add_obs(m, k0, j, tr->tri_x[i]);
+        (void)kf_add_obs(m, kn, j, tr->x[i]);
+        m->lm[j].tracked = 1;
+        tr->lm[i] = j;
+        tr->inlier[i] = 1;
+        ++made;
+    }
+    return made;
+}
+
+/* Remove observation o of keyframe k (swap with the last). */
+static void kf_remove_obs(tvo_map *m, tvo_map_kf *k, int32_t o)
+{
+    const int32_t j = k->obs_lm[o];
+    m->lm[j].n_obs--;
+    k->n_obs--;
+    k->obs_lm[o] = k->obs_lm[k->n_obs];
+    k->obs_x[o] = k->obs_x[k->n_obs];
+}
+
+/* Windowed bundle adjustment over the window's keyframes and the landmarks with >= 2 observations; the
+ * two oldest keyframes are fixed (they hold the gauge and the scale), all of them when the window has
+ * two. Observations that end with a large error are removed, and with them the landmarks that are left
+ * with fewer than two observations and no track. */
+static void bundle_adjust(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, void *scratch,
+                          size_t scratch_size, tvo_map_frame *out)
+{
+    const int32_t w = m->n_kf, cap_obs = m->window * m->max_tracks;
+    carve c;
+    tvo_pose *poses;
+    uint8_t *fixed;
+    double(*X)[3], *err2;
+    int32_t *lm2pt, *pt2lm, np = 0, no = 0;
+    tvo_ba_obs *obs;
+    tvo_ba_config bc;
+    tvo_ba_problem p;
+    tvo_ba_report rep;
+    void *bs;
+    size_t bs_size;
+    double max_err2;
+    ba_config(cfg, &bc);
+    bs_size = tvo_ba_scratch_size(&bc);
+    tvo_arena_init(&c.a, scratch, scratch_size);
+    poses = (tvo_pose *)take(&c, (size_t)m->window * sizeof(tvo_pose));
+    fixed = (uint8_t *)take(&c, (size_t)m->window);
+    X = (double(*)[3])take(&c, (size_t)m->max_lm * 3 * sizeof(double));
+    lm2pt = (int32_t *)take(&c, (size_t)m->max_lm * sizeof(int32_t));
+    pt2lm = (int32_t *)take(&c, (size_t)m->max_lm * sizeof(int32_t));
+    obs = (tvo_ba_obs *)take(&c, (size_t)cap_obs * sizeof(tvo_ba_obs));
+    err2 = (double *)take(&c, (size_t)cap_obs * sizeof(double));
+    bs = take(&c, bs_size);
+    if (poses == NULL || fixed == NULL || X == NULL || lm2pt == NULL || pt2lm == NULL || obs == NULL ||
+        err2 == NULL || bs == NULL || w < 3)
+        return;
+    for (int32_t j = 0; j < m->max_lm; ++j) {
+        lm2pt[j] = -1;
+        if (m->lm[j].alive && m->lm[j].n_obs >= 2) {
+            lm2pt[j] = np;
+            pt2lm[np] = j;
+            memcpy(X[np], m->lm[j].X, sizeof(X[np]));
+            ++np;
+        }
+    }
+    for (int32_t i = 0; i < w; ++i) {
+        const tvo_map_kf *k = kf_at(m, i);
+        poses[i] = k->T_c_w;
+        fixed[i] = (uint8_t)(i < 2);
+        for (int32_t o = 0; o < k->n_obs; ++o) {
+            const int32_t pt = lm2pt[k->obs_lm[o]];
+            if (pt < 0 || no >= cap_obs)
+                continue;
+            obs[no].pose = i;
+            obs[no].point = pt;
+            obs[no].x = k->obs_x[o].x;
+            obs[no].y = k->obs_x[o].y;
+            ++no;
+        }
+    }
+    if (np == 0 || no == 0)
+        return;
+    memset(&p, 0, sizeof(p));
+    p.n_poses = w;
+    p.T_c_w = poses;
+    p.pose_fixed = fixed;
+    p.n_points = np;
+    p.X = X;
+    p.point_fixed = NULL;
+    p.n_obs = no;
+    p.obs = obs;
+    memset(&rep, 0, sizeof(rep));
+    if (tvo_ba_solve(&bc, &p, bs, bs_size, &rep) != TVO_OK)
+        return;
+    out->ba_iterations = rep.iterations;
+    out->ba_flags = rep.flags;
+    for (int32_t i = 0; i < w; ++i)
+        if (!tvo_pose_is_finite(&poses[i]))
+            return; /* by contract the solver never writes one; never take it */
+    for (int32_t q = 0; q < np; ++q)
+        if (!(isfinite(X[q][0]) && isfinite(X[q][1]) && isfinite(X[q][2])))
+            return;
+    for (int32_t i = 0; i < w; ++i)
+        kf_at(m, i)->T_c_w = poses[i];
+    for (int32_t q = 0; q < np; ++q)
+        memcpy(m->lm[pt2lm[q]].X, X[q], sizeof(X[q]));
+    /* outliers: the observations that still do not fit */
+    if (tvo_ba_obs_errors(&p, err2) != TVO_OK)
+        return;
+    max_err2 = TVO_MAP_BA_MAX_ERR_PX / focal(cfg);
+    max_err2 *= max_err2;
+    {
+        int32_t q = 0;
+        /* walk the observations in the order they were built, removing from the keyframes' lists from
+           the back so the remaining indices stay valid */
+        for (int32_t i = 0; i < w; ++i) {
+            tvo_map_kf *k = kf_at(m, i);
+            int32_t first = q, cnt = 0;
+            for (int32_t o = 0; o < k->n_obs; ++o)
+                if (lm2pt[k->obs_lm[o]] >= 0)
+                    ++cnt;
+            q += cnt;
+            for (int32_t o = k->n_obs - 1, e = q - 1; o >= 0; --o) {
+                if (lm2pt[k->obs_lm[o]] < 0)
+                    continue;
+                if (e >= first && err2[e] > max_err2)
+                    kf_remove_obs(m, k, o);
+                --e;
+            }
+        }
+    }
+    /* tracks whose landmark lost its observation in the newest keyframe let go of it */
+    {
+        tvo_map_kf *kn = kf_at(m, w - 1);
+        for (int32_t i = 0; i < tr->n; ++i) {
+            int32_t j = tr->lm[i], seen = 0;
+            if (j < 0)
+                continue;
+            for (int32_t o = 0; o < kn->n_obs && !seen; ++o)
+                seen = kn->obs_lm[o] == j;
+            if (!seen) {
+                tr->lm[i] = -1;
+                tr->inlier[i] = 0;
+                tr->tri_kf[i] = kn->id;
+                tr->tri_x[i] = tr->x[i];
+            }
+        }
+    }
+    mark_tracked(m, tr);
+    for (int32_t j = 0; j < m->max_lm; ++j)
+        if (m->lm[j].alive && !m->lm[j].tracked && m->lm[j].n_obs < 2)
+            lm_free(m, j);
+}
+
+static void add_keyframe(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns, tvo_pose *T,
+                         void *scratch, size_t scratch_size, tvo_map_frame *out)
+{
+    tvo_map_kf *kn;
+    int32_t seen = 0;
+    mark_tracked(m, tr);
+    kn = kf_push(m, T, t_ns);
+    for (int32_t i = 0; i < tr->n; ++i) {
+        if (tr->lm[i] >= 0 && tr->inlier[i] && kf_add_obs(m, kn, tr->lm[i], tr->x[i]))
+            ++seen;
+    }
+    out->new_points = triangulate_new(m, cfg, tr, kn);
+    bundle_adjust(m, cfg, tr, scratch, scratch_size, out);
+    kn = kf_at(m, m->n_kf - 1);
+    *T = kn->T_c_w;
+    m->kf_points = seen + out->new_points;
+    m->frames_since_kf = 0;
+    m->cur_kf_id = kn->id;
+    out->keyframe = 1;
+    update_speed(m);
+}
+
+/* ---- the per-frame entry ------------------------------------------------------------------------ */
+
+static void lose(tvo_map *m, tvo_map_tracks *tr, int64_t t_ns, const tvo_pose *T_c_w_prior, tvo_map_frame *out)
+{
+    update_speed(m);
+    m->losses++;
+    start_ref(m, tr, t_ns, T_c_w_prior);
+    out->state = TVO_MAP_LOST;
+}
+
+tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
+                           const double *R_cur_prev, const tvo_pose *T_c_w_prior, void *scratch,
+                           size_t scratch_size, tvo_map_frame *out)
+{
+    tvo_pose T;
+    int32_t n_in = 0;
+    double depth_med = 0.0;
+    memset(out, 0, sizeof(*out));
+    out->T_c_w = *T_c_w_prior;
+    m->cur_kf_id = -1;
+    for (int32_t i = 0; i < tr->n; ++i)
+        tr->inlier[i] = 0;
+    if (!m->active) {
+        out->state = TVO_MAP_INITIALISING;
+        if (!m->has_ref) {
+            start_ref(m, tr, t_ns, T_c_w_prior);
+            return TVO_OK;
+        }
+        m->ref_frames++;
+        if (try_init(m, cfg, tr, t_ns, T_c_w_prior, scratch, scratch_size, out))
+            return TVO_OK;
+        {
+            /* renew the reference when it is too old or most of its tracks are gone */
+            int32_t k = 0;
+            for (int32_t i = 0; i < tr->n; ++i)
+                k += tr->tri_kf[i] == TVO_MAP_REF_ID && tr->x_ok[i];
+            if (m->ref_frames > TVO_MAP_REF_MAX_FRAMES || k < TVO_MAP_INIT_MIN_POINTS)
+                start_ref(m, tr, t_ns, T_c_w_prior);
+        }
+        return TVO_OK;
+    }
+    if (!track_frame(m, cfg, tr, t_ns, R_cur_prev, scratch, scratch_size, &T, &n_in, &depth_med)) {
+        lose(m, tr, t_ns, T_c_w_prior, out);
+        return TVO_OK;
+    }
+    mark_tracked(m, tr);
+    out->state = TVO_MAP_TRACKING;
+    out->points = n_in;
+    if (need_keyframe(m, cfg, &T, n_in, depth_med))
+        add_keyframe(m, cfg, tr, t_ns, &T, scratch, scratch_size, out);
+    else
+        m->frames_since_kf++;
+    if (!tvo_pose_is_finite(&T)) {
+        lose(m, tr, t_ns, T_c_w_prior, out);
+        return TVO_OK;
+    }
+    {
+        /* the velocity of this step, for the next prediction */
+        const tvo_pose Tw = tvo_pose_inverse(&m->last_T_c_w);
+        m->vel = tvo_pose_compose(&T, &Tw);
+        m->vel_dt_ns = t_ns - m->last_t_ns;
+        m->has_vel = 1;
+    }
+    m->last_T_c_w = T;
+    m->last_t_ns = t_ns;
+    out->T_c_w = T;
+    return TVO_OK;
+}
+
+void tvo_map_new_tracks(const tvo_map *m, tvo_map_tracks *tr, int32_t first)
+{
+    for (int32_t i = first; i < tr->n; ++i) {
+        tr->lm[i] = -1;
+        tr->inlier[i] = 0;
+        tr->tri_x[i] = tr->x[i];
+        if (!tr->x_ok[i])
+            tr->tri_kf[i] = -1;
+        else if (!m->active && m->has_ref && m->ref_frames == 0)
+            tr->tri_kf[i] = TVO_MAP_REF_ID; /* detected in the reference frame itself */
+        else if (m->active && m->cur_kf_id >= 0)
+            tr->tri_kf[i] = m->cur_kf_id;
+        else
+            tr->tri_kf[i] = -1;
+    }
+}

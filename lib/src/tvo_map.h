@@ -1,0 +1,118 @@
+/* tinyvo: the VO's local map (internal to the VO object; see vo.h for what users see of it).
+ *
+ * Keyframes in a sliding window, landmarks triangulated between them, frame poses from PnP on the
+ * landmarks the LK tracks carry, and a windowed bundle adjustment at each new keyframe.
+ *
+ * Landmarks are 3D points in the map's world frame (not inverse depth anchored in a keyframe): every
+ * observation then ties one pose to one point, so the bundle adjustment's Schur complement has 3x3
+ * point blocks and no anchor coupling, and PnP reads the points directly. The usual weakness of 3D
+ * points, far points with little parallax, is handled where they are made: a track is triangulated only
+ * when its two rays (first keyframe that saw it, current keyframe) are at least
+ * cfg.map_tri_parallax_deg apart; until then it waits, carrying its first observation. A landmark whose
+ * 3x3 block is still ill-conditioned is held fixed by the solver.
+ *
+ * The map's world is the VO's world: the camera of the first frame after tvo_vo_init() is the origin.
+ * Its unit of length is the first map's initial baseline (1 unit), and every later map (after a loss)
+ * continues in the same unit: its initial baseline is the speed of the previous map (units per second,
+ * over its last window) times the time between its two first keyframes.
+ *
+ * Memory: everything lives in the VO's block (tvo_map_layout_size()); nothing allocated afterwards. */
+#ifndef TVO_MAP_H
+#define TVO_MAP_H
+
+#include "tinyvo/arena.h"
+#include "tinyvo/ba.h"
+#include "tinyvo/pnp.h"
+#include "tinyvo/relpose.h"
+#include "tinyvo/se3.h"
+#include "tinyvo/vo.h"
+
+/* A keyframe of the window: its pose and the landmark observations made in it. */
+typedef struct tvo_map_kf {
+    int32_t id;           /* increasing keyframe id (never reused) */
+    int64_t t_ns;
+    tvo_pose T_c_w;       /* world -> camera */
+    int32_t n_obs;
+    int32_t *obs_lm;      /* [max_tracks] landmark index of each observation */
+    tvo_point2d *obs_x;   /* [max_tracks] normalised position */
+} tvo_map_kf;
+
+/* A landmark: a world point, the number of window keyframes that observe it, and whether a live
+ * track carries it. Free when !alive. */
+typedef struct tvo_map_lm {
+    double X[3];
+    int16_t n_obs;
+    uint8_t alive, tracked;
+} tvo_map_lm;
+
+/* The VO's tracks as the map sees them: parallel arrays of length n, owned by the VO. The map reads x
+ * (normalised current position, valid where x_ok) and reads/writes lm, tri_kf, tri_x and inlier. */
+typedef struct tvo_map_tracks {
+    int32_t n;
+    const tvo_point2d *x;
+    const uint8_t *x_ok;
+    int32_t *lm;          /* landmark index, or -1 */
+    int32_t *tri_kf;      /* id of the keyframe of the track's first observation (to triangulate), or -1 */
+    tvo_point2d *tri_x;   /* normalised position in that keyframe */
+    uint8_t *inlier;      /* out: 1 when the track's landmark is an inlier of this frame's map pose */
+} tvo_map_tracks;
+
+typedef struct tvo_map {
+    int32_t window, max_tracks, max_lm;
+    int32_t n_kf;              /* keyframes in the window, oldest first in kf[] order by age */
+    int32_t kf_head;           /* slot of the oldest keyframe (ring) */
+    tvo_map_kf *kf;            /* [window] */
+    tvo_map_lm *lm;            /* [max_lm] */
+    int32_t n_lm;              /* alive landmarks */
+    int32_t next_kf_id;
+    int32_t active;            /* 1 while the map poses frames */
+    /* initialisation: the reference frame (its pose and time), tracks carry tri_kf = TVO_MAP_REF_ID */
+    int32_t has_ref;
+    tvo_pose ref_T_c_w;
+    int64_t ref_t_ns;
+    int32_t ref_frames;        /* frames since the reference */
+    /* motion: the last frame's pose and its velocity (T_cur_prev of the last two posed frames) */
+    tvo_pose last_T_c_w;
+    tvo_pose vel;              /* T_cur_prev of the last step, in map units */
+    int64_t last_t_ns, vel_dt_ns;
+    int32_t has_vel;
+    double speed;              /* map units per second of the last map (> 0 when known) */
+    int32_t kf_points;         /* landmarks the last keyframe saw (for the keyframe decision) */
+    int32_t frames_since_kf;
+    int32_t losses;
+    int32_t cur_kf_id;         /* id of the keyframe made in the last processed frame, or -1 */
+    int32_t lm_cursor;         /* where the search for a free landmark slot starts */
+} tvo_map;
+
+/* Id that tracks carry in tri_kf while the map waits for its initial pair. */
+#define TVO_MAP_REF_ID (-2)
+
+/* What the map did with a frame (filled into the VO result by tvo_vo.c). */
+typedef struct tvo_map_frame {
+    tvo_vo_map_state state;
+    int32_t keyframe;          /* 1 when the frame became a keyframe */
+    int32_t points;            /* landmarks used for the pose (inliers) */
+    int32_t new_points;        /* landmarks triangulated in this frame */
+    int32_t ba_iterations, ba_flags;
+    tvo_pose T_c_w;            /* valid when state is TRACKING or INITIALISED */
+} tvo_map_frame;
+
+size_t tvo_map_layout_size(const tvo_vo_config *cfg);
+size_t tvo_map_scratch_size(const tvo_vo_config *cfg);
+/* Carve the map's arrays from arena a (in the order of tvo_map_layout_size). TVO_ERR_NO_MEMORY. */
+tvo_status tvo_map_init(tvo_map *m, const tvo_vo_config *cfg, tvo_arena *a);
+/* Forget keyframes and landmarks (the speed and the loss count are kept). */
+void tvo_map_clear(tvo_map *m);
+
+/* One frame after the VO's two-view step. R_cur_prev: the two-view rotation of this frame (NULL when
+ * none), T_c_w_prior: the pose the VO would report without the map (the two-view chain), used as the
+ * reference pose when a new map starts. Tracks' lm / tri_* are updated, *out filled. Uses scratch. */
+tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
+                           const double *R_cur_prev, const tvo_pose *T_c_w_prior, void *scratch,
+                           size_t scratch_size, tvo_map_frame *out);
+
+/* Tracks added after tvo_map_process in a keyframe frame (re-detection) start their wait for
+ * triangulation in that keyframe (or in the reference frame while initialising). */
+void tvo_map_new_tracks(const tvo_map *m, tvo_map_tracks *tr, int32_t first);
+
+#endif /* TVO_MAP_H */
