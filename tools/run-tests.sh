@@ -2,6 +2,8 @@
 # The test command (README, .ci/run): installs what is needed, then builds and runs every test:
 #   1. Release build with -Werror, all ctest tests (unit, port, guarantees, fuzz-corpus replays; -j2)
 #   2. the OpenCV oracle tests (pytest, test/oracle) and the Python tool tests (test/python) against it
+#      install + external project (test/external/run.sh: find_package and pkg-config from a moved
+#      non-default prefix, static and shared libraries)
 #   3. an ASan+UBSan build running the ctest tests again
 #   4. a -Os (MinSizeRel) build running the ctest tests again, and the Cortex-M size report
 #      (tools/size-report.sh: arm-none-eabi core builds, link check, Cortex-M7 .text <= 64 KiB)
@@ -22,6 +24,9 @@ ctest --test-dir build/release -j$JOBS --output-on-failure
 echo "== oracle tests (OpenCV)"
 TVO_BUILD_DIR="$ROOT/build/release" "$ROOT/.venv/bin/python" -m pytest -q -rs test/oracle
 TVO_BUILD_DIR="$ROOT/build/release" "$ROOT/.venv/bin/python" -m pytest -q test/python
+
+echo "== install to a non-default prefix, external project (find_package + pkg-config; static, shared + SONAME)"
+bash test/external/run.sh
 
 echo "== ASan + UBSan build + unit tests"
 cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DTVO_SANITIZE=ON -DTVO_WERROR=ON \

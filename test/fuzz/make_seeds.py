@@ -122,6 +122,14 @@ def seeds_yaml(out: pathlib.Path) -> None:
     put(out, "radtan5.yaml", b"intrinsics: [700, 700, 640, 360]\nresolution: [1280, 720]\n"
         b"distortion_coefficients: [-0.3, 0.1, 0.001, -0.001, -0.02]\n"
         b"T_BS:\n  data: [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]\n")
+    # the real calibration files of the import tests (Kalibr, ROS, OpenCV, EuRoC layouts; sources in
+    # test/data/calib/SOURCES.md)
+    for f in sorted((ROOT / "test" / "data" / "calib").iterdir()):
+        if f.suffix in (".yaml", ".yml"):
+            put(out, "calib_" + f.name, f.read_bytes())
+    put(out, "flow_map.yaml", b"image_width: 64\nimage_height: 48\ncamera_matrix: {rows: 3, cols: 3,\n"
+        b"  data: [50, 0, 32, 0, 50, 24, 0, 0, 1]}\ndistortion_model: equidistant\n"
+        b"distortion_coefficients: {rows: 1, cols: 4, data: [0.1, 0.01, 0, 0]}\n")
     put(out, "unclosed.yaml", b"intrinsics: [1, 2, 3, 4\nresolution: [1, 1]\n")
     put(out, "strong_distortion.yaml", b"intrinsics: [100, 100, 50, 50]\nresolution: [100, 100]\n"
         b"distortion_model: radtan\ndistortion_coefficients: [5, -40, 0.5, 0.5, 100]\n"

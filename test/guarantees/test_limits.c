@@ -33,7 +33,8 @@ static void test_image_view_limits(void **state)
     assert_int_equal(tvo_image_check(NULL), TVO_ERR_NULL);
     /* the kernels refuse it before forming any offset (the UBSan build aborts if they do not) */
     assert_int_equal(tvo_fast9_detect(&huge_stride, 20, 1, c, 4, &n, scratch, sizeof scratch), TVO_ERR_SIZE);
-    assert_int_equal(tvo_fast9_detect_ref(&huge_stride, 20, 1, c, 4, &n), TVO_ERR_SIZE);
+    assert_int_equal(tvo_fast9_detect_rows(&huge_stride, 20, 1, 0, 16, c, 4, &n, scratch, sizeof scratch),
+                     TVO_ERR_SIZE);
 }
 
 /* The VO configuration: camera size, track capacity. */

@@ -6,6 +6,7 @@
 #include <math.h>
 
 #include "tinyvo/corners.h"
+#include "tvo_fast_ref.h"
 
 /* ---- helpers ------------------------------------------------------------------------------------- */
 

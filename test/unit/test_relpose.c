@@ -127,6 +127,133 @@ static void test_fivept_bits(void **state)
     assert_true(h == expected);
 }
 
+/* ---- digest of the whole estimator's output bits -------------------------------------------------
+ * tvo_relpose_estimate on 240 fixed two-view problems drawn with + - * / and sqrt only (so every
+ * target sees the same inputs): general scenes with noise, with 30 % outliers, planes (forward and
+ * sideways motion), pure rotation, a tiny baseline (low parallax), the 8-point method, the homography
+ * and the refinement switched off, and small point counts. Every output field (R, t, R_alt, t_alt,
+ * R_rot, parallax, counts, flags), the status and the inlier mask are hashed; the 5-point solver is
+ * hashed on each problem's first five correspondences as well. The SIMD and the portable paths
+ * (-DTVO_FIVEPT_NO_SIMD -DTVO_RELPOSE_NO_SIMD -DTVO_LINALG_NO_SIMD, and the ARM targets) must give
+ * the same bits; a restructuring of the solver or the estimator must not move them. An intended change
+ * of the arithmetic moves the digest: the failure message prints the new value. */
+typedef struct dg_problem {
+    tvo_point2d x1[300], x2[300];
+    int n;
+} dg_problem;
+
+static double dg_u(uint64_t *s) { return 2.0 * urand(s) - 1.0; } /* uniform in [-1, 1) */
+
+static void dg_make(uint64_t *s, int kind, dg_problem *p)
+{
+    static const int counts[8] = {300, 200, 150, 120, 60, 30, 12, 8};
+    const double amp = kind == 5 ? 0.02 : 0.15; /* quaternion vector part: rotations to ~17 deg */
+    double q[4] = {1.0, amp * dg_u(s), amp * dg_u(s), amp * dg_u(s)};
+    double nq = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    for (int k = 0; k < 4; ++k)
+        q[k] /= nq;
+    const double w = q[0], x = q[1], y = q[2], z = q[3];
+    const double R[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - w * z),     2 * (x * z + w * y),
+                         2 * (x * y + w * z),     1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+                         2 * (x * z - w * y),     2 * (y * z + w * x),     1 - 2 * (x * x + y * y)};
+    double t[3] = {dg_u(s), dg_u(s), dg_u(s)};
+    if (kind == 3)
+        t[2] *= 0.2; /* sideways */
+    const double base = kind == 4 ? 0.0 : kind == 5 ? 0.01 : 0.5;
+    const int planar = kind == 2 || kind == 3;
+    const double pn[3] = {0.3 * dg_u(s), 0.3 * dg_u(s), 1.0};
+    const double noise = (kind == 0 ? 0.0 : 0.7) / F_PX, outl = kind == 0 ? 0.0 : kind == 1 ? 0.3 : 0.15;
+    p->n = kind == 7 ? counts[(int)(8.0 * urand(s))] : 200;
+    for (int i = 0; i < p->n; ++i) {
+        double u = 0, v = 0, a = 0, b = 0;
+        for (int tries = 0; tries < 100; ++tries) {
+            a = dg_u(s) * HALF_W;
+            b = dg_u(s) * HALF_H;
+            double d = planar ? 4.0 / (pn[0] * a + pn[1] * b + pn[2]) : 1.0 + 7.0 * urand(s);
+            double X[3] = {a * d, b * d, d}, Y[3];
+            tvo_la_mat3_vec(R, X, Y);
+            for (int k = 0; k < 3; ++k)
+                Y[k] += base * t[k];
+            if (!(Y[2] > 0.5))
+                continue;
+            u = Y[0] / Y[2];
+            v = Y[1] / Y[2];
+            if (fabs(u) <= HALF_W && fabs(v) <= HALF_H)
+                break;
+        }
+        p->x1[i].x = a + noise * dg_u(s);
+        p->x1[i].y = b + noise * dg_u(s);
+        p->x2[i].x = u + noise * dg_u(s);
+        p->x2[i].y = v + noise * dg_u(s);
+        if (urand(s) < outl) {
+            p->x2[i].x = dg_u(s) * HALF_W;
+            p->x2[i].y = dg_u(s) * HALF_H;
+        }
+    }
+}
+
+static void test_relpose_bits(void **state)
+{
+    (void)state;
+    const uint64_t expected = 0xa0790b2a1a42f57eULL;
+    uint64_t h = 0xcbf29ce484222325ULL, s = 271828;
+    int flags_seen = 0;
+    for (int trial = 0; trial < 240; ++trial) {
+        static dg_problem p;
+        const int kind = trial % 8;
+        dg_make(&s, kind, &p);
+        tvo_relpose_config cfg;
+        tvo_relpose_config_default(&cfg);
+        cfg.seed = (uint64_t)trial;
+        if (kind == 6) {
+            cfg.method = TVO_RELPOSE_8PT;
+            cfg.refine_iters = (trial / 8) % 2 ? 0 : 3;
+        }
+        if (kind == 3 && (trial / 8) % 2)
+            cfg.use_homography = 0;
+        tvo_relpose out;
+        uint8_t mask[300];
+        tvo_status st = tvo_relpose_estimate(&cfg, p.x1, p.x2, p.n, &out, mask, g_scratch, sizeof g_scratch);
+        h = fnv_double(h, (double)st);
+        h = fnv_double(h, (double)out.inliers);
+        h = fnv_double(h, (double)out.flags);
+        h = fnv_double(h, (double)out.iterations);
+        h = fnv_double(h, out.parallax_deg);
+        for (int k = 0; k < 9; ++k) {
+            h = fnv_double(h, out.R[k]);
+            h = fnv_double(h, out.R_alt[k]);
+            h = fnv_double(h, out.R_rot[k]);
+        }
+        for (int k = 0; k < 3; ++k) {
+            h = fnv_double(h, out.t[k]);
+            h = fnv_double(h, out.t_alt[k]);
+        }
+        for (int i = 0; i < p.n; ++i)
+            h = fnv_double(h, (double)mask[i]);
+        flags_seen |= out.flags;
+        double a[5][2], b[5][2], E[10][9];
+        for (int i = 0; i < 5; ++i) {
+            a[i][0] = p.x1[i].x;
+            a[i][1] = p.x1[i].y;
+            b[i][0] = p.x2[i].x;
+            b[i][1] = p.x2[i].y;
+        }
+        int ns = tvo_essential_5pt((const double (*)[2])a, (const double (*)[2])b, E);
+        h = fnv_double(h, (double)ns);
+        for (int m = 0; m < ns; ++m)
+            for (int k = 0; k < 9; ++k)
+                h = fnv_double(h, E[m][k]);
+    }
+    /* the problems reach every branch that sets a flag */
+    assert_int_equal(flags_seen, TVO_RELPOSE_FLAG_LOW_PARALLAX | TVO_RELPOSE_FLAG_ROTATION_ONLY |
+                                     TVO_RELPOSE_FLAG_HOMOGRAPHY | TVO_RELPOSE_FLAG_LOW_CONFIDENCE |
+                                     TVO_RELPOSE_FLAG_AMBIGUOUS);
+    if (h != expected)
+        print_message("test_relpose_bits: digest 0x%016llxULL, expected 0x%016llxULL\n", (unsigned long long)h,
+                      (unsigned long long)expected);
+    assert_true(h == expected);
+}
+
 static void test_pipeline_noise_free(void **state)
 {
     (void)state;
@@ -639,6 +766,7 @@ int main(void)
         cmocka_unit_test(test_select_kth),
         cmocka_unit_test(test_fivept_noise_free),
         cmocka_unit_test(test_fivept_bits),
+        cmocka_unit_test(test_relpose_bits),
         cmocka_unit_test(test_pipeline_noise_free),
         cmocka_unit_test(test_pipeline_noise_outliers),
         cmocka_unit_test(test_pure_rotation),

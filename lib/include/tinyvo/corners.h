@@ -60,11 +60,6 @@ tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int no
                                  tvo_corner *out, int32_t capacity, int32_t *count,
                                  void *scratch, size_t scratch_size);
 
-/* Deliberately simple reference implementation (no table, no SIMD, no early rejection) of
- * tvo_fast9_detect with the same contract and results; for tests. Needs no scratch. Slow. */
-tvo_status tvo_fast9_detect_ref(const tvo_image *img, int32_t threshold, int nonmax,
-                                tvo_corner *out, int32_t capacity, int32_t *count);
-
 /* OpenCV's FAST-9 score (definition above) of pixel (x, y); x, y must be >= 3 inside the image (no check
  * beyond that; returns -1 for a pixel outside that range or a bad view). Meaningful for corners only:
  * for a non-corner it returns max(..)-1 over the arcs, which may be below any threshold. */

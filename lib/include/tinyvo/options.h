@@ -13,10 +13,4 @@
 #define TVO_MAX_PYR_LEVELS 8
 #endif
 
-/* Numeric type of the geometry (camera models, essential matrix, poses): double by default.
- * Define TVO_REAL_FLOAT to 1 for single-precision builds on FPUs without double support. */
-#ifndef TVO_REAL_FLOAT
-#define TVO_REAL_FLOAT 0
-#endif
-
 #endif /* TINYVO_OPTIONS_H */

@@ -2,16 +2,11 @@
 #ifndef TINYVO_TINYVO_H
 #define TINYVO_TINYVO_H
 
-#define TVO_VERSION_MAJOR 0
-#define TVO_VERSION_MINOR 1
-#define TVO_VERSION_PATCH 0
-
+#include "tinyvo/version.h"
 #include "tinyvo/status.h"
 #include "tinyvo/options.h"
 #include "tinyvo/types.h"
 #include "tinyvo/image.h"
-#include "tinyvo/arena.h"
-#include "tinyvo/dmath.h"
 #include "tinyvo/pyramid.h"
 #include "tinyvo/corners.h"
 #include "tinyvo/lk.h"

@@ -11,12 +11,6 @@
 extern "C" {
 #endif
 
-#if TVO_REAL_FLOAT
-typedef float tvo_real;
-#else
-typedef double tvo_real;   /* the geometry's numeric type: one place to change it */
-#endif
-
 /* A pixel position: x to the right, y down, origin at the centre of the top-left pixel (OpenCV's
  * convention), in pixels of the image it refers to. */
 typedef struct tvo_point2f {

@@ -112,8 +112,9 @@ tvo_status tvo_euroc_load_groundtruth_file(tvo_euroc *seq, const char *path, cha
 
 /* ---- parsers on memory buffers (also for fuzzing) ----------------------------------------------- */
 
-/* A camera sensor.yaml (the subset of YAML that ASL/Kalibr files use: "key: value" lines, one level of
- * nested mappings, flow sequences "[a, b, ...]" that may span lines, '#' comments, "%YAML" directives).
+/* A camera sensor.yaml (tvo_calib_parse with TVO_CALIB_EUROC, tinyvo/port/calib.h: the YAML subset
+ * calibration tools write: nested "key: value" mappings, flow sequences "[a, b, ...]" that may span
+ * lines, '#' comments, "%YAML" directives). The Kalibr key distortion_coeffs is accepted as well.
  * Required: intrinsics [fu, fv, cu, cv], resolution [w, h], T_BS with data of 16 numbers (rows/cols
  * 4 if given, last row 0 0 0 1, a rotation block orthonormal to 1e-3, a translation within
  * +-TVO_EUROC_MAX_COORD). distortion_model:

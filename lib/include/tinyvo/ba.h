@@ -1,0 +1,154 @@
+/* tinyvo: windowed bundle adjustment (poses + points of a local map).
+ *
+ * Minimises the Huber-robust reprojection error in normalised image coordinates over the free camera
+ * poses and the free world points of a small window (a few keyframes, a few hundred landmarks) with
+ * Levenberg-Marquardt and the Schur complement on the poses.
+ *
+ * Model. Observation k of point j in camera i: P = R_i X_j + t_i (T_c_w = (R_i, t_i)), predicted
+ * (P_x / P_z, P_y / P_z), residual r_k = predicted - (x, y). The Huber function is applied to each of
+ * the two components separately (as scipy.optimize.least_squares(loss='huber', f_scale=huber) does):
+ *     cost = 1/2 sum_components rho(r^2),  rho(s) = s for sqrt(s) <= huber, 2 huber sqrt(s) - huber^2
+ * above (normalised units^2). The normal equations use the IRLS weights w = min(1, huber / |r|), whose
+ * gradient J^T W r is the exact gradient of the cost.
+ *
+ * Parametrisation. A pose step d = [omega, v] (6) is applied on the left as
+ *     R <- R_d R,  t <- R_d t + v,   R_d = tvo_rotvec_to_rot(omega)
+ * (the first-order "left perturbation" of exp(d) T: its derivative at d = 0 is the one of the SE(3)
+ * exponential, dP/d omega = -[P]x, dP/dv = I). A point step is X <- X + dx.
+ *
+ * Step. Damping is Marquardt's: every diagonal entry of the pose blocks and the 3x3 point blocks is
+ * multiplied by (1 + lambda). The point blocks are inverted (3x3 Cholesky) and eliminated; the reduced
+ * camera system (6 x free poses) is solved by a dense Cholesky. A step is accepted only when it lowers
+ * the robust cost by more than 1e-12 of it (smaller changes are rounding, not progress) and every value
+ * is finite and every used observation stays at Z_c >= min_depth; otherwise the state is restored
+ * bit-for-bit and lambda is multiplied by 10 (divided by 10 after an accepted step, floor 1e-12).
+ * Stops: max_iterations steps tried (accepted + rejected), an accepted step that lowered the cost by
+ * less than 1e-6 of it (converged), a cost at or below 1e-24 per used observation (RMS residual
+ * 1e-12: converged before any step), or lambda above 1e12.
+ *
+ * Held points. A free point is held fixed for a step (its observations still constrain the poses, as
+ * a fixed point's do) when it has fewer than 2 usable observations (from free or fixed poses), or when
+ * its undamped 3x3 block V is ill-conditioned: a Cholesky pivot below 1e-12 of its diagonal entry, or
+ * the estimate trace(V) * ||V^-1||_F (between the 2-norm condition number and 3 sqrt(3) times it)
+ * above cfg->max_point_cond (default 1e6: a point seen with a parallax of about 0.06 degree or less,
+ * e.g. a landmark nearly at infinity). Decided again at every linearisation.
+ * An observation is usable when x, y are finite and its point has Z_c >= min_depth in that camera.
+ *
+ * Gauge. The caller fixes at least one pose (two for a monocular window, else the scale is free).
+ * A free pose with no usable observation is held fixed. When the undamped reduced camera system at
+ * the start is not positive definite (a Cholesky pivot below 1e-10 of its diagonal entry: a free
+ * pose is not determined by what it sees, or the scale gauge is free) TVO_BA_FLAG_SINGULAR is set and
+ * the solve goes on with damped steps (the undetermined directions stay near their start values).
+ *
+ * Cost. Scaling per iteration: O(obs) to linearise and to evaluate a trial step, O(points) for the 3x3 point
+ * blocks, O(sum over points of obs_per_point^2) (<= O(obs * poses)) for the Schur complement,
+ * O((6 free poses)^3 / 6) for the reduced system's Cholesky. No allocation (everything lives in the
+ * caller's scratch), stack below 4 KB, no recursion, only + - * / sqrt and tvo_dm_* (bit-identical on
+ * every IEEE-754 double target). Reentrant: no global state. */
+#ifndef TINYVO_BA_H
+#define TINYVO_BA_H
+
+#include "tinyvo/se3.h"
+#include "tinyvo/types.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Largest cfg->max_poses (the reduced system is 6 * max_poses square, dense). */
+#define TVO_BA_MAX_POSES 32
+/* Largest cfg->max_points and cfg->max_obs. */
+#define TVO_BA_MAX_POINTS (1 << 20)
+#define TVO_BA_MAX_OBS (1 << 22)
+/* Largest cfg->max_iterations. */
+#define TVO_BA_MAX_ITERATIONS 1000
+/* Value tvo_ba_obs_errors() gives an observation that cannot be measured (point at Z_c <= 0, or a
+ * non-finite observation or projection). */
+#define TVO_BA_ERR_INVALID 1e30
+
+typedef struct tvo_ba_obs {
+    int32_t pose, point; /* indices into the problem's poses and points */
+    double x, y;         /* normalised image coordinates x = X_c / Z_c, y = Y_c / Z_c */
+} tvo_ba_obs;
+
+typedef struct tvo_ba_config {
+    int32_t max_iterations; /* LM iterations cap (accepted + rejected steps), 1..TVO_BA_MAX_ITERATIONS; default 10 */
+    double huber;           /* Huber width in normalised units, finite > 0; default 2.0 / 458 */
+    double lambda_init;     /* initial LM damping (relative to the diagonal), finite in (0, 1e12]; default 1e-3 */
+    double min_depth;       /* an observation whose point has Z_c below this is left out of the step
+                               (counted in obs_skipped); finite > 0; default 1e-3 (world units) */
+    int32_t max_poses;      /* capacities the scratch is sized for: 1..TVO_BA_MAX_POSES, */
+    int32_t max_points;     /* 1..TVO_BA_MAX_POINTS, */
+    int32_t max_obs;        /* 1..TVO_BA_MAX_OBS; defaults 10, 1024, 8192 */
+    double max_point_cond;  /* (added) condition estimate above which a point is held fixed, finite >= 1;
+                               default 1e6 (see "Held points" above) */
+} tvo_ba_config;
+
+/* Fills the defaults listed above. cfg == NULL does nothing. */
+void tvo_ba_config_default(tvo_ba_config *cfg);
+
+typedef struct tvo_ba_problem {
+    int32_t n_poses;           /* 1..cfg->max_poses */
+    tvo_pose *T_c_w;           /* in/out [n_poses]: camera poses (world -> camera); R must be a rotation */
+    const uint8_t *pose_fixed; /* [n_poses], nonzero = held constant (the gauge: the caller fixes at least 1,
+                                  normally the 2 oldest for a monocular window to hold the scale) */
+    int32_t n_points;          /* 0..cfg->max_points */
+    double (*X)[3];            /* in/out [n_points]: world points */
+    const uint8_t *point_fixed; /* [n_points], nonzero = held constant; or NULL (all free) */
+    int32_t n_obs;             /* 0..cfg->max_obs */
+    const tvo_ba_obs *obs;     /* [n_obs]; the order does not matter (results do not depend on it
+                                  except for rounding) */
+} tvo_ba_problem;
+
+enum {
+    TVO_BA_FLAG_COST_ROSE = 1,      /* no step lowered the cost: the state is unchanged (bit-identical) */
+    TVO_BA_FLAG_SINGULAR = 2,       /* the undamped reduced system at the start, or a damped one, was not
+                                       positive definite, or a free pose had no usable observation */
+    TVO_BA_FLAG_ITER_CAP = 4,       /* stopped by max_iterations before converging */
+    TVO_BA_FLAG_POINTS_SKIPPED = 8  /* some free points had < 2 usable observations or an ill-conditioned
+                                       3x3 block and were held fixed (points_skipped says how many) */
+};
+
+typedef struct tvo_ba_report {
+    int32_t iterations;      /* steps tried (accepted + rejected), <= max_iterations */
+    int32_t accepted;        /* steps accepted */
+    int32_t flags;           /* TVO_BA_FLAG_* */
+    int32_t points_skipped;  /* free points held fixed at the last linearisation */
+    double cost_initial;     /* robust cost of the input state (over its usable observations) */
+    double cost_final;       /* robust cost of the output state (over the observations of the last step) */
+    int32_t obs_skipped;     /* (added) observations left out at the last linearisation: non-finite x, y
+                                or Z_c < min_depth */
+    int32_t poses_free;      /* (added) free poses that were optimised at the last linearisation */
+} tvo_ba_report;
+
+/* Bytes of scratch tvo_ba_solve() needs for problems within cfg's capacities; 0 for an invalid (or
+ * NULL) config. Roughly 300 B per max_obs + 170 B per max_point + 600 B per max_pose + 2 * (6 max_poses)^2
+ * doubles. */
+size_t tvo_ba_scratch_size(const tvo_ba_config *cfg);
+
+/* Runs the bundle adjustment on p (poses and points updated in place; on any error status or with
+ * TVO_BA_FLAG_COST_ROSE nothing is written). scratch: at least tvo_ba_scratch_size(cfg) bytes, any
+ * alignment; its contents are not needed between calls. rep may be NULL.
+ * Returns TVO_OK (see rep->flags), or
+ *   TVO_ERR_NULL       cfg, p, scratch, T_c_w, pose_fixed, or X / obs with n_points / n_obs > 0 NULL
+ *   TVO_ERR_ARG        invalid config; n_poses < 1, n_points < 0, n_obs < 0; an observation whose pose or
+ *                      point index is out of range
+ *   TVO_ERR_NO_MEMORY  n_poses, n_points or n_obs above cfg's capacities, or scratch_size too small
+ *   TVO_ERR_NOT_FINITE a pose or point with a non-finite entry
+ *   TVO_ERR_TOO_FEW    no free pose and no free point, or n_obs == 0
+ * Non-finite observations are not an error: they are left out and counted in rep->obs_skipped. */
+tvo_status tvo_ba_solve(const tvo_ba_config *cfg, tvo_ba_problem *p, void *scratch, size_t scratch_size,
+                        tvo_ba_report *rep);
+
+/* Squared reprojection error |predicted - (x, y)|^2 of each observation (normalised units^2) to
+ * err2[n_obs], so that the caller can drop outliers; TVO_BA_ERR_INVALID for a point at Z_c <= 0 in that
+ * camera or a non-finite observation. No capacity limits, O(n_obs), no scratch.
+ * Returns TVO_ERR_NULL (p, err2, T_c_w, or X / obs with n > 0), TVO_ERR_ARG (negative counts, an index out
+ * of range: nothing written). */
+tvo_status tvo_ba_obs_errors(const tvo_ba_problem *p, double *err2);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* TINYVO_BA_H */

@@ -1,0 +1,731 @@
+/* tinyvo: windowed bundle adjustment (contract and cost in tinyvo/ba.h). */
+#include "tinyvo/ba.h"
+
+#include <math.h>
+#include <string.h>
+
+/* point states during one linearisation */
+#define PT_FREE 0   /* optimised */
+#define PT_FIXED 1  /* fixed by the caller */
+#define PT_HELD 2   /* free, but held fixed for this step (too few observations, ill-conditioned) */
+
+#define ACCEPT_REL 1e-12    /* a step must lower the cost by more than this fraction of it */
+#define CONVERGED_REL 1e-6 /* an accepted step lowering the cost by less than this fraction: converged */
+#define COST_FLOOR 1e-24    /* cost per used observation at or below which the solve is converged */
+#define LAMBDA_MIN 1e-12
+#define LAMBDA_MAX 1e12
+#define PIVOT_POINT 1e-12   /* 3x3 point block: pivot / diagonal entry */
+#define PIVOT_SINGULAR 1e-10 /* undamped reduced system: pivot / diagonal entry */
+#define PIVOT_DAMPED 1e-14  /* damped reduced system: pivot / diagonal entry */
+
+typedef struct ba_ws {
+    /* poses [max_poses] */
+    int32_t *slot;      /* index in the reduced system, -1 when not optimised */
+    int32_t *pose_nuse; /* usable observations */
+    tvo_pose *pose_bak;
+    double (*Hc)[36];   /* J^T W J of the pose (6x6, row-major) */
+    double (*gc)[6];    /* J^T W r of the pose */
+    /* points [max_points] */
+    uint8_t *pstate;
+    int32_t *pt_nuse;
+    int32_t *pt_start; /* [max_points + 1]: observations of point j are pt_obs[pt_start[j] .. pt_start[j+1]) */
+    double (*X_bak)[3];
+    double (*V)[9];    /* J^T W J of the point (3x3) */
+    double (*gx)[3];
+    double (*Vi)[9];   /* inverse of the damped V */
+    double (*dx)[3];
+    /* observations [max_obs] */
+    int32_t *pt_obs;
+    uint8_t *ouse;     /* usable at the current linearisation */
+    double (*W)[18];   /* Jc^T W Jx (6x3) for a free pose and a free point */
+    double (*Y)[18];   /* W Vi (6x3) */
+    /* reduced system, n = 6 * max_poses */
+    double *S;         /* n x n, row stride n_cur */
+    double *b;
+    double *dc;
+} ba_ws;
+
+static int cfg_valid(const tvo_ba_config *c)
+{
+    if (c == NULL)
+        return 0;
+    if (c->max_iterations < 1 || c->max_iterations > TVO_BA_MAX_ITERATIONS)
+        return 0;
+    if (!(isfinite(c->huber) && c->huber > 0.0))
+        return 0;
+    if (!(isfinite(c->lambda_init) && c->lambda_init > 0.0 && c->lambda_init <= LAMBDA_MAX))
+        return 0;
+    if (!(isfinite(c->min_depth) && c->min_depth > 0.0))
+        return 0;
+    if (!(isfinite(c->max_point_cond) && c->max_point_cond >= 1.0))
+        return 0;
+    if (c->max_poses < 1 || c->max_poses > TVO_BA_MAX_POSES)
+        return 0;
+    if (c->max_points < 1 || c->max_points > TVO_BA_MAX_POINTS)
+        return 0;
+    if (c->max_obs < 1 || c->max_obs > TVO_BA_MAX_OBS)
+        return 0;
+    return 1;
+}
+
+void tvo_ba_config_default(tvo_ba_config *cfg)
+{
+    if (cfg == NULL)
+        return;
+    memset(cfg, 0, sizeof *cfg);
+    cfg->max_iterations = 10;
+    cfg->huber = 2.0 / 458.0;
+    cfg->lambda_init = 1e-3;
+    cfg->min_depth = 1e-3;
+    cfg->max_poses = 10;
+    cfg->max_points = 1024;
+    cfg->max_obs = 8192;
+    cfg->max_point_cond = 1e6;
+}
+
+/* Carves the workspace from base (NULL: only sizes). Returns the bytes used from an aligned base. */
+static size_t carve(const tvo_ba_config *c, uint8_t *base, ba_ws *ws)
+{
+    const size_t np = (size_t)c->max_poses, nx = (size_t)c->max_points, no = (size_t)c->max_obs;
+    const size_t n = 6u * np;
+    size_t off = 0;
+#define TVO_BA_TAKE(field, count)                                                          \
+    do {                                                                                   \
+        if (base != NULL)                                                                  \
+            ws->field = (void *)(base + off);                                              \
+        off += ((count) * sizeof(*ws->field) + 15u) & ~(size_t)15u;                        \
+    } while (0)
+    TVO_BA_TAKE(slot, np);
+    TVO_BA_TAKE(pose_nuse, np);
+    TVO_BA_TAKE(pose_bak, np);
+    TVO_BA_TAKE(Hc, np);
+    TVO_BA_TAKE(gc, np);
+    TVO_BA_TAKE(pstate, nx);
+    TVO_BA_TAKE(pt_nuse, nx);
+    TVO_BA_TAKE(pt_start, nx + 1u);
+    TVO_BA_TAKE(X_bak, nx);
+    TVO_BA_TAKE(V, nx);
+    TVO_BA_TAKE(gx, nx);
+    TVO_BA_TAKE(Vi, nx);
+    TVO_BA_TAKE(dx, nx);
+    TVO_BA_TAKE(pt_obs, no);
+    TVO_BA_TAKE(ouse, no);
+    TVO_BA_TAKE(W, no);
+    TVO_BA_TAKE(Y, no);
+    TVO_BA_TAKE(S, n * n);
+    TVO_BA_TAKE(b, n);
+    TVO_BA_TAKE(dc, n);
+#undef TVO_BA_TAKE
+    return off;
+}
+
+size_t tvo_ba_scratch_size(const tvo_ba_config *cfg)
+{
+    if (!cfg_valid(cfg))
+        return 0;
+    /* bounded capacities keep every product far below SIZE_MAX on 32-bit targets too */
+    return carve(cfg, NULL, NULL) + 16u;
+}
+
+/* ---- robust cost ------------------------------------------------------------------------------ */
+
+/* 1/2 rho(r^2) and the IRLS weight of one residual component */
+static double huber_half(double r, double k, double *w)
+{
+    const double a = fabs(r);
+    if (a <= k) {
+        *w = 1.0;
+        return 0.5 * r * r;
+    }
+    *w = k / a;
+    return k * a - 0.5 * k * k;
+}
+
+static int pose_finite(const tvo_pose *T)
+{
+    for (int i = 0; i < 9; ++i)
+        if (!isfinite(T->R[i]))
+            return 0;
+    return isfinite(T->t[0]) && isfinite(T->t[1]) && isfinite(T->t[2]);
+}
+
+static void to_camera(const tvo_pose *T, const double X[3], double P[3])
+{
+    P[0] = T->R[0] * X[0] + T->R[1] * X[1] + T->R[2] * X[2] + T->t[0];
+    P[1] = T->R[3] * X[0] + T->R[4] * X[1] + T->R[5] * X[2] + T->t[1];
+    P[2] = T->R[6] * X[0] + T->R[7] * X[1] + T->R[8] * X[2] + T->t[2];
+}
+
+/* Cost of the current state over the observations marked usable; +inf when one of them fell below
+ * min_depth or a value is not finite. O(obs). */
+static double eval_cost(const tvo_ba_config *c, const tvo_ba_problem *p, const ba_ws *ws)
+{
+    double cost = 0.0, w;
+    for (int32_t k = 0; k < p->n_obs; ++k) {
+        const tvo_ba_obs *o = &p->obs[k];
+        double P[3];
+        if (!ws->ouse[k])
+            continue;
+        to_camera(&p->T_c_w[o->pose], p->X[o->point], P);
+        if (!(P[2] >= c->min_depth))
+            return INFINITY;
+        cost += huber_half(P[0] / P[2] - o->x, c->huber, &w);
+        cost += huber_half(P[1] / P[2] - o->y, c->huber, &w);
+    }
+    return isfinite(cost) ? cost : INFINITY;
+}
+
+/* ---- small dense algebra ---------------------------------------------------------------------- */
+
+/* Inverse of a symmetric 3x3 by Cholesky; 0 when a pivot is not above rel * its diagonal entry. */
+static int chol3_inv(const double A[9], double rel, double Ai[9])
+{
+    double l00, l10, l11, l20, l21, l22, d;
+    double m00, m10, m11, m20, m21, m22; /* L^-1 (lower) */
+    if (!(A[0] > 0.0 && A[4] > 0.0 && A[8] > 0.0))
+        return 0;
+    if (!(A[0] > rel * A[0]))
+        return 0;
+    l00 = sqrt(A[0]);
+    l10 = A[3] / l00;
+    l20 = A[6] / l00;
+    d = A[4] - l10 * l10;
+    if (!(d > rel * A[4]))
+        return 0;
+    l11 = sqrt(d);
+    l21 = (A[7] - l20 * l10) / l11;
+    d = A[8] - l20 * l20 - l21 * l21;
+    if (!(d > rel * A[8]))
+        return 0;
+    l22 = sqrt(d);
+    m00 = 1.0 / l00;
+    m11 = 1.0 / l11;
+    m22 = 1.0 / l22;
+    m10 = -l10 * m00 / l11;
+    m21 = -l21 * m11 / l22;
+    m20 = -(l20 * m00 + l21 * m10) / l22;
+    /* A^-1 = M^T M */
+    Ai[0] = m00 * m00 + m10 * m10 + m20 * m20;
+    Ai[1] = m10 * m11 + m20 * m21;
+    Ai[2] = m20 * m22;
+    Ai[4] = m11 * m11 + m21 * m21;
+    Ai[5] = m21 * m22;
+    Ai[8] = m22 * m22;
+    Ai[3] = Ai[1];
+    Ai[6] = Ai[2];
+    Ai[7] = Ai[5];
+    for (int i = 0; i < 9; ++i)
+        if (!isfinite(Ai[i]))
+            return 0;
+    return 1;
+}
+
+/* In-place Cholesky of the lower triangle of an n x n matrix (row stride n): L L^T. 0 when a pivot is
+ * not above rel * its diagonal entry or is not finite. O(n^3 / 6). */
+static int chol_n(double *A, int n, double rel)
+{
+    for (int j = 0; j < n; ++j) {
+        double *rj = A + (size_t)j * (size_t)n;
+        double d = rj[j];
+        const double diag = rj[j];
+        for (int k = 0; k < j; ++k)
+            d -= rj[k] * rj[k];
+        if (!(diag > 0.0 && d > rel * diag && isfinite(d)))
+            return 0;
+        d = sqrt(d);
+        rj[j] = d;
+        for (int i = j + 1; i < n; ++i) {
+            double *ri = A + (size_t)i * (size_t)n;
+            double s = ri[j];
+            for (int k = 0; k < j; ++k)
+                s -= ri[k] * rj[k];
+            ri[j] = s / d;
+        }
+    }
+    return 1;
+}
+
+/* Solves L L^T x = b (x may alias b). */
+static void chol_solve(const double *L, int n, const double *b, double *x)
+{
+    for (int i = 0; i < n; ++i) {
+        const double *ri = L + (size_t)i * (size_t)n;
+        double s = b[i];
+        for (int k = 0; k < i; ++k)
+            s -= ri[k] * x[k];
+        x[i] = s / ri[i];
+    }
+    for (int i = n - 1; i >= 0; --i) {
+        double s = x[i];
+        for (int k = i + 1; k < n; ++k)
+            s -= L[(size_t)k * (size_t)n + (size_t)i] * x[k];
+        x[i] = s / L[(size_t)i * (size_t)n + (size_t)i];
+    }
+}
+
+/* ---- linearisation ---------------------------------------------------------------------------- */
+
+/* Builds the per-pose and per-point blocks at the current state, marks usable observations, decides
+ * the held points and the free-pose slots. Returns the cost (over the usable observations); counts to
+ * *n_used, *n_skipped_obs, *n_held, *n_free_poses; *pose_starved when a free pose had no usable
+ * observation. */
+static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *ws, int32_t *n_used,
+                        int32_t *n_skipped_obs, int32_t *n_held, int32_t *n_free_poses, int *pose_starved)
+{
+    const double k_h = c->huber;
+    double cost = 0.0;
+    int32_t used = 0, nfree = 0, held = 0;
+    *pose_starved = 0;
+    for (int32_t i = 0; i < p->n_poses; ++i) {
+        ws->pose_nuse[i] = 0;
+        memset(ws->Hc[i], 0, sizeof ws->Hc[i]);
+        memset(ws->gc[i], 0, sizeof ws->gc[i]);
+    }
+    for (int32_t j = 0; j < p->n_points; ++j) {
+        ws->pt_nuse[j] = 0;
+        memset(ws->V[j], 0, sizeof ws->V[j]);
+        memset(ws->gx[j], 0, sizeof ws->gx[j]);
+        ws->pstate[j] = (p->point_fixed != NULL && p->point_fixed[j]) ? PT_FIXED : PT_FREE;
+    }
+    for (int32_t k = 0; k < p->n_obs; ++k) {
+        const tvo_ba_obs *o = &p->obs[k];
+        const tvo_pose *T = &p->T_c_w[o->pose];
+        const int pose_free = !p->pose_fixed[o->pose];
+        const int pt_free = ws->pstate[o->point] == PT_FREE;
+        double P[3], iz, u, v, r0, r1, w0, w1, Jc[2][6], Jx[2][3];
+        ws->ouse[k] = 0;
+        if (!(isfinite(o->x) && isfinite(o->y)))
+            continue;
+        to_camera(T, p->X[o->point], P);
+        if (!(P[2] >= c->min_depth))
+            continue;
+        iz = 1.0 / P[2];
+        u = P[0] * iz;
+        v = P[1] * iz;
+        r0 = u - o->x;
+        r1 = v - o->y;
+        if (!(isfinite(r0) && isfinite(r1)))
+            continue;
+        ws->ouse[k] = 1;
+        used++;
+        ws->pose_nuse[o->pose]++;
+        ws->pt_nuse[o->point]++;
+        cost += huber_half(r0, k_h, &w0) + huber_half(r1, k_h, &w1);
+        /* d(u, v)/dP = iz [1 0 -u; 0 1 -v]; dP/d(omega, v) = [-[P]x  I]; dP/dX = R */
+        Jc[0][0] = -u * v;
+        Jc[0][1] = 1.0 + u * u;
+        Jc[0][2] = -v;
+        Jc[0][3] = iz;
+        Jc[0][4] = 0.0;
+        Jc[0][5] = -u * iz;
+        Jc[1][0] = -1.0 - v * v;
+        Jc[1][1] = u * v;
+        Jc[1][2] = u;
+        Jc[1][3] = 0.0;
+        Jc[1][4] = iz;
+        Jc[1][5] = -v * iz;
+        for (int a = 0; a < 3; ++a) {
+            Jx[0][a] = iz * (T->R[a] - u * T->R[6 + a]);
+            Jx[1][a] = iz * (T->R[3 + a] - v * T->R[6 + a]);
+        }
+        if (pose_free) {
+            double *H = ws->Hc[o->pose], *g = ws->gc[o->pose];
+            for (int a = 0; a < 6; ++a) {
+                const double wa0 = w0 * Jc[0][a], wa1 = w1 * Jc[1][a];
+                for (int b = 0; b < 6; ++b)
+                    H[6 * a + b] += wa0 * Jc[0][b] + wa1 * Jc[1][b];
+                g[a] += wa0 * r0 + wa1 * r1;
+            }
+        }
+        if (pt_free) {
+            double *Vj = ws->V[o->point], *g = ws->gx[o->point];
+            for (int a = 0; a < 3; ++a) {
+                const double wa0 = w0 * Jx[0][a], wa1 = w1 * Jx[1][a];
+                for (int b = 0; b < 3; ++b)
+                    Vj[3 * a + b] += wa0 * Jx[0][b] + wa1 * Jx[1][b];
+                g[a] += wa0 * r0 + wa1 * r1;
+            }
+            if (pose_free) {
+                double *Wk = ws->W[k];
+                for (int a = 0; a < 6; ++a) {
+                    const double wa0 = w0 * Jc[0][a], wa1 = w1 * Jc[1][a];
+                    for (int b = 0; b < 3; ++b)
+                        Wk[3 * a + b] = wa0 * Jx[0][b] + wa1 * Jx[1][b];
+                }
+            }
+        }
+    }
+    /* held points: too few usable observations or an ill-conditioned block */
+    for (int32_t j = 0; j < p->n_points; ++j) {
+        double Vi[9], tr, fro = 0.0;
+        if (ws->pstate[j] != PT_FREE)
+            continue;
+        if (ws->pt_nuse[j] < 2 || !chol3_inv(ws->V[j], PIVOT_POINT, Vi)) {
+            ws->pstate[j] = PT_HELD;
+            held++;
+            continue;
+        }
+        tr = ws->V[j][0] + ws->V[j][4] + ws->V[j][8];
+        for (int a = 0; a < 9; ++a)
+            fro += Vi[a] * Vi[a];
+        if (!(tr * sqrt(fro) <= c->max_point_cond)) {
+            ws->pstate[j] = PT_HELD;
+            held++;
+        }
+    }
+    for (int32_t i = 0; i < p->n_poses; ++i) {
+        ws->slot[i] = -1;
+        if (p->pose_fixed[i])
+            continue;
+        if (ws->pose_nuse[i] == 0) {
+            *pose_starved = 1;
+            continue;
+        }
+        ws->slot[i] = nfree++;
+    }
+    *n_used = used;
+    *n_skipped_obs = p->n_obs - used;
+    *n_held = held;
+    *n_free_poses = nfree;
+    return isfinite(cost) ? cost : INFINITY;
+}
+
+/* Builds and solves the damped system (lambda; Cholesky pivot bound rel) into ws->dc (poses, by slot)
+ * and ws->dx (free points). Returns 0 when a factorisation fails. With solve == 0 only the reduced
+ * system's factorisation is attempted (the singularity test). */
+static int build_solve(const tvo_ba_problem *p, ba_ws *ws, int32_t nfree, double lambda, double rel, int solve)
+{
+    const int n = 6 * nfree;
+    const double dmp = 1.0 + lambda;
+    double *S = ws->S;
+    memset(S, 0, (size_t)n * (size_t)n * sizeof *S);
+    for (int32_t i = 0; i < p->n_poses; ++i) {
+        const int32_t s = ws->slot[i];
+        if (s < 0)
+            continue;
+        for (int a = 0; a < 6; ++a) {
+            double *row = S + (size_t)(6 * s + a) * (size_t)n + (size_t)(6 * s);
+            for (int b2 = 0; b2 < 6; ++b2)
+                row[b2] = ws->Hc[i][6 * a + b2];
+            row[a] *= dmp;
+            ws->b[6 * s + a] = -ws->gc[i][a];
+        }
+    }
+    for (int32_t j = 0; j < p->n_points; ++j) {
+        double Vd[9];
+        const int32_t k0 = ws->pt_start[j], k1 = ws->pt_start[j + 1];
+        if (ws->pstate[j] != PT_FREE)
+            continue;
+        memcpy(Vd, ws->V[j], sizeof Vd);
+        Vd[0] *= dmp;
+        Vd[4] *= dmp;
+        Vd[8] *= dmp;
+        if (!chol3_inv(Vd, 0.0, ws->Vi[j]))
+            return 0;
+        for (int32_t q = k0; q < k1; ++q) {
+            const int32_t k = ws->pt_obs[q];
+            const int32_t sk = ws->slot[p->obs[k].pose];
+            const double *Wk = ws->W[k], *Vi = ws->Vi[j], *g = ws->gx[j];
+            double *Yk = ws->Y[k];
+            if (!ws->ouse[k] || sk < 0)
+                continue;
+            for (int a = 0; a < 6; ++a) {
+                for (int b2 = 0; b2 < 3; ++b2)
+                    Yk[3 * a + b2] = Wk[3 * a] * Vi[b2] + Wk[3 * a + 1] * Vi[3 + b2] + Wk[3 * a + 2] * Vi[6 + b2];
+                ws->b[6 * sk + a] += Yk[3 * a] * g[0] + Yk[3 * a + 1] * g[1] + Yk[3 * a + 2] * g[2];
+            }
+        }
+        for (int32_t q = k0; q < k1; ++q) {
+            const int32_t k = ws->pt_obs[q];
+            const int32_t sk = ws->slot[p->obs[k].pose];
+            if (!ws->ouse[k] || sk < 0)
+                continue;
+            for (int32_t q2 = k0; q2 < k1; ++q2) {
+                const int32_t l = ws->pt_obs[q2];
+                const int32_t sl = ws->slot[p->obs[l].pose];
+                const double *Yk = ws->Y[k], *Wl = ws->W[l];
+                if (!ws->ouse[l] || sl < 0 || sl > sk)
+                    continue;
+                for (int a = 0; a < 6; ++a) {
+                    double *row = S + (size_t)(6 * sk + a) * (size_t)n + (size_t)(6 * sl);
+                    for (int b2 = 0; b2 < 6; ++b2)
+                        row[b2] -= Yk[3 * a] * Wl[3 * b2] + Yk[3 * a + 1] * Wl[3 * b2 + 1] + Yk[3 * a + 2] * Wl[3 * b2 + 2];
+                }
+            }
+        }
+    }
+    if (n > 0 && !chol_n(S, n, rel))
+        return 0;
+    if (!solve)
+        return 1;
+    if (n > 0)
+        chol_solve(S, n, ws->b, ws->dc);
+    /* back-substitution: dx_j = Vi (-gx_j - sum_k W_k^T dc_k) */
+    for (int32_t j = 0; j < p->n_points; ++j) {
+        double t[3];
+        const int32_t k0 = ws->pt_start[j], k1 = ws->pt_start[j + 1];
+        const double *Vi = ws->Vi[j];
+        if (ws->pstate[j] != PT_FREE)
+            continue;
+        t[0] = -ws->gx[j][0];
+        t[1] = -ws->gx[j][1];
+        t[2] = -ws->gx[j][2];
+        for (int32_t q = k0; q < k1; ++q) {
+            const int32_t k = ws->pt_obs[q];
+            const int32_t sk = ws->slot[p->obs[k].pose];
+            const double *Wk = ws->W[k], *d;
+            if (!ws->ouse[k] || sk < 0)
+                continue;
+            d = ws->dc + 6 * sk;
+            for (int b2 = 0; b2 < 3; ++b2)
+                for (int a = 0; a < 6; ++a)
+                    t[b2] -= Wk[3 * a + b2] * d[a];
+        }
+        for (int a = 0; a < 3; ++a)
+            ws->dx[j][a] = Vi[3 * a] * t[0] + Vi[3 * a + 1] * t[1] + Vi[3 * a + 2] * t[2];
+    }
+    return 1;
+}
+
+/* Applies the step; 0 (nothing written) when a value of the step or of the result is not finite. */
+static int apply_step(tvo_ba_problem *p, const ba_ws *ws, int32_t nfree)
+{
+    for (int i = 0; i < 6 * nfree; ++i)
+        if (!isfinite(ws->dc[i]))
+            return 0;
+    for (int32_t j = 0; j < p->n_points; ++j)
+        if (ws->pstate[j] == PT_FREE &&
+            !(isfinite(ws->dx[j][0]) && isfinite(ws->dx[j][1]) && isfinite(ws->dx[j][2])))
+            return 0;
+    for (int32_t i = 0; i < p->n_poses; ++i) {
+        const int32_t s = ws->slot[i];
+        tvo_pose *T = &p->T_c_w[i];
+        double Rd[9], R[9], t[3];
+        const double *d;
+        if (s < 0)
+            continue;
+        d = ws->dc + 6 * s;
+        tvo_rotvec_to_rot(d, Rd);
+        for (int r = 0; r < 3; ++r) {
+            for (int col = 0; col < 3; ++col)
+                R[3 * r + col] = Rd[3 * r] * T->R[col] + Rd[3 * r + 1] * T->R[3 + col] + Rd[3 * r + 2] * T->R[6 + col];
+            t[r] = Rd[3 * r] * T->t[0] + Rd[3 * r + 1] * T->t[1] + Rd[3 * r + 2] * T->t[2] + d[3 + r];
+        }
+        memcpy(T->R, R, sizeof R);
+        memcpy(T->t, t, sizeof t);
+    }
+    for (int32_t j = 0; j < p->n_points; ++j) {
+        if (ws->pstate[j] != PT_FREE)
+            continue;
+        p->X[j][0] += ws->dx[j][0];
+        p->X[j][1] += ws->dx[j][1];
+        p->X[j][2] += ws->dx[j][2];
+    }
+    for (int32_t i = 0; i < p->n_poses; ++i)
+        if (!pose_finite(&p->T_c_w[i]))
+            return 0;
+    for (int32_t j = 0; j < p->n_points; ++j)
+        if (!(isfinite(p->X[j][0]) && isfinite(p->X[j][1]) && isfinite(p->X[j][2])))
+            return 0;
+    return 1;
+}
+
+/* Decrease of the cost the damped model predicts for the solved step: 1/2 d^T (lambda D d - g). */
+static double predicted_drop(const tvo_ba_problem *p, const ba_ws *ws, double lambda)
+{
+    double s = 0.0;
+    for (int32_t i = 0; i < p->n_poses; ++i) {
+        const int32_t sl = ws->slot[i];
+        if (sl < 0)
+            continue;
+        for (int a = 0; a < 6; ++a) {
+            const double d = ws->dc[6 * sl + a];
+            s += d * (lambda * ws->Hc[i][7 * a] * d - ws->gc[i][a]);
+        }
+    }
+    for (int32_t j = 0; j < p->n_points; ++j) {
+        if (ws->pstate[j] != PT_FREE)
+            continue;
+        for (int a = 0; a < 3; ++a) {
+            const double d = ws->dx[j][a];
+            s += d * (lambda * ws->V[j][4 * a] * d - ws->gx[j][a]);
+        }
+    }
+    return 0.5 * s;
+}
+
+static void backup(const tvo_ba_problem *p, ba_ws *ws)
+{
+    memcpy(ws->pose_bak, p->T_c_w, (size_t)p->n_poses * sizeof *p->T_c_w);
+    if (p->n_points > 0)
+        memcpy(ws->X_bak, p->X, (size_t)p->n_points * sizeof *p->X);
+}
+
+static void restore(tvo_ba_problem *p, const ba_ws *ws)
+{
+    memcpy(p->T_c_w, ws->pose_bak, (size_t)p->n_poses * sizeof *p->T_c_w);
+    if (p->n_points > 0)
+        memcpy(p->X, ws->X_bak, (size_t)p->n_points * sizeof *p->X);
+}
+
+static tvo_status check_problem(const tvo_ba_config *cfg, const tvo_ba_problem *p)
+{
+    int32_t free_vars = 0;
+    if (p->T_c_w == NULL || p->pose_fixed == NULL || (p->n_points > 0 && p->X == NULL) ||
+        (p->n_obs > 0 && p->obs == NULL))
+        return TVO_ERR_NULL;
+    if (p->n_poses < 1 || p->n_points < 0 || p->n_obs < 0)
+        return TVO_ERR_ARG;
+    if (p->n_poses > cfg->max_poses || p->n_points > cfg->max_points || p->n_obs > cfg->max_obs)
+        return TVO_ERR_NO_MEMORY;
+    for (int32_t k = 0; k < p->n_obs; ++k)
+        if (p->obs[k].pose < 0 || p->obs[k].pose >= p->n_poses || p->obs[k].point < 0 ||
+            p->obs[k].point >= p->n_points)
+            return TVO_ERR_ARG;
+    for (int32_t i = 0; i < p->n_poses; ++i) {
+        if (!pose_finite(&p->T_c_w[i]))
+            return TVO_ERR_NOT_FINITE;
+        free_vars += !p->pose_fixed[i];
+    }
+    for (int32_t j = 0; j < p->n_points; ++j) {
+        if (!(isfinite(p->X[j][0]) && isfinite(p->X[j][1]) && isfinite(p->X[j][2])))
+            return TVO_ERR_NOT_FINITE;
+        free_vars += p->point_fixed == NULL || !p->point_fixed[j];
+    }
+    if (free_vars == 0 || p->n_obs == 0)
+        return TVO_ERR_TOO_FEW;
+    return TVO_OK;
+}
+
+tvo_status tvo_ba_solve(const tvo_ba_config *cfg, tvo_ba_problem *p, void *scratch, size_t scratch_size,
+                        tvo_ba_report *rep)
+{
+    ba_ws ws;
+    tvo_ba_report r;
+    tvo_status st;
+    uint8_t *base;
+    double cost, lambda;
+    int32_t n_used, n_skip, n_held, nfree, it;
+    int starved, converged = 0, linearised = 1;
+    if (cfg == NULL || p == NULL || scratch == NULL)
+        return TVO_ERR_NULL;
+    if (!cfg_valid(cfg))
+        return TVO_ERR_ARG;
+    st = check_problem(cfg, p);
+    if (st != TVO_OK)
+        return st;
+    if (scratch_size < tvo_ba_scratch_size(cfg))
+        return TVO_ERR_NO_MEMORY;
+    base = (uint8_t *)scratch + ((16u - ((uintptr_t)scratch & 15u)) & 15u);
+    (void)carve(cfg, base, &ws);
+
+    /* observations grouped by point (counting sort, stable) */
+    for (int32_t j = 0; j <= p->n_points; ++j)
+        ws.pt_start[j] = 0;
+    for (int32_t k = 0; k < p->n_obs; ++k)
+        ws.pt_start[p->obs[k].point + 1]++;
+    for (int32_t j = 0; j < p->n_points; ++j)
+        ws.pt_start[j + 1] += ws.pt_start[j];
+    for (int32_t j = 0; j < p->n_points; ++j)
+        ws.pt_nuse[j] = ws.pt_start[j]; /* fill cursor */
+    for (int32_t k = 0; k < p->n_obs; ++k)
+        ws.pt_obs[ws.pt_nuse[p->obs[k].point]++] = k;
+
+    memset(&r, 0, sizeof r);
+    cost = linearise(cfg, p, &ws, &n_used, &n_skip, &n_held, &nfree, &starved);
+    r.cost_initial = cost;
+    if (starved)
+        r.flags |= TVO_BA_FLAG_SINGULAR;
+    /* the undamped reduced system: is every free pose determined? */
+    if (nfree > 0 && !build_solve(p, &ws, nfree, 0.0, PIVOT_SINGULAR, 0))
+        r.flags |= TVO_BA_FLAG_SINGULAR;
+    lambda = cfg->lambda_init;
+    backup(p, &ws);
+    for (it = 0; it < cfg->max_iterations; ++it) {
+        int has_free_point = 0;
+        double cnew;
+        if (!linearised) {
+            cost = linearise(cfg, p, &ws, &n_used, &n_skip, &n_held, &nfree, &starved);
+            if (starved)
+                r.flags |= TVO_BA_FLAG_SINGULAR;
+            backup(p, &ws);
+            linearised = 1;
+        }
+        for (int32_t j = 0; j < p->n_points && !has_free_point; ++j)
+            has_free_point = ws.pstate[j] == PT_FREE;
+        if (n_used == 0 || cost <= COST_FLOOR * (double)n_used || (nfree == 0 && !has_free_point) ||
+            !isfinite(cost)) {
+            converged = 1;
+            break;
+        }
+        if (!build_solve(p, &ws, nfree, lambda, PIVOT_DAMPED, 1)) {
+            r.iterations++;
+            r.flags |= TVO_BA_FLAG_SINGULAR;
+            lambda *= 10.0;
+        } else {
+            if (!(predicted_drop(p, &ws, lambda) > ACCEPT_REL * cost)) {
+                converged = 1; /* the model promises no meaningful decrease: a stationary point */
+                break;
+            }
+            r.iterations++;
+            if (!apply_step(p, &ws, nfree) || !((cnew = eval_cost(cfg, p, &ws)) < cost - ACCEPT_REL * cost)) {
+                restore(p, &ws);
+                lambda *= 10.0;
+            } else {
+                const double drop = cost - cnew;
+                r.accepted++;
+                cost = cnew;
+                lambda = lambda / 10.0 < LAMBDA_MIN ? LAMBDA_MIN : lambda / 10.0;
+                linearised = 0;
+                if (drop < CONVERGED_REL * (cost + drop)) {
+                    converged = 1;
+                    break;
+                }
+            }
+        }
+        if (lambda > LAMBDA_MAX) {
+            converged = 1; /* no step lowers the cost any more */
+            break;
+        }
+    }
+    if (!converged)
+        r.flags |= TVO_BA_FLAG_ITER_CAP;
+    if (r.accepted == 0 && r.iterations > 0)
+        r.flags |= TVO_BA_FLAG_COST_ROSE;
+    if (n_held > 0)
+        r.flags |= TVO_BA_FLAG_POINTS_SKIPPED;
+    r.points_skipped = n_held;
+    r.obs_skipped = n_skip;
+    r.poses_free = nfree;
+    r.cost_final = cost;
+    if (rep != NULL)
+        *rep = r;
+    return TVO_OK;
+}
+
+tvo_status tvo_ba_obs_errors(const tvo_ba_problem *p, double *err2)
+{
+    if (p == NULL || err2 == NULL || p->T_c_w == NULL || (p->n_points > 0 && p->X == NULL) ||
+        (p->n_obs > 0 && p->obs == NULL))
+        return TVO_ERR_NULL;
+    if (p->n_poses < 0 || p->n_points < 0 || p->n_obs < 0)
+        return TVO_ERR_ARG;
+    for (int32_t k = 0; k < p->n_obs; ++k)
+        if (p->obs[k].pose < 0 || p->obs[k].pose >= p->n_poses || p->obs[k].point < 0 ||
+            p->obs[k].point >= p->n_points)
+            return TVO_ERR_ARG;
+    for (int32_t k = 0; k < p->n_obs; ++k) {
+        const tvo_ba_obs *o = &p->obs[k];
+        double P[3], e0, e1, e;
+        to_camera(&p->T_c_w[o->pose], p->X[o->point], P);
+        err2[k] = TVO_BA_ERR_INVALID;
+        if (!(P[2] > 0.0))
+            continue;
+        e0 = P[0] / P[2] - o->x;
+        e1 = P[1] / P[2] - o->y;
+        e = e0 * e0 + e1 * e1;
+        if (isfinite(e) && e < TVO_BA_ERR_INVALID)
+            err2[k] = e;
+    }
+    return TVO_OK;
+}

@@ -1,0 +1,111 @@
+#!/usr/bin/env bash
+# Install tinyvo to a non-default prefix and build a project outside the tree against it
+# (tools/run-tests.sh). For each kind of library (static, then shared with BUILD_SHARED_LIBS=ON):
+#   1. configure with the default prefix, build lib/ + port/, `cmake --install --prefix $PREFIX`, then MOVE
+#      the installed tree elsewhere: every use below goes through the moved tree (relocatable package);
+#   2. no internal header is installed (linalg.h, dmath.h, arena.h, tvo_border.h) and every installed header
+#      compiles alone with only the installed include folder (C99, -Wall -Wextra -Wpedantic -Werror);
+#   3. the installed CMake and pkg-config files name no path of the build machine (source, build folder,
+#      a library path such as /usr/lib/.../libm.so);
+#   4. test/external through find_package(tinyvo COMPONENTS port) (tinyvo::tinyvo, tinyvo::port) and through
+#      `pkg-config tinyvo-port`, each run (test/external/main.c: version, PNG round trip, 8 VO frames, model);
+#   5. shared only: SONAME libtinyvo.so.<SOVERSION> (and _port, _v4l2), the programs need those names;
+#      static only: the programs need no libtinyvo*.so.
+# Usage: test/external/run.sh [static|shared ...]   (default: static shared)
+# Environment: TVO_EXT_PREFIX (default /tmp/tvo-prefix; the moved tree is $TVO_EXT_PREFIX-moved), JOBS.
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+cd "$ROOT"
+JOBS="${JOBS:-2}"
+KINDS=("$@")
+[ ${#KINDS[@]} -eq 0 ] && KINDS=(static shared)
+PREFIX_BASE="${TVO_EXT_PREFIX:-/tmp/tvo-prefix}"
+fail() { echo "[external] FAIL: $*" >&2; exit 1; }
+
+for kind in "${KINDS[@]}"; do
+  case "$kind" in
+    static) shared=OFF ;;
+    shared) shared=ON ;;
+    *) echo "usage: test/external/run.sh [static|shared ...]" >&2; exit 2 ;;
+  esac
+  B="$ROOT/build/adopt-install-$kind"
+  PREFIX="$PREFIX_BASE-$kind"
+  MOVED="$PREFIX-moved"
+  echo "== [external] $kind: build, install to $PREFIX, move to $MOVED"
+  cmake -S . -B "$B" -G Ninja -DCMAKE_BUILD_TYPE=Release -DBUILD_SHARED_LIBS=$shared -DTVO_WERROR=ON \
+        -DTVO_BUILD_TESTS=OFF -DTVO_BUILD_BENCH=OFF -DTVO_BUILD_EXAMPLES=OFF >/dev/null
+  cmake --build "$B" -j"$JOBS" >/dev/null
+  rm -rf "$PREFIX" "$MOVED"
+  cmake --install "$B" --prefix "$PREFIX" >/dev/null
+  mv "$PREFIX" "$MOVED"
+  P="$MOVED"
+  LIBDIR="$P/lib"
+  [ -d "$LIBDIR/cmake/tinyvo" ] || fail "no $LIBDIR/cmake/tinyvo"
+
+  # 2. headers
+  for h in linalg.h dmath.h arena.h tvo_border.h; do
+    found=$(find "$P" -name "$h")
+    [ -z "$found" ] || fail "internal header installed: $found"
+  done
+  hdr_dir="$B/ext-headers"
+  mkdir -p "$hdr_dir"
+  n=0
+  while IFS= read -r h; do
+    rel="${h#"$P/include/"}"
+    echo "#include \"$rel\"" > "$hdr_dir/one.c"
+    echo "int tvo_external_header_check;" >> "$hdr_dir/one.c"
+    cc -std=c99 -Wall -Wextra -Wpedantic -Werror -D_POSIX_C_SOURCE=200809L -I"$P/include" -c "$hdr_dir/one.c" \
+       -o "$hdr_dir/one.o" 2>"$hdr_dir/one.log" || { cat "$hdr_dir/one.log" >&2; fail "$rel does not compile alone"; }
+    n=$((n + 1))
+  done < <(find "$P/include" -name '*.h' | sort)
+  echo "[external] $n installed headers compile alone; no internal header installed"
+
+  # 3. no build-machine paths in the package files
+  if grep -rnE "$ROOT|$PREFIX|/usr/lib[^ \"]*\.(so|a)" "$LIBDIR/cmake/tinyvo" "$LIBDIR/pkgconfig"; then
+    fail "the installed package files above name a path of the build machine"
+  fi
+
+  # 4a. find_package
+  E="$B/ext-cmake"
+  rm -rf "$E"
+  cmake -S test/external -B "$E" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$P" >"$B/ext-cmake.log" \
+    || { cat "$B/ext-cmake.log" >&2; fail "find_package(tinyvo) project does not configure"; }
+  cmake --build "$E" >/dev/null || fail "find_package(tinyvo) project does not build"
+  model=$(ls "$P/share/tinyvo/models/"*.tvonn | head -n 1)
+  "$E/tvo_external" "$E/frame.png" "$model" || fail "find_package build: tvo_external failed"
+  # 4b. pkg-config (from the moved tree: the prefix comes from the .pc file's folder)
+  export PKG_CONFIG_PATH="$LIBDIR/pkgconfig"
+  pc_static=""
+  [ "$shared" = OFF ] && pc_static="--static"
+  [ "$(pkg-config --modversion tinyvo-port)" = "$(pkg-config --modversion tinyvo)" ] || fail "pkg-config versions differ"
+  pc_models="$(pkg-config --variable=modelsdir tinyvo)"
+  [ -d "$pc_models" ] || fail "pkg-config modelsdir $pc_models is not a folder"
+  # shellcheck disable=SC2046
+  cc -std=c99 -Wall -Wextra -Wpedantic -Werror test/external/main.c -o "$B/ext-pkgconfig" \
+     $(pkg-config --cflags tinyvo-port) $(pkg-config $pc_static --libs tinyvo-port) \
+     || fail "pkg-config build failed"
+  env LD_LIBRARY_PATH="$LIBDIR" "$B/ext-pkgconfig" "$B/ext-pkgconfig.png" "$(ls "$pc_models"/*.tvonn | head -n 1)" \
+     || fail "pkg-config build: tvo_external failed"
+  unset PKG_CONFIG_PATH
+
+  # 5. libraries
+  if [ "$shared" = ON ]; then
+    for lib in tinyvo tinyvo_port tinyvo_v4l2; do
+      so=$(ls "$LIBDIR/lib$lib.so."*.*.* 2>/dev/null | head -n 1)
+      [ -n "$so" ] || fail "no versioned lib$lib.so.X.Y.Z in $LIBDIR"
+      soname=$(readelf -d "$so" | sed -n 's/.*(SONAME).*\[\(.*\)\]/\1/p')
+      [ -n "$soname" ] || fail "$so has no SONAME"
+      [ -L "$LIBDIR/$soname" ] || fail "$LIBDIR/$soname (the SONAME link) is missing"
+      echo "[external] $(basename "$so"): SONAME $soname"
+    done
+    for exe in "$E/tvo_external" "$B/ext-pkgconfig"; do
+      readelf -d "$exe" | grep -q "NEEDED.*\[libtinyvo\.so\.[0-9]" || fail "$exe does not need libtinyvo.so.N"
+      readelf -d "$exe" | grep -q "NEEDED.*\[libtinyvo_port\.so\.[0-9]" || fail "$exe does not need libtinyvo_port.so.N"
+    done
+  else
+    for exe in "$E/tvo_external" "$B/ext-pkgconfig"; do
+      if readelf -d "$exe" | grep -q "NEEDED.*libtinyvo"; then fail "$exe needs a shared libtinyvo in a static build"; fi
+    done
+  fi
+  echo "[external] $kind: find_package and pkg-config builds pass"
+done
