@@ -32,15 +32,18 @@ static const char *const feature_names[TVO_FEAT_COUNT] = {
     "rx", "ry", "rz", "tx", "ty", "tz", "inlier_ratio", "parallax_deg", "tracks_k", "dt", "rot_only"
 };
 static const char *const stage_names[TVO_STAGE_COUNT] = { "pyramid", "track", "undistort",
-                                                           "pose", "detect", "total" };
+                                                           "pose", "detect", "map", "total" };
+static const char *const map_state_names[TVO_MAP_STATE_COUNT] = { "off", "initialising", "initialised",
+                                                                  "tracking", "lost" };
 
 typedef struct options {
-    const char *euroc, *cam, *out, *model, *stats, *features;
+    const char *euroc, *cam, *out, *model, *stats, *features, *tracks;
     enum scale_mode scale;
     double alpha, step; /* --scale-alpha (< 0: not given), --step */
     int body_frame, strict, quiet, print_memory;
     int keyframe; /* --keyframe 0|1 (< 0: the library's default) */
     int track_prediction; /* --track-prediction 0|1 (< 0: the library's default) */
+    int map;              /* --map 0|1 (< 0: the library's default) */
     long max_frames;
 } options;
 
@@ -51,17 +54,19 @@ static void usage(FILE *f)
             "  --euroc DIR          EuRoC/ASL sequence (folder holding mav0/)\n"
             "  --cam cam0|cam1      camera to replay (default cam0)\n"
             "  --out FILE           trajectory in TUM format (t tx ty tz qx qy qz qw)\n"
-            "  --scale MODE         per-step scale: gt (ground-truth step length), model (the\n"
-            "                       per-DoF networks' translation, --model), propagate (first\n"
-            "                       step from ground truth, then s_k = r_k s_(k-1) with the VO's\n"
-            "                       relative scale r_k), const (--step every frame), none (unit\n"
-            "                       steps; default)\n"
+            "  --scale MODE         the metric scale of the map's trajectory (one unknown\n"
+            "                       factor for the whole run): none (the map's own unit, the\n"
+            "                       first baseline; default), gt (set at every keyframe from\n"
+            "                       the ground-truth path length so far), model (the same\n"
+            "                       with the per-DoF networks' step lengths, --model),\n"
+            "                       const (the same with --step per frame), propagate (set\n"
+            "                       once, at the map's first keyframes, from ground truth).\n"
+            "                       With --map 0, each frame's step length instead (docs)\n"
             "  --model FILE         tinyvo weights file (needed by --scale model)\n"
-            "  --scale-alpha A      with model or const: step length s_k from the filter\n"
-            "                       log s_k = (1-A)(log s_(k-1) + log r_k) + A log n_k, n_k the\n"
-            "                       prior (|t| of the networks or their step-length branch,\n"
-            "                       or --step) along the raw VO\n"
-            "                       direction; A in [0, 1] (vo.h, tvo_scale_filter)\n"
+            "  --scale-alpha A      with model or const: the factor follows each keyframe\n"
+            "                       interval's length ratio r as log s = (1-A) log s + A log r\n"
+            "                       instead of the ratio of the whole path; A in [0, 1]\n"
+            "                       (with --map 0: the per-step filter of vo.h)\n"
             "  --step M             constant step length in metres for --scale const\n"
             "  --frame camera|body  pose written: camera (default) or body (through T_BS)\n"
             "  --stats FILE         JSON with frame counts, status counts and stage timings\n"
@@ -69,6 +74,10 @@ static void usage(FILE *f)
             "                       the dataset builder: t_ns,state,relpose_flags,\n"
             "                       pose_status,inliers,<feature names>,rel_scale,\n"
             "                       rel_scale_points\n"
+            "  --map 0|1            local map (keyframes, landmarks, bundle adjustment) on or\n"
+            "                       off (vo.h; default: the library's, on)\n"
+            "  --tracks FILE        CSV of the tracks after every frame: t_ns,id,x,y,age,flags\n"
+            "                       (pixels; flags: 1 pose inlier, 2 map landmark, 4 keyframe)\n"
             "  --keyframe 0|1       keyframe rotation on or off (vo.h; default: the library's)\n"
             "  --track-prediction 0|1\n"
             "                       LK guesses from the previous frame's rotation on or off\n"
@@ -100,6 +109,7 @@ static int parse_args(int argc, char **argv, options *o)
     o->max_frames = -1;
     o->keyframe = -1;
     o->track_prediction = -1;
+    o->map = -1;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -181,6 +191,13 @@ static int parse_args(int argc, char **argv, options *o)
                 fprintf(stderr, "tvo_replay: --max-frames needs a non-negative integer (got '%s')\n", v);
                 return -1;
             }
+        } else if (!strcmp(a, "--map")) {
+            NEED_VALUE();
+            if (parse_switch(a, v, &o->map) != 0)
+                return -1;
+        } else if (!strcmp(a, "--tracks")) {
+            NEED_VALUE();
+            o->tracks = v;
         } else if (!strcmp(a, "--keyframe") || !strcmp(a, "--track-prediction")) {
             NEED_VALUE();
             if (parse_switch(a, v, !strcmp(a, "--keyframe") ? &o->keyframe : &o->track_prediction) != 0)
@@ -267,6 +284,48 @@ static void *read_file(const char *path, size_t *size)
     return buf;
 }
 
+/* The map's metric scale (--scale with the map on). The VO's world has one unknown scale for the whole
+ * run; the replay's trajectory integrates the VO's motion times a factor s (metres per map unit) that the
+ * scale source sets at keyframes: path lengths of the source (ground-truth steps, the networks' step
+ * lengths, or --step per frame) over the VO's path lengths, keyframe interval by keyframe interval. */
+typedef struct map_scale {
+    double s;               /* metres per map unit (1 for --scale none; 0 until a source sets it) */
+    int set;
+    double src_sum, vo_sum; /* path lengths over the keyframe intervals used so far */
+    double src_int, vo_int; /* path lengths since the last keyframe */
+} map_scale;
+
+/* One frame: vo_len the VO's step length (map units), src_len the source's (metres; <= 0: none). At a
+ * keyframe the factor is updated: the ratio of the whole path (alpha < 0), the last interval's ratio
+ * through a log-space filter of weight alpha, or (once) for propagate. */
+static void map_scale_frame(map_scale *ms, enum scale_mode mode, double alpha, double vo_len, double src_len,
+                            int keyframe)
+{
+    if (mode == SCALE_NONE)
+        return;
+    if (vo_len > 0.0 && isfinite(vo_len))
+        ms->vo_int += vo_len;
+    if (src_len > 0.0 && isfinite(src_len))
+        ms->src_int += src_len;
+    if (!keyframe || !(ms->vo_int > 0.0) || !(ms->src_int > 0.0))
+        return;
+    if (mode == SCALE_PROPAGATE) {
+        if (!ms->set) {
+            ms->s = ms->src_int / ms->vo_int;
+            ms->set = 1;
+        }
+    } else if (alpha >= 0.0 && ms->set) {
+        const double r = ms->src_int / ms->vo_int;
+        ms->s = exp((1.0 - alpha) * log(ms->s) + alpha * log(r));
+    } else {
+        ms->src_sum += ms->src_int;
+        ms->vo_sum += ms->vo_int;
+        ms->s = ms->src_sum / ms->vo_sum;
+        ms->set = 1;
+    }
+    ms->src_int = ms->vo_int = 0.0;
+}
+
 int main(int argc, char **argv)
 {
     options o;
@@ -283,6 +342,11 @@ int main(int argc, char **argv)
     double *timing[TVO_STAGE_COUNT + 1] = { 0 };
     long counts_state[TVO_VO_STATE_COUNT] = { 0 }, counts_skip[SKIP_COUNT] = { 0 };
     long keyframe_frames = 0; /* frames whose rotation is the keyframe rotation */
+    long counts_map[TVO_MAP_STATE_COUNT] = { 0 }, map_keyframes = 0;
+    map_scale msc;
+    tvo_pose T_w_c_vo_prev = { { 0 }, { 0 } }; /* the VO's world pose of the previous frame (map on) */
+    tvo_vo_track *trk = NULL;
+    FILE *tracks = NULL;
     long n_frames, processed = 0, gaps = 0, gt_missing = 0, timed = 0;
     int64_t t_last = INT64_MIN, period_ns;
     int have_gt, have_prev_gt = 0, rc = 1, tty;
@@ -308,6 +372,8 @@ int main(int argc, char **argv)
         goto cleanup;
     }
     (void)tvo_scale_filter_init(&filt, o.alpha >= 0.0 ? o.alpha : 0.0);
+    memset(&msc, 0, sizeof(msc));
+    msc.s = o.scale == SCALE_NONE ? 1.0 : 0.0;
     T_bs = tvo_euroc_T_BS(seq);
     T_sb = tvo_pose_inverse(&T_bs);
     period_ns = (int64_t)llround(1e9 / (tvo_euroc_rate_hz(seq) > 0 ? tvo_euroc_rate_hz(seq) : 20.0));
@@ -318,6 +384,8 @@ int main(int argc, char **argv)
         cfg.keyframe = o.keyframe;
     if (o.track_prediction >= 0)
         cfg.track_prediction = o.track_prediction;
+    if (o.map >= 0)
+        cfg.map = o.map;
     vo_size = tvo_vo_required_size(&cfg);
     if (vo_size == 0) {
         fprintf(stderr, "tvo_replay: the camera of %s is not usable (check sensor.yaml)\n", o.euroc);
@@ -367,6 +435,15 @@ int main(int argc, char **argv)
             fprintf(stderr, "tvo_replay: model %s refused: %s\n", o.model, tvo_status_str(st));
             goto cleanup;
         }
+    }
+    if (o.tracks != NULL) {
+        trk = (tvo_vo_track *)malloc((size_t)cfg.max_tracks * sizeof(tvo_vo_track));
+        tracks = fopen(o.tracks, "w");
+        if (trk == NULL || tracks == NULL) {
+            fprintf(stderr, "tvo_replay: cannot write %s\n", o.tracks);
+            goto cleanup;
+        }
+        fprintf(tracks, "t_ns,id,x,y,age,flags\n");
     }
     out = fopen(o.out, "w");
     if (out == NULL) {
@@ -445,8 +522,18 @@ int main(int argc, char **argv)
             continue;
         }
         counts_state[res.state]++;
+        counts_map[res.map_state]++;
+        map_keyframes += res.keyframe;
         if (res.keyframe_age > 0)
             keyframe_frames++;
+        if (tracks != NULL) {
+            int32_t nt = 0;
+            if (tvo_vo_tracks(vo, trk, cfg.max_tracks, &nt) == TVO_OK)
+                for (int32_t k = 0; k < nt && k < cfg.max_tracks; ++k)
+                    fprintf(tracks, "%lld,%u,%.2f,%.2f,%d,%d\n", (long long)t_ns, (unsigned)trk[k].id,
+                            (double)trk[k].x, (double)trk[k].y, (int)trk[k].age,
+                            (trk[k].inlier ? 1 : 0) | (trk[k].landmark ? 2 : 0) | (res.keyframe ? 4 : 0));
+        }
         if (feat != NULL) {
             fprintf(feat, "%lld,%d,%d,%d,%d", (long long)t_ns, (int)res.state, (int)res.relpose_flags,
                     (int)res.pose_status, (int)res.inliers);
@@ -470,7 +557,30 @@ int main(int argc, char **argv)
                 tvo_traj_init(&traj, &T_w_c0);
             }
             step = res.T_prev_cur;
-            if (res.state == TVO_VO_OK || res.state == TVO_VO_ROTATION_ONLY) {
+            if (cfg.map) {
+                /* the map's pose: integrate the VO's world motion with the map's scale factor */
+                double gt_len = -1.0, src = -1.0, vo_len;
+                tvo_pose rel = processed == 0 ? tvo_pose_identity() : tvo_pose_relative(&T_w_c_vo_prev, &res.T_w_c);
+                vo_len = sqrt(rel.t[0] * rel.t[0] + rel.t[1] * rel.t[1] + rel.t[2] * rel.t[2]);
+                if (gt_ok && have_prev_gt) {
+                    tvo_pose g = tvo_pose_body_to_camera_relative(&T_w_b_prev, &T_w_b, &T_bs);
+                    gt_len = sqrt(g.t[0] * g.t[0] + g.t[1] * g.t[1] + g.t[2] * g.t[2]);
+                }
+                if (o.scale == SCALE_GT || o.scale == SCALE_PROPAGATE) {
+                    src = gt_len;
+                } else if (o.scale == SCALE_CONST) {
+                    src = processed > 0 ? o.step : -1.0;
+                } else if (o.scale == SCALE_MODEL && res.state == TVO_VO_OK) {
+                    tvo_pose refined;
+                    if (tvo_vo_refine(nn, &res, &refined) == TVO_OK)
+                        src = sqrt(refined.t[0] * refined.t[0] + refined.t[1] * refined.t[1] +
+                                   refined.t[2] * refined.t[2]);
+                }
+                map_scale_frame(&msc, o.scale, o.alpha, vo_len, src, res.keyframe);
+                T_w_c_vo_prev = res.T_w_c;
+                if (tvo_traj_step(&traj, &rel, msc.s) != TVO_OK)
+                    counts_state[TVO_VO_LOST]++;
+            } else if (res.state == TVO_VO_OK || res.state == TVO_VO_ROTATION_ONLY) {
                 double scale = 1.0, gt_len = -1.0;
                 if (gt_ok && have_prev_gt) {
                     tvo_pose rel = tvo_pose_body_to_camera_relative(&T_w_b_prev, &T_w_b, &T_bs);
@@ -572,7 +682,12 @@ int main(int argc, char **argv)
                     gt_missing);
             for (int k = 0; k < TVO_VO_STATE_COUNT; ++k)
                 fprintf(js, "%s\"%s\": %ld", k ? ", " : "", state_names[k], counts_state[k]);
-            fprintf(js, "},\n  \"keyframe_rotation_frames\": %ld,\n  \"timing_us\": {\n", keyframe_frames);
+            fprintf(js, "},\n  \"keyframe_rotation_frames\": %ld,\n", keyframe_frames);
+            fprintf(js, "  \"map\": {\"enabled\": %d, \"keyframes\": %ld, \"losses\": %ld, \"scale\": %.9g, \"states\": {",
+                    (int)cfg.map, map_keyframes, counts_map[TVO_MAP_LOST], msc.s);
+            for (int k = 0; k < TVO_MAP_STATE_COUNT; ++k)
+                fprintf(js, "%s\"%s\": %ld", k ? ", " : "", map_state_names[k], counts_map[k]);
+            fprintf(js, "}},\n  \"timing_us\": {\n");
             for (int s = 0; s <= TVO_STAGE_COUNT; ++s) {
                 double med, p90;
                 percentiles(timing[s], timed, &med, &p90);
@@ -592,6 +707,11 @@ int main(int argc, char **argv)
 cleanup:
     if (out != NULL)
         fclose(out);
+    if (tracks != NULL && fclose(tracks) != 0) {
+        fprintf(stderr, "tvo_replay: error writing %s\n", o.tracks);
+        rc = 1;
+    }
+    free(trk);
     if (feat != NULL && fclose(feat) != 0) {
         fprintf(stderr, "tvo_replay: error writing %s\n", o.features);
         rc = 1;

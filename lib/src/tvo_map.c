@@ -19,6 +19,8 @@
 #define TVO_MAP_TRI_MAX_DEPTH 1e4
 /* After a bundle adjustment, observations with a larger reprojection error are removed. */
 #define TVO_MAP_BA_MAX_ERR_PX 2.5
+/* No keyframe below this share of cfg.map_kf_baseline (the camera only turned). */
+#define TVO_MAP_KF_MIN_BASELINE 0.25
 /* PnP inlier threshold, in pixels. */
 #define TVO_MAP_PNP_THRESHOLD_PX 2.0
 /* The initial pair needs this many triangulated landmarks, and this share of the reference's tracks
@@ -147,7 +149,10 @@ tvo_status tvo_map_init(tvo_map *m, const tvo_vo_config *cfg, tvo_arena *a)
     if (m->lm == NULL)
         return TVO_ERR_NO_MEMORY;
     tvo_map_clear(m);
+    for (int32_t i = 0; i < TVO_MAP_RING; ++i)
+        m->ring[i].serial = -1;
     m->next_kf_id = 0;
+    m->serial = -1;
     m->speed = 0.0;
     m->losses = 0;
     return TVO_OK;
@@ -188,6 +193,30 @@ static tvo_map_kf *kf_by_id(tvo_map *m, int32_t id)
             return k;
     }
     return NULL;
+}
+
+/* The pose of frame `serial` (the keyframe's, refined, when it became one in the window); NULL when the
+ * frame is no longer in the ring. *kf gets its keyframe or NULL. */
+static const tvo_pose *frame_pose(tvo_map *m, int32_t serial, tvo_map_kf **kf)
+{
+    const tvo_map_frame_pose *f;
+    *kf = NULL;
+    if (serial < 0)
+        return NULL;
+    f = &m->ring[serial % TVO_MAP_RING];
+    if (f->serial != serial)
+        return NULL;
+    if (f->kf_id >= 0)
+        *kf = kf_by_id(m, f->kf_id);
+    return *kf != NULL ? &(*kf)->T_c_w : &f->T_c_w;
+}
+
+static void ring_put(tvo_map *m, const tvo_pose *T, int32_t kf_id)
+{
+    tvo_map_frame_pose *f = &m->ring[m->serial % TVO_MAP_RING];
+    f->serial = m->serial;
+    f->kf_id = kf_id;
+    f->T_c_w = *T;
 }
 
 static void lm_free(tvo_map *m, int32_t j)
@@ -363,12 +392,13 @@ static void start_ref(tvo_map *m, tvo_map_tracks *tr, int64_t t_ns, const tvo_po
 {
     tvo_map_clear(m);
     m->has_ref = 1;
+    m->ref_serial = m->serial;
     m->ref_T_c_w = *T_c_w;
     m->ref_t_ns = t_ns;
     m->ref_frames = 0;
     for (int32_t i = 0; i < tr->n; ++i) {
         tr->lm[i] = -1;
-        tr->tri_kf[i] = tr->x_ok[i] ? TVO_MAP_REF_ID : -1;
+        tr->tri_fr[i] = tr->x_ok[i] ? m->serial : -1;
         tr->tri_x[i] = tr->x[i];
     }
 }
@@ -404,7 +434,7 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
     if (xa == NULL || xb == NULL || mask == NULL || idx == NULL || rs == NULL)
         return 0;
     for (int32_t i = 0; i < n; ++i) {
-        if (tr->tri_kf[i] == TVO_MAP_REF_ID && tr->x_ok[i]) {
+        if (tr->tri_fr[i] == m->ref_serial && tr->x_ok[i]) {
             xa[k] = tr->tri_x[i];
             xb[k] = tr->x[i];
             idx[k] = i;
@@ -485,16 +515,13 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
             return 0;
         }
     }
-    /* the tracks that were not triangulated keep waiting, now in keyframe 0 */
-    for (int32_t i = 0; i < n; ++i) {
-        if (tr->lm[i] >= 0)
-            continue;
-        if (tr->tri_kf[i] == TVO_MAP_REF_ID) {
-            tr->tri_kf[i] = k0->id;
-        } else {
-            tr->tri_kf[i] = tr->x_ok[i] ? k1->id : -1;
-            tr->tri_x[i] = tr->x[i];
-        }
+    /* the reference frame is keyframe 0 now; the tracks that were not triangulated keep waiting where
+       they were first seen */
+    {
+        tvo_map_frame_pose *f = &m->ring[m->ref_serial % TVO_MAP_RING];
+        f->serial = m->ref_serial;
+        f->kf_id = k0->id;
+        f->T_c_w = k0->T_c_w;
     }
     mark_tracked(m, tr);
     m->active = 1;
@@ -608,8 +635,9 @@ static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr,
             tvo_pose_transform_point(T, X[q], p);
             depth[nd++] = p[2];
         } else {
-            tr->lm[i] = -1; /* an outlier: the track no longer carries the landmark */
-            tr->tri_kf[i] = -1;
+            tr->lm[i] = -1; /* an outlier: the track no longer carries the landmark, and waits again */
+            tr->tri_fr[i] = m->serial;
+            tr->tri_x[i] = tr->x[i];
         }
     }
     *n_in = ni;
@@ -624,20 +652,23 @@ static int need_keyframe(const tvo_map *m, const tvo_vo_config *cfg, const tvo_p
                          double depth_med)
 {
     const tvo_map_kf *k = &m->kf[(m->kf_head + m->n_kf - 1) % m->window];
-    double ck[3], cc[3], d[3], Rrel[9];
-    if (m->frames_since_kf + 1 >= cfg->map_kf_max_frames)
-        return 1;
-    if ((double)n_in < cfg->map_kf_points_ratio * (double)m->kf_points)
-        return 1;
+    double ck[3], cc[3], d[3], base;
     centre(&k->T_c_w, ck);
     centre(T, cc);
     d[0] = cc[0] - ck[0];
     d[1] = cc[1] - ck[1];
     d[2] = cc[2] - ck[2];
-    if (depth_med > 0.0 && sqrt(dot3(d, d)) > cfg->map_kf_baseline * depth_med)
+    base = sqrt(dot3(d, d));
+    /* a keyframe that barely moved adds no structure (nothing to triangulate) and, as one of the two
+       oldest of a later window, would hold the scale on a tiny baseline: none while the camera only
+       turns, whatever the other criteria say (the map is lost instead when its points run out) */
+    if (!(depth_med > 0.0) || base < TVO_MAP_KF_MIN_BASELINE * cfg->map_kf_baseline * depth_med)
+        return 0;
+    if (m->frames_since_kf + 1 >= cfg->map_kf_max_frames)
         return 1;
-    tvo_la_mat3_mul_bt(T->R, k->T_c_w.R, Rrel);
-    return tvo_la_rot_angle(Rrel) > deg2rad(cfg->keyframe_max_rot_deg);
+    if ((double)n_in < cfg->map_kf_points_ratio * (double)m->kf_points)
+        return 1;
+    return base > cfg->map_kf_baseline * depth_med;
 }
 
 /* Triangulate the waiting tracks against the new keyframe kn; tracks whose first keyframe left the window
@@ -653,21 +684,24 @@ static int32_t triangulate_new(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tra
         int32_t j;
         if (tr->lm[i] >= 0 || !tr->x_ok[i])
             continue;
-        k0 = tr->tri_kf[i] >= 0 ? kf_by_id(m, tr->tri_kf[i]) : NULL;
-        if (k0 == NULL || k0 == kn) {
-            tr->tri_kf[i] = kn->id;
+        const tvo_pose *T0 = frame_pose(m, tr->tri_fr[i], &k0);
+        if (T0 == NULL || k0 == NULL || tr->tri_fr[i] == m->serial) {
+            /* first seen in a frame that is not a keyframe of the window (or now): wait from this
+               keyframe, so that every landmark starts with two observations the adjustment refines */
+            tr->tri_fr[i] = m->serial;
             tr->tri_x[i] = tr->x[i];
             continue;
         }
-        if (!triangulate(&k0->T_c_w, &kn->T_c_w, tr->tri_x[i], tr->x[i], min_cos, max_err, X))
+        if (!triangulate(T0, &kn->T_c_w, tr->tri_x[i], tr->x[i], min_cos, max_err, X))
             continue; /* not enough parallax yet (or a bad track): wait for the next keyframe */
-        if (k0->n_obs >= m->max_tracks || kn->n_obs >= m->max_tracks)
+        if ((k0 != NULL && k0->n_obs >= m->max_tracks) || kn->n_obs >= m->max_tracks)
             continue;
         j = lm_alloc(m);
         if (j < 0)
             break;
         memcpy(m->lm[j].X, X, sizeof(X));
-        (void)kf_add_obs(m, k0, j, tr->tri_x[i]);
+        if (k0 != NULL) /* first seen in a keyframe of the window: observed there too */
+            (void)kf_add_obs(m, k0, j, tr->tri_x[i]);
         (void)kf_add_obs(m, kn, j, tr->x[i]);
         m->lm[j].tracked = 1;
         tr->lm[i] = j;
@@ -808,7 +842,7 @@ static void bundle_adjust(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *
             if (!seen) {
                 tr->lm[i] = -1;
                 tr->inlier[i] = 0;
-                tr->tri_kf[i] = kn->id;
+                tr->tri_fr[i] = m->serial;
                 tr->tri_x[i] = tr->x[i];
             }
         }
@@ -851,40 +885,61 @@ static void lose(tvo_map *m, tvo_map_tracks *tr, int64_t t_ns, const tvo_pose *T
     out->state = TVO_MAP_LOST;
 }
 
+static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
+                         const double *R_cur_prev, const tvo_pose *T_c_w_prior, void *scratch,
+                         size_t scratch_size, tvo_map_frame *out);
+
 tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
                            const double *R_cur_prev, const tvo_pose *T_c_w_prior, void *scratch,
                            size_t scratch_size, tvo_map_frame *out)
 {
-    tvo_pose T;
-    int32_t n_in = 0;
-    double depth_med = 0.0;
     memset(out, 0, sizeof(*out));
     out->T_c_w = *T_c_w_prior;
     m->cur_kf_id = -1;
+    m->serial = m->serial < INT32_MAX - 1 ? m->serial + 1 : 0; /* wraps after 2^31 frames */
+    tvo_map_step(m, cfg, tr, t_ns, R_cur_prev, T_c_w_prior, scratch, scratch_size, out);
+    /* only the map's own poses serve triangulation (the two-view chain's are in another geometry); the
+       reference frame's entry is written when it becomes keyframe 0 */
+    if (out->state == TVO_MAP_TRACKING || out->state == TVO_MAP_INITIALISED)
+        ring_put(m, &out->T_c_w, out->keyframe ? m->cur_kf_id : -1);
+    else if (!(m->has_ref && m->ref_serial == m->serial))
+        m->ring[m->serial % TVO_MAP_RING].serial = -1;
+    else
+        ring_put(m, &out->T_c_w, -1);
+    return TVO_OK;
+}
+
+static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
+                         const double *R_cur_prev, const tvo_pose *T_c_w_prior, void *scratch,
+                         size_t scratch_size, tvo_map_frame *out)
+{
+    tvo_pose T;
+    int32_t n_in = 0;
+    double depth_med = 0.0;
     for (int32_t i = 0; i < tr->n; ++i)
         tr->inlier[i] = 0;
     if (!m->active) {
         out->state = TVO_MAP_INITIALISING;
         if (!m->has_ref) {
             start_ref(m, tr, t_ns, T_c_w_prior);
-            return TVO_OK;
+            return;
         }
         m->ref_frames++;
         if (try_init(m, cfg, tr, t_ns, T_c_w_prior, scratch, scratch_size, out))
-            return TVO_OK;
+            return;
         {
             /* renew the reference when it is too old or most of its tracks are gone */
             int32_t k = 0;
             for (int32_t i = 0; i < tr->n; ++i)
-                k += tr->tri_kf[i] == TVO_MAP_REF_ID && tr->x_ok[i];
+                k += tr->tri_fr[i] == m->ref_serial && tr->x_ok[i];
             if (m->ref_frames > TVO_MAP_REF_MAX_FRAMES || k < TVO_MAP_INIT_MIN_POINTS)
                 start_ref(m, tr, t_ns, T_c_w_prior);
         }
-        return TVO_OK;
+        return;
     }
     if (!track_frame(m, cfg, tr, t_ns, R_cur_prev, scratch, scratch_size, &T, &n_in, &depth_med)) {
         lose(m, tr, t_ns, T_c_w_prior, out);
-        return TVO_OK;
+        return;
     }
     mark_tracked(m, tr);
     out->state = TVO_MAP_TRACKING;
@@ -895,7 +950,7 @@ tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks 
         m->frames_since_kf++;
     if (!tvo_pose_is_finite(&T)) {
         lose(m, tr, t_ns, T_c_w_prior, out);
-        return TVO_OK;
+        return;
     }
     {
         /* the velocity of this step, for the next prediction */
@@ -907,7 +962,7 @@ tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks 
     m->last_T_c_w = T;
     m->last_t_ns = t_ns;
     out->T_c_w = T;
-    return TVO_OK;
+    return;
 }
 
 void tvo_map_new_tracks(const tvo_map *m, tvo_map_tracks *tr, int32_t first)
@@ -916,13 +971,6 @@ void tvo_map_new_tracks(const tvo_map *m, tvo_map_tracks *tr, int32_t first)
         tr->lm[i] = -1;
         tr->inlier[i] = 0;
         tr->tri_x[i] = tr->x[i];
-        if (!tr->x_ok[i])
-            tr->tri_kf[i] = -1;
-        else if (!m->active && m->has_ref && m->ref_frames == 0)
-            tr->tri_kf[i] = TVO_MAP_REF_ID; /* detected in the reference frame itself */
-        else if (m->active && m->cur_kf_id >= 0)
-            tr->tri_kf[i] = m->cur_kf_id;
-        else
-            tr->tri_kf[i] = -1;
+        tr->tri_fr[i] = tr->x_ok[i] ? m->serial : -1;
     }
 }

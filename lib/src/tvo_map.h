@@ -46,16 +46,25 @@ typedef struct tvo_map_lm {
 } tvo_map_lm;
 
 /* The VO's tracks as the map sees them: parallel arrays of length n, owned by the VO. The map reads x
- * (normalised current position, valid where x_ok) and reads/writes lm, tri_kf, tri_x and inlier. */
+ * (normalised current position, valid where x_ok) and reads/writes lm, tri_fr, tri_x and inlier. */
 typedef struct tvo_map_tracks {
     int32_t n;
     const tvo_point2d *x;
     const uint8_t *x_ok;
     int32_t *lm;          /* landmark index, or -1 */
-    int32_t *tri_kf;      /* id of the keyframe of the track's first observation (to triangulate), or -1 */
-    tvo_point2d *tri_x;   /* normalised position in that keyframe */
+    int32_t *tri_fr;      /* serial of the frame of the track's first observation (to triangulate), or -1 */
+    tvo_point2d *tri_x;   /* normalised position in that frame */
     uint8_t *inlier;      /* out: 1 when the track's landmark is an inlier of this frame's map pose */
 } tvo_map_tracks;
+
+/* The poses of the last TVO_MAP_RING frames, for triangulating a track from the frame it was first seen
+ * in (any frame, not only a keyframe). A track first seen further back waits again from the current frame. */
+#define TVO_MAP_RING 32
+typedef struct tvo_map_frame_pose {
+    int32_t serial;            /* frame serial (-1: empty) */
+    int32_t kf_id;             /* id of the keyframe the frame became, or -1 */
+    tvo_pose T_c_w;
+} tvo_map_frame_pose;
 
 typedef struct tvo_map {
     int32_t window, max_tracks, max_lm;
@@ -66,8 +75,11 @@ typedef struct tvo_map {
     int32_t n_lm;              /* alive landmarks */
     int32_t next_kf_id;
     int32_t active;            /* 1 while the map poses frames */
-    /* initialisation: the reference frame (its pose and time), tracks carry tri_kf = TVO_MAP_REF_ID */
+    tvo_map_frame_pose ring[TVO_MAP_RING];
+    int32_t serial;            /* serial of the frame being processed (increases by one per frame) */
+    /* initialisation: the reference frame (its serial, pose and time); the tracks first seen in it */
     int32_t has_ref;
+    int32_t ref_serial;
     tvo_pose ref_T_c_w;
     int64_t ref_t_ns;
     int32_t ref_frames;        /* frames since the reference */
@@ -84,8 +96,6 @@ typedef struct tvo_map {
     int32_t lm_cursor;         /* where the search for a free landmark slot starts */
 } tvo_map;
 
-/* Id that tracks carry in tri_kf while the map waits for its initial pair. */
-#define TVO_MAP_REF_ID (-2)
 
 /* What the map did with a frame (filled into the VO result by tvo_vo.c). */
 typedef struct tvo_map_frame {
@@ -111,8 +121,7 @@ tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks 
                            const double *R_cur_prev, const tvo_pose *T_c_w_prior, void *scratch,
                            size_t scratch_size, tvo_map_frame *out);
 
-/* Tracks added after tvo_map_process in a keyframe frame (re-detection) start their wait for
- * triangulation in that keyframe (or in the reference frame while initialising). */
+/* Tracks added after tvo_map_process (re-detection) start their wait for triangulation in this frame. */
 void tvo_map_new_tracks(const tvo_map *m, tvo_map_tracks *tr, int32_t first);
 
 #endif /* TVO_MAP_H */

@@ -53,7 +53,7 @@ struct tvo_vo {
        keyframe and position a track waits in for its triangulation, its map inlier flag */
     uint32_t *id;             /* [max_tracks] */
     int32_t *age;             /* [max_tracks] */
-    int32_t *lm, *tri_kf;     /* [max_tracks] */
+    int32_t *lm, *tri_fr;     /* [max_tracks] */
     tvo_point2d *tri_x;       /* [max_tracks] */
     uint8_t *minl;            /* [max_tracks] */
     uint32_t next_id;
@@ -211,7 +211,7 @@ static size_t layout_size(const tvo_vo_config *cfg)
     s = tvo_size_add(s, tvo_arena_round(n));                                       /* has0 */
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))) * 3); /* xk kx1 kx2 */
     s = tvo_size_add(s, tvo_arena_round(n) * 2);                                   /* hask kmask */
-    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(int32_t))) * 4);   /* id age lm tri_kf */
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(int32_t))) * 4);   /* id age lm tri_fr */
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))));   /* tri_x */
     s = tvo_size_add(s, tvo_arena_round(n));                                       /* minl */
     if (cfg->map)
@@ -277,10 +277,10 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg, void *mem, size_t
     vo->id = (uint32_t *)tvo_arena_alloc(&a, n * sizeof(uint32_t));
     vo->age = (int32_t *)tvo_arena_alloc(&a, n * sizeof(int32_t));
     vo->lm = (int32_t *)tvo_arena_alloc(&a, n * sizeof(int32_t));
-    vo->tri_kf = (int32_t *)tvo_arena_alloc(&a, n * sizeof(int32_t));
+    vo->tri_fr = (int32_t *)tvo_arena_alloc(&a, n * sizeof(int32_t));
     vo->tri_x = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
     vo->minl = (uint8_t *)tvo_arena_alloc(&a, n);
-    if (vo->id == NULL || vo->age == NULL || vo->lm == NULL || vo->tri_kf == NULL || vo->tri_x == NULL ||
+    if (vo->id == NULL || vo->age == NULL || vo->lm == NULL || vo->tri_fr == NULL || vo->tri_x == NULL ||
         vo->minl == NULL)
         return TVO_ERR_NO_MEMORY;
     if (cfg->map) {
@@ -364,7 +364,7 @@ static int32_t detect_append(tvo_vo *vo, const tvo_pyramid *pyr, int32_t thresho
         vo->id[vo->n + i] = vo->next_id++;
         vo->age[vo->n + i] = 0;
         vo->lm[vo->n + i] = -1;
-        vo->tri_kf[vo->n + i] = -1;
+        vo->tri_fr[vo->n + i] = -1;
         vo->minl[vo->n + i] = 0;
     }
     vo->n += got;
@@ -648,7 +648,7 @@ static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
         vo->id[m] = vo->id[i];
         vo->age[m] = vo->age[i];
         vo->lm[m] = vo->lm[i];
-        vo->tri_kf[m] = vo->tri_kf[i];
+        vo->tri_fr[m] = vo->tri_fr[i];
         vo->tri_x[m] = vo->tri_x[i];
         vo->minl[m] = vo->minl[i];
         ++m;
@@ -725,7 +725,7 @@ static tvo_map_tracks map_tracks(tvo_vo *vo)
     tr.x = vo->x2;
     tr.x_ok = vo->ok2;
     tr.lm = vo->lm;
-    tr.tri_kf = vo->tri_kf;
+    tr.tri_fr = vo->tri_fr;
     tr.tri_x = vo->tri_x;
     tr.inlier = vo->minl;
     return tr;

@@ -1,0 +1,446 @@
+/* The VO's local map end to end on frames rendered from the textured box room of test/common/tvo_room.h:
+ * one consistent scale over a long run, keyframes and landmarks, pure rotation before and after the map
+ * exists, a loss and the new map that continues the trajectory, the tracks view, and the map's config
+ * and memory contract. */
+#include "tvo_test.h"
+
+#include <math.h>
+
+#include "tinyvo/vo.h"
+#include "tvo_room.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+#define W 320
+#define H 240
+#define FOCAL 250.0
+#define DT_NS 50000000LL
+
+static tvo_camera test_camera(void)
+{
+    tvo_camera cam;
+    memset(&cam, 0, sizeof(cam));
+    cam.width = W;
+    cam.height = H;
+    cam.fx = cam.fy = FOCAL;
+    cam.cx = (W - 1) / 2.0;
+    cam.cy = (H - 1) / 2.0;
+    cam.model = TVO_DIST_NONE;
+    return cam;
+}
+
+typedef struct fixture {
+    tvo_vo_config cfg;
+    void *mem;
+    tvo_vo *vo;
+    uint8_t img[W * H];
+} fixture;
+
+static fixture *open_vo(int map)
+{
+    fixture *f = calloc(1, sizeof(fixture));
+    tvo_camera cam = test_camera();
+    size_t need;
+    assert_non_null(f);
+    tvo_vo_config_default(&f->cfg, &cam);
+    f->cfg.map = map;
+    need = tvo_vo_required_size(&f->cfg);
+    assert_true(need > 0);
+    f->mem = malloc(need);
+    assert_non_null(f->mem);
+    assert_int_equal(tvo_vo_init(&f->vo, &f->cfg, f->mem, need), TVO_OK);
+    return f;
+}
+
+static void close_vo(fixture *f)
+{
+    free(f->mem);
+    free(f);
+}
+
+/* C = A B (3x3, row-major) */
+static void mat3_mul(const double A[9], const double B[9], double C[9])
+{
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+            C[3 * r + c] = A[3 * r] * B[c] + A[3 * r + 1] * B[3 + c] + A[3 * r + 2] * B[6 + c];
+}
+
+static double rot_err_deg(const tvo_pose *a, const tvo_pose *b)
+{
+    tvo_pose d = tvo_pose_relative(a, b);
+    return tvo_rot_angle(d.R) * 180.0 / M_PI;
+}
+
+/* A walk through the room: forward and sideways along a gentle curve with a slow yaw sway, 4 cm a
+ * frame (about 0.5 m/s at 20 Hz). Frame 0 is the identity, so the VO's world is the ground truth's up to the
+ * scale. */
+static tvo_pose walk(int k)
+{
+    tvo_pose T = tvo_pose_identity();
+    const double s = 0.025 * k;
+    const double v[3] = { 0.01 * sin(0.05 * k), 0.25 * sin(0.02 * k), 0.0 };
+    tvo_rotvec_to_rot(v, T.R);
+    T.t[0] = 0.6 * sin(0.4 * s);
+    T.t[1] = 0.05 * sin(0.7 * s);
+    T.t[2] = 0.9 * s - 1.0 * (1.0 - cos(0.1 * s));
+    return T;
+}
+
+static tvo_status step(fixture *f, const tvo_pose *T, int k, tvo_vo_result *res)
+{
+    tvo_image img = tvo_image_make(W, H, W, f->img);
+    tvo_status st;
+    tvo_room_render(T, W, H, FOCAL, f->img);
+    st = tvo_vo_process(f->vo, &img, 1000000000LL + k * DT_NS, res);
+    if (getenv("TVO_MAP_TEST_VERBOSE"))
+        fprintf(stderr, "  frame %d: state %d map %d kf %d points %d new %d landmarks %d tracks %d losses %d "
+                "rot err %.3f t %.3f %.3f %.3f gt %.3f %.3f %.3f\n", k, (int)res->state, (int)res->map_state,
+                (int)res->keyframe, (int)res->map_points, (int)res->map_new_points, (int)res->map_landmarks,
+                (int)res->tracks, (int)res->map_losses, rot_err_deg(&res->T_w_c, T), res->T_w_c.t[0], res->T_w_c.t[1], res->T_w_c.t[2],
+                T->t[0], T->t[1], T->t[2]);
+    return st;
+}
+
+/* least-squares scale s minimising sum |gt - s est|^2 over frames [a, b) (both worlds start at the
+ * identity) */
+static double best_scale(const tvo_pose *gt, const tvo_pose *est, int a, int b)
+{
+    double num = 0.0, den = 0.0;
+    for (int k = a; k < b; ++k)
+        for (int c = 0; c < 3; ++c) {
+            num += gt[k].t[c] * est[k].t[c];
+            den += est[k].t[c] * est[k].t[c];
+        }
+    return den > 0.0 ? num / den : 0.0;
+}
+
+#define LONG_RUN 160
+
+/* One scale for the whole run: the position error after one scale factor stays within 2 % of the path,
+ * the scale fitted to the first and to the last third agree within 3 %, the rotation error stays within
+ * 2 deg (the two-view chain of the same frames, cfg.map = 0, ends 1.9 deg off), and every frame after
+ * the initialisation is posed by the map. */
+static void test_map_consistent_scale(void **state)
+{
+    fixture *f = open_vo(1);
+    static tvo_pose gt[LONG_RUN], est[LONG_RUN];
+    int tracking = 0, keyframes = 0, init_frame = -1, losses = 0;
+    double path = 0.0, err2 = 0.0, max_rot = 0.0, s, s1, s3;
+    (void)state;
+    for (int k = 0; k < LONG_RUN; ++k) {
+        tvo_vo_result res;
+        gt[k] = walk(k);
+        assert_int_equal(step(f, &gt[k], k, &res), TVO_OK);
+        assert_true(tvo_pose_is_finite(&res.T_w_c));
+        est[k] = res.T_w_c;
+        tracking += res.map_state == TVO_MAP_TRACKING;
+        keyframes += res.keyframe;
+        losses = res.map_losses;
+        if (res.map_state == TVO_MAP_INITIALISED && init_frame < 0)
+            init_frame = k;
+        if (k > 0) {
+            tvo_pose d = tvo_pose_relative(&gt[k - 1], &gt[k]);
+            path += sqrt(d.t[0] * d.t[0] + d.t[1] * d.t[1] + d.t[2] * d.t[2]);
+        }
+        if (res.map_state == TVO_MAP_TRACKING) {
+            assert_true(res.map_points >= f->cfg.map_min_points);
+            assert_true(res.map_landmarks >= res.map_points);
+        }
+    }
+    assert_true(init_frame > 0 && init_frame < 30);
+    assert_int_equal(losses, 0);
+    assert_int_equal(tracking, LONG_RUN - 1 - init_frame);
+    assert_true(keyframes >= 4);
+    s = best_scale(gt, est, init_frame, LONG_RUN);
+    s1 = best_scale(gt, est, init_frame, LONG_RUN / 3);
+    s3 = best_scale(gt, est, 2 * LONG_RUN / 3, LONG_RUN);
+    for (int k = init_frame; k < LONG_RUN; ++k) {
+        for (int c = 0; c < 3; ++c) {
+            const double e = gt[k].t[c] - s * est[k].t[c];
+            err2 += e * e;
+        }
+        {
+            const double r = rot_err_deg(&est[k], &gt[k]);
+            max_rot = r > max_rot ? r : max_rot;
+        }
+    }
+    err2 = sqrt(err2 / (LONG_RUN - init_frame));
+    fprintf(stderr, "map walk: init at frame %d, %d keyframes, path %.2f m, ATE %.4f m (%.2f %%), scale %.4f "
+            "first third %.4f last third %.4f, max rotation error %.3f deg\n", init_frame, keyframes, path, err2,
+            100.0 * err2 / path, s, s1, s3, max_rot);
+    assert_true(err2 < 0.02 * path);
+    assert_true(fabs(s1 / s3 - 1.0) < 0.03);
+    assert_true(max_rot < 2.0);
+    close_vo(f);
+}
+
+/* The map off: T_w_c is the two-view chain with unit steps, and the map fields stay empty. */
+static void test_map_off(void **state)
+{
+    fixture *f = open_vo(0);
+    tvo_pose prev = tvo_pose_identity();
+    int ok = 0;
+    (void)state;
+    for (int k = 0; k < 20; ++k) {
+        tvo_vo_result res;
+        const tvo_pose T = walk(k);
+        assert_int_equal(step(f, &T, k, &res), TVO_OK);
+        assert_int_equal(res.map_state, TVO_MAP_OFF);
+        assert_int_equal(res.keyframe, 0);
+        assert_int_equal(res.map_landmarks, 0);
+        assert_true(tvo_pose_is_finite(&res.T_w_c));
+        if (k > 0) {
+            /* the chain's step is the two-view step: its rotation, and a unit translation or none */
+            const tvo_pose d = tvo_pose_relative(&prev, &res.T_w_c);
+            const double len = sqrt(d.t[0] * d.t[0] + d.t[1] * d.t[1] + d.t[2] * d.t[2]);
+            assert_true(rot_err_deg(&d, &res.T_prev_cur) < 1e-9);
+            if (res.state == TVO_VO_OK) {
+                assert_true(fabs(len - 1.0) < 1e-9);
+                ++ok;
+            } else {
+                assert_true(len == 0.0);
+            }
+        }
+        prev = res.T_w_c;
+    }
+    assert_true(ok > 10);
+    close_vo(f);
+}
+
+/* A camera that only rotates (a slow pan and tilt) for 200 frames from the start: the map never
+ * initialises (nothing to triangulate), the pose keeps the two-view rotation and no translation. */
+static void test_map_pure_rotation(void **state)
+{
+    fixture *f = open_vo(1);
+    double max_rot = 0.0, max_t = 0.0;
+    (void)state;
+    for (int k = 0; k < 200; ++k) {
+        tvo_vo_result res;
+        tvo_pose T = tvo_pose_identity();
+        const double v[3] = { 0.15 * sin(0.03 * k), 0.5 * sin(0.02 * k), 0.0 };
+        tvo_rotvec_to_rot(v, T.R);
+        assert_int_equal(step(f, &T, k, &res), TVO_OK);
+        assert_true(tvo_pose_is_finite(&res.T_w_c));
+        assert_true(res.map_state == TVO_MAP_INITIALISING);
+        {
+            const double r = rot_err_deg(&res.T_w_c, &T);
+            const double t = sqrt(res.T_w_c.t[0] * res.T_w_c.t[0] + res.T_w_c.t[1] * res.T_w_c.t[1] +
+                                  res.T_w_c.t[2] * res.T_w_c.t[2]);
+            max_rot = r > max_rot ? r : max_rot;
+            max_t = t > max_t ? t : max_t;
+        }
+    }
+    fprintf(stderr, "map pure rotation: max rotation error %.3f deg, max position %.4f\n", max_rot, max_t);
+    assert_true(max_rot < 1.0);
+    assert_true(max_t == 0.0);
+    close_vo(f);
+}
+
+/* Walk, then turn on the spot for 150 frames, then walk on: finite poses throughout, the rotation stays
+ * right, the camera stays where it stopped (within 5 % of the distance walked), and the map is there
+ * again (tracking) at the end. */
+static void test_map_rotation_after_map(void **state)
+{
+    fixture *f = open_vo(1);
+    const int walk1 = 60, turn = 150, walk2 = 80;
+    tvo_pose T_stop = tvo_pose_identity(), est_stop = tvo_pose_identity();
+    double max_rot = 0.0, max_drift = 0.0, walked = 0.0;
+    tvo_vo_result res;
+    (void)state;
+    for (int k = 0; k < walk1 + turn + walk2; ++k) {
+        tvo_pose T;
+        if (k < walk1) {
+            T = walk(k);
+        } else if (k < walk1 + turn) {
+            /* a turn of +-34 deg about the vertical and back, on the spot (ends where it started) */
+            const double a = 0.6 * sin(2.0 * M_PI * (k - walk1 + 1) / turn);
+            const tvo_pose W0 = walk(walk1 - 1);
+            const double v[3] = { 0.0, a, 0.0 };
+            double Ry[9];
+            T = T_stop;
+            tvo_rotvec_to_rot(v, Ry);
+            mat3_mul(Ry, W0.R, T.R);
+        } else {
+            const tvo_pose W0 = walk(walk1 - 1);
+            T = walk(k - turn);
+            for (int c = 0; c < 3; ++c)
+                T.t[c] += T_stop.t[c] - W0.t[c];
+        }
+        assert_int_equal(step(f, &T, k, &res), TVO_OK);
+        assert_true(tvo_pose_is_finite(&res.T_w_c));
+        {
+            const double r = rot_err_deg(&res.T_w_c, &T);
+            max_rot = r > max_rot ? r : max_rot;
+        }
+        if (k == walk1 - 1) {
+            T_stop = T;
+            est_stop = res.T_w_c;
+            walked = sqrt(est_stop.t[0] * est_stop.t[0] + est_stop.t[1] * est_stop.t[1] +
+                          est_stop.t[2] * est_stop.t[2]);
+        } else if (k >= walk1 && k < walk1 + turn) {
+            double d2 = 0.0;
+            for (int c = 0; c < 3; ++c)
+                d2 += (res.T_w_c.t[c] - est_stop.t[c]) * (res.T_w_c.t[c] - est_stop.t[c]);
+            max_drift = sqrt(d2) > max_drift ? sqrt(d2) : max_drift;
+        }
+    }
+    fprintf(stderr, "map walk-turn-walk: max rotation error %.3f deg, drift while turning %.4f of %.4f walked, "
+            "%d losses, end state %d\n", max_rot, max_drift, walked, (int)res.map_losses, (int)res.map_state);
+    assert_true(max_rot < 2.0);
+    assert_true(max_drift < 0.05 * walked);
+    assert_int_equal(res.map_state, TVO_MAP_TRACKING);
+    close_vo(f);
+}
+
+/* Three blank frames in the middle of a walk lose the tracks and the map; the VO reports the loss, makes a
+ * new map, and the trajectory continues in the same unit: the scale fitted after the loss is within 25 %
+ * of the one before it. */
+static void test_map_loss_and_new_map(void **state)
+{
+    fixture *f = open_vo(1);
+    static tvo_pose gt[LONG_RUN], est[LONG_RUN];
+    int lost_frame = -1, reinit = -1;
+    double s_before, s_after;
+    tvo_vo_result res;
+    (void)state;
+    for (int k = 0; k < LONG_RUN; ++k) {
+        gt[k] = walk(k);
+        if (k >= 70 && k < 73) {
+            tvo_image img = tvo_image_make(W, H, W, f->img);
+            memset(f->img, 128, sizeof(f->img));
+            assert_int_equal(tvo_vo_process(f->vo, &img, 1000000000LL + k * DT_NS, &res), TVO_OK);
+        } else {
+            assert_int_equal(step(f, &gt[k], k, &res), TVO_OK);
+        }
+        assert_true(tvo_pose_is_finite(&res.T_w_c));
+        est[k] = res.T_w_c;
+        if (res.map_state == TVO_MAP_LOST && lost_frame < 0)
+            lost_frame = k;
+        if (lost_frame >= 0 && reinit < 0 && res.map_state == TVO_MAP_INITIALISED)
+            reinit = k;
+    }
+    fprintf(stderr, "map loss: lost at %d, new map at %d, %d losses\n", lost_frame, reinit, (int)res.map_losses);
+    assert_true(lost_frame >= 70 && lost_frame < 74);
+    assert_true(reinit > lost_frame && reinit < lost_frame + 40);
+    assert_true(res.map_losses >= 1);
+    assert_int_equal(res.map_state, TVO_MAP_TRACKING);
+    {
+        /* scales of the displacement from the loss: the new map's positions relative to the pose where the
+           old one ended */
+        double num = 0.0, den = 0.0;
+        s_before = best_scale(gt, est, 30, lost_frame);
+        for (int k = reinit + 5; k < LONG_RUN; ++k)
+            for (int c = 0; c < 3; ++c) {
+                const double g = gt[k].t[c] - gt[reinit].t[c], e = est[k].t[c] - est[reinit].t[c];
+                num += g * e;
+                den += e * e;
+            }
+        s_after = den > 0.0 ? num / den : 0.0;
+    }
+    fprintf(stderr, "map loss: scale before %.4f after %.4f\n", s_before, s_after);
+    assert_true(s_after > 0.0 && fabs(s_after / s_before - 1.0) < 0.25);
+    close_vo(f);
+}
+
+/* The tracks view: counts, unique ids, landmark flags that agree with the map's count, bad arguments. */
+static void test_tracks_view(void **state)
+{
+    fixture *f = open_vo(1);
+    tvo_vo_track *t = calloc((size_t)f->cfg.max_tracks, sizeof(tvo_vo_track));
+    int32_t n = -1, small = -1;
+    tvo_vo_result res;
+    (void)state;
+    assert_non_null(t);
+    for (int k = 0; k < 40; ++k) {
+        const tvo_pose T = walk(k);
+        assert_int_equal(step(f, &T, k, &res), TVO_OK);
+    }
+    assert_int_equal(res.map_state, TVO_MAP_TRACKING);
+    assert_int_equal(tvo_vo_tracks(f->vo, t, f->cfg.max_tracks, &n), TVO_OK);
+    assert_int_equal(n, res.tracks);
+    {
+        int lm = 0, inl = 0;
+        for (int32_t i = 0; i < n; ++i) {
+            assert_true(t[i].x >= 0.0f && t[i].x <= (float)(W - 1) && t[i].y >= 0.0f && t[i].y <= (float)(H - 1));
+            assert_true(t[i].age >= 0 && t[i].age < 40);
+            lm += t[i].landmark;
+            inl += t[i].inlier;
+            for (int32_t j = 0; j < i; ++j)
+                assert_true(t[i].id != t[j].id);
+        }
+        /* the frame's PnP inliers that are still tracked carry landmarks; new tracks carry none */
+        assert_true(lm >= res.map_points / 2 && lm <= res.map_landmarks);
+        assert_true(inl <= lm + res.map_new_points);
+    }
+    assert_int_equal(tvo_vo_tracks(f->vo, t, 3, &small), TVO_OK);
+    assert_int_equal(small, n);
+    assert_int_equal(tvo_vo_tracks(f->vo, NULL, 0, &small), TVO_OK);
+    assert_int_equal(tvo_vo_tracks(NULL, t, 3, &small), TVO_ERR_NULL);
+    assert_int_equal(tvo_vo_tracks(f->vo, NULL, 3, &small), TVO_ERR_NULL);
+    assert_int_equal(tvo_vo_tracks(f->vo, t, 3, NULL), TVO_ERR_NULL);
+    assert_int_equal(tvo_vo_tracks(f->vo, t, -1, &small), TVO_ERR_ARG);
+    free(t);
+    close_vo(f);
+}
+
+/* The map's configuration: each out-of-range field is refused (size 0, init TVO_ERR_ARG); the map's
+ * memory is part of tvo_vo_required_size and grows with the window. */
+static void test_map_config(void **state)
+{
+    tvo_camera cam = test_camera();
+    tvo_vo_config c0, c;
+    size_t with, without, wide;
+    (void)state;
+    tvo_vo_config_default(&c0, &cam);
+    with = tvo_vo_required_size(&c0);
+    c = c0;
+    c.map = 0;
+    without = tvo_vo_required_size(&c);
+    c = c0;
+    c.map_window = TVO_VO_MAX_WINDOW;
+    wide = tvo_vo_required_size(&c);
+    assert_true(with > without && wide > with);
+#define REFUSED(field, value)                                                                       \
+    do {                                                                                            \
+        tvo_vo *vo = NULL;                                                                          \
+        static uint8_t mem[64];                                                                     \
+        c = c0;                                                                                     \
+        c.field = value;                                                                            \
+        assert_int_equal(tvo_vo_required_size(&c), 0);                                              \
+        assert_int_equal(tvo_vo_init(&vo, &c, mem, sizeof(mem)), TVO_ERR_ARG);                       \
+    } while (0)
+    REFUSED(map, 2);
+    REFUSED(map, -1);
+    REFUSED(map_window, 2);
+    REFUSED(map_window, TVO_VO_MAX_WINDOW + 1);
+    REFUSED(map_max_landmarks, 15);
+    REFUSED(map_min_points, 5);
+    REFUSED(map_min_points, c0.max_tracks + 1);
+    REFUSED(map_init_parallax_deg, 0.0);
+    REFUSED(map_init_parallax_deg, NAN);
+    REFUSED(map_tri_parallax_deg, 31.0);
+    REFUSED(map_kf_baseline, 0.0);
+    REFUSED(map_kf_baseline, INFINITY);
+    REFUSED(map_kf_points_ratio, -0.1);
+    REFUSED(map_kf_points_ratio, 1.1);
+    REFUSED(map_kf_max_frames, 0);
+    REFUSED(map_ba_iterations, 0);
+    REFUSED(map_ba_iterations, 101);
+#undef REFUSED
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_map_consistent_scale),
+        cmocka_unit_test(test_map_off),
+        cmocka_unit_test(test_map_pure_rotation),
+        cmocka_unit_test(test_map_rotation_after_map),
+        cmocka_unit_test(test_map_loss_and_new_map),
+        cmocka_unit_test(test_tracks_view),
+        cmocka_unit_test(test_map_config),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
