@@ -1,19 +1,44 @@
-/* tinyvo: the monocular visual odometry object (front end of the "system of systems" VO).
+/* tinyvo: the monocular visual odometry object.
  *
  * Per frame: pyramid -> LK tracking of the current tracks (forward-backward checked) -> undistortion
- * to normalised coordinates -> relative pose (5-point essential matrix in RANSAC, or rotation-only /
- * homography when the geometry calls for it) -> outlier removal -> re-detection spread over the image
- * when tracks run low. The result is the RAW relative pose of this frame to the previous one, with a
- * unit (scale-free) translation; tvo_traj_step() integrates it with a per-step scale that the caller
- * takes from ground truth, from the per-DoF networks (nn.h) or from nothing (unit steps).
+ * to normalised coordinates -> two-view relative pose to the previous frame (5-point essential matrix in
+ * RANSAC, or rotation-only / homography when the geometry calls for it) -> outlier removal -> the local
+ * map (below) -> re-detection spread over the image when tracks run low.
+ *
+ * Two results per frame:
+ *   - T_prev_cur, the RAW two-view relative pose with a unit (scale-free) translation: the front end's
+ *     own estimate, and the input of the per-DoF networks (features);
+ *   - T_w_c, the camera pose in the VO's world, from the local map: the trajectory to use.
+ *
+ * The local map (cfg.map, on by default). Keyframes in a sliding window of cfg.map_window (default 6);
+ * landmarks are 3D points in the world, triangulated from a track's first keyframe and a later keyframe
+ * once their rays are cfg.map_tri_parallax_deg apart, in front of both cameras and reprojecting within
+ * 2 px. Every frame is posed by PnP on the landmarks its tracks carry (Huber-robust Gauss-Newton from the
+ * motion-model prediction with this frame's two-view rotation, P3P RANSAC when that fails; pnp.h). A new
+ * keyframe is made when the camera moved more than cfg.map_kf_baseline x the median landmark depth since
+ * the last one, when fewer than cfg.map_kf_points_ratio of its landmarks remain, or after
+ * cfg.map_kf_max_frames frames, and never when it barely moved (a turn on the spot adds no structure).
+ * At each keyframe: new landmarks, then a bundle adjustment of the window (ba.h: Huber reprojection error
+ * in normalised coordinates, Levenberg-Marquardt with the Schur complement on the poses, at most
+ * cfg.map_ba_iterations iterations, the two oldest keyframes fixed to hold the gauge and the scale: they
+ * are fixed, not marginalised), after which observations above 2.5 px are dropped.
+ * The map starts from two frames with cfg.map_init_parallax_deg of median parallax (5-point pose,
+ * triangulated inliers). Until then, and after a loss, T_w_c continues the two-view chain: its rotation,
+ * and its translation direction times the last map's speed (one unit per frame before the first map).
+ * A frame whose PnP fails, or whose map rotation is more than 5 deg from its own two-view rotation, loses
+ * the map (map_state TVO_MAP_LOST, counted in map_losses); a new map starts from that frame, its initial
+ * baseline the distance the chain travelled, so the whole run keeps one unit of length: the first map's
+ * initial baseline. A monocular VO cannot know that unit in metres; tvo_replay's --scale sets it
+ * from an outside source.
+ *
+ * Cost: the map's work per frame is one PnP refinement on up to max_tracks points (~0.4 M instructions
+ * for 200 points, pnp.h); a keyframe adds the triangulation and one bundle adjustment (~10 M
+ * instructions for 6 keyframes and 300 landmarks, ba.h).
  *
  * Memory: tvo_vo_required_size(&cfg) bytes, handed to tvo_vo_init(); nothing is allocated afterwards.
- * For 752x480 with the default configuration this is about 1.1 MB (see the README for the figure
- * printed by `tvo_replay --print-memory`); of it, max_tracks * 17 bytes (rounded, 5.2 KB for 300 tracks)
- * keep each track's position in the frame before the previous one, for the relative scale
- * (tvo_vo_result.rel_scale), and max_tracks * 50 bytes (rounded, 15 KB for 300 tracks) its position in
- * the keyframe plus one frame's keyframe correspondences (cfg.keyframe; allocated whether it is on or
- * not). Not thread-safe: one tvo_vo per thread.
+ * It covers the pyramids, the tracks, the map (map_window x max_tracks observations, map_max_landmarks
+ * landmarks) and the scratch of the bundle adjustment; `tvo_replay --print-memory` prints it for a
+ * sequence (docs/limits.md gives it for common sizes). Not thread-safe: one tvo_vo per thread.
  */
 #ifndef TINYVO_VO_H
 #define TINYVO_VO_H
