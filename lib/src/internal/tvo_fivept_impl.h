@@ -62,7 +62,7 @@ FP_INLINE void mul_ll(const double a[4], const double b[4], double q[10])
  * stages (one row per call) and an SSE2 register of two doubles in tvo_fivept_sse2.c (which defines
  * FP_LANES_SSE2 before including this header: two rows per call, one per lane), with the same
  * operations in the same order in every lane. */
-#ifdef FP_LANES_SSE2
+#if defined(FP_LANES_SSE2) && defined(TVO_FIVEPT_SSE2)
 #include <emmintrin.h>
 typedef __m128d fp_v;
 #define FP_ADD(a, b) _mm_add_pd(a, b)
