@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo port: calibration import (see tinyvo/port/calib.h). */
 #include "tinyvo/port/calib.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo port: EuRoC / ASL folder reader (see tinyvo/port/euroc.h). */
 #include "tinyvo/port/euroc.h"
 

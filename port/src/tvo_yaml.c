@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo port, internal: the YAML subset of the sensor.yaml and calibration readers (see tvo_yaml.h). */
 #include "tvo_yaml.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Dataset folders besides EuRoC (tinyvo/port/dataset.h) and the skipping of malformed frame rows.
  *
  * KITTI: a KITTI odometry folder (image_0/%06d.png, times.txt, calib.txt with P0, a poses file) is

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo port: dataset folders besides EuRoC, read into the sequence object of euroc.h (every
  * tvo_euroc_* query applies: frames, times, paths, camera, rate, ground truth, bad rows; close with
  * tvo_euroc_close).

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo port: EuRoC / ASL dataset folder reader.
  *
  * Layout read (the ASL format of the EuRoC MAV dataset):
