@@ -1,7 +1,7 @@
 """Side-by-side benchmark: tinyvo's replay against an OpenCV pipeline doing the same job.
 
-    python -m tinyvo_tools.bench --euroc DIR [--frames N] [--replay build/release/examples/replay/tvo_replay]
-                                 [--out OUTDIR] [--repeat N]
+    tinyvo-bench --euroc DIR [--frames N] [--replay build/release/examples/replay/tvo_replay]
+                 [--out OUTDIR] [--repeat N] [--quiet]
 
 Both run on the same frames, single thread, in one session, with ground-truth step lengths:
   tinyvo : tvo_replay --scale gt (its per-stage timings come from --stats: median and p90 per frame)
@@ -12,7 +12,6 @@ Per-frame times exclude PNG decoding for both. Accuracy of both trajectories com
 tinyvo_tools.eval (evo). With --repeat N the two alternate N times: the table shows the last run, the
 ratio line the median of the N per-run ratios (the figure to quote on a shared machine). OpenCV is a test/benchmark dependency only; the library never uses it.
 """
-import argparse
 import json
 import os
 import subprocess
@@ -21,7 +20,7 @@ import time
 
 import numpy as np
 
-from . import trajio
+from . import cli, trajio
 
 
 def _rot_to_quat_xyzw(R):
@@ -99,18 +98,31 @@ def _eval(traj_path, seq_dir, out_json):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = cli.parser("tinyvo-bench", __doc__)
     ap.add_argument("--euroc", required=True, help="EuRoC/ASL folder (holding mav0/)")
     ap.add_argument("--frames", type=int, default=0, help="frames to use (0 = all)")
-    ap.add_argument("--replay", default=os.path.join("build", "release", "examples", "replay", "tvo_replay"))
-    ap.add_argument("--out", default=os.path.join("out", "bench"))
+    ap.add_argument("--replay", default=os.path.join("build", "release", "examples", "replay", "tvo_replay"),
+                    help="tvo_replay binary (default build/release/examples/replay/tvo_replay)")
+    ap.add_argument("--out", default=os.path.join("out", "bench"),
+                    help="output folder: trajectories, evaluations, bench.json (default out/bench)")
     ap.add_argument("--repeat", type=int, default=1,
                     help="alternate the two pipelines this many times and report the median of the per-run "
                          "ratios (a load change on a shared machine then biases one run, not the figure)")
     a = ap.parse_args(argv)
     if a.repeat < 1:
         ap.error("--repeat must be >= 1")
+    if a.frames < 0:
+        ap.error("--frames must be >= 0")
+    return cli.run(ap.prog, lambda: _main(a))
+
+
+def _main(a) -> int:
+    if not os.path.isdir(os.path.join(a.euroc, "mav0")):
+        raise cli.Failure(f"{a.euroc}: no mav0/ folder (not an EuRoC/ASL sequence)")
+    if not (os.path.isfile(a.replay) and os.access(a.replay, os.X_OK)):
+        raise cli.Failure(f"{a.replay}: no tvo_replay program there (build it or pass --replay)")
     os.makedirs(a.out, exist_ok=True)
+    say = (lambda *x: None) if a.quiet else print
 
     tvo_traj = os.path.join(a.out, "tinyvo.txt")
     stats_path = os.path.join(a.out, "tinyvo_stats.json")
@@ -150,15 +162,15 @@ def main(argv=None):
         rpe_r = std["rpe_frame"]["rotation_deg"]["rmse"]
         return (f"{name:8s} {med:9.3f} {p90:9.3f}   ATE({std['alignment']['type']}) {ate:.4f} m   "
                 f"RPE/frame {rpe_t:.5f} m {rpe_r:.3f} deg")
-    print(f"frames: {len(t_ns)} ({a.euroc})")
-    print(f"{'':8s} {'median ms':>9s} {'p90 ms':>9s}")
-    print(row("tinyvo", tv_med, tv_p90, ev_t))
-    print(row("opencv", cv_med, cv_p90, ev_c))
-    print(f"ratio tinyvo/opencv (median per frame): {result['ratio_median_tinyvo_over_opencv']:.3f}")
+    say(f"frames: {len(t_ns)} ({a.euroc})")
+    say(f"{'':8s} {'median ms':>9s} {'p90 ms':>9s}")
+    say(row("tinyvo", tv_med, tv_p90, ev_t))
+    say(row("opencv", cv_med, cv_p90, ev_c))
+    say(f"ratio tinyvo/opencv (median per frame): {result['ratio_median_tinyvo_over_opencv']:.3f}")
     if len(runs) > 1:
         rs = " ".join(f"{t / c:.3f}" for t, c in runs)
-        print(f"{len(runs)} alternating runs, ratios: {rs}; median of runs {result['ratio_median_of_runs']:.3f}")
-    print(f"written: {os.path.join(a.out, 'bench.json')}")
+        say(f"{len(runs)} alternating runs, ratios: {rs}; median of runs {result['ratio_median_of_runs']:.3f}")
+    say(f"written: {os.path.join(a.out, 'bench.json')}")
     return 0
 
 
