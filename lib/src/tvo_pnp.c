@@ -177,7 +177,7 @@ static int config_ok(const tvo_pnp_config *c)
 {
     return c->threshold > 0.0 && c->threshold < DBL_MAX && c->confidence > 0.0 && c->confidence < 1.0 &&
            c->max_iterations >= 1 && c->refine_iterations >= 1 && c->huber > 0.0 && c->huber < DBL_MAX &&
-           c->min_inliers >= 3;
+           c->min_inliers >= 3 && (c->use_guess == 0 || c->use_guess == 1);
 }
 
 /* on error: leave a finite pose as given, replace a non-finite one by the identity */
@@ -199,6 +199,7 @@ void tvo_pnp_config_default(tvo_pnp_config *cfg)
     cfg->huber = cfg->threshold;
     cfg->min_inliers = 12;
     cfg->seed = 0x5eedULL;
+    cfg->use_guess = 0;
 }
 
 size_t tvo_pnp_scratch_size(int32_t max_points)
@@ -940,6 +941,7 @@ tvo_status tvo_pnp_ransac(const tvo_pnp_config *cfg, const double (*X)[3], const
             pose_on_error(T_c_w);
         return TVO_ERR_NULL;
     }
+    const int guess_finite = tvo_pose_is_finite(T_c_w);
     pose_on_error(T_c_w);
     if (cfg == NULL) {
         tvo_pnp_config_default(&def);
@@ -971,6 +973,16 @@ tvo_status tvo_pnp_ransac(const tvo_pnp_config *cfg, const double (*X)[3], const
     double best_cost = DBL_MAX;
     int32_t best_inl = 0, need_it = cfg->max_iterations;
     int have = 0, any = 0;
+    if (cfg->use_guess && guess_finite) {
+        int32_t cnt;
+        double cost = msac_cost(&best, X, x, idx, m, th2, DBL_MAX, &cnt);
+        if (cnt > 0) {
+            best_cost = cost;
+            best_inl = cnt;
+            have = 1;
+            need_it = ransac_needed(cfg->confidence, best_inl, m, PNP_SAMPLE, cfg->max_iterations);
+        }
+    }
     for (int32_t it = 0; it < need_it; ++it) {
         int32_t s[PNP_SAMPLE];
         double Xs[3][3], xs[3][2];

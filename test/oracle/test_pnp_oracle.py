@@ -31,7 +31,8 @@ HW, HH = 376.0 / F, 240.0 / F
 class PnpConfig(ctypes.Structure):
     _fields_ = [("threshold", ctypes.c_double), ("confidence", ctypes.c_double),
                 ("max_iterations", ctypes.c_int32), ("refine_iterations", ctypes.c_int32),
-                ("huber", ctypes.c_double), ("min_inliers", ctypes.c_int32), ("seed", ctypes.c_uint64)]
+                ("huber", ctypes.c_double), ("min_inliers", ctypes.c_int32), ("seed", ctypes.c_uint64),
+                ("use_guess", ctypes.c_int32)]
 
 
 class Pose(ctypes.Structure):

@@ -305,6 +305,47 @@ static void test_ransac_bounded(void **state)
         assert_true(ni >= cfg.min_inliers);
 }
 
+/* use_guess: a prediction near the truth is the first hypothesis, so one sample is enough even at 40 %
+ * outliers; a non-finite guess is ignored (the same result as without one); the result is refined */
+static void test_ransac_guess(void **state)
+{
+    (void)state;
+    tvo_pnp_config cfg;
+    tvo_pnp_config_default(&cfg);
+    cfg.max_iterations = 1;
+    cfg.use_guess = 1;
+    int plain_ok = 0;
+    for (uint64_t seed = 1300; seed < 1320; ++seed) {
+        pscene sc;
+        make_pscene(&sc, seed, 200, 0.5, 0.4);
+        tvo_pose T = perturb(&sc.T, seed, 0.002, 0.01); /* ~0.1 deg, 1 cm: a good prediction */
+        int32_t ni = 0;
+        assert_int_equal(tvo_pnp_ransac(&cfg, (const double (*)[3])sc.X, sc.x, sc.n, &T, NULL, &ni, g_scratch,
+                                        sizeof g_scratch), TVO_OK);
+        assert_true(rot_err(&T, &sc.T) * DEG < 0.2 && c_err(&T, &sc.T) < 0.08);
+        assert_true(ni >= (sc.n - sc.n_out) * 95 / 100);
+        /* the same single sample without the guess */
+        tvo_pnp_config c0 = cfg;
+        c0.use_guess = 0;
+        tvo_pose P = tvo_pose_identity();
+        int32_t np = 0;
+        plain_ok += tvo_pnp_ransac(&c0, (const double (*)[3])sc.X, sc.x, sc.n, &P, NULL, &np, g_scratch,
+                                   sizeof g_scratch) == TVO_OK && rot_err(&P, &sc.T) * DEG < 0.2;
+        /* a NaN guess: as without a guess */
+        tvo_pose G = tvo_pose_identity(), Q = T;
+        Q.R[0] = NAN;
+        int32_t nq = 0;
+        tvo_status sq = tvo_pnp_ransac(&cfg, (const double (*)[3])sc.X, sc.x, sc.n, &Q, NULL, &nq, g_scratch,
+                                       sizeof g_scratch);
+        tvo_status sg = tvo_pnp_ransac(&c0, (const double (*)[3])sc.X, sc.x, sc.n, &G, NULL, &np, g_scratch,
+                                       sizeof g_scratch);
+        assert_int_equal(sq, sg);
+        assert_true(pose_equal(&Q, &G) && nq == (sq == TVO_OK ? np : 0));
+    }
+    print_message("ransac with max_iterations = 1: 20 of 20 with a guess, %d of 20 without\n", plain_ok);
+    assert_true(plain_ok < 20); /* at 40 % outliers one random sample is often not enough */
+}
+
 /* ---- bad input ---------------------------------------------------------------------------------- */
 
 static void expect_unchanged(const tvo_pose *before, const tvo_pose *after, int32_t ni)
@@ -333,7 +374,7 @@ static void test_ransac_bad_input(void **state)
     expect_unchanged(&T0, &T, ni);
 
     /* config values: zero, NaN, out of range */
-    for (int c = 0; c < 12; ++c) {
+    for (int c = 0; c < 14; ++c) {
         tvo_pnp_config_default(&cfg);
         switch (c) {
         case 0: cfg.threshold = 0.0; break;
@@ -347,6 +388,8 @@ static void test_ransac_bad_input(void **state)
         case 8: cfg.huber = NAN; break;
         case 9: cfg.min_inliers = 2; break;
         case 10: cfg.threshold = INFINITY; break;
+        case 11: cfg.use_guess = 2; break;
+        case 12: cfg.use_guess = -1; break;
         default: cfg.huber = -1.0; break;
         }
         ni = 5;
@@ -703,6 +746,7 @@ int main(void)
         cmocka_unit_test(test_ransac_nan_points_skipped),
         cmocka_unit_test(test_ransac_deterministic),
         cmocka_unit_test(test_ransac_bounded),
+        cmocka_unit_test(test_ransac_guess),
         cmocka_unit_test(test_ransac_bad_input),
         cmocka_unit_test(test_ransac_degenerate_scenes),
         cmocka_unit_test(test_refine_converges),

@@ -32,7 +32,7 @@
  * tvo_pnp_ransac: RANSAC (MSAC cost: sum of min(e^2, threshold^2), a point behind the camera costs
  * threshold^2; exact bail-out when a hypothesis' partial cost exceeds the best) over P3P on random
  * 3-point samples of the usable points; a 4th sampled point must be an inlier of a P3P solution for
- * it to be scored. The iteration count adapts to the best inlier ratio w (log(1 - confidence) /
+ * it to be scored (with use_guess, the given pose is scored first). The iteration count adapts to the best inlier ratio w (log(1 - confidence) /
  * log(1 - w^4)) and never exceeds max_iterations. The best hypothesis is refined (tvo_pnp_refine's
  * step, Huber kernel) on its inliers, the inliers are re-selected on all usable points and it is
  * refined once more while the inlier count grows (at most 3 rounds); a refinement is kept only
@@ -77,6 +77,11 @@ typedef struct tvo_pnp_config {
     int32_t min_inliers;       /* fewer inliers -> TVO_ERR_TOO_FEW; >= 3; default 12 */
     uint64_t seed;             /* seed of the deterministic generator (splitmix64-seeded xorshift, the
                                   scheme of relpose); default 0x5eed */
+    /* ---- added fields (the defaults are what tvo_pnp_config_default sets) ---- */
+    int32_t use_guess;         /* tvo_pnp_ransac: 1 = the pose passed in *T_c_w (when finite) is scored
+                                  as the first hypothesis, before any sample (a motion-model prediction:
+                                  with many inliers the adaptive count then stops after a few samples);
+                                  0 = *T_c_w is output only; 0 or 1, default 0 */
 } tvo_pnp_config;
 
 /* Fill cfg with the defaults above. NULL is ignored. */
@@ -95,14 +100,14 @@ int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4]);
 
 /* RANSAC over P3P, then refinement of the best hypothesis on its inliers (see above).
  * cfg: NULL -> the defaults. X[n], x[n]: correspondences (n >= 4 usable ones needed). *T_c_w: output
- * only (the pose is estimated from scratch). inliers[n] (may be NULL): 1 for inliers of the result
+ * only (the pose is estimated from scratch), unless cfg->use_guess: then also a first hypothesis. inliers[n] (may be NULL): 1 for inliers of the result
  * (reprojection error < threshold and in front), else 0; all 0 on error. *n_inliers: their count, 0 on
  * error. scratch: at least tvo_pnp_scratch_size(n) bytes, owned by the caller.
  * Returns TVO_OK, TVO_ERR_NULL (X, x, T_c_w, n_inliers or scratch NULL), TVO_ERR_ARG (a config value
  * out of range or NaN, n < 0), TVO_ERR_TOO_FEW (n < 4, fewer than 4 usable points, or fewer than
  * min_inliers inliers for the best hypothesis, also when no hypothesis passed the 4th-point test),
  * TVO_ERR_NO_MEMORY (scratch too small), TVO_ERR_DEGENERATE (every sample was degenerate: P3P gave no
- * solution, e.g. all points collinear or coincident). On error *T_c_w is left as given when it is
+ * solution, e.g. all points collinear or coincident, and no guess was scored). On error *T_c_w is left as given when it is
  * finite, else set to the identity. The output pose is never NaN.
  * Cost: bounded by max_iterations samples (each a P3P and at most 4 scorings of O(n)) and 3
  * refinements. */
