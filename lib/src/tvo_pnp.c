@@ -984,7 +984,7 @@ tvo_status tvo_pnp_ransac(const tvo_pnp_config *cfg, const double (*X)[3], const
         }
     }
     for (int32_t it = 0; it < need_it; ++it) {
-        int32_t s[PNP_SAMPLE];
+        int32_t s[PNP_SAMPLE] = {0, 0, 0, 0};
         double Xs[3][3], xs[3][2];
         tvo_pose sol[4];
         rng_sample(&rng, m, PNP_SAMPLE, s);

@@ -305,6 +305,37 @@ static void test_ransac_bounded(void **state)
         assert_true(ni >= cfg.min_inliers);
 }
 
+/* all points on one plane (a floor or a wall: common in VO), and a far scene (20..80 m, a road) */
+static void test_ransac_planar_and_far(void **state)
+{
+    (void)state;
+    for (uint64_t seed = 1400; seed < 1410; ++seed) {
+        pscene sc;
+        make_pscene(&sc, seed, 150, 0.5, 0.2);
+        tvo_pose Twc = tvo_pose_inverse(&sc.T);
+        uint64_t s = seed;
+        for (int i = 0; i < sc.n; ++i) {
+            /* re-place point i on the plane z_c = 4 + 0.5 x_c (tilted), or 20..80 m deep for odd seeds */
+            double u = (2.0 * urand(&s) - 1.0) * HALF_W, v = (2.0 * urand(&s) - 1.0) * HALF_H;
+            double z = (seed & 1) ? 20.0 + 60.0 * urand(&s) : 4.0 / (1.0 - 0.5 * u);
+            double Xc[3] = {u * z, v * z, z};
+            tvo_pose_transform_point(&Twc, Xc, sc.X[i]);
+            if (!sc.outlier[i]) {
+                sc.x[i].x = u + 0.5 / F_PX * nrand(&s);
+                sc.x[i].y = v + 0.5 / F_PX * nrand(&s);
+            }
+        }
+        tvo_pose T = tvo_pose_identity();
+        int32_t ni = 0;
+        assert_int_equal(tvo_pnp_ransac(NULL, (const double (*)[3])sc.X, sc.x, sc.n, &T, NULL, &ni, g_scratch,
+                                        sizeof g_scratch), TVO_OK);
+        assert_true(ni >= (sc.n - sc.n_out) * 9 / 10);
+        /* (seen: planar up to 0.06 deg / 4 mm, far up to 0.03 deg / 2.3 cm) */
+        assert_true(rot_err(&T, &sc.T) * DEG < 0.15);
+        assert_true(c_err(&T, &sc.T) < ((seed & 1) ? 0.15 : 0.02));
+    }
+}
+
 /* use_guess: a prediction near the truth is the first hypothesis, so one sample is enough even at 40 %
  * outliers; a non-finite guess is ignored (the same result as without one); the result is refined */
 static void test_ransac_guess(void **state)
@@ -747,6 +778,7 @@ int main(void)
         cmocka_unit_test(test_ransac_deterministic),
         cmocka_unit_test(test_ransac_bounded),
         cmocka_unit_test(test_ransac_guess),
+        cmocka_unit_test(test_ransac_planar_and_far),
         cmocka_unit_test(test_ransac_bad_input),
         cmocka_unit_test(test_ransac_degenerate_scenes),
         cmocka_unit_test(test_refine_converges),

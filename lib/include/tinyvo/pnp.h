@@ -10,10 +10,10 @@
  *     of (X_c / Z_c, Y_c / Z_c) - x, in normalised units.
  *   - A point whose X or x has a non-finite entry, |x| > 1e6 or |X| > 1e9 is skipped (never used,
  *     never an inlier); that alone is not an error.
- *   - Everything is double precision, uses only + - * / and sqrt and the tvo_dm_* functions
- *     (dmath.h), allocates nothing and is deterministic for a given seed (no global state), so the
- *     same call gives the same bits on every IEEE-754 target. Stack below 4 KB per call (measured by
- *     test/unit/test_pnp.c).
+ *   - Everything is double precision, uses only + - * / and sqrt and the library's deterministic
+ *     elementary functions (tvo_dm_*), allocates nothing and is deterministic for a given seed (no
+ *     global state), so the same call gives the same bits on every IEEE-754 target. Stack below 4 KB
+ *     per call (measured by test/unit/test_pnp.c).
  *
  * tvo_p3p: the minimal solver (lambda twist, Persson & Nordberg, ECCV 2018, written from the
  * paper's derivation). With unit bearings y_i, depths l_i and a_ij = |X_i - X_j|^2, b_ij = -2
@@ -32,11 +32,11 @@
  * tvo_pnp_ransac: RANSAC (MSAC cost: sum of min(e^2, threshold^2), a point behind the camera costs
  * threshold^2; exact bail-out when a hypothesis' partial cost exceeds the best) over P3P on random
  * 3-point samples of the usable points; a 4th sampled point must be an inlier of a P3P solution for
- * it to be scored (with use_guess, the given pose is scored first). The iteration count adapts to the best inlier ratio w (log(1 - confidence) /
- * log(1 - w^4)) and never exceeds max_iterations. The best hypothesis is refined (tvo_pnp_refine's
- * step, Huber kernel) on its inliers, the inliers are re-selected on all usable points and it is
- * refined once more while the inlier count grows (at most 3 rounds); a refinement is kept only
- * when its MSAC cost is not above the hypothesis'.
+ * it to be scored (with use_guess, the given pose is scored first). The iteration count adapts to
+ * the best inlier ratio w (log(1 - confidence) / log(1 - w^4)) and never exceeds max_iterations.
+ * The best hypothesis is refined (tvo_pnp_refine's step, Huber kernel) on its inliers, the inliers
+ * are re-selected on all usable points and it is refined once more while the inlier count grows (at
+ * most 3 rounds); a refinement is kept only when its MSAC cost is not above the hypothesis'.
  *
  * tvo_pnp_refine: iteratively re-weighted Levenberg-Marquardt on the Huber-robust reprojection cost
  * sum rho(e_i), rho(e) = e^2 / 2 for e <= huber, huber * (e - huber / 2) above, over the selected
@@ -44,12 +44,12 @@
  * reprojection error of 1, ~450 px: a step gains nothing by pushing a reasonably placed point
  * behind the camera). The increment d = [omega, v] is applied on the left with the SE(3)
  * exponential: T <- exp(d) T (rotation part by tvo_rotvec_to_rot). The 6x6 normal equations (J^T W
- * J + mu diag(J^T W J)) d = -J^T W r are solved by tvo_la_solve; mu starts at 1e-4 and is divided
- * by 10 after an accepted step; a step that raises the robust cost is rejected (the pose restored)
- * and mu multiplied by 10. Each solve counts as one iteration (at most refine_iterations); it stops
- * early after a tiny step (|omega| < 1e-9 rad and |v| < 1e-9 (1 + |t|) m, accepted or not), an
- * accepted step that lowers the cost by less than 1e-10 of it, or when mu exceeds 1e8. The output's
- * robust cost is never above the input's.
+ * J + mu diag(J^T W J)) d = -J^T W r are solved by Gaussian elimination; mu starts at 1e-4 and is
+ * divided by 10 after an accepted step; a step that raises the robust cost is rejected (the pose
+ * restored) and mu multiplied by 10. Each solve counts as one iteration (at most
+ * refine_iterations); it stops early after a tiny step (|omega| < 1e-9 rad and |v| < 1e-9 (1 + |t|)
+ * m, accepted or not), an accepted step that lowers the cost by less than 1e-10 of it, or when mu
+ * exceeds 1e8. The output's robust cost is never above the input's.
  *
  * Cost: instruction counts (callgrind, x86-64 gcc -O3, test/bench/bench_pnp.c; scenes of 200 points,
  * f = 450, 0.5 px noise, default configuration): tvo_p3p ~2.6k; tvo_pnp_refine from 1 deg / 5 cm
@@ -98,19 +98,19 @@ size_t tvo_pnp_scratch_size(int32_t max_points);
  * of T_c_w beyond the count are not written. Cost ~2.6k instructions. */
 int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4]);
 
-/* RANSAC over P3P, then refinement of the best hypothesis on its inliers (see above).
- * cfg: NULL -> the defaults. X[n], x[n]: correspondences (n >= 4 usable ones needed). *T_c_w: output
- * only (the pose is estimated from scratch), unless cfg->use_guess: then also a first hypothesis. inliers[n] (may be NULL): 1 for inliers of the result
- * (reprojection error < threshold and in front), else 0; all 0 on error. *n_inliers: their count, 0 on
- * error. scratch: at least tvo_pnp_scratch_size(n) bytes, owned by the caller.
- * Returns TVO_OK, TVO_ERR_NULL (X, x, T_c_w, n_inliers or scratch NULL), TVO_ERR_ARG (a config value
- * out of range or NaN, n < 0), TVO_ERR_TOO_FEW (n < 4, fewer than 4 usable points, or fewer than
- * min_inliers inliers for the best hypothesis, also when no hypothesis passed the 4th-point test),
- * TVO_ERR_NO_MEMORY (scratch too small), TVO_ERR_DEGENERATE (every sample was degenerate: P3P gave no
- * solution, e.g. all points collinear or coincident, and no guess was scored). On error *T_c_w is left as given when it is
- * finite, else set to the identity. The output pose is never NaN.
- * Cost: bounded by max_iterations samples (each a P3P and at most 4 scorings of O(n)) and 3
- * refinements. */
+/* RANSAC over P3P, then refinement of the best hypothesis on its inliers (see above). cfg: NULL ->
+ * the defaults. X[n], x[n]: correspondences (n >= 4 usable ones needed). *T_c_w: output only (the
+ * pose is estimated from scratch), unless cfg->use_guess: then also a first hypothesis. inliers[n]
+ * (may be NULL): 1 for inliers of the result (reprojection error < threshold and in front), else 0;
+ * all 0 on error. *n_inliers: their count, 0 on error. scratch: at least tvo_pnp_scratch_size(n)
+ * bytes, owned by the caller. Returns TVO_OK, TVO_ERR_NULL (X, x, T_c_w, n_inliers or scratch
+ * NULL), TVO_ERR_ARG (a config value out of range or NaN, n < 0), TVO_ERR_TOO_FEW (n < 4, fewer
+ * than 4 usable points, or fewer than min_inliers inliers for the best hypothesis, also when no
+ * hypothesis passed the 4th-point test), TVO_ERR_NO_MEMORY (scratch too small), TVO_ERR_DEGENERATE
+ * (every sample was degenerate: P3P gave no solution, e.g. all points collinear or coincident, and
+ * no guess was scored). On error *T_c_w is left as given when it is finite, else set to the
+ * identity. The output pose is never NaN. Cost: bounded by max_iterations samples (each a P3P and
+ * at most 4 scorings of O(n)) and 3 refinements. */
 tvo_status tvo_pnp_ransac(const tvo_pnp_config *cfg, const double (*X)[3], const tvo_point2d *x, int32_t n,
                           tvo_pose *T_c_w, uint8_t *inliers, int32_t *n_inliers, void *scratch,
                           size_t scratch_size);
