@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: windowed bundle adjustment (contract and cost in tinyvo/ba.h). */
 #include "tinyvo/ba.h"
 
@@ -79,7 +80,7 @@ void tvo_ba_config_default(tvo_ba_config *cfg)
     cfg->min_depth = 1e-3;
     cfg->max_poses = 10;
     cfg->max_points = 1024;
-    cfg->max_obs = 8192;
+    cfg->max_obs = 4096;
     cfg->max_point_cond = 1e6;
 }
 
@@ -332,7 +333,7 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
             double *H = ws->Hc[o->pose], *g = ws->gc[o->pose];
             for (int a = 0; a < 6; ++a) {
                 const double wa0 = w0 * Jc[0][a], wa1 = w1 * Jc[1][a];
-                for (int b = 0; b < 6; ++b)
+                for (int b = a; b < 6; ++b) /* upper triangle; mirrored below */
                     H[6 * a + b] += wa0 * Jc[0][b] + wa1 * Jc[1][b];
                 g[a] += wa0 * r0 + wa1 * r1;
             }
@@ -341,7 +342,7 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
             double *Vj = ws->V[o->point], *g = ws->gx[o->point];
             for (int a = 0; a < 3; ++a) {
                 const double wa0 = w0 * Jx[0][a], wa1 = w1 * Jx[1][a];
-                for (int b = 0; b < 3; ++b)
+                for (int b = a; b < 3; ++b) /* upper triangle; mirrored below */
                     Vj[3 * a + b] += wa0 * Jx[0][b] + wa1 * Jx[1][b];
                 g[a] += wa0 * r0 + wa1 * r1;
             }
@@ -360,6 +361,9 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
         double Vi[9], tr, fro = 0.0;
         if (ws->pstate[j] != PT_FREE)
             continue;
+        ws->V[j][3] = ws->V[j][1];
+        ws->V[j][6] = ws->V[j][2];
+        ws->V[j][7] = ws->V[j][5];
         if (ws->pt_nuse[j] < 2 || !chol3_inv(ws->V[j], PIVOT_POINT, Vi)) {
             ws->pstate[j] = PT_HELD;
             held++;
@@ -377,6 +381,9 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
         ws->slot[i] = -1;
         if (p->pose_fixed[i])
             continue;
+        for (int a = 1; a < 6; ++a)
+            for (int b = 0; b < a; ++b)
+                ws->Hc[i][6 * a + b] = ws->Hc[i][6 * b + a];
         if (ws->pose_nuse[i] == 0) {
             *pose_starved = 1;
             continue;

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Windowed bundle adjustment (tvo_ba_solve, tvo_ba_obs_errors): synthetic windows of 6 poses along a
  * path and 200 points; convergence without noise, with 0.5 px noise and with 10 % gross outliers,
  * points at infinity, a singular window, an already optimal state, the documented statuses, and the
