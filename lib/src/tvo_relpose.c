@@ -1286,11 +1286,10 @@ static int pose_any(const double E[9], double R[9], double t[3])
  * (and seeds the final refinement better). The first round selects within 2 thresholds (a model
  * fitted to 5 noisy points is often off by more than the threshold over part of the image), the
  * second within the threshold of the improved model; up to max_rounds rounds continue while that
- * selection grows. 5-point hypotheses take 2 rounds: more saved 9 % of the RANSAC iterations but
- * no time, and moved VO results both ways. 8-point hypotheses start further off: after 2 rounds LO
- * often stopped on part of the inliers, which raw hypotheses (scored unrefined) rarely beat, so 7 %
- * of the benchmark scenes ran to max_iters; they take up to RP_LO_ROUNDS_8PT (docs/geometry.md).
- * mask: n bytes of scratch. Returns 0 on failure. */
+ * selection grows: RP_LO_ROUNDS_5PT rounds for 5-point hypotheses (more rounds save RANSAC iterations
+ * but no time), up to RP_LO_ROUNDS_8PT for 8-point ones, which start further off (after 2 rounds LO
+ * often stops on part of the inliers, and raw hypotheses rarely beat that, so the RANSAC would run to
+ * max_iters). mask: n bytes of scratch. Returns 0 on failure. */
 static int lo_refine(const double E[9], const tvo_point2d *x1, const tvo_point2d *x2, int32_t n, double thr2,
                      int max_rounds, uint8_t *mask, double Eout[9])
 {
