@@ -9,7 +9,8 @@
 #      (tools/size-report.sh: arm-none-eabi core builds, link check, Cortex-M7 .text <= 64 KiB)
 #   5. cppcheck + clang-tidy with the checked-in configuration (tools/run-static.sh)
 #   6. aarch64 / armhf cross builds, their tests under qemu-user (tools/run-cross.sh)
-# Tests that need ../shared/data skip with a message when it is absent.
+# Tests that need recorded data read it from $TVO_DATA_DIR (default ../shared/data beside the repository)
+# and skip with a message when it is absent.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"

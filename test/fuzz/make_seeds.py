@@ -6,7 +6,7 @@ beside them as crash-* / leak-* / timeout-* files, never regenerated). Determini
 Sources: exporter output (tinyvo_tools.nnfmt / nngolden: micro models written here, plus a copy of
 test/data/nn/tiny.tvonn), files in the EuRoC/ASL formats written here by tinyvo_tools.trajio (the writer
 the synth tool uses) with made-up values, small PNGs of a procedural texture, and hand-made edge cases.
-Nothing comes from ../shared/data: its files must not be copied into the repository, not even in part.
+Nothing comes from the data folder (TVO_DATA_DIR): its files must not be copied into the repository, not even in part.
 """
 from __future__ import annotations
 
