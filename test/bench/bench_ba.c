@@ -6,9 +6,10 @@
  * perturbed state. Prints the report of one call, the median / p90 microseconds per call and a
  * checksum of the result.
  *
- *   bench_ba [calls]              default 200
- *   bench_ba --callgrind [calls]  no timing (default 10 calls), for
- *       valgrind --tool=callgrind --toggle-collect=tvo_ba_solve bench_ba --callgrind   (total / calls) */
+ *   bench_ba [--poses N] [calls]              default 6 poses, 200 calls
+ *   bench_ba [--poses N] --callgrind [calls]  no timing (default 10 calls), for
+ *       valgrind --tool=callgrind --toggle-collect=tvo_ba_solve bench_ba --callgrind   (total / calls)
+ * --poses N (4..10): a longer window along the same path with 50 N points (still 4 views each). */
 #define _POSIX_C_SOURCE 199309L
 #include <math.h>
 #include <stdio.h>
@@ -19,10 +20,10 @@
 #include "tinyvo/ba.h"
 #include "tvo_rand.h"
 
-#define NPOSE 6
-#define NPT 300
+#define NPOSE_MAX 10
+#define NPT_MAX 500
 #define NVIEW 4
-#define NOBS (NPT * NVIEW)
+#define NOBS_MAX (NPT_MAX * NVIEW)
 #define FOCAL 458.0
 
 static double urand(uint64_t *s) /* [-1, 1) */
@@ -65,11 +66,11 @@ static void left_rotate(tvo_pose *T, const double rv[3], const double dt[3])
 
 int main(int argc, char **argv)
 {
-    static tvo_pose T0[NPOSE], T[NPOSE];
-    static double X_true[NPT][3], X0[NPT][3], X[NPT][3];
-    static tvo_ba_obs obs[NOBS];
-    static uint8_t fixed[NPOSE] = {1, 1, 0, 0, 0, 0};
-    int callgrind = 0, calls, n_obs = 0;
+    static tvo_pose T0[NPOSE_MAX], T[NPOSE_MAX];
+    static double X_true[NPT_MAX][3], X0[NPT_MAX][3], X[NPT_MAX][3];
+    static tvo_ba_obs obs[NOBS_MAX];
+    static uint8_t fixed[NPOSE_MAX] = {1, 1};
+    int callgrind = 0, calls, n_obs = 0, n_pose = 6, n_pt;
     uint64_t rng = 42;
     tvo_ba_config cfg;
     tvo_ba_problem p;
@@ -77,6 +78,16 @@ int main(int argc, char **argv)
     size_t size;
     void *mem;
     double *t_us, sum = 0.0;
+    if (argc > 2 && strcmp(argv[1], "--poses") == 0) {
+        n_pose = atoi(argv[2]);
+        if (n_pose < NVIEW || n_pose > NPOSE_MAX) {
+            fprintf(stderr, "bench_ba: --poses must be %d..%d\n", NVIEW, NPOSE_MAX);
+            return 2;
+        }
+        argc -= 2;
+        argv += 2;
+    }
+    n_pt = 50 * n_pose;
     if (argc > 1 && strcmp(argv[1], "--callgrind") == 0) {
         callgrind = 1;
         argc--;
@@ -85,16 +96,16 @@ int main(int argc, char **argv)
     calls = argc > 1 ? atoi(argv[1]) : (callgrind ? 10 : 200);
     if (calls < 1)
         calls = 1;
-    for (int i = 0; i < NPOSE; ++i) {
+    for (int i = 0; i < n_pose; ++i) {
         const double rv[3] = {0.01 * sin(0.7 * i), 0.03 * i - 0.07, 0.005 * i};
         const double c[3] = {0.25 * i, 0.03 * sin(1.3 * i), 0.02 * i};
         tvo_rotvec_to_rot(rv, T0[i].R);
         for (int r = 0; r < 3; ++r)
             T0[i].t[r] = -(T0[i].R[3 * r] * c[0] + T0[i].R[3 * r + 1] * c[1] + T0[i].R[3 * r + 2] * c[2]);
     }
-    for (int j = 0; j < NPT; ++j) {
+    for (int j = 0; j < n_pt; ++j) {
         const double z = 4.0 + 3.0 * (urand(&rng) + 1.0);
-        const int first = j % (NPOSE - NVIEW + 1);
+        const int first = j % (n_pose - NVIEW + 1);
         X_true[j][0] = 0.6 + 0.5 * z * urand(&rng);
         X_true[j][1] = 0.4 * z * urand(&rng);
         X_true[j][2] = z;
@@ -113,29 +124,29 @@ int main(int argc, char **argv)
             }
         }
     }
-    for (int i = 2; i < NPOSE; ++i) {
+    for (int i = 2; i < n_pose; ++i) {
         const double rv[3] = {0.01 * urand(&rng), 0.01 * urand(&rng), 0.01 * urand(&rng)};
         const double dt[3] = {0.03 * urand(&rng), 0.03 * urand(&rng), 0.03 * urand(&rng)};
         left_rotate(&T0[i], rv, dt);
     }
-    for (int j = 0; j < NPT; ++j)
+    for (int j = 0; j < n_pt; ++j)
         for (int a = 0; a < 3; ++a)
             X0[j][a] = X_true[j][a] + 0.1 * urand(&rng);
 
     tvo_ba_config_default(&cfg);
     cfg.max_iterations = 5;
-    cfg.max_poses = NPOSE;
-    cfg.max_points = NPT;
-    cfg.max_obs = NOBS;
+    cfg.max_poses = n_pose;
+    cfg.max_points = n_pt;
+    cfg.max_obs = n_pt * NVIEW;
     size = tvo_ba_scratch_size(&cfg);
     mem = malloc(size);
     t_us = (double *)malloc((size_t)calls * sizeof *t_us);
     if (mem == NULL || t_us == NULL)
         return 1;
-    p.n_poses = NPOSE;
+    p.n_poses = n_pose;
     p.T_c_w = T;
     p.pose_fixed = fixed;
-    p.n_points = NPT;
+    p.n_points = n_pt;
     p.X = X;
     p.point_fixed = NULL;
     p.n_obs = n_obs;
@@ -153,12 +164,12 @@ int main(int argc, char **argv)
             return 1;
         }
     }
-    for (int i = 0; i < NPOSE; ++i)
+    for (int i = 0; i < n_pose; ++i)
         for (int a = 0; a < 3; ++a)
             sum += T[i].t[a];
-    for (int j = 0; j < NPT; ++j)
+    for (int j = 0; j < n_pt; ++j)
         sum += X[j][0] + X[j][1] + X[j][2];
-    printf("bench_ba: %d poses (2 fixed), %d points, %d observations, scratch %zu bytes\n", NPOSE, NPT, n_obs, size);
+    printf("bench_ba: %d poses (2 fixed), %d points, %d observations, scratch %zu bytes\n", n_pose, n_pt, n_obs, size);
     printf("report: iterations %d accepted %d flags %d points_skipped %d obs_skipped %d cost %.6g -> %.6g\n",
            rep.iterations, rep.accepted, rep.flags, rep.points_skipped, rep.obs_skipped, rep.cost_initial,
            rep.cost_final);
