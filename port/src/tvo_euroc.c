@@ -1008,8 +1008,9 @@ static void tvo_rate_from_frames(tvo_euroc *s)
         if (s->frames[i].t_ns > s->frames[i - 1].t_ns)
             d[n++] = s->frames[i].t_ns - s->frames[i - 1].t_ns;
     if (n > 0) {
+        const int32_t mid = n / 2;
         qsort(d, (size_t)n, sizeof *d, cmp_i64);
-        s->rate_hz = 1e9 / (double)d[n / 2];
+        s->rate_hz = 1e9 / (double)d[mid];
     }
     free(d);
 }
@@ -1281,7 +1282,7 @@ static tvo_status tvo_kitti_load_times(tvo_euroc *s, const char *path, int lenie
         return TVO_ERR_FORMAT;
     }
     s->frames = (tvo_euroc_frame *)malloc(lines * sizeof *s->frames);
-    *index = (int32_t *)malloc(lines * sizeof **index);
+    *index = (int32_t *)calloc(lines, sizeof **index);
     if (s->frames == NULL || *index == NULL) {
         free(text);
         tvo_set_err(err, err_size, "%s: out of memory", path);
