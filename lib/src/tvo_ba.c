@@ -266,11 +266,12 @@ static void chol_solve(const double *L, int n, const double *b, double *x)
 
 /* ---- linearisation ---------------------------------------------------------------------------- */
 
-/* Builds the per-pose and per-point blocks at the current state, marks usable observations, decides
- * the held points and the free-pose slots. Returns the cost (over the usable observations); counts to
+/* Builds the per-pose and per-point blocks at the current state, marks usable observations (first:
+ * from all of them; later: from those usable before, which accepted steps keep usable), decides the held
+ * points and the free-pose slots. Returns the cost (over the usable observations); counts to
  * *n_used, *n_skipped_obs, *n_held, *n_free_poses; *pose_starved when a free pose had no usable
  * observation. */
-static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *ws, int32_t *n_used,
+static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *ws, int first, int32_t *n_used,
                         int32_t *n_skipped_obs, int32_t *n_held, int32_t *n_free_poses, int *pose_starved)
 {
     const double k_h = c->huber;
@@ -294,6 +295,8 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
         const int pose_free = !p->pose_fixed[o->pose];
         const int pt_free = ws->pstate[o->point] == PT_FREE;
         double P[3], iz, u, v, r0, r1, w0, w1, Jc[2][6], Jx[2][3];
+        if (!first && !ws->ouse[k])
+            continue; /* the usable set is the first linearisation's for the whole call */
         ws->ouse[k] = 0;
         if (!(isfinite(o->x) && isfinite(o->y)))
             continue;
@@ -639,7 +642,7 @@ tvo_status tvo_ba_solve(const tvo_ba_config *cfg, tvo_ba_problem *p, void *scrat
         ws.pt_obs[ws.pt_nuse[p->obs[k].point]++] = k;
 
     memset(&r, 0, sizeof r);
-    cost = linearise(cfg, p, &ws, &n_used, &n_skip, &n_held, &nfree, &starved);
+    cost = linearise(cfg, p, &ws, 1, &n_used, &n_skip, &n_held, &nfree, &starved);
     r.cost_initial = cost;
     if (starved)
         r.flags |= TVO_BA_FLAG_SINGULAR;
@@ -652,7 +655,7 @@ tvo_status tvo_ba_solve(const tvo_ba_config *cfg, tvo_ba_problem *p, void *scrat
         int has_free_point = 0;
         double cnew;
         if (!linearised) {
-            cost = linearise(cfg, p, &ws, &n_used, &n_skip, &n_held, &nfree, &starved);
+            cost = linearise(cfg, p, &ws, 0, &n_used, &n_skip, &n_held, &nfree, &starved);
             if (starved)
                 r.flags |= TVO_BA_FLAG_SINGULAR;
             backup(p, &ws);

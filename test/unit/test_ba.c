@@ -550,6 +550,101 @@ static void test_fixed_points_and_points_only(void **state)
     free(s);
 }
 
+/* Hostile windows: random poses (some with huge or tiny translations), points anywhere (behind the
+ * cameras, at a camera centre, 1e12 m away), observations that are garbage, NaN or infinite, duplicated
+ * observations, random fixed flags. Every call returns a documented status; the state stays finite. */
+static void test_hostile_inputs_finite(void **state)
+{
+    enum { NP = 5, NX = 40, NO = 160 };
+    static const double scales[4] = {1.0, 1e-8, 1e6, 1e12};
+    tvo_ba_config cfg;
+    size_t size;
+    void *mem;
+    uint64_t rng = 99;
+    int ok = 0;
+    (void)state;
+    tvo_ba_config_default(&cfg);
+    cfg.max_poses = NP;
+    cfg.max_points = NX;
+    cfg.max_obs = NO;
+    mem = scratch_for(&cfg, &size);
+    for (int trial = 0; trial < 300; ++trial) {
+        tvo_pose T[NP];
+        uint8_t pf[NP], xf[NX];
+        double X[NX][3];
+        tvo_ba_obs obs[NO];
+        tvo_ba_problem p;
+        tvo_ba_report rep;
+        tvo_status st;
+        cfg.max_iterations = 1 + (int32_t)(tvo_test_rand(&rng) % 8);
+        for (int i = 0; i < NP; ++i) {
+            double rv[3];
+            const double sc = scales[tvo_test_rand(&rng) % 4];
+            for (int a = 0; a < 3; ++a)
+                rv[a] = 3.0 * urand(&rng);
+            tvo_rotvec_to_rot(rv, T[i].R);
+            for (int a = 0; a < 3; ++a)
+                T[i].t[a] = sc * urand(&rng);
+            pf[i] = (uint8_t)(tvo_test_rand(&rng) % 3 == 0);
+        }
+        for (int j = 0; j < NX; ++j) {
+            const double sc = scales[tvo_test_rand(&rng) % 4];
+            for (int a = 0; a < 3; ++a)
+                X[j][a] = sc * urand(&rng);
+            if (j % 7 == 0) /* at camera 0's centre */
+                for (int a = 0; a < 3; ++a)
+                    X[j][a] = -(T[0].R[a] * T[0].t[0] + T[0].R[3 + a] * T[0].t[1] + T[0].R[6 + a] * T[0].t[2]);
+            xf[j] = (uint8_t)(tvo_test_rand(&rng) % 5 == 0);
+        }
+        for (int k = 0; k < NO; ++k) {
+            const uint64_t kind = tvo_test_rand(&rng) % 10;
+            obs[k].pose = (int32_t)(tvo_test_rand(&rng) % NP);
+            obs[k].point = (int32_t)(tvo_test_rand(&rng) % NX);
+            if (kind < 6) { /* consistent with the state, slightly off */
+                double x, y, z;
+                project(&T[obs[k].pose], X[obs[k].point], &x, &y, &z);
+                obs[k].x = x + 0.01 * urand(&rng);
+                obs[k].y = y + 0.01 * urand(&rng);
+            } else if (kind < 8) {
+                obs[k].x = 1e3 * urand(&rng);
+                obs[k].y = 1e-3 * urand(&rng);
+            } else if (kind == 8) {
+                obs[k].x = NAN;
+                obs[k].y = 0.0;
+            } else {
+                obs[k].x = 0.0;
+                obs[k].y = -INFINITY;
+            }
+            if (k > 0 && kind == 0)
+                obs[k] = obs[k - 1]; /* duplicate */
+        }
+        p.n_poses = NP;
+        p.T_c_w = T;
+        p.pose_fixed = pf;
+        p.n_points = NX;
+        p.X = X;
+        p.point_fixed = (trial & 1) ? xf : NULL;
+        p.n_obs = NO;
+        p.obs = obs;
+        st = tvo_ba_solve(&cfg, &p, mem, size, &rep);
+        assert_true(st == TVO_OK || st == TVO_ERR_TOO_FEW);
+        if (st == TVO_OK) {
+            ok++;
+            assert_true(isfinite(rep.cost_initial) && isfinite(rep.cost_final));
+            assert_true(rep.cost_final <= rep.cost_initial);
+            assert_true(rep.iterations <= cfg.max_iterations && rep.accepted <= rep.iterations);
+        }
+        for (int i = 0; i < NP; ++i)
+            assert_true(tvo_pose_is_finite(&T[i]));
+        for (int j = 0; j < NX; ++j)
+            for (int a = 0; a < 3; ++a)
+                assert_true(isfinite(X[j][a]));
+    }
+    fprintf(stderr, "hostile: %d of 300 windows solved (TVO_OK)\n", ok);
+    assert_true(ok > 250);
+    free(mem);
+}
+
 static void test_statuses(void **state)
 {
     scene *s = make_scene(20, 0.0, 0.0, 19);
@@ -765,6 +860,7 @@ int main(void)
         cmocka_unit_test(test_behind_and_nonfinite_skipped),
         cmocka_unit_test(test_rejected_step_restores),
         cmocka_unit_test(test_fixed_points_and_points_only),
+        cmocka_unit_test(test_hostile_inputs_finite),
         cmocka_unit_test(test_statuses),
         cmocka_unit_test(test_unaligned_scratch_deterministic),
         cmocka_unit_test(test_stack),

@@ -38,7 +38,10 @@
  * the estimate trace(V) * ||V^-1||_F (between the 2-norm condition number and 3 sqrt(3) times it)
  * above cfg->max_point_cond (default 1e6: a point seen with a parallax of about 0.06 degree or less,
  * e.g. a landmark nearly at infinity). Decided again at every linearisation.
- * An observation is usable when x, y are finite and its point has Z_c >= min_depth in that camera.
+ * An observation is usable when x, y are finite and its point has Z_c >= min_depth in that camera at
+ * the input state; that set stays fixed for the call (a step that would take one of them below
+ * min_depth is rejected; one that brings another in front of its camera does not add it), so the
+ * costs reported are over the same observations and cost_final <= cost_initial.
  *
  * Gauge. The caller fixes at least one pose (two for a monocular window, else the scale is free).
  * A free pose with no usable observation is held fixed. When the undamped reduced camera system at
@@ -126,10 +129,10 @@ typedef struct tvo_ba_report {
     int32_t accepted;        /* steps accepted */
     int32_t flags;           /* TVO_BA_FLAG_* */
     int32_t points_skipped;  /* free points held fixed at the last linearisation */
-    double cost_initial;     /* robust cost of the input state (over its usable observations) */
-    double cost_final;       /* robust cost of the output state (over the observations of the last step) */
-    int32_t obs_skipped;     /* (added) observations left out at the last linearisation: non-finite x, y
-                                or Z_c < min_depth */
+    double cost_initial;     /* robust cost of the input state over the usable observations */
+    double cost_final;       /* robust cost of the output state over the same observations (<= cost_initial) */
+    int32_t obs_skipped;     /* (added) observations left out (not usable at the input state: non-finite
+                                x, y or Z_c < min_depth) */
     int32_t poses_free;      /* (added) free poses that were optimised at the last linearisation */
 } tvo_ba_report;
 
