@@ -50,11 +50,11 @@
  * the solve goes on with damped steps (the undetermined directions stay near their start values).
  *
  * Cost. On the bench-like window of test/bench/bench_ba.c (6 poses, 2 of them fixed, 300 points each seen
- * by 4 poses, 1200 observations, 0.5 px noise and 5 % outliers, 5 iterations all accepted): 11.5 M
+ * by 4 poses, 1200 observations, 0.5 px noise and 5 % outliers, 5 iterations all accepted): 11.6 M
  * instructions per call (callgrind, x86-64, gcc -O3: `valgrind --tool=callgrind
  * --toggle-collect=tvo_ba_solve bench_ba --callgrind`, total / 10 calls), of which 60 % build and solve
  * the systems (6 of them: 5 damped steps and the undamped check), 31 % linearise (5 times). A 10-pose
- * window (500 points, 2000 observations, `bench_ba --poses 10`): 23.4 M instructions per call.
+ * window (500 points, 2000 observations, `bench_ba --poses 10`): 23.5 M instructions per call.
  * Scaling per iteration: O(obs) to linearise and to evaluate a trial step, O(points) for the 3x3 point
  * blocks, O(sum over points of obs_per_point^2) (<= O(obs * poses)) for the Schur complement,
  * O((6 free poses)^3 / 6) for the reduced system's Cholesky. No allocation (everything lives in the
