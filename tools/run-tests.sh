@@ -6,9 +6,11 @@
 #      non-default prefix, static and shared libraries)
 #   3. an ASan+UBSan build running the ctest tests again
 #   4. a -Os (MinSizeRel) build running the ctest tests again, and the Cortex-M size report
-#      (tools/size-report.sh: arm-none-eabi core builds, link check, Cortex-M7 .text <= 64 KiB)
+#      (tools/size-report.sh: arm-none-eabi core builds, link check, Cortex-M7 .text <= 96 KiB)
 #   5. cppcheck + clang-tidy with the checked-in configuration (tools/run-static.sh)
 #   6. aarch64 / armhf cross builds, their tests under qemu-user (tools/run-cross.sh)
+#   7. the Cortex-M7 model (qemu-system-arm -M mps2-an500): unit tests and the QVGA replay, bit-identical
+#      to the host (tools/run-mcu.sh)
 # Tests that need recorded data read it from $TVO_DATA_DIR (default ../shared/data beside the repository)
 # and skip with a message when it is absent.
 set -euo pipefail
@@ -41,7 +43,7 @@ cmake -S . -B build/minsize -G Ninja -DCMAKE_BUILD_TYPE=MinSizeRel -DTVO_WERROR=
 cmake --build build/minsize -j$JOBS
 ctest --test-dir build/minsize -j$JOBS --output-on-failure
 
-echo "== Cortex-M7 / M4 core builds, link check, M7 .text <= 64 KiB (tools/size-report.sh)"
+echo "== Cortex-M7 / M4 core builds, link check, M7 .text <= 96 KiB (tools/size-report.sh)"
 TVO_WERROR=ON bash tools/size-report.sh
 
 echo "== static analysis (cppcheck + clang-tidy, tools/run-static.sh; ~3 min)"
@@ -49,5 +51,8 @@ bash tools/run-static.sh
 
 echo "== ARM cross builds, unit tests under qemu-user (aarch64, armhf; ~7 min)"
 bash tools/run-cross.sh
+
+echo "== Cortex-M7 model: unit tests and QVGA replay under qemu-system-arm (tools/run-mcu.sh; ~10 min)"
+bash tools/run-mcu.sh
 
 echo "== all tests passed"
