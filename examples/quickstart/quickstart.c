@@ -37,8 +37,11 @@ int main(void)
     void *mem = malloc(size); /* all the VO's memory, from any allocator you like */
     uint8_t *pixels = malloc(W * H);
     tvo_vo *vo = NULL;
-    if (size == 0 || mem == NULL || pixels == NULL || tvo_vo_init(&vo, &cfg, mem, size) != TVO_OK)
+    if (size == 0 || mem == NULL || pixels == NULL || tvo_vo_init(&vo, &cfg, mem, size) != TVO_OK) {
+        free(pixels);
+        free(mem);
         return 1;
+    }
     tvo_image frame = tvo_image_make(W, H, W, pixels);
     tvo_traj traj;
     tvo_traj_init(&traj, NULL); /* the first camera is the world frame */

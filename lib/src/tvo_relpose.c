@@ -1594,6 +1594,7 @@ static double homography_ransac(const rp_work *w, int32_t inl, double Hb[9])
 {
     const tvo_relpose_config *cfg = w->cfg;
     const int32_t n = w->n, stride = visit_stride(n);
+    memset(Hb, 0, 9 * sizeof(double)); /* written with the first model that scores above -1 */
     rp_rng rng;
     rng_seed(&rng, cfg->seed ^ RP_H_SEED_SALT);
     double inv_s2 = 1.0 / w->thr2, best = -1.0;
