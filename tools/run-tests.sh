@@ -3,7 +3,8 @@
 #   1. Release build with -Werror, all ctest tests (unit, port, guarantees, fuzz-corpus replays; -j2)
 #   2. the OpenCV oracle tests (pytest, test/oracle) and the Python tool tests (test/python) against it
 #      install + external project (test/external/run.sh: find_package and pkg-config from a moved
-#      non-default prefix, static and shared libraries)
+#      non-default prefix, static and shared libraries); pip install of the tools into a fresh venv
+#      and every console script's --help (tools/check-pip-install.sh)
 #   3. an ASan+UBSan build running the ctest tests again
 #   4. a -Os (MinSizeRel) build running the ctest tests again, and the Cortex-M size report
 #      (tools/size-report.sh: arm-none-eabi core builds, link check, Cortex-M7 .text <= 96 KiB)
@@ -31,6 +32,9 @@ TVO_BUILD_DIR="$ROOT/build/release" "$ROOT/.venv/bin/python" -m pytest -q test/p
 echo "== install to a non-default prefix, external project (find_package + pkg-config; static, shared + SONAME)"
 bash test/external/run.sh
 
+echo "== pip install ./tools into a fresh venv, every console script's --help (tools/check-pip-install.sh)"
+bash tools/check-pip-install.sh
+
 echo "== ASan + UBSan build + unit tests"
 cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DTVO_SANITIZE=ON -DTVO_WERROR=ON \
       -DTVO_BUILD_BENCH=OFF >/dev/null
@@ -47,6 +51,8 @@ echo "== Cortex-M7 / M4 core builds, link check, M7 .text <= 96 KiB (tools/size-
 TVO_WERROR=ON bash tools/size-report.sh
 
 echo "== static analysis (cppcheck + clang-tidy, tools/run-static.sh; ~3 min)"
+# SPDX line in every source file: enabled once tools/spdx.sh --add has been run over the tree
+# bash tools/spdx.sh --check
 bash tools/run-static.sh
 
 echo "== ARM cross builds, unit tests under qemu-user (aarch64, armhf; ~7 min)"

@@ -167,6 +167,14 @@ def test_video_and_options(replay_like, tmp_path):
     assert len(frames) == N // 2
     sw = round(w * 240 / h)
     assert frames[0].shape == (240, sw + 240, 3)
+    # .mp4 (mp4v through the FFmpeg of the opencv-python-headless wheel)
+    mp4 = tmp_path / "v.mp4"
+    assert view.main(["--seq", str(seq), "--tracks", str(tracks), "-o", str(mp4), "--max-frames", "5", "--quiet"]) == 0
+    cap = cv2.VideoCapture(str(mp4))
+    n = 0
+    while cap.read()[0]:
+        n += 1
+    assert n == 5 and int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)) == w
     # without a trajectory: the image alone
     out2 = tmp_path / "nt.gif"
     assert view.main(["--seq", str(seq), "--tracks", str(tracks), "-o", str(out2), "--max-frames", "4",
