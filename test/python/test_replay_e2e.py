@@ -114,8 +114,10 @@ def test_bench_alternating_runs(replayed, tmp_path):
     ratios = sorted(r["ratio"] for r in res["runs"])
     assert all(r > 0 and math.isfinite(r) for r in ratios)
     assert res["ratio_median_of_runs"] == pytest.approx(0.5 * (ratios[0] + ratios[1]))
-    for name in ("tinyvo", "opencv"):
+    for name in ("tinyvo", "opencv", "opencv_plain", "opencv_fb"):
         assert math.isfinite(res[name]["eval"]["standard"]["ate_m"]["rmse"])
+    plain = sorted(r["ratio_plain"] for r in res["runs"])  # the plain pipeline (no fb check) ran too
+    assert res["opencv_plain"]["ratio_median_of_runs"] == pytest.approx(0.5 * (plain[0] + plain[1]))
     bad = subprocess.run([sys.executable, "-m", "tinyvo_tools.bench", "--euroc", str(seq), "--repeat", "0",
                           "--replay", str(REPLAY), "--out", str(out)], capture_output=True, text=True)
     assert bad.returncode == 2 and "--repeat must be >= 1" in bad.stderr
