@@ -183,6 +183,41 @@ def test_video_and_options(replay_like, tmp_path):
     assert (n, size) == (4, (w, h))
 
 
+def test_tum_and_kitti_layouts(replay_like, tmp_path):
+    """The same frames in the TUM RGB-D layout (rgb.txt, seconds) and the KITTI layout (times.txt, seconds
+    from 0, image_0/%06d.png) render the same pictures as from the EuRoC folder."""
+    seq, tracks, _, _, _, ts = replay_like
+    _, files = view.read_frames(str(seq))
+    tum, kitti = tmp_path / "tum", tmp_path / "kitti"
+    (tum / "rgb").mkdir(parents=True)
+    (kitti / "image_0").mkdir(parents=True)
+    with open(tum / "rgb.txt", "w") as f:
+        f.write("# color images\n# timestamp filename\n")
+        for t, src in zip(ts, files):
+            name = f"rgb/{t // 10**9}.{(t % 10**9) // 1000:06d}.png"
+            os.symlink(src, tum / name)
+            f.write(f"{t // 10**9}.{(t % 10**9) // 1000:06d} {name}\n")
+    with open(kitti / "times.txt", "w") as f:
+        for k, (t, src) in enumerate(zip(ts, files)):
+            os.symlink(src, kitti / "image_0" / f"{k:06d}.png")
+            f.write(f"{(t - ts[0]) * 1e-9:e}\n")
+    lines = tracks.read_text().splitlines()
+    shifted = tmp_path / "tracks_kitti.csv"
+    shifted.write_text("\n".join([lines[0]] + [f"{int(r.split(',')[0]) - ts[0]},{r.split(',', 1)[1]}"
+                                                for r in lines[1:]]) + "\n")
+    outs = {}
+    for name, d, tr in (("euroc", seq, tracks), ("tum", tum, tracks), ("kitti", kitti, shifted)):
+        outs[name] = tmp_path / f"{name}.gif"
+        assert view.main(["--seq", str(d), "--tracks", str(tr), "-o", str(outs[name]), "--max-frames", "6",
+                          "--quiet"]) == 0, name
+    ref = gif_frames(outs["euroc"])
+    for name in ("tum", "kitti"):
+        got = gif_frames(outs[name])
+        assert got[:2] == ref[:2] == (6, ref[1]), name
+        for a, b in zip(got[2], ref[2]):
+            assert np.array_equal(a, b), name
+
+
 def run_view(*args):
     return subprocess.run([sys.executable, "-m", "tinyvo_tools.view", *map(str, args)], capture_output=True,
                           text=True)

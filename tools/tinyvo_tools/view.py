@@ -11,12 +11,14 @@ far (the two axes along which the whole trajectory extends most, equal scale), t
 (yellow squares) and the current position.
 
 Inputs:
-- DIR: an EuRoC/ASL sequence (DIR/mav0/cam0/data.csv and data/*.png, as tinyvo-synth writes and
-  tvo_replay --euroc reads), or a camera folder holding data.csv and data/ itself;
+- DIR: the sequence folder tvo_replay read: EuRoC/ASL (DIR/mav0/cam0/data.csv and data/*.png, as
+  tinyvo-synth writes; or a camera folder holding data.csv and data/), TUM RGB-D (rgb.txt) or KITTI
+  odometry (times.txt, image_0/);
 - TRACKS.csv: the per-frame tracks of ``tvo_replay --tracks FILE``: a header line ``t_ns,id,x,y,age,flags``,
   then one row per track alive after each frame: t_ns the frame's timestamp (ns), id the track's id, x y its
   position in pixels of the raw image, age in frames, flags bit 0 = inlier of this frame's pose, bit 1 =
-  has a map landmark, bit 2 = the frame is a keyframe (set on every row of that frame);
+  has a map landmark, bit 2 = the frame is a keyframe (set on every row of that frame); a frame's rows
+  are those whose t_ns is nearest its timestamp, within 1 ms;
 - TRAJ.txt (optional): the replay's TUM trajectory (``tvo_replay --out``: t tx ty tz qx qy qz qw, t in
   seconds), camera positions; frames are matched by timestamp (within 1 ms).
 
@@ -29,6 +31,7 @@ mp4v, through the FFmpeg bundled with opencv-python(-headless) wheels). Frames w
 from __future__ import annotations
 
 import csv
+import decimal
 import os
 import sys
 from dataclasses import dataclass
@@ -93,32 +96,79 @@ def read_tracks(path: str) -> Dict[int, FrameTracks]:
     return out
 
 
+def _ns(token: str, where: str) -> int:
+    """Seconds with a decimal fraction or an exponent ("1305031102.175304", "1.036000e-01") -> int ns,
+    exactly (decimal arithmetic, as the C readers)."""
+    try:
+        return int((decimal.Decimal(token) * 1_000_000_000).to_integral_value(decimal.ROUND_HALF_EVEN))
+    except decimal.InvalidOperation:
+        raise ValueError(f"{where}: bad timestamp {token!r}") from None
+
+
 def read_frames(seq: str) -> Tuple[List[int], List[str]]:
-    """Timestamps (ns) and PNG paths of an EuRoC/ASL sequence's cam0 (or of a camera folder)."""
+    """Timestamps (ns) and image paths of a sequence folder, in the layouts tvo_replay reads: EuRoC/ASL
+    (mav0/cam0/data.csv + data/, or a camera folder holding data.csv), TUM RGB-D (rgb.txt) or KITTI
+    odometry (times.txt + image_0/)."""
     cam = os.path.join(seq, "mav0", "cam0")
     if not os.path.isfile(os.path.join(cam, "data.csv")):
         cam = seq
     csv_path = os.path.join(cam, "data.csv")
-    if not os.path.isfile(csv_path):
-        raise cli.Failure(f"{seq}: no mav0/cam0/data.csv (not an EuRoC/ASL sequence)")
     ts, files = [], []
-    with open(csv_path, "r", encoding="utf-8") as f:
+    if os.path.isfile(csv_path):
+        kind, path = "euroc", csv_path
+    elif os.path.isfile(os.path.join(seq, "rgb.txt")):
+        kind, path = "tum", os.path.join(seq, "rgb.txt")
+    elif os.path.isfile(os.path.join(seq, "times.txt")):
+        kind, path = "kitti", os.path.join(seq, "times.txt")
+    else:
+        raise cli.Failure(f"{seq}: no mav0/cam0/data.csv, rgb.txt or times.txt (not an EuRoC, TUM or KITTI sequence)")
+    with open(path, "r", encoding="utf-8") as f:
         for n, line in enumerate(f, 1):
             s = line.strip()
             if not s or s.startswith("#"):
                 continue
-            parts = [p.strip() for p in s.split(",")]
-            try:
-                t = int(parts[0])
-            except ValueError:
-                raise ValueError(f"{csv_path}:{n}: bad timestamp {parts[0]!r}") from None
-            if len(parts) < 2 or not parts[1]:
-                raise ValueError(f"{csv_path}:{n}: no file name")
+            where = f"{path}:{n}"
+            if kind == "euroc":
+                parts = [p.strip() for p in s.split(",")]
+                try:
+                    t = int(parts[0])
+                except ValueError:
+                    raise ValueError(f"{where}: bad timestamp {parts[0]!r}") from None
+                if len(parts) < 2 or not parts[1]:
+                    raise ValueError(f"{where}: no file name")
+                name = os.path.join(cam, "data", parts[1])
+            elif kind == "tum":
+                parts = s.split()
+                if len(parts) < 2:
+                    raise ValueError(f"{where}: expected 'timestamp filename'")
+                t, name = _ns(parts[0], where), os.path.join(seq, parts[1])
+            else:
+                t, name = _ns(s.split()[0], where), os.path.join(seq, "image_0", f"{len(ts):06d}.png")
             ts.append(t)
-            files.append(os.path.join(cam, "data", parts[1]))
+            files.append(name)
     if not ts:
-        raise cli.Failure(f"{csv_path}: no frames")
+        raise cli.Failure(f"{path}: no frames")
     return ts, files
+
+
+class _Nearest:
+    """Lookup of the entry whose timestamp is nearest t, within tol_ns (the tracks and trajectory files
+    may carry a frame's time rounded differently from the frame list)."""
+
+    def __init__(self, t_ns: Sequence[int], tol_ns: int = 1_000_000):
+        self.t = np.asarray(sorted(t_ns), dtype=np.int64)
+        self.tol = tol_ns
+
+    def index(self, t: int) -> Optional[int]:
+        if len(self.t) == 0:
+            return None
+        j = int(np.searchsorted(self.t, t))
+        best = min((c for c in (j - 1, j) if 0 <= c < len(self.t)), key=lambda c: abs(int(self.t[c]) - t))
+        return best if abs(int(self.t[best]) - t) <= self.tol else None
+
+    def key(self, t: int) -> Optional[int]:
+        i = self.index(t)
+        return None if i is None else int(self.t[i])
 
 
 def read_positions(path: str) -> Tuple[np.ndarray, np.ndarray]:
@@ -248,6 +298,14 @@ def render(seq: str, tracks_path: str, out: str, traj_path: Optional[str] = None
     tpos = tp = None
     if traj_path:
         tpos, tp = read_positions(traj_path)
+        order = np.argsort(tpos, kind="stable")
+        tpos, tp = tpos[order], tp[order]
+    near_tracks = _Nearest(tracks.keys())
+    near_traj = _Nearest(tpos if tpos is not None else [])
+
+    def tracks_at(t):
+        key = near_tracks.key(t)
+        return None if key is None else tracks[key]
     panel, traj_pts = None, []
     history: Dict[int, List[Tuple[float, float]]] = {}
     kf_pos: List[np.ndarray] = []
@@ -262,10 +320,10 @@ def render(seq: str, tracks_path: str, out: str, traj_path: Optional[str] = None
         if panel is None and tp is not None:
             panel = TrajPanel(tp, round(img.shape[0] * scale))
         t = ts[k]
-        ft = tracks.get(t)
+        ft = tracks_at(t)
         # every frame of the sequence (also those skipped by --stride) extends the tails
         for kk in range(sel[n - 1] + 1 if n else 0, k + 1):
-            fk = tracks.get(ts[kk])
+            fk = tracks_at(ts[kk])
             if fk is None:
                 continue
             alive = set(fk.ids.tolist())
@@ -278,12 +336,10 @@ def render(seq: str, tracks_path: str, out: str, traj_path: Optional[str] = None
         if ft is not None:
             n_tracks += 1
         cur = None
-        if tp is not None and len(tp):
-            j = int(np.searchsorted(tpos, t))
-            cand = [c for c in (j - 1, j) if 0 <= c < len(tpos)]
-            best = min(cand, key=lambda c: abs(int(tpos[c]) - t))
-            if abs(int(tpos[best]) - t) <= 1_000_000:
-                cur = tp[best]
+        if tp is not None:
+            j = near_traj.index(t)
+            if j is not None:
+                cur = tp[j]
         if cur is not None:
             traj_pts.append(cur)
             if ft is not None and ft.keyframe:
@@ -304,7 +360,7 @@ def render(seq: str, tracks_path: str, out: str, traj_path: Optional[str] = None
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     ap = cli.parser("tinyvo-view", __doc__)
-    ap.add_argument("--seq", required=True, help="sequence folder (EuRoC/ASL: mav0/cam0/data.csv + data/*.png)")
+    ap.add_argument("--seq", required=True, help="sequence folder: EuRoC/ASL (mav0/), TUM RGB-D (rgb.txt) or KITTI (times.txt)")
     ap.add_argument("--tracks", required=True, help="per-frame tracks csv (tvo_replay --tracks)")
     ap.add_argument("--traj", default=None, help="the replay's TUM trajectory (tvo_replay --out): adds the panel")
     ap.add_argument("-o", "--out", required=True, help="output file: .gif, .avi (MJPG) or .mp4 (mp4v)")
