@@ -192,3 +192,13 @@ def test_dataset_name(tmp_path):
     r = run("dataset", [str(seq), "-o", str(out), "--replay", str(replay)], tmp_path)
     assert r.returncode == 0 and set(np.load(out)["sequence"].tolist()) == {"seqA"}
     assert r.stdout.splitlines()[-1].startswith(f"wrote {out}")
+
+
+def test_versions_agree():
+    """One release number: project(VERSION) of CMakeLists.txt, tinyvo/version.h (the C programs' --version),
+    tools/pyproject.toml and tinyvo_tools.__version__ (the Python programs' --version)."""
+    tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
+    cmake = re.search(r"project\(tinyvo VERSION ([0-9.]+)", (ROOT / "CMakeLists.txt").read_text()).group(1)
+    with open(ROOT / "tools" / "pyproject.toml", "rb") as f:
+        py = tomllib.load(f)["project"]["version"]
+    assert cmake == c_version() == py == tinyvo_tools.__version__
