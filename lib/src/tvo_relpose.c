@@ -707,8 +707,7 @@ static void refine_pose(double R[9], double t[3], const tvo_point2d *x1, const t
      * in a row end it: the normal equations treat the Sampson denominator as constant, so close to
      * the optimum their step is not an exact descent direction of the cost, and further damping
      * only buys changes far below the noise. Once an accepted step changed the cost by less than
-     * 1e-3 (relative) the pose is that close to the optimum, and the first rejection ends it (in
-     * the VO replay of synthetic V1_01, rejected trials were 9 % of the refinement passes). */
+     * 1e-3 (relative) the pose is that close to the optimum, and the first rejection ends it. */
     for (int it = 0, rejected = 0, limit = 3; it < iters && rejected < limit;) {
         double dx[5], Rn[9], tn[3], Hn[25], gn[5], nb1[3], nb2[3];
         if (!solve_damped(H, g, lambda, dx))
