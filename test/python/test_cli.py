@@ -202,3 +202,20 @@ def test_versions_agree():
     with open(ROOT / "tools" / "pyproject.toml", "rb") as f:
         py = tomllib.load(f)["project"]["version"]
     assert cmake == c_version() == py == tinyvo_tools.__version__
+
+
+def test_quiet_runs_are_silent(tmp_path):
+    """--quiet: a real run prints nothing at all (no progress bar, no summary); without it the summary is
+    there. tinyvo-train and tinyvo-export on train.py's synthetic demo data."""
+    pytest.importorskip("torch")
+    ck = tmp_path / "m.ckpt.npz"
+    train = ["synthetic", "-o", str(ck), "--epochs", "1", "--joint-epochs", "0", "--sizes", "8,8"]
+    r = run("train", train + ["--quiet"], tmp_path)
+    assert r.returncode == 0 and r.stdout == "" and r.stderr == "", r.stderr
+    r = run("train", train, tmp_path)
+    assert r.returncode == 0 and r.stdout.splitlines()[-1].startswith(f"wrote {ck}")
+    export = [str(ck), "synthetic", "-o", str(tmp_path / "m.tvonn")]
+    r = run("export", export + ["--quiet"], tmp_path)
+    assert r.returncode == 0 and r.stdout == "" and r.stderr == "", r.stderr
+    r = run("export", export, tmp_path)
+    assert r.returncode == 0 and r.stdout.lstrip().startswith("{") and (tmp_path / "m.tvonn").stat().st_size > 0
