@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fuzzes tinyvo's parsers and the VO with libFuzzer (clang), one harness at a time (docs/fuzzing.md).
 #
-#   tools/run-fuzz.sh [-t SECONDS] [HARNESS...]     HARNESS: nn csv yaml png vo (default: all)
+#   tools/run-fuzz.sh [-t SECONDS] [HARNESS...]     HARNESS: nn csv yaml png dataset vo (default: all)
 #
 # Installs clang and libclang-rt-14-dev (libFuzzer, sanitizer runtimes) when missing (as root, after
 # apt-get update), builds build/fuzz with -DTVO_BUILD_FUZZ=ON (libFuzzer + ASan + UBSan), then runs
@@ -24,11 +24,11 @@ while getopts "t:h" opt; do
 done
 shift $((OPTIND - 1))
 HARNESSES=("$@")
-[ ${#HARNESSES[@]} -gt 0 ] || HARNESSES=(nn csv yaml png vo)
+[ ${#HARNESSES[@]} -gt 0 ] || HARNESSES=(nn csv yaml png dataset vo)
 
 # max_len per harness: the largest input worth mutating (a weights file with a few small branches, a
 # few hundred csv rows / yaml lines, a small PNG, a header + a few 96x96 frames)
-declare -A MAX_LEN=([nn]=16384 [csv]=4096 [yaml]=4096 [png]=16384 [vo]=32768)
+declare -A MAX_LEN=([nn]=16384 [csv]=4096 [yaml]=4096 [png]=16384 [dataset]=4096 [vo]=32768)
 
 # ---- tools ----------------------------------------------------------------------------------------
 . "$ROOT/tools/apt-lib.sh"

@@ -3,13 +3,17 @@
 #   1. Release build with -Werror, all ctest tests (unit, port, guarantees, fuzz-corpus replays; -j2)
 #   2. the OpenCV oracle tests (pytest, test/oracle) and the Python tool tests (test/python) against it
 #      install + external project (test/external/run.sh: find_package and pkg-config from a moved
-#      non-default prefix, static and shared libraries)
+#      non-default prefix, static and shared libraries); pip install of the tools into a fresh venv
+#      and every console script's --help (tools/check-pip-install.sh)
 #   3. an ASan+UBSan build running the ctest tests again
 #   4. a -Os (MinSizeRel) build running the ctest tests again, and the Cortex-M size report
-#      (tools/size-report.sh: arm-none-eabi core builds, link check, Cortex-M7 .text <= 64 KiB)
+#      (tools/size-report.sh: arm-none-eabi core builds, link check, Cortex-M7 .text <= 96 KiB)
 #   5. cppcheck + clang-tidy with the checked-in configuration (tools/run-static.sh)
 #   6. aarch64 / armhf cross builds, their tests under qemu-user (tools/run-cross.sh)
-# Tests that need ../shared/data skip with a message when it is absent.
+#   7. the Cortex-M7 model (qemu-system-arm -M mps2-an500): unit tests and the QVGA replay, bit-identical
+#      to the host (tools/run-mcu.sh)
+# Tests that need recorded data read it from $TVO_DATA_DIR (default ../shared/data beside the repository)
+# and skip with a message when it is absent.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
@@ -28,6 +32,9 @@ TVO_BUILD_DIR="$ROOT/build/release" "$ROOT/.venv/bin/python" -m pytest -q test/p
 echo "== install to a non-default prefix, external project (find_package + pkg-config; static, shared + SONAME)"
 bash test/external/run.sh
 
+echo "== pip install ./tools into a fresh venv, every console script's --help (tools/check-pip-install.sh)"
+bash tools/check-pip-install.sh
+
 echo "== ASan + UBSan build + unit tests"
 cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DTVO_SANITIZE=ON -DTVO_WERROR=ON \
       -DTVO_BUILD_BENCH=OFF >/dev/null
@@ -40,13 +47,18 @@ cmake -S . -B build/minsize -G Ninja -DCMAKE_BUILD_TYPE=MinSizeRel -DTVO_WERROR=
 cmake --build build/minsize -j$JOBS
 ctest --test-dir build/minsize -j$JOBS --output-on-failure
 
-echo "== Cortex-M7 / M4 core builds, link check, M7 .text <= 64 KiB (tools/size-report.sh)"
+echo "== Cortex-M7 / M4 core builds, link check, M7 .text <= 96 KiB (tools/size-report.sh)"
 TVO_WERROR=ON bash tools/size-report.sh
 
 echo "== static analysis (cppcheck + clang-tidy, tools/run-static.sh; ~3 min)"
+# SPDX line in every source file: enabled once tools/spdx.sh --add has been run over the tree
+# bash tools/spdx.sh --check
 bash tools/run-static.sh
 
 echo "== ARM cross builds, unit tests under qemu-user (aarch64, armhf; ~7 min)"
 bash tools/run-cross.sh
+
+echo "== Cortex-M7 model: unit tests and QVGA replay under qemu-system-arm (tools/run-mcu.sh; ~10 min)"
+bash tools/run-mcu.sh
 
 echo "== all tests passed"

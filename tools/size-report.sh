@@ -7,7 +7,8 @@
 #   2. link check: links a minimal main() against the WHOLE archive (--whole-archive) with
 #      --specs=nosys.specs -lm -lc; this fails if any core object needs a symbol beyond libc/libm,
 #   3. lists the external symbols the core uses (all must be libc/libm),
-#   4. checks core .text <= 64 KiB on Cortex-M7 (exit 1 otherwise).
+#   4. checks core .text <= 96 KiB on Cortex-M7 (exit 1 otherwise): the budget of the core with the local
+#      map (keyframes, landmarks, bundle adjustment).
 # TVO_WERROR=ON in the environment makes warnings errors (off by default: this is a size report).
 # Needs gcc-arm-none-eabi and libnewlib-arm-none-eabi (installed as root if missing).
 set -euo pipefail
@@ -15,7 +16,7 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
 CORES=("$@")
 [ ${#CORES[@]} -eq 0 ] && CORES=(m7 m4)
-LIMIT_M7=$((64 * 1024))
+LIMIT_M7=$((96 * 1024))
 
 . "$ROOT/tools/apt-lib.sh"
 tvo_apt_ensure size-report gcc-arm-none-eabi libnewlib-arm-none-eabi cmake ninja-build || exit 1

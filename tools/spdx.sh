@@ -15,7 +15,9 @@ usage() { echo "usage: tools/spdx.sh --check | --add" >&2; exit 2; }
 [ $# -eq 1 ] || usage
 case "$1" in
   --check|--add) mode="$1" ;;
-  -h|--help) sed -n '2,11p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'; exit 0 ;;
+  -h|--help) # the comment block under the shebang, without an SPDX line
+    awk 'NR > 1 && !/^#/ {exit} NR > 1 && !/SPDX-License-Identifier:/ {sub(/^# ?/, ""); print}' "${BASH_SOURCE[0]}"
+    exit 0 ;;
   *) echo "tools/spdx.sh: unknown option $1" >&2; usage ;;
 esac
 

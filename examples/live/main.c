@@ -1,20 +1,26 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tvo_live: visual odometry on a live V4L2 camera.
  *
- *   tvo_live [--device /dev/video0] [--calib sensor.yaml] [--model FILE] [--size WxH] [--fps N]
- *            [--frames N] [--timeout-ms N]
+ *   tvo_live [--device /dev/video0] [--calib FILE [--calib-cam NAME]] [--model FILE] [--size WxH]
+ *            [--fps N] [--frames N] [--timeout-ms N] [--out TRAJ.txt] [--quiet]
  *
  * Prints one line per frame on stdout, at the camera rate:
  *   t_s state tracked inliers tx ty tz qx qy qz qw
  * (t in seconds of CLOCK_MONOTONIC, the camera pose in the world frame of the first frame, TUM order;
- * translation in unit steps, or metres from the per-DoF networks with --model). Status and errors
- * go to stderr. Without --calib a distortion-free pinhole with a 60 degree horizontal field of
- * view is assumed. Cameras driven only by libcamera: `libcamerify tvo_live ...` (docs/ports.md).
- * Exit codes: 0 done (--frames reached or Ctrl-C), 1 usage, 2 no device, 3 device busy,
- * 4 device unusable (not a capture device, no grey/YUV format), 5 stream failed (lost, stalled). */
+ * translation in unit steps, or metres from the per-DoF networks with --model). --out also writes the
+ * trajectory in TUM format (t tx ty tz qx qy qz qw). Status and errors go to stderr. --calib takes any
+ * calibration of tinyvo/port/calib.h (EuRoC sensor.yaml, Kalibr camchain, OpenCV, ROS camera_info);
+ * without it a distortion-free pinhole with a 60 degree horizontal field of view is assumed. The
+ * calibration, the model and the --out file are checked before the camera is opened. Cameras driven
+ * only by libcamera: `libcamerify tvo_live ...` (docs/ports.md).
+ * Exit codes: 0 done (--frames reached or Ctrl-C), 1 a runtime error (a bad calibration or model, no
+ * device, device busy or unusable, size mismatch, stream lost or stalled: one line on stderr says
+ * which), 2 a usage error (one line naming the option). */
+#include "tinyvo/port/calib.h"
 #include "tinyvo/port/clock.h"
-#include "tinyvo/port/euroc.h"
 #include "tinyvo/port/v4l2.h"
 #include "tinyvo/tinyvo.h"
+#include "tinyvo/version.h"
 #include "tinyvo/vo.h"
 
 #include <errno.h>
@@ -33,18 +39,25 @@ static void on_signal(int sig)
     g_stop = 1;
 }
 
-static void usage(void)
+static void usage(FILE *f)
 {
-    fprintf(stderr,
-            "usage: tvo_live [--device PATH] [--calib sensor.yaml] [--model FILE] [--size WxH]\n"
-            "                [--fps N] [--frames N] [--timeout-ms N]\n"
+    fprintf(f,
+            "usage: tvo_live [--device PATH] [--calib FILE] [--model FILE] [--size WxH] [--fps N]\n"
+            "                [--frames N] [--timeout-ms N] [--out TRAJ.txt] [--quiet]\n"
             "  --device PATH     V4L2 capture device (default /dev/video0)\n"
-            "  --calib FILE      EuRoC/Kalibr-style sensor.yaml with intrinsics and distortion\n"
+            "  --calib FILE      camera calibration: EuRoC sensor.yaml, Kalibr camchain, OpenCV or\n"
+            "                    ROS camera_info YAML (docs/calibration.md)\n"
+            "  --calib-cam NAME  camera of a Kalibr camchain (default cam0)\n"
             "  --model FILE      tinyvo weights file: metric steps from the per-DoF networks\n"
             "  --size WxH        requested size (default: the calibration's, else 640x480)\n"
             "  --fps N           requested frame rate (default 30)\n"
             "  --frames N        stop after N frames (default: until Ctrl-C)\n"
-            "  --timeout-ms N    give up when no frame arrives for N ms (default 2000)\n");
+            "  --timeout-ms N    give up when no frame arrives for N ms (default 2000)\n"
+            "  --out FILE        also write the trajectory in TUM format (t tx ty tz qx qy qz qw)\n"
+            "  --quiet           no status lines on stderr (errors are still reported)\n"
+            "  --version         print the version and exit\n"
+            "  --help            this text\n"
+            "Exit codes: 0 done, 1 runtime error, 2 usage error.\n");
 }
 
 /* Whole-string decimal integer in [lo, hi] (atoi/sscanf accept "5x" and overflow is undefined). */
@@ -89,7 +102,9 @@ static int64_t clock_cb(void *user)
 
 int main(int argc, char **argv)
 {
-    const char *device = "/dev/video0", *calib = NULL, *model = NULL;
+    const char *device = "/dev/video0", *calib = NULL, *calib_cam = NULL, *model = NULL, *out_path = NULL;
+    FILE *out = NULL;
+    int quiet = 0;
     int32_t width = 0, height = 0, fps = 30, timeout_ms = 2000;
     long frames_max = -1;
     tvo_camera cam;
@@ -113,79 +128,95 @@ int main(int argc, char **argv)
     for (i = 1; i < argc; i++) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+        static const char *const with_value[] = {"--device", "--calib", "--calib-cam", "--model", "--size",
+                                                 "--fps",    "--frames", "--timeout-ms", "--out"};
+        size_t k;
+        int known = 0;
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            usage();
+            usage(stdout);
             return 0;
+        }
+        if (!strcmp(a, "--version")) {
+            printf("tvo_live %s\n", tvo_version());
+            return 0;
+        }
+        if (!strcmp(a, "--quiet")) {
+            quiet = 1;
+            continue;
+        }
+        for (k = 0; k < sizeof with_value / sizeof with_value[0]; ++k)
+            known |= !strcmp(a, with_value[k]);
+        if (!known) {
+            fprintf(stderr, "tvo_live: unknown option '%s' (see --help)\n", a);
+            return 2;
         }
         if (v == NULL) {
             fprintf(stderr, "tvo_live: %s needs a value\n", a);
-            usage();
-            return 1;
+            return 2;
         }
         i++;
         if (!strcmp(a, "--device")) {
             device = v;
         } else if (!strcmp(a, "--calib")) {
             calib = v;
+        } else if (!strcmp(a, "--calib-cam")) {
+            calib_cam = v;
         } else if (!strcmp(a, "--model")) {
             model = v;
+        } else if (!strcmp(a, "--out")) {
+            out_path = v;
         } else if (!strcmp(a, "--size")) {
             char wbuf[16];
             const char *x = strchr(v, 'x');
             long w = 0, h = 0;
             if (x == NULL || (size_t)(x - v) >= sizeof wbuf) {
                 fprintf(stderr, "tvo_live: --size must be WxH (got '%s')\n", v);
-                return 1;
+                return 2;
             }
             memcpy(wbuf, v, (size_t)(x - v));
             wbuf[x - v] = '\0';
             if (!parse_long(wbuf, 1, TVO_MAX_IMAGE_DIM, &w) || !parse_long(x + 1, 1, TVO_MAX_IMAGE_DIM, &h)) {
                 fprintf(stderr, "tvo_live: --size must be WxH (got '%s')\n", v);
-                return 1;
+                return 2;
             }
             width = (int32_t)w;
             height = (int32_t)h;
         } else if (!strcmp(a, "--fps")) {
             long l = 0;
             if (!parse_long(v, 1, 1000, &l)) {
-                fprintf(stderr, "tvo_live: --fps must be 1..1000\n");
-                return 1;
+                fprintf(stderr, "tvo_live: --fps must be 1..1000 (got '%s')\n", v);
+                return 2;
             }
             fps = (int32_t)l;
         } else if (!strcmp(a, "--frames")) {
             if (!parse_long(v, 1, LONG_MAX, &frames_max)) {
-                fprintf(stderr, "tvo_live: --frames must be >= 1\n");
-                return 1;
+                fprintf(stderr, "tvo_live: --frames must be >= 1 (got '%s')\n", v);
+                return 2;
             }
-        } else if (!strcmp(a, "--timeout-ms")) {
+        } else { /* --timeout-ms */
             long l = 0;
             if (!parse_long(v, 1, 600000, &l)) {
-                fprintf(stderr, "tvo_live: --timeout-ms must be 1..600000\n");
-                return 1;
+                fprintf(stderr, "tvo_live: --timeout-ms must be 1..600000 (got '%s')\n", v);
+                return 2;
             }
             timeout_ms = (int32_t)l;
-        } else {
-            fprintf(stderr, "tvo_live: unknown option %s\n", a);
-            usage();
-            return 1;
         }
     }
+    if (calib_cam != NULL && calib == NULL) {
+        fprintf(stderr, "tvo_live: --calib-cam goes with --calib\n");
+        return 2;
+    }
 
+    /* everything that can be checked without the camera, before opening it */
     if (calib != NULL) {
-        size_t len = 0;
-        char err[160];
-        char *text = read_file(calib, &len);
-        if (text == NULL) {
-            fprintf(stderr, "tvo_live: cannot read %s\n", calib);
-            return 1;
-        }
-        err[0] = '\0';
-        st = tvo_euroc_parse_sensor_yaml(text, len, &cam, NULL, NULL, err, sizeof err);
-        free(text);
+        char err[512];
+        tvo_calib c;
+        st = tvo_calib_load(calib, calib_cam, &c, err, sizeof err);
         if (st != TVO_OK) {
-            fprintf(stderr, "tvo_live: %s: %s (%s)\n", calib, err, tvo_status_str(st));
+            fprintf(stderr, "tvo_live: calibration refused (%s): %s\n", tvo_status_str(st), err);
             return 1;
         }
+        cam = c.camera;
         have_calib = 1;
         if (width == 0) {
             width = cam.width;
@@ -195,6 +226,34 @@ int main(int argc, char **argv)
     if (width == 0) {
         width = 640;
         height = 480;
+    }
+    if (model != NULL) {
+        size_t fsize = 0, need = 0;
+        nn_file = read_file(model, &fsize);
+        if (nn_file == NULL) {
+            fprintf(stderr, "tvo_live: cannot read model %s\n", model);
+            return 1;
+        }
+        st = tvo_nn_required_size(nn_file, fsize, &need);
+        if (st == TVO_OK) {
+            nn_mem = need > 0 ? malloc(need) : NULL;
+            st = nn_mem != NULL ? tvo_nn_load(&nn, nn_file, fsize, nn_mem, need) : TVO_ERR_NO_MEMORY;
+        }
+        if (st != TVO_OK) {
+            fprintf(stderr, "tvo_live: model %s refused: %s\n", model, tvo_status_str(st));
+            free(nn_mem);
+            free(nn_file);
+            return 1;
+        }
+    }
+    if (out_path != NULL) {
+        out = fopen(out_path, "w");
+        if (out == NULL) {
+            fprintf(stderr, "tvo_live: cannot write %s: %s\n", out_path, strerror(errno));
+            free(nn_mem);
+            free(nn_file);
+            return 1;
+        }
     }
 
     memset(&sa, 0, sizeof sa);
@@ -211,33 +270,31 @@ int main(int argc, char **argv)
     vcfg.timeout_ms = timeout_ms;
     st = tvo_v4l2_open(&v4l2, &vcfg);
     if (st != TVO_OK) {
-        fprintf(stderr, "tvo_live: %s\n", tvo_v4l2_message(&v4l2));
-        switch (st) {
-        case TVO_ERR_NOT_FOUND:
-            fprintf(stderr, "tvo_live: no camera at %s (list cameras with `v4l2-ctl --list-devices`)\n",
-                    device);
-            return 2;
-        case TVO_ERR_BUSY:
+        if (st == TVO_ERR_NOT_FOUND)
+            fprintf(stderr, "tvo_live: no camera at %s (list cameras with `v4l2-ctl --list-devices`)\n", device);
+        else if (st == TVO_ERR_BUSY)
             fprintf(stderr, "tvo_live: %s is in use by another program\n", device);
-            return 3;
-        default:
-            return 4;
-        }
+        else
+            fprintf(stderr, "tvo_live: %s\n", tvo_v4l2_message(&v4l2));
+        rc = 1;
+        goto early;
     }
     fmt = tvo_v4l2_get_format(&v4l2);
-    fprintf(stderr, "tvo_live: %s\n", tvo_v4l2_message(&v4l2));
+    if (!quiet)
+        fprintf(stderr, "tvo_live: %s\n", tvo_v4l2_message(&v4l2));
 
     if (have_calib && (cam.width != fmt->width || cam.height != fmt->height)) {
         fprintf(stderr, "tvo_live: the camera gives %dx%d but %s is for %dx%d\n", (int)fmt->width,
                 (int)fmt->height, calib, (int)cam.width, (int)cam.height);
-        rc = 4;
+        rc = 1;
         goto done;
     }
     if (!have_calib) {
         double f = 0.5 * (double)fmt->width / tan(30.0 * 3.14159265358979323846 / 180.0);
         cam = tvo_camera_make_pinhole(fmt->width, fmt->height, f, f, 0.5 * (fmt->width - 1),
                                       0.5 * (fmt->height - 1));
-        fprintf(stderr, "tvo_live: no --calib: assuming a pinhole camera, f = %.1f px\n", f);
+        if (!quiet)
+            fprintf(stderr, "tvo_live: no --calib: assuming a pinhole camera, f = %.1f px\n", f);
     }
 
     tvo_vo_config_default(&cfg, &cam);
@@ -248,25 +305,6 @@ int main(int argc, char **argv)
         st = vo_mem != NULL ? tvo_vo_init(&vo, &cfg, vo_mem, need) : TVO_ERR_NO_MEMORY;
         if (st != TVO_OK) {
             fprintf(stderr, "tvo_live: VO initialisation failed: %s\n", tvo_status_str(st));
-            rc = 4;
-            goto done;
-        }
-    }
-    if (model != NULL) {
-        size_t fsize = 0, need = 0;
-        nn_file = read_file(model, &fsize);
-        if (nn_file == NULL) {
-            fprintf(stderr, "tvo_live: cannot read model %s\n", model);
-            rc = 1;
-            goto done;
-        }
-        st = tvo_nn_required_size(nn_file, fsize, &need);
-        if (st == TVO_OK) {
-            nn_mem = need > 0 ? malloc(need) : NULL;
-            st = nn_mem != NULL ? tvo_nn_load(&nn, nn_file, fsize, nn_mem, need) : TVO_ERR_NO_MEMORY;
-        }
-        if (st != TVO_OK) {
-            fprintf(stderr, "tvo_live: model %s refused: %s\n", model, tvo_status_str(st));
             rc = 1;
             goto done;
         }
@@ -274,7 +312,7 @@ int main(int argc, char **argv)
     grey = fmt->width > 0 && fmt->height > 0 ? (uint8_t *)malloc((size_t)fmt->width * (size_t)fmt->height) : NULL;
     if (grey == NULL) {
         fprintf(stderr, "tvo_live: out of memory\n");
-        rc = 4;
+        rc = 1;
         goto done;
     }
     tvo_traj_init(&traj, &I);
@@ -288,7 +326,7 @@ int main(int argc, char **argv)
             if (g_stop)
                 break;
             fprintf(stderr, "tvo_live: %s (%s)\n", tvo_v4l2_message(&v4l2), tvo_status_str(st));
-            rc = 5;
+            rc = 1;
             break;
         }
         {
@@ -317,8 +355,11 @@ int main(int argc, char **argv)
                (int)res.state, (int)res.tracked, (int)res.inliers, traj.T_w_c.t[0], traj.T_w_c.t[1],
                traj.T_w_c.t[2], q[1], q[2], q[3], q[0]);
         fflush(stdout);
+        if (out != NULL)
+            fprintf(out, "%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", (double)f.timestamp_ns * 1e-9, traj.T_w_c.t[0],
+                    traj.T_w_c.t[1], traj.T_w_c.t[2], q[1], q[2], q[3], q[0]);
     }
-    {
+    if (!quiet) {
         const tvo_v4l2_stats *s = tvo_v4l2_get_stats(&v4l2);
         fprintf(stderr, "tvo_live: %ld frames; driver: %llu good, %llu error-flagged, %llu short, %llu dropped\n",
                 n, (unsigned long long)s->frames, (unsigned long long)s->error_buffers,
@@ -326,6 +367,11 @@ int main(int argc, char **argv)
     }
 done:
     tvo_v4l2_close(&v4l2);
+early:
+    if (out != NULL && fclose(out) != 0 && rc == 0) {
+        fprintf(stderr, "tvo_live: error writing %s\n", out_path);
+        rc = 1;
+    }
     free(grey);
     free(nn_mem);
     free(nn_file);

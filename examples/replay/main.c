@@ -1,13 +1,19 @@
-/* tvo_replay: replay an EuRoC/ASL sequence through the tinyvo VO and write the trajectory.
+/* SPDX-License-Identifier: Apache-2.0 */
+/* tvo_replay: replay a dataset sequence (EuRoC/ASL, TUM RGB-D or KITTI odometry) through the tinyvo
+ * VO and write the trajectory.
  *
- *   tvo_replay --euroc DIR [--cam cam0|cam1] --out TRAJ.txt [--scale gt|model|propagate|const|none]
- *              [--model FILE] [--scale-alpha A] [--step M] [--frame camera|body] [--stats STATS.json]
+ *   tvo_replay (--euroc DIR [--cam cam0|cam1] | --tum DIR | --kitti DIR [--poses FILE]) --out TRAJ.txt
+ *              [--calib FILE [--calib-cam NAME]] [--scale gt|model|propagate|const|none] [--model FILE]
+ *              [--scale-alpha A] [--step M] [--frame camera|body] [--stats STATS.json]
  *              [--max-frames N] [--strict] [--quiet]
  *
  * The trajectory is written in TUM format (t tx ty tz qx qy qz qw, seconds). Bad frames (missing,
- * corrupt, wrong size, non-increasing timestamps) are reported, counted in the stats and skipped; the
- * tracker re-initialises after them and after gaps longer than 1.5 frame periods. --strict turns
+ * corrupt, wrong size, non-increasing timestamps) and malformed rows of the frame list (data.csv,
+ * rgb.txt, times.txt) are reported ("file:line: what" for a row), counted in the stats and skipped;
+ * the tracker re-initialises after them and after gaps longer than 1.5 frame periods. --strict turns
  * each of them into a non-zero exit instead.
+ * Exit codes: 0 done, 1 a runtime error (one line on stderr), 2 a usage error (one line naming the
+ * option).
  */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
@@ -18,14 +24,19 @@
 #include <unistd.h>
 
 #include "tinyvo/nn.h"
+#include "tinyvo/port/calib.h"
 #include "tinyvo/port/clock.h"
+#include "tinyvo/port/dataset.h"
 #include "tinyvo/port/euroc.h"
 #include "tinyvo/port/png.h"
+#include "tinyvo/version.h"
 #include "tinyvo/vo.h"
 
 enum scale_mode { SCALE_NONE, SCALE_GT, SCALE_MODEL, SCALE_PROPAGATE, SCALE_CONST };
-enum skip_kind { SKIP_MISSING, SKIP_CORRUPT, SKIP_SIZE, SKIP_TIMESTAMP, SKIP_COUNT };
-static const char *const skip_names[SKIP_COUNT] = { "missing", "corrupt", "wrong_size", "timestamp" };
+enum skip_kind { SKIP_MISSING, SKIP_CORRUPT, SKIP_SIZE, SKIP_TIMESTAMP, SKIP_BAD_ROW, SKIP_COUNT };
+static const char *const skip_names[SKIP_COUNT] = { "missing", "corrupt", "wrong_size", "timestamp", "bad_row" };
+enum source_kind { SRC_EUROC, SRC_TUM, SRC_KITTI };
+static const char *const source_names[3] = { "euroc", "tum", "kitti" };
 static const char *const state_names[TVO_VO_STATE_COUNT] = { "ok", "initialising", "rotation_only",
                                                               "lost" };
 static const char *const feature_names[TVO_FEAT_COUNT] = {
@@ -37,7 +48,9 @@ static const char *const map_state_names[TVO_MAP_STATE_COUNT] = { "off", "initia
                                                                   "tracking", "lost" };
 
 typedef struct options {
-    const char *euroc, *cam, *out, *model, *stats, *features, *tracks;
+    const char *dir, *cam, *out, *model, *stats, *features, *tracks;
+    const char *poses, *calib, *calib_cam;
+    enum source_kind source;
     enum scale_mode scale;
     double alpha, step; /* --scale-alpha (< 0: not given), --step */
     int body_frame, strict, quiet, print_memory;
@@ -50,9 +63,18 @@ typedef struct options {
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: tvo_replay --euroc DIR --out TRAJ.txt [options]\n"
+            "usage: tvo_replay (--euroc DIR | --tum DIR | --kitti DIR) --out TRAJ.txt [options]\n"
             "  --euroc DIR          EuRoC/ASL sequence (folder holding mav0/)\n"
-            "  --cam cam0|cam1      camera to replay (default cam0)\n"
+            "  --cam cam0|cam1      EuRoC camera to replay (default cam0)\n"
+            "  --tum DIR            TUM RGB-D sequence (rgb.txt, rgb/, groundtruth.txt); the camera\n"
+            "                       from --calib, else the published freiburg1/2/3 one named by DIR\n"
+            "  --kitti DIR          KITTI odometry sequence (image_0/, times.txt, calib.txt)\n"
+            "  --poses FILE         KITTI ground-truth poses (default: DIR/poses.txt or\n"
+            "                       DIR/../../poses/<seq>.txt when present)\n"
+            "  --calib FILE         camera calibration replacing the dataset's: EuRoC sensor.yaml,\n"
+            "                       Kalibr camchain, OpenCV or ROS camera_info YAML\n"
+            "                       (docs/calibration.md); its size must be the frames'\n"
+            "  --calib-cam NAME     camera of a Kalibr camchain (default cam0)\n"
             "  --out FILE           trajectory in TUM format (t tx ty tz qx qy qz qw)\n"
             "  --scale MODE         the metric scale of the map's trajectory (one unknown\n"
             "                       factor for the whole run): none (the map's own unit, the\n"
@@ -83,9 +105,13 @@ static void usage(FILE *f)
             "                       LK guesses from the previous frame's rotation on or off\n"
             "                       (vo.h; default: the library's)\n"
             "  --max-frames N       stop after N frames\n"
-            "  --strict             exit non-zero at the first bad frame instead of skipping it\n"
-            "  --quiet              no progress line\n"
-            "  --print-memory       print the VO working-memory size for the sequence and exit\n");
+            "  --strict             exit non-zero at the first bad frame or row instead of skipping it\n"
+            "  --quiet              no progress line and no summary (errors and skipped frames\n"
+            "                       are still reported)\n"
+            "  --print-memory       print the VO working-memory size for the sequence and exit\n"
+            "  --version            print the version and exit\n"
+            "  --help               this text\n"
+            "Exit codes: 0 done, 1 runtime error, 2 usage error.\n");
 }
 
 /* A 0|1 switch's value into *out; -1 with a message naming the option otherwise. */
@@ -124,9 +150,26 @@ static int parse_args(int argc, char **argv, options *o)
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             usage(stdout);
             exit(0);
-        } else if (!strcmp(a, "--euroc")) {
+        } else if (!strcmp(a, "--version")) {
+            printf("tvo_replay %s\n", tvo_version());
+            exit(0);
+        } else if (!strcmp(a, "--euroc") || !strcmp(a, "--tum") || !strcmp(a, "--kitti")) {
             NEED_VALUE();
-            o->euroc = v;
+            if (o->dir != NULL) {
+                fprintf(stderr, "tvo_replay: %s: only one of --euroc, --tum, --kitti\n", a);
+                return -1;
+            }
+            o->dir = v;
+            o->source = !strcmp(a, "--euroc") ? SRC_EUROC : (!strcmp(a, "--tum") ? SRC_TUM : SRC_KITTI);
+        } else if (!strcmp(a, "--poses")) {
+            NEED_VALUE();
+            o->poses = v;
+        } else if (!strcmp(a, "--calib")) {
+            NEED_VALUE();
+            o->calib = v;
+        } else if (!strcmp(a, "--calib-cam")) {
+            NEED_VALUE();
+            o->calib_cam = v;
         } else if (!strcmp(a, "--cam")) {
             NEED_VALUE();
             o->cam = v;
@@ -209,13 +252,25 @@ static int parse_args(int argc, char **argv, options *o)
         } else if (!strcmp(a, "--print-memory")) {
             o->print_memory = 1;
         } else {
-            fprintf(stderr, "tvo_replay: unknown argument '%s' (see --help)\n", a);
+            fprintf(stderr, "tvo_replay: unknown option '%s' (see --help)\n", a);
             return -1;
         }
 #undef NEED_VALUE
     }
-    if (o->euroc == NULL || (o->out == NULL && !o->print_memory)) {
-        fprintf(stderr, "tvo_replay: --euroc and --out are required (see --help)\n");
+    if (o->dir == NULL) {
+        fprintf(stderr, "tvo_replay: one of --euroc, --tum, --kitti is required (see --help)\n");
+        return -1;
+    }
+    if (o->out == NULL && !o->print_memory) {
+        fprintf(stderr, "tvo_replay: --out is required (see --help)\n");
+        return -1;
+    }
+    if (o->poses != NULL && o->source != SRC_KITTI) {
+        fprintf(stderr, "tvo_replay: --poses goes with --kitti\n");
+        return -1;
+    }
+    if (o->calib_cam != NULL && o->calib == NULL) {
+        fprintf(stderr, "tvo_replay: --calib-cam goes with --calib\n");
         return -1;
     }
     if (o->scale == SCALE_MODEL && o->model == NULL) {
@@ -331,6 +386,8 @@ int main(int argc, char **argv)
     options o;
     char err[512] = "";
     tvo_euroc *seq = NULL;
+    tvo_calib calib;
+    tvo_camera camera;
     tvo_vo_config cfg;
     tvo_vo *vo = NULL;
     tvo_traj traj;
@@ -360,25 +417,66 @@ int main(int argc, char **argv)
         return 2;
     tty = !o.quiet && isatty(STDERR_FILENO);
 
-    st = tvo_euroc_open(&seq, o.euroc, o.cam, err, sizeof(err));
+    memset(&calib, 0, sizeof(calib));
+    if (o.calib != NULL) {
+        st = tvo_calib_load(o.calib, o.calib_cam, &calib, err, sizeof(err));
+        if (st != TVO_OK) {
+            fprintf(stderr, "tvo_replay: calibration refused (%s): %s\n", tvo_status_str(st), err);
+            return 1;
+        }
+    }
+    {
+        /* --strict: a malformed row of the frame list fails the open; else it is reported and skipped */
+        const unsigned flags = o.strict ? 0u : TVO_EUROC_SKIP_BAD_ROWS;
+        if (o.source == SRC_TUM)
+            st = tvo_tum_open(&seq, o.dir, o.calib != NULL ? &calib.camera : NULL, flags, err, sizeof(err));
+        else if (o.source == SRC_KITTI)
+            st = tvo_kitti_open(&seq, o.dir, o.poses, flags, err, sizeof(err));
+        else
+            st = tvo_euroc_open_ex(&seq, o.dir, o.cam, flags, err, sizeof(err));
+    }
     if (st != TVO_OK) {
-        fprintf(stderr, "tvo_replay: cannot open %s (%s): %s\n", o.euroc, tvo_status_str(st), err);
+        fprintf(stderr, "tvo_replay: cannot open %s (%s): %s\n", o.dir, tvo_status_str(st), err);
         return 1;
+    }
+    counts_skip[SKIP_BAD_ROW] = tvo_euroc_bad_row_count(seq);
+    for (int32_t k = 0; k < tvo_euroc_bad_row_count(seq) && tvo_euroc_bad_row(seq, k) != NULL; ++k)
+        fprintf(stderr, "tvo_replay: %s: row skipped\n", tvo_euroc_bad_row(seq, k));
+    if (tvo_euroc_bad_row_count(seq) > TVO_EUROC_MAX_BAD_ROWS)
+        fprintf(stderr, "tvo_replay: %ld more malformed rows skipped\n",
+                (long)tvo_euroc_bad_row_count(seq) - TVO_EUROC_MAX_BAD_ROWS);
+    camera = *tvo_euroc_camera(seq);
+    if (o.calib != NULL) {
+        /* the calibration replaces the folder's camera; one for another size is refused before the
+           first frame */
+        char path0[1024];
+        int32_t w0 = 0, h0 = 0;
+        if (tvo_euroc_frame_path(seq, 0, path0, sizeof(path0)) == TVO_OK && tvo_png_size(path0, &w0, &h0) == TVO_OK &&
+            (w0 != calib.camera.width || h0 != calib.camera.height)) {
+            fprintf(stderr, "tvo_replay: the calibration %s is for %dx%d but the frames of %s are %dx%d\n", o.calib,
+                    (int)calib.camera.width, (int)calib.camera.height, o.dir, (int)w0, (int)h0);
+            goto cleanup;
+        }
+        camera = calib.camera;
     }
     have_gt = tvo_euroc_has_groundtruth(seq);
     if ((o.scale == SCALE_GT || o.scale == SCALE_PROPAGATE) && !have_gt) {
-        fprintf(stderr, "tvo_replay: --scale %s needs ground truth, and %s has none\n",
-                o.scale == SCALE_GT ? "gt" : "propagate", o.euroc);
+        fprintf(stderr, "tvo_replay: --scale %s needs ground truth, and %s has none (%s)\n",
+                o.scale == SCALE_GT ? "gt" : "propagate", o.dir,
+                o.source == SRC_EUROC ? "no mav0/state_groundtruth_estimate0/data.csv"
+                                      : (o.source == SRC_TUM ? "no groundtruth.txt"
+                                                             : "no poses file: --poses FILE, DIR/poses.txt or "
+                                                               "DIR/../../poses/<seq>.txt"));
         goto cleanup;
     }
     (void)tvo_scale_filter_init(&filt, o.alpha >= 0.0 ? o.alpha : 0.0);
     memset(&msc, 0, sizeof(msc));
     msc.s = o.scale == SCALE_NONE ? 1.0 : 0.0;
-    T_bs = tvo_euroc_T_BS(seq);
+    T_bs = calib.has_T_BS ? calib.T_BS : tvo_euroc_T_BS(seq);
     T_sb = tvo_pose_inverse(&T_bs);
     period_ns = (int64_t)llround(1e9 / (tvo_euroc_rate_hz(seq) > 0 ? tvo_euroc_rate_hz(seq) : 20.0));
 
-    tvo_vo_config_default(&cfg, tvo_euroc_camera(seq));
+    tvo_vo_config_default(&cfg, &camera);
     cfg.clock = clock_cb;
     if (o.keyframe >= 0)
         cfg.keyframe = o.keyframe;
@@ -388,7 +486,7 @@ int main(int argc, char **argv)
         cfg.map = o.map;
     vo_size = tvo_vo_required_size(&cfg);
     if (vo_size == 0) {
-        fprintf(stderr, "tvo_replay: the camera of %s is not usable (check sensor.yaml)\n", o.euroc);
+        fprintf(stderr, "tvo_replay: the camera of %s is not usable (check the calibration)\n", o.dir);
         goto cleanup;
     }
     if (o.print_memory) {
@@ -670,7 +768,9 @@ int main(int argc, char **argv)
                 fprintf(stderr, "tvo_replay: cannot write %s\n", o.stats);
                 goto cleanup;
             }
-            fprintf(js, "{\n  \"sequence\": \"%s\",\n  \"camera\": \"%s\",\n", o.euroc, o.cam);
+            fprintf(js, "{\n  \"sequence\": \"%s\",\n  \"dataset\": \"%s\",\n  \"camera\": \"%s\",\n", o.dir,
+                    source_names[o.source],
+                    o.source == SRC_EUROC ? o.cam : (o.source == SRC_TUM ? "rgb" : "image_0"));
             fprintf(js, "  \"width\": %d,\n  \"height\": %d,\n  \"vo_memory_bytes\": %zu,\n",
                     (int)cfg.camera.width, (int)cfg.camera.height, vo_size);
             fprintf(js, "  \"frames\": {\"total\": %ld, \"processed\": %ld, \"skipped\": %ld, \"lost\": %ld},\n",

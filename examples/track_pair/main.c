@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tvo_track_pair: detect corners in image A and track them into image B with pyramidal Lucas-Kanade.
  *
  *   tvo_track_pair A.png B.png [--max N] [--out tracks.csv] [--fb] [--win W] [--levels L] [--quiet]
@@ -9,7 +10,8 @@
  * (pixels, status 1 = tracked, 0 = lost; err = mean abs grey difference over the window). With --out
  * the same goes to a csv file instead (header x_a,y_a,x_b,y_b,status,err). A summary (counts, median
  * flow, time per stage) goes to stderr. All memory is allocated once, up front, from the sizes the
- * library reports. Exit status 0 on success, 1 on a bad command line, 2 on an input or library error. */
+ * library reports. Exit status 0 on success, 1 on an input or library error (one line on stderr), 2 on a
+ * bad command line (one line naming the option). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -20,6 +22,7 @@
 #include "tinyvo/lk.h"
 #include "tinyvo/pyramid.h"
 #include "tinyvo/status.h"
+#include "tinyvo/version.h"
 #include "tinyvo/port/clock.h"
 #include "tinyvo/port/png.h"
 
@@ -31,7 +34,10 @@ static void usage(FILE *f)
                "  --fb         forward-backward check (points that do not track back within 1 px are lost)\n"
                "  --win W      LK window side, odd (default 21)\n"
                "  --levels L   pyramid levels including full resolution (default 4; reduced for small images)\n"
-               "  --quiet      no summary on stderr\n");
+               "  --quiet      no summary on stderr\n"
+               "  --version    print the version and exit\n"
+               "  --help       this text\n"
+               "Exit codes: 0 done, 1 runtime error, 2 usage error.\n");
 }
 
 static int parse_int(const char *s, long lo, long hi, int32_t *out)
@@ -80,7 +86,7 @@ int main(int argc, char **argv)
     tvo_pyramid pyr_a, pyr_b;
     tvo_status st;
     FILE *out = stdout;
-    int rc = 2;
+    int rc = 1;
     int64_t t0, t_detect, t_pyr, t_lk;
 
     for (i = 1; i < argc; ++i) {
@@ -88,27 +94,30 @@ int main(int argc, char **argv)
         if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
             usage(stdout);
             return 0;
+        } else if (strcmp(a, "--version") == 0) {
+            printf("tvo_track_pair %s\n", tvo_version());
+            return 0;
         } else if (strcmp(a, "--max") == 0) {
             if (!parse_int(i + 1 < argc ? argv[++i] : NULL, 1, 100000, &max_corners)) {
                 fprintf(stderr, "tvo_track_pair: --max needs an integer in 1..100000\n");
-                return 1;
+                return 2;
             }
         } else if (strcmp(a, "--win") == 0) {
             if (!parse_int(i + 1 < argc ? argv[++i] : NULL, TVO_LK_MIN_WIN_SIZE, TVO_LK_MAX_WIN_SIZE, &win) ||
                 win % 2 == 0) {
                 fprintf(stderr, "tvo_track_pair: --win needs an odd integer in %d..%d\n", TVO_LK_MIN_WIN_SIZE,
                         TVO_LK_MAX_WIN_SIZE);
-                return 1;
+                return 2;
             }
         } else if (strcmp(a, "--levels") == 0) {
             if (!parse_int(i + 1 < argc ? argv[++i] : NULL, 1, TVO_MAX_PYR_LEVELS, &levels)) {
                 fprintf(stderr, "tvo_track_pair: --levels needs an integer in 1..%d\n", TVO_MAX_PYR_LEVELS);
-                return 1;
+                return 2;
             }
         } else if (strcmp(a, "--out") == 0) {
             if (i + 1 >= argc) {
                 fprintf(stderr, "tvo_track_pair: --out needs a file name\n");
-                return 1;
+                return 2;
             }
             out_path = argv[++i];
         } else if (strcmp(a, "--fb") == 0) {
@@ -116,39 +125,37 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "--quiet") == 0) {
             quiet = 1;
         } else if (a[0] == '-' && a[1] != '\0') {
-            fprintf(stderr, "tvo_track_pair: unknown option '%s'\n", a);
-            usage(stderr);
-            return 1;
+            fprintf(stderr, "tvo_track_pair: unknown option '%s' (see --help)\n", a);
+            return 2;
         } else if (path_a == NULL) {
             path_a = a;
         } else if (path_b == NULL) {
             path_b = a;
         } else {
-            fprintf(stderr, "tvo_track_pair: too many arguments ('%s')\n", a);
-            usage(stderr);
-            return 1;
+            fprintf(stderr, "tvo_track_pair: too many arguments ('%s'; see --help)\n", a);
+            return 2;
         }
     }
     if (path_a == NULL || path_b == NULL) {
-        usage(stderr);
-        return 1;
+        fprintf(stderr, "tvo_track_pair: two images A.png B.png are required (see --help)\n");
+        return 2;
     }
 
     /* ---- sizes, then every allocation, once --------------------------------------------------- */
     st = tvo_png_size(path_a, &wa, &ha);
     if (st != TVO_OK) {
         fprintf(stderr, "tvo_track_pair: cannot read %s: %s%s\n", path_a, tvo_status_str(st), hint(st));
-        return 2;
+        return 1;
     }
     st = tvo_png_size(path_b, &wb, &hb);
     if (st != TVO_OK) {
         fprintf(stderr, "tvo_track_pair: cannot read %s: %s%s\n", path_b, tvo_status_str(st), hint(st));
-        return 2;
+        return 1;
     }
     if (wa != wb || ha != hb) {
         fprintf(stderr, "tvo_track_pair: the images differ in size: %s is %dx%d, %s is %dx%d\n", path_a, (int)wa,
                 (int)ha, path_b, (int)wb, (int)hb);
-        return 2;
+        return 1;
     }
     tvo_detect_config_default(&dcfg);
     dcfg.max_corners = max_corners;
@@ -164,7 +171,7 @@ int main(int argc, char **argv)
     lk_size = tvo_lk_scratch_size(&lcfg);
     if (pyr_size == 0 || det_size == 0 || lk_size == 0) {
         fprintf(stderr, "tvo_track_pair: unsupported image size %dx%d or configuration\n", (int)wa, (int)ha);
-        return 2;
+        return 1;
     }
     img_a = (uint8_t *)malloc((size_t)wa * (size_t)ha);
     img_b = (uint8_t *)malloc((size_t)wa * (size_t)ha);
@@ -278,7 +285,7 @@ int main(int argc, char **argv)
 done:
     if (out != stdout && out != NULL && fclose(out) != 0 && rc == 0) {
         fprintf(stderr, "tvo_track_pair: write error on %s\n", out_path);
-        rc = 2;
+        rc = 1;
     }
     free(img_a);
     free(img_b);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: windowed bundle adjustment (contract and cost in tinyvo/ba.h). */
 #include "tinyvo/ba.h"
 
@@ -79,7 +80,7 @@ void tvo_ba_config_default(tvo_ba_config *cfg)
     cfg->min_depth = 1e-3;
     cfg->max_poses = 10;
     cfg->max_points = 1024;
-    cfg->max_obs = 8192;
+    cfg->max_obs = 4096;
     cfg->max_point_cond = 1e6;
 }
 
@@ -265,11 +266,12 @@ static void chol_solve(const double *L, int n, const double *b, double *x)
 
 /* ---- linearisation ---------------------------------------------------------------------------- */
 
-/* Builds the per-pose and per-point blocks at the current state, marks usable observations, decides
- * the held points and the free-pose slots. Returns the cost (over the usable observations); counts to
+/* Builds the per-pose and per-point blocks at the current state, marks usable observations (first:
+ * from all of them; later: from those usable before, which accepted steps keep usable), decides the held
+ * points and the free-pose slots. Returns the cost (over the usable observations); counts to
  * *n_used, *n_skipped_obs, *n_held, *n_free_poses; *pose_starved when a free pose had no usable
  * observation. */
-static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *ws, int32_t *n_used,
+static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *ws, int first, int32_t *n_used,
                         int32_t *n_skipped_obs, int32_t *n_held, int32_t *n_free_poses, int *pose_starved)
 {
     const double k_h = c->huber;
@@ -293,6 +295,8 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
         const int pose_free = !p->pose_fixed[o->pose];
         const int pt_free = ws->pstate[o->point] == PT_FREE;
         double P[3], iz, u, v, r0, r1, w0, w1, Jc[2][6], Jx[2][3];
+        if (!first && !ws->ouse[k])
+            continue; /* the usable set is the first linearisation's for the whole call */
         ws->ouse[k] = 0;
         if (!(isfinite(o->x) && isfinite(o->y)))
             continue;
@@ -332,7 +336,7 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
             double *H = ws->Hc[o->pose], *g = ws->gc[o->pose];
             for (int a = 0; a < 6; ++a) {
                 const double wa0 = w0 * Jc[0][a], wa1 = w1 * Jc[1][a];
-                for (int b = 0; b < 6; ++b)
+                for (int b = a; b < 6; ++b) /* upper triangle; mirrored below */
                     H[6 * a + b] += wa0 * Jc[0][b] + wa1 * Jc[1][b];
                 g[a] += wa0 * r0 + wa1 * r1;
             }
@@ -341,7 +345,7 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
             double *Vj = ws->V[o->point], *g = ws->gx[o->point];
             for (int a = 0; a < 3; ++a) {
                 const double wa0 = w0 * Jx[0][a], wa1 = w1 * Jx[1][a];
-                for (int b = 0; b < 3; ++b)
+                for (int b = a; b < 3; ++b) /* upper triangle; mirrored below */
                     Vj[3 * a + b] += wa0 * Jx[0][b] + wa1 * Jx[1][b];
                 g[a] += wa0 * r0 + wa1 * r1;
             }
@@ -360,6 +364,9 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
         double Vi[9], tr, fro = 0.0;
         if (ws->pstate[j] != PT_FREE)
             continue;
+        ws->V[j][3] = ws->V[j][1];
+        ws->V[j][6] = ws->V[j][2];
+        ws->V[j][7] = ws->V[j][5];
         if (ws->pt_nuse[j] < 2 || !chol3_inv(ws->V[j], PIVOT_POINT, Vi)) {
             ws->pstate[j] = PT_HELD;
             held++;
@@ -377,6 +384,9 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
         ws->slot[i] = -1;
         if (p->pose_fixed[i])
             continue;
+        for (int a = 1; a < 6; ++a)
+            for (int b = 0; b < a; ++b)
+                ws->Hc[i][6 * a + b] = ws->Hc[i][6 * b + a];
         if (ws->pose_nuse[i] == 0) {
             *pose_starved = 1;
             continue;
@@ -632,7 +642,7 @@ tvo_status tvo_ba_solve(const tvo_ba_config *cfg, tvo_ba_problem *p, void *scrat
         ws.pt_obs[ws.pt_nuse[p->obs[k].point]++] = k;
 
     memset(&r, 0, sizeof r);
-    cost = linearise(cfg, p, &ws, &n_used, &n_skip, &n_held, &nfree, &starved);
+    cost = linearise(cfg, p, &ws, 1, &n_used, &n_skip, &n_held, &nfree, &starved);
     r.cost_initial = cost;
     if (starved)
         r.flags |= TVO_BA_FLAG_SINGULAR;
@@ -645,7 +655,7 @@ tvo_status tvo_ba_solve(const tvo_ba_config *cfg, tvo_ba_problem *p, void *scrat
         int has_free_point = 0;
         double cnew;
         if (!linearised) {
-            cost = linearise(cfg, p, &ws, &n_used, &n_skip, &n_held, &nfree, &starved);
+            cost = linearise(cfg, p, &ws, 0, &n_used, &n_skip, &n_held, &nfree, &starved);
             if (starved)
                 r.flags |= TVO_BA_FLAG_SINGULAR;
             backup(p, &ws);

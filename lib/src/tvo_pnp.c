@@ -16,10 +16,11 @@
 #define PNP_SAMPLE 4            /* 3 points for P3P and one to check it */
 #define PNP_EQ_TOL 1e-6         /* P3P: relative residual of the distance equations to keep a solution */
 #define PNP_GN_STEPS 5          /* P3P: Gauss-Newton polish steps at most */
+#define PNP_REL_GAIN 1e-10       /* LM: an accepted step gaining less than this share of the cost ends it */
 #define PNP_MU0 1e-4            /* LM: initial damping */
 #define PNP_MU_MIN 1e-12
 #define PNP_MU_MAX 1e8
-#define PNP_TINY 1e-12          /* LM: a step below this (rad; m relative to 1 + |t|) ends it */
+#define PNP_TINY 1e-9           /* LM: a step below this (rad; m relative to 1 + |t|) ends it */
 #define PNP_MAX_POINTS (1 << 28)
 
 /* ---- deterministic generator (relpose's scheme) ---------------------------------------------- */
@@ -148,10 +149,10 @@ static double trace_ab(const double A[9], const double B[9])
     return s;
 }
 
+/* finite and within the bounds (a comparison with NaN is false, |inf| exceeds every bound) */
 static int point_usable(const double X[3], const tvo_point2d *x)
 {
-    return isfinite(X[0]) && isfinite(X[1]) && isfinite(X[2]) && isfinite(x->x) && isfinite(x->y) &&
-           fabs(X[0]) <= PNP_MAX_WORLD && fabs(X[1]) <= PNP_MAX_WORLD && fabs(X[2]) <= PNP_MAX_WORLD &&
+    return fabs(X[0]) <= PNP_MAX_WORLD && fabs(X[1]) <= PNP_MAX_WORLD && fabs(X[2]) <= PNP_MAX_WORLD &&
            fabs(x->x) <= PNP_MAX_IMG && fabs(x->y) <= PNP_MAX_IMG;
 }
 
@@ -176,7 +177,7 @@ static int config_ok(const tvo_pnp_config *c)
 {
     return c->threshold > 0.0 && c->threshold < DBL_MAX && c->confidence > 0.0 && c->confidence < 1.0 &&
            c->max_iterations >= 1 && c->refine_iterations >= 1 && c->huber > 0.0 && c->huber < DBL_MAX &&
-           c->min_inliers >= 3;
+           c->min_inliers >= 3 && (c->use_guess == 0 || c->use_guess == 1);
 }
 
 /* on error: leave a finite pose as given, replace a non-finite one by the identity */
@@ -198,6 +199,7 @@ void tvo_pnp_config_default(tvo_pnp_config *cfg)
     cfg->huber = cfg->threshold;
     cfg->min_inliers = 12;
     cfg->seed = 0x5eedULL;
+    cfg->use_guess = 0;
 }
 
 size_t tvo_pnp_scratch_size(int32_t max_points)
@@ -419,6 +421,87 @@ static int plane_directions(const double u[3], const double D1[9], const double 
     return m;
 }
 
+/* unit null vector of a rank-2 symmetric 3x3 M: the longest cross product of two rows; 0 if M ~ 0 */
+static int null_vector(const double M[9], double v[3])
+{
+    double c[3][3], best = 0.0;
+    int bi = -1;
+    cross3(M, M + 3, c[0]);
+    cross3(M, M + 6, c[1]);
+    cross3(M + 3, M + 6, c[2]);
+    for (int i = 0; i < 3; ++i) {
+        double nn = dot3(c[i], c[i]);
+        if (nn > best) {
+            best = nn;
+            bi = i;
+        }
+    }
+    if (bi < 0 || !(best < DBL_MAX))
+        return 0;
+    double inv = 1.0 / sqrt(best);
+    v[0] = c[bi][0] * inv;
+    v[1] = c[bi][1] * inv;
+    v[2] = c[bi][2] * inv;
+    return 1;
+}
+
+/* The two non-null eigenpairs of a singular symmetric 3x3 D (|*sa| >= |*sb|, unit eigenvectors).
+ * Closed form: with the third eigenvalue 0 the others solve s^2 - trace s + m2 = 0 (m2: the sum of
+ * the principal 2x2 minors), their eigenvectors are null vectors of D - s I. When the two are close or
+ * the smaller is ~0 (the closed form loses accuracy), Jacobi (tvo_la_sym_eig) instead. 0 if D ~ 0. */
+static int pencil_eig(const double D[9], double *sa, double *sb, double ea[3], double eb[3])
+{
+    double tr = D[0] + D[4] + D[8];
+    double m2 = D[0] * D[4] - D[1] * D[1] + D[0] * D[8] - D[2] * D[2] + D[4] * D[8] - D[5] * D[5];
+    double disc = tr * tr - 4.0 * m2;
+    disc = disc > 0.0 ? disc : 0.0;
+    double q = 0.5 * (tr + (tr >= 0.0 ? sqrt(disc) : -sqrt(disc)));
+    if (q != 0.0) {
+        double r1 = q, r2 = m2 / q;
+        double a = fabs(r1) >= fabs(r2) ? r1 : r2, b = fabs(r1) >= fabs(r2) ? r2 : r1;
+        if (fabs(a - b) > 1e-6 * fabs(a) && fabs(b) > 1e-6 * fabs(a)) {
+            double M[9];
+            memcpy(M, D, sizeof M);
+            M[0] -= a;
+            M[4] -= a;
+            M[8] -= a;
+            int ok = null_vector(M, ea);
+            memcpy(M, D, sizeof M);
+            M[0] -= b;
+            M[4] -= b;
+            M[8] -= b;
+            if (ok && null_vector(M, eb)) {
+                *sa = a;
+                *sb = b;
+                return 1;
+            }
+        }
+    }
+    double A[9], w[3], V[9];
+    memcpy(A, D, sizeof A);
+    if (tvo_la_sym_eig(A, 3, w, V) != TVO_OK)
+        return 0;
+    int z = 0;
+    for (int k = 1; k < 3; ++k)
+        if (fabs(w[k]) < fabs(w[z]))
+            z = k;
+    int ia = (z + 1) % 3, ib = (z + 2) % 3;
+    if (fabs(w[ib]) > fabs(w[ia])) {
+        int tmp = ia;
+        ia = ib;
+        ib = tmp;
+    }
+    if (!(fabs(w[ia]) > 0.0))
+        return 0;
+    *sa = w[ia];
+    *sb = w[ib];
+    for (int k = 0; k < 3; ++k) {
+        ea[k] = V[3 * k + ia];
+        eb[k] = V[3 * k + ib];
+    }
+    return 1;
+}
+
 int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4])
 {
     if (X == NULL || x == NULL || T_c_w == NULL)
@@ -488,38 +571,27 @@ int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4])
         gs[pos] = g;
         score[pos] = sc;
     }
-    double ev[3] = {0.0, 0.0, 0.0}, V[9] = {0.0};
-    int ia = -1, ib = -1, found = 0;
+    double sa = 0.0, sb = 0.0, ea[3] = {0.0, 0.0, 0.0}, eb[3] = {0.0, 0.0, 0.0};
+    int have = 0, found = 0;
     for (int cand = 0; cand < (ng > 0 ? ng : 1) && !found; ++cand) {
-        double D0[9], w[3], Vc[9];
+        double D0[9], ca, cb, va[3], vb[3];
         for (int k = 0; k < 9; ++k)
             D0[k] = ng > 0 ? D1[k] + gs[cand] * D2[k] : D2[k];
-        if (tvo_la_sym_eig(D0, 3, w, Vc) != TVO_OK)
+        if (!pencil_eig(D0, &ca, &cb, va, vb))
             continue;
-        int z = 0;
-        for (int k = 1; k < 3; ++k)
-            if (fabs(w[k]) < fabs(w[z]))
-                z = k;
-        int a = (z + 1) % 3, b = (z + 2) % 3;
-        if (fabs(w[b]) > fabs(w[a])) {
-            int tmp = a;
-            a = b;
-            b = tmp;
-        }
-        if (!(fabs(w[a]) > 0.0))
-            continue;
-        int indefinite = w[a] * w[b] < 0.0;
-        if (indefinite || ia < 0) {
-            memcpy(ev, w, sizeof ev);
-            memcpy(V, Vc, sizeof V);
-            ia = a;
-            ib = b;
+        int indefinite = ca * cb < 0.0;
+        if (indefinite || !have) {
+            sa = ca;
+            sb = cb;
+            memcpy(ea, va, sizeof ea);
+            memcpy(eb, vb, sizeof eb);
+            have = 1;
             found = indefinite;
         }
     }
-    if (ia < 0)
+    if (!have)
         return 0;
-    double s = -ev[ib] / ev[ia];
+    double s = -sb / sa;
     s = s > 0.0 ? sqrt(s) : 0.0;
 
     double sols[4][3];
@@ -527,7 +599,7 @@ int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4])
     for (int sign = 0; sign < 2; ++sign) {
         double u[3], mu[2][3];
         for (int k = 0; k < 3; ++k)
-            u[k] = V[3 * k + ia] + (sign == 0 ? s : -s) * V[3 * k + ib];
+            u[k] = ea[k] + (sign == 0 ? s : -s) * eb[k];
         if (sign == 1 && s == 0.0)
             break; /* the same plane twice */
         int nm = plane_directions(u, D1, D2, mu);
@@ -615,22 +687,6 @@ static double huber_rho(double e2, double k)
     return k * (sqrt(e2) - 0.5 * k);
 }
 
-/* robust cost of the selected points at T; a point behind the camera costs rho(1) */
-static double robust_cost(const tvo_pose *T, const double (*X)[3], const tvo_point2d *x, const uint8_t *use,
-                          int32_t n, double k)
-{
-    const double pen = huber_rho(1.0, k);
-    double cost = 0.0;
-    for (int32_t i = 0; i < n; ++i) {
-        if (!selected(use, i, X, x))
-            continue;
-        int front;
-        double e2 = reproj_err2(T, X[i], &x[i], &front);
-        cost += front ? huber_rho(e2, k) : pen;
-    }
-    return cost;
-}
-
 /* T <- exp(d) T, d = [omega, v] (SE(3) exponential) */
 static void se3_left_update(const double d[6], tvo_pose *T)
 {
@@ -656,11 +712,14 @@ static void se3_left_update(const double d[6], tvo_pose *T)
         T->t[k] = tn[k] + tv[k];
 }
 
-/* normal equations at T; returns the number of points used (in front) */
-static int32_t build_normal(const tvo_pose *T, const double (*X)[3], const tvo_point2d *x, const uint8_t *use,
-                            int32_t n, double k, double H[36], double g[6])
+/* Robust cost of the selected points at T (a point behind the camera costs rho(1)) and the IRLS normal
+ * equations H d = -g of the points in front; returns their count. */
+static int32_t evaluate(const tvo_pose *T, const double (*X)[3], const tvo_point2d *x, const uint8_t *use,
+                        int32_t n, double k, double H[36], double g[6], double *cost)
 {
+    const double pen = huber_rho(1.0, k), k2 = k * k;
     int32_t used = 0;
+    double c = 0.0;
     memset(H, 0, 36 * sizeof(double));
     memset(g, 0, 6 * sizeof(double));
     const double *R = T->R;
@@ -671,24 +730,57 @@ static int32_t build_normal(const tvo_pose *T, const double (*X)[3], const tvo_p
         double Xc = R[0] * P[0] + R[1] * P[1] + R[2] * P[2] + T->t[0];
         double Yc = R[3] * P[0] + R[4] * P[1] + R[5] * P[2] + T->t[1];
         double Zc = R[6] * P[0] + R[7] * P[1] + R[8] * P[2] + T->t[2];
-        if (!(Zc > PNP_MIN_Z))
+        if (!(Zc > PNP_MIN_Z)) {
+            c += pen;
             continue;
-        double iz = 1.0 / Zc, xn = Xc * iz, yn = Yc * iz;
-        double ru = xn - x[i].x, rv = yn - x[i].y, e2 = ru * ru + rv * rv;
-        double wgt = e2 <= k * k ? 1.0 : k / sqrt(e2);
-        double Ju[6] = {-xn * yn, 1.0 + xn * xn, -yn, iz, 0.0, -xn * iz};
-        double Jv[6] = {-(1.0 + yn * yn), xn * yn, xn, 0.0, iz, -yn * iz};
-        for (int a = 0; a < 6; ++a) {
-            double wa = wgt * Ju[a], wb = wgt * Jv[a];
-            g[a] += wa * ru + wb * rv;
-            for (int b = a; b < 6; ++b)
-                H[6 * a + b] += wa * Ju[b] + wb * Jv[b];
         }
+        double iz = 1.0 / Zc, xn = Xc * iz, yn = Yc * iz;
+        double ru = xn - x[i].x, rv = yn - x[i].y, e2 = ru * ru + rv * rv, wgt = 1.0;
+        if (e2 <= k2) {
+            c += 0.5 * e2;
+        } else {
+            double e = sqrt(e2);
+            c += k * (e - 0.5 * k);
+            wgt = k / e;
+        }
+        /* J_u = [a b c p 0 q], J_v = [d e f 0 p r] (d = [omega, v], left increment); the upper
+         * triangle of w (J_u^T J_u + J_v^T J_v) without the products by zero */
+        double a = -xn * yn, bb = 1.0 + xn * xn, cc = -yn, dd = -(1.0 + yn * yn), e = xn * yn, f = xn;
+        double p = iz, q = -xn * iz, r = -yn * iz;
+        double wa = wgt * a, wb = wgt * bb, wc = wgt * cc, wd = wgt * dd, we = wgt * e, wf = wgt * f;
+        double wp = wgt * p, wq = wgt * q, wr = wgt * r;
+        g[0] += wa * ru + wd * rv;
+        g[1] += wb * ru + we * rv;
+        g[2] += wc * ru + wf * rv;
+        g[3] += wp * ru;
+        g[4] += wp * rv;
+        g[5] += wq * ru + wr * rv;
+        H[0] += wa * a + wd * dd;
+        H[1] += wa * bb + wd * e;
+        H[2] += wa * cc + wd * f;
+        H[3] += wa * p;
+        H[4] += wd * p;
+        H[5] += wa * q + wd * r;
+        H[7] += wb * bb + we * e;
+        H[8] += wb * cc + we * f;
+        H[9] += wb * p;
+        H[10] += we * p;
+        H[11] += wb * q + we * r;
+        H[14] += wc * cc + wf * f;
+        H[15] += wc * p;
+        H[16] += wf * p;
+        H[17] += wc * q + wf * r;
+        H[21] += wp * p;
+        H[23] += wp * q;
+        H[28] += wp * p;
+        H[29] += wp * r;
+        H[35] += wq * q + wr * r;
         ++used;
     }
-    for (int a = 0; a < 6; ++a)
-        for (int b = 0; b < a; ++b)
-            H[6 * a + b] = H[6 * b + a];
+    for (int ia = 0; ia < 6; ++ia)
+        for (int ib = 0; ib < ia; ++ib)
+            H[6 * ia + ib] = H[6 * ib + ia];
+    *cost = c;
     return used;
 }
 
@@ -697,15 +789,9 @@ static void refine_core(const tvo_pnp_config *cfg, const double (*X)[3], const t
                         const uint8_t *use, int32_t n, tvo_pose *T)
 {
     const double k = cfg->huber;
-    double H[36], g[6], mu = PNP_MU0;
-    double cost = robust_cost(T, X, x, use, n, k);
-    int rebuild = 1;
-    for (int32_t it = 0; it < cfg->refine_iterations; ++it) {
-        if (rebuild) {
-            if (build_normal(T, X, x, use, n, k, H, g) < 3)
-                return;
-            rebuild = 0;
-        }
+    double H[36], g[6], Hn[36], gn[6], mu = PNP_MU0, cost;
+    int32_t used = evaluate(T, X, x, use, n, k, H, g, &cost);
+    for (int32_t it = 0; it < cfg->refine_iterations && used >= 3; ++it) {
         double A[36], b[6], d[6];
         memcpy(A, H, sizeof A);
         for (int a = 0; a < 6; ++a) {
@@ -721,21 +807,24 @@ static void refine_core(const tvo_pnp_config *cfg, const double (*X)[3], const t
         }
         tvo_pose Tn = *T;
         se3_left_update(d, &Tn);
-        double cn = tvo_pose_is_finite(&Tn) ? robust_cost(&Tn, X, x, use, n, k) : DBL_MAX;
+        double cn = DBL_MAX;
+        int32_t usedn = tvo_pose_is_finite(&Tn) ? evaluate(&Tn, X, x, use, n, k, Hn, gn, &cn) : 0;
+        double nw = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        double nv = sqrt(d[3] * d[3] + d[4] * d[4] + d[5] * d[5]);
+        int tiny = nw < PNP_TINY && nv < PNP_TINY * (1.0 + sqrt(dot3(T->t, T->t)));
         if (cn <= cost) {
+            tiny |= cost - cn <= PNP_REL_GAIN * cost;
             *T = Tn;
             cost = cn;
+            memcpy(H, Hn, sizeof H);
+            memcpy(g, gn, sizeof g);
+            used = usedn;
             mu = mu * 0.1 > PNP_MU_MIN ? mu * 0.1 : PNP_MU_MIN;
-            rebuild = 1;
-            double nw = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-            double nv = sqrt(d[3] * d[3] + d[4] * d[4] + d[5] * d[5]);
-            if (nw < PNP_TINY && nv < PNP_TINY * (1.0 + sqrt(dot3(T->t, T->t))))
-                return;
         } else {
             mu *= 10.0;
-            if (mu > PNP_MU_MAX)
-                return;
         }
+        if (tiny || mu > PNP_MU_MAX)
+            return; /* converged (tiny step or gain, or at the rounding level), or no step helps */
     }
 }
 
@@ -852,6 +941,7 @@ tvo_status tvo_pnp_ransac(const tvo_pnp_config *cfg, const double (*X)[3], const
             pose_on_error(T_c_w);
         return TVO_ERR_NULL;
     }
+    const int guess_finite = tvo_pose_is_finite(T_c_w);
     pose_on_error(T_c_w);
     if (cfg == NULL) {
         tvo_pnp_config_default(&def);
@@ -883,8 +973,18 @@ tvo_status tvo_pnp_ransac(const tvo_pnp_config *cfg, const double (*X)[3], const
     double best_cost = DBL_MAX;
     int32_t best_inl = 0, need_it = cfg->max_iterations;
     int have = 0, any = 0;
+    if (cfg->use_guess && guess_finite) {
+        int32_t cnt;
+        double cost = msac_cost(&best, X, x, idx, m, th2, DBL_MAX, &cnt);
+        if (cnt > 0) {
+            best_cost = cost;
+            best_inl = cnt;
+            have = 1;
+            need_it = ransac_needed(cfg->confidence, best_inl, m, PNP_SAMPLE, cfg->max_iterations);
+        }
+    }
     for (int32_t it = 0; it < need_it; ++it) {
-        int32_t s[PNP_SAMPLE];
+        int32_t s[PNP_SAMPLE] = {0, 0, 0, 0};
         double Xs[3][3], xs[3][2];
         tvo_pose sol[4];
         rng_sample(&rng, m, PNP_SAMPLE, s);

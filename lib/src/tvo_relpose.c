@@ -17,21 +17,52 @@
 #define RP_SSE2 1
 #endif
 
+/* ---- tuning constants: every decision threshold of the estimator, in one place ---------------------
+ * Squared factors multiply the squared inlier threshold cfg->threshold^2 (thr2). Changing any of
+ * these changes the results (test_relpose's digests). */
 #define RP_PI 3.14159265358979323846
-#define RP_CHI2_1DOF 3.841
+#define RP_DEG_PER_RAD (180.0 / RP_PI)
+#define RP_MAX_COORD 1e6      /* |coordinate| above this: TVO_ERR_RANGE */
+#define RP_MIN_SAMPLE 5       /* the 5-point sample: fewer epipolar inliers is no epipolar model */
+#define RP_MIN_SEP2 1e-6      /* sample points closer than this * thr2 (squared) are degenerate */
+/* scoring (MSAC on the Sampson error; ORB-SLAM style homography / epipolar scores) */
+#define RP_CHI2_1DOF 3.841    /* 95 % chi-square gates, 1 and 2 degrees of freedom */
 #define RP_CHI2_2DOF 5.991
-#define RP_MAX_COORD 1e6
-#define RP_ROT_MAX_ITERS 64
-#define RP_BAIL_STEP 20 /* points between two bail-out tests (msac_cost, homography_score) */
-#define RP_BAIL_Z 3.0    /* bail-out margin in standard deviations */
-#define RP_PRE_N 10      /* msac_cost pre-test: points visited ... */
-#define RP_PRE_EPS 0.55  /* ... and the best model's inlier ratio from which it applies */
-#define RP_H_SHARE 0.5   /* a plane must hold this share of the epipolar inliers to matter */
-#define RP_ROT_SHARE 0.8 /* share of the epipolar inliers the rotation model must explain */
-#define RP_H_RATIO 0.40 /* ORB-SLAM2's homography / (homography + epipolar) score ratio */
-#define RP_H_MIN_ITERS 16 /* homography samples at least */
-#define RP_LO_ROUNDS_8PT 8 /* lo_refine rounds at most for 8-point hypotheses (5-point: 2) */
-#define RP_PROD_EXP 512     /* lm_pass: the product of the cost factors is multiplied by 2^-512 ... */
+#define RP_BAIL_STEP 20       /* points between two bail-out tests (msac_cost, homography_score) */
+#define RP_BAIL_Z 3.0         /* bail-out margin in standard deviations */
+#define RP_PRE_N 10           /* msac_cost pre-test: points visited ... */
+#define RP_PRE_EPS 0.55       /* ... and the best model's inlier ratio from which it applies */
+/* local optimisation of new best hypotheses (lo_refine) */
+#define RP_LO_ROUNDS_5PT 2    /* rounds at most for 5-point hypotheses ... */
+#define RP_LO_ROUNDS_8PT 8    /* ... and for 8-point ones, which start further off */
+#define RP_LO_FIRST2 4.0      /* first round selects within 2 thresholds (squared factor) */
+#define RP_LO_MIN_POINTS 6    /* fewer selected points: no refinement */
+/* final refinement (polish, refine_pose) */
+#define RP_POLISH_BAND2 9.0   /* points within 3 thresholds (squared factor) are refined ... */
+#define RP_POLISH_K2 (2.5 * 2.5 * 1.4826 * 1.4826) /* ... with a Cauchy scale^2 of this * median r^2 */
+#define RP_LM_LAMBDA0 1e-4    /* initial Levenberg-Marquardt damping */
+#define RP_LM_LAMBDA_MIN 1e-10
+#define RP_LM_CLOSE 1e-3      /* relative cost change below which the first rejection ends LM */
+#define RP_LM_DONE 1e-5       /* relative cost change below which LM has converged */
+#define RP_LM_STEP_MIN 1e-10  /* step norm (rad / tangent) below which LM has converged */
+/* rotation-only model */
+#define RP_ROT_MAX_ITERS 64   /* 2-point rotation RANSAC iterations at most */
+#define RP_WIDE2 4.0          /* rotation inliers, plane cheirality counts: within 2 thresholds */
+#define RP_ROT_SHARE 0.8      /* share of the epipolar inliers the rotation model must explain */
+#define RP_MIN_ROT_INLIERS 3  /* fewer rotation inliers: LOW_CONFIDENCE */
+/* homography model selection */
+#define RP_H_SEED_SALT 0x486F6DULL /* the homography RANSAC's generator: cfg->seed ^ this */
+#define RP_H_SHARE 0.5        /* a plane must hold this share of the epipolar inliers to matter */
+#define RP_H_RATIO 0.40       /* ORB-SLAM2's homography / (homography + epipolar) score ratio */
+#define RP_H_MIN_ITERS 16     /* homography samples at least */
+#define RP_H_SAMPLE_TRIES 32  /* draws to move a sample index onto an epipolar inlier */
+#define RP_H_MIN_INLIERS 8    /* a plane with fewer inliers is not decomposed */
+#define RP_MIN_GOOD 5         /* a plane pose needs this many points in front of both cameras */
+#define RP_TWIN_SHARE 0.85    /* twins whose good counts are within this ratio: AMBIGUOUS */
+#define RP_DIFFER_ROT_DEG 0.5 /* two poses differ by more than this rotation ... */
+#define RP_DIFFER_T_DEG 2.0   /* ... or this angle between their translations */
+/* lm_pass's cost product (exact powers of two, so it neither overflows nor depends on the target) */
+#define RP_PROD_EXP 512     /* the product of the cost factors is multiplied by 2^-512 ... */
 #define RP_PROD_MAX 0x1p512 /* ... whenever it exceeds 2^512 (each factor is at most 2^100) */
 #define RP_PROD_INV 0x1p-512
 #if (RP_PRE_N % 2) != 0 || (RP_BAIL_STEP % 2) != 0
@@ -478,6 +509,117 @@ static inline void lm_point(const double R[9], const double t[3], const double b
     }
 }
 
+#ifdef RP_SSE2
+/* lm_pass's SSE2 loop, second half: the cost factors and the weighted normal-equation terms of the
+ * pair (residuals e, Sampson denominators d, the Jacobian's rotation part J[0..2]), added to acc as
+ * lm_point adds them, the first point's terms then the second's */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline void lm_pair_accumulate(__m128d e, __m128d d, __m128d J[5], __m128d c0, __m128d c1, __m128d cc2,
+                                      const double b1[3], const double b2[3], double c2, int want_cost,
+                                      double *prod, int32_t *scaled, double acc[20])
+{
+    const __m128d B10 = _mm_set1_pd(b1[0]), B11 = _mm_set1_pd(b1[1]), B12 = _mm_set1_pd(b1[2]);
+    const __m128d B20 = _mm_set1_pd(b2[0]), B21 = _mm_set1_pd(b2[1]), B22 = _mm_set1_pd(b2[2]);
+    const __m128d C2 = _mm_set1_pd(c2), ONE = _mm_set1_pd(1.0);
+    __m128d e2 = _mm_mul_pd(e, e);
+    __m128d q = _mm_add_pd(d, _mm_div_pd(e2, C2));
+    if (want_cost) {
+        __m128d opu = _mm_div_pd(q, d);
+        double o[2];
+        _mm_storeu_pd(o, opu);
+        for (int l = 0; l < 2; ++l) {
+            double v = o[l];
+            if (!(v < 0x1p100))
+                v = 0x1p100;
+            *prod *= v;
+            if (*prod > RP_PROD_MAX) {
+                *prod *= RP_PROD_INV;
+                ++*scaled;
+            }
+        }
+    }
+    J[3] = _mm_add_pd(_mm_add_pd(_mm_mul_pd(B10, c0), _mm_mul_pd(B11, c1)), _mm_mul_pd(B12, cc2));
+    J[4] = _mm_add_pd(_mm_add_pd(_mm_mul_pd(B20, c0), _mm_mul_pd(B21, c1)), _mm_mul_pd(B22, cc2));
+    __m128d wgt = _mm_div_pd(ONE, q);
+    __m128d P[20];
+    for (int p = 0, m = 5; p < 5; ++p) {
+        __m128d wj = _mm_mul_pd(wgt, J[p]);
+        P[p] = _mm_mul_pd(wj, e);
+        for (int k = p; k < 5; ++k)
+            P[m++] = _mm_mul_pd(wj, J[k]);
+    }
+    /* the first point's terms, then the second's (entry pairs m, m + 1 per vector) */
+    for (int m = 0; m < 20; m += 2) {
+        __m128d s = _mm_loadu_pd(&acc[m]);
+        s = _mm_add_pd(s, _mm_unpacklo_pd(P[m], P[m + 1]));
+        s = _mm_add_pd(s, _mm_unpackhi_pd(P[m], P[m + 1]));
+        _mm_storeu_pd(&acc[m], s);
+    }
+}
+
+/* lm_pass's SSE2 loop: two masked points per step, the per-point arithmetic in the two lanes with
+ * lm_point's operations in the same order. Returns the index from which the C loop continues (at
+ * most one masked point is left). */
+static int32_t lm_pairs_sse2(const double R[9], const double t[3], const double b1[3], const double b2[3],
+                             const tvo_point2d *x1, const tvo_point2d *x2, int32_t n, const uint8_t *mask,
+                             double c2, int want_cost, double *prod, int32_t *scaled, double acc[20])
+{
+    int32_t i = 0, sc = *scaled;
+    double pr = *prod; /* local: stores through acc could alias *prod */
+    const __m128d R0 = _mm_set1_pd(R[0]), R1 = _mm_set1_pd(R[1]), R2 = _mm_set1_pd(R[2]);
+    const __m128d R3 = _mm_set1_pd(R[3]), R4 = _mm_set1_pd(R[4]), R5 = _mm_set1_pd(R[5]);
+    const __m128d R6 = _mm_set1_pd(R[6]), R7 = _mm_set1_pd(R[7]), R8 = _mm_set1_pd(R[8]);
+    const __m128d T0 = _mm_set1_pd(t[0]), T1 = _mm_set1_pd(t[1]), T2 = _mm_set1_pd(t[2]);
+    for (;;) {
+        while (i < n && !mask[i])
+            ++i;
+        int32_t j = i + 1;
+        while (j < n && !mask[j])
+            ++j;
+        if (j >= n)
+            break; /* at most one masked point left: the C loop below */
+        __m128d a0, a1, q0, q1;
+        rp_load2(&x1[i], &x2[i], &x1[j], &x2[j], &a0, &a1, &q0, &q1);
+        __m128d u0 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R0, a0), _mm_mul_pd(R1, a1)), R2);
+        __m128d u1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R3, a0), _mm_mul_pd(R4, a1)), R5);
+        __m128d u2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R6, a0), _mm_mul_pd(R7, a1)), R8);
+        __m128d c0 = _mm_sub_pd(u1, _mm_mul_pd(u2, q1));
+        __m128d c1 = _mm_sub_pd(_mm_mul_pd(u2, q0), u0);
+        __m128d cc2 = _mm_sub_pd(_mm_mul_pd(u0, q1), _mm_mul_pd(u1, q0));
+        __m128d e = _mm_add_pd(_mm_add_pd(_mm_mul_pd(T0, c0), _mm_mul_pd(T1, c1)), _mm_mul_pd(T2, cc2));
+        __m128d f0 = _mm_sub_pd(_mm_mul_pd(q1, T2), T1);
+        __m128d f1 = _mm_sub_pd(T0, _mm_mul_pd(q0, T2));
+        __m128d f2 = _mm_sub_pd(_mm_mul_pd(q0, T1), _mm_mul_pd(q1, T0));
+        __m128d J[5];
+        J[0] = _mm_sub_pd(_mm_mul_pd(u1, f2), _mm_mul_pd(u2, f1));
+        J[1] = _mm_sub_pd(_mm_mul_pd(u2, f0), _mm_mul_pd(u0, f2));
+        J[2] = _mm_sub_pd(_mm_mul_pd(u0, f1), _mm_mul_pd(u1, f0));
+        __m128d ex0 = _mm_sub_pd(_mm_mul_pd(T1, u2), _mm_mul_pd(T2, u1));
+        __m128d ex1 = _mm_sub_pd(_mm_mul_pd(T2, u0), _mm_mul_pd(T0, u2));
+        __m128d et0 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R0, f0), _mm_mul_pd(R3, f1)), _mm_mul_pd(R6, f2));
+        __m128d et1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R1, f0), _mm_mul_pd(R4, f1)), _mm_mul_pd(R7, f2));
+        __m128d d = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(ex0, ex0), _mm_mul_pd(ex1, ex1)),
+                                          _mm_mul_pd(et0, et0)),
+                               _mm_mul_pd(et1, et1));
+        if (_mm_movemask_pd(_mm_cmpgt_pd(d, _mm_set1_pd(1e-300))) != 3) {
+            /* a degenerate point in the pair (rare): both through the C code, in order */
+            lm_point(R, t, b1, b2, x1[i].x, x1[i].y, x2[i].x, x2[i].y, c2, want_cost, &pr, &sc, acc);
+            lm_point(R, t, b1, b2, x1[j].x, x1[j].y, x2[j].x, x2[j].y, c2, want_cost, &pr, &sc, acc);
+            i = j + 1;
+            continue;
+        }
+        lm_pair_accumulate(e, d, J, c0, c1, cc2, b1, b2, c2, want_cost, &pr, &sc, acc);
+        i = j + 1;
+    }
+    *prod = pr;
+    *scaled = sc;
+    return i;
+}
+
+#endif
+
 /* One pass over the masked points at the pose (R, t): the Gauss-Newton normal equations H dx = -g
  * of the IRLS-weighted Sampson error (Cauchy loss of scale c2 = c^2) in the 5 parameters (rotation
  * increment, two tangent directions b1, b2 of t), and the robust cost sum log(1 + r^2 / c2) when
@@ -505,89 +647,7 @@ static double lm_pass(const double Rp[9], const double tp[3], const double b1p[3
         acc[p] = 0.0;
     int32_t i = 0;
 #ifdef RP_SSE2
-    {
-        const __m128d R0 = _mm_set1_pd(R[0]), R1 = _mm_set1_pd(R[1]), R2 = _mm_set1_pd(R[2]);
-        const __m128d R3 = _mm_set1_pd(R[3]), R4 = _mm_set1_pd(R[4]), R5 = _mm_set1_pd(R[5]);
-        const __m128d R6 = _mm_set1_pd(R[6]), R7 = _mm_set1_pd(R[7]), R8 = _mm_set1_pd(R[8]);
-        const __m128d T0 = _mm_set1_pd(t[0]), T1 = _mm_set1_pd(t[1]), T2 = _mm_set1_pd(t[2]);
-        const __m128d B10 = _mm_set1_pd(b1[0]), B11 = _mm_set1_pd(b1[1]), B12 = _mm_set1_pd(b1[2]);
-        const __m128d B20 = _mm_set1_pd(b2[0]), B21 = _mm_set1_pd(b2[1]), B22 = _mm_set1_pd(b2[2]);
-        const __m128d C2 = _mm_set1_pd(c2), ONE = _mm_set1_pd(1.0);
-        for (;;) {
-            while (i < n && !mask[i])
-                ++i;
-            int32_t j = i + 1;
-            while (j < n && !mask[j])
-                ++j;
-            if (j >= n)
-                break; /* at most one masked point left: the C loop below */
-            __m128d a0, a1, q0, q1;
-            rp_load2(&x1[i], &x2[i], &x1[j], &x2[j], &a0, &a1, &q0, &q1);
-            __m128d u0 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R0, a0), _mm_mul_pd(R1, a1)), R2);
-            __m128d u1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R3, a0), _mm_mul_pd(R4, a1)), R5);
-            __m128d u2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R6, a0), _mm_mul_pd(R7, a1)), R8);
-            __m128d c0 = _mm_sub_pd(u1, _mm_mul_pd(u2, q1));
-            __m128d c1 = _mm_sub_pd(_mm_mul_pd(u2, q0), u0);
-            __m128d cc2 = _mm_sub_pd(_mm_mul_pd(u0, q1), _mm_mul_pd(u1, q0));
-            __m128d e = _mm_add_pd(_mm_add_pd(_mm_mul_pd(T0, c0), _mm_mul_pd(T1, c1)), _mm_mul_pd(T2, cc2));
-            __m128d f0 = _mm_sub_pd(_mm_mul_pd(q1, T2), T1);
-            __m128d f1 = _mm_sub_pd(T0, _mm_mul_pd(q0, T2));
-            __m128d f2 = _mm_sub_pd(_mm_mul_pd(q0, T1), _mm_mul_pd(q1, T0));
-            __m128d J[5];
-            J[0] = _mm_sub_pd(_mm_mul_pd(u1, f2), _mm_mul_pd(u2, f1));
-            J[1] = _mm_sub_pd(_mm_mul_pd(u2, f0), _mm_mul_pd(u0, f2));
-            J[2] = _mm_sub_pd(_mm_mul_pd(u0, f1), _mm_mul_pd(u1, f0));
-            __m128d ex0 = _mm_sub_pd(_mm_mul_pd(T1, u2), _mm_mul_pd(T2, u1));
-            __m128d ex1 = _mm_sub_pd(_mm_mul_pd(T2, u0), _mm_mul_pd(T0, u2));
-            __m128d et0 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R0, f0), _mm_mul_pd(R3, f1)), _mm_mul_pd(R6, f2));
-            __m128d et1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(R1, f0), _mm_mul_pd(R4, f1)), _mm_mul_pd(R7, f2));
-            __m128d d = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(ex0, ex0), _mm_mul_pd(ex1, ex1)),
-                                              _mm_mul_pd(et0, et0)),
-                                   _mm_mul_pd(et1, et1));
-            if (_mm_movemask_pd(_mm_cmpgt_pd(d, _mm_set1_pd(1e-300))) != 3) {
-                /* a degenerate point in the pair (rare): both through the C code, in order */
-                lm_point(R, t, b1, b2, x1[i].x, x1[i].y, x2[i].x, x2[i].y, c2, want_cost, &prod, &scaled, acc);
-                lm_point(R, t, b1, b2, x1[j].x, x1[j].y, x2[j].x, x2[j].y, c2, want_cost, &prod, &scaled, acc);
-                i = j + 1;
-                continue;
-            }
-            __m128d e2 = _mm_mul_pd(e, e);
-            __m128d q = _mm_add_pd(d, _mm_div_pd(e2, C2));
-            if (want_cost) {
-                __m128d opu = _mm_div_pd(q, d);
-                double o[2];
-                _mm_storeu_pd(o, opu);
-                for (int l = 0; l < 2; ++l) {
-                    double v = o[l];
-                    if (!(v < 0x1p100))
-                        v = 0x1p100;
-                    prod *= v;
-                    if (prod > RP_PROD_MAX) {
-                        prod *= RP_PROD_INV;
-                        ++scaled;
-                    }
-                }
-            }
-            J[3] = _mm_add_pd(_mm_add_pd(_mm_mul_pd(B10, c0), _mm_mul_pd(B11, c1)), _mm_mul_pd(B12, cc2));
-            J[4] = _mm_add_pd(_mm_add_pd(_mm_mul_pd(B20, c0), _mm_mul_pd(B21, c1)), _mm_mul_pd(B22, cc2));
-            __m128d wgt = _mm_div_pd(ONE, q);
-            __m128d P[20];
-            for (int p = 0, m = 5; p < 5; ++p) {
-                __m128d wj = _mm_mul_pd(wgt, J[p]);
-                P[p] = _mm_mul_pd(wj, e);
-                for (int k = p; k < 5; ++k)
-                    P[m++] = _mm_mul_pd(wj, J[k]);
-            }
-            /* the first point's terms, then the second's (entry pairs m, m + 1 per vector) */
-            for (int m = 0; m < 20; m += 2) {
-                __m128d s = _mm_loadu_pd(&acc[m]);
-                s = _mm_add_pd(s, _mm_unpacklo_pd(P[m], P[m + 1]));
-                s = _mm_add_pd(s, _mm_unpackhi_pd(P[m], P[m + 1]));
-                _mm_storeu_pd(&acc[m], s);
-            }
-            i = j + 1;
-        }
-    }
+    i = lm_pairs_sse2(R, t, b1, b2, x1, x2, n, mask, c2, want_cost, &prod, &scaled, acc);
 #endif
     for (; i < n; ++i) {
         if (!mask[i])
@@ -642,13 +702,12 @@ static void refine_pose(double R[9], double t[3], const tvo_point2d *x1, const t
     double H[25], g[5], b1[3], b2[3];
     tangent_basis(t, b1, b2);
     double cost = lm_pass(R, t, b1, b2, x1, x2, n, mask, c2, 1, H, g);
-    double lambda = 1e-4;
+    double lambda = RP_LM_LAMBDA0;
     /* `iters` accepted steps at most; rejected trials (lambda x 10) do not count. Three rejections
      * in a row end it: the normal equations treat the Sampson denominator as constant, so close to
      * the optimum their step is not an exact descent direction of the cost, and further damping
      * only buys changes far below the noise. Once an accepted step changed the cost by less than
-     * 1e-3 (relative) the pose is that close to the optimum, and the first rejection ends it (in
-     * the VO replay of synthetic V1_01, rejected trials were 9 % of the refinement passes). */
+     * 1e-3 (relative) the pose is that close to the optimum, and the first rejection ends it. */
     for (int it = 0, rejected = 0, limit = 3; it < iters && rejected < limit;) {
         double dx[5], Rn[9], tn[3], Hn[25], gn[5], nb1[3], nb2[3];
         if (!solve_damped(H, g, lambda, dx))
@@ -671,14 +730,14 @@ static void refine_pose(double R[9], double t[3], const tvo_point2d *x1, const t
             memcpy(b1, nb1, sizeof nb1);
             memcpy(b2, nb2, sizeof nb2);
             cost = cn;
-            lambda = lambda * 0.1 > 1e-10 ? lambda * 0.1 : 1e-10;
+            lambda = lambda * 0.1 > RP_LM_LAMBDA_MIN ? lambda * 0.1 : RP_LM_LAMBDA_MIN;
             ++it;
             rejected = 0;
-            limit = rel < 1e-3 ? 1 : 3;
+            limit = rel < RP_LM_CLOSE ? 1 : 3;
             /* converged for every purpose: a relative cost change below 1e-5 moves the pose by
                orders of magnitude less than the noise (0.04 deg median error at 0.5 px; the steps
                shrink by ~0.4 per iteration there, so the pose is within ~1e-5 rad of the limit) */
-            if (step < 1e-10 || rel < 1e-5)
+            if (step < RP_LM_STEP_MIN || rel < RP_LM_DONE)
                 break;
         } else {
             lambda *= 10.0;
@@ -1111,7 +1170,7 @@ static int32_t good_count(const double R[9], const double t[3], const tvo_point2
 static int poses_differ(const double Ra[9], const double ta[3], const double Rb[9], const double tb[3])
 {
     double c = dot3(ta, tb);
-    return tvo_la_rot_dist(Ra, Rb) > 0.5 * RP_PI / 180.0 || c < tvo_dm_cos(2.0 * RP_PI / 180.0);
+    return tvo_la_rot_dist(Ra, Rb) > RP_DIFFER_ROT_DEG * RP_PI / 180.0 || c < tvo_dm_cos(RP_DIFFER_T_DEG * RP_PI / 180.0);
 }
 
 /* ---- public API ----------------------------------------------------------------------------- */
@@ -1226,11 +1285,10 @@ static int pose_any(const double E[9], double R[9], double t[3])
  * (and seeds the final refinement better). The first round selects within 2 thresholds (a model
  * fitted to 5 noisy points is often off by more than the threshold over part of the image), the
  * second within the threshold of the improved model; up to max_rounds rounds continue while that
- * selection grows. 5-point hypotheses take 2 rounds: more saved 9 % of the RANSAC iterations but
- * no time, and moved VO results both ways. 8-point hypotheses start further off: after 2 rounds LO
- * often stopped on part of the inliers, which raw hypotheses (scored unrefined) rarely beat, so 7 %
- * of the benchmark scenes ran to max_iters; they take up to RP_LO_ROUNDS_8PT (docs/geometry.md).
- * mask: n bytes of scratch. Returns 0 on failure. */
+ * selection grows: RP_LO_ROUNDS_5PT rounds for 5-point hypotheses (more rounds save RANSAC iterations
+ * but no time), up to RP_LO_ROUNDS_8PT for 8-point ones, which start further off (after 2 rounds LO
+ * often stops on part of the inliers, and raw hypotheses rarely beat that, so the RANSAC would run to
+ * max_iters). mask: n bytes of scratch. Returns 0 on failure. */
 static int lo_refine(const double E[9], const tvo_point2d *x1, const tvo_point2d *x2, int32_t n, double thr2,
                      int max_rounds, uint8_t *mask, double Eout[9])
 {
@@ -1240,8 +1298,8 @@ static int lo_refine(const double E[9], const tvo_point2d *x1, const tvo_point2d
     essential_from_pose(R, t, Eout);
     int32_t prev = 0;
     for (int round = 0; round < max_rounds; ++round) {
-        int32_t m = mark_inliers(Eout, x1, x2, n, round == 0 ? 4.0 * thr2 : thr2, mask);
-        if (m < 6)
+        int32_t m = mark_inliers(Eout, x1, x2, n, round == 0 ? RP_LO_FIRST2 * thr2 : thr2, mask);
+        if (m < RP_LO_MIN_POINTS)
             return 0;
         if (round >= 2 && m <= prev)
             break;
@@ -1273,7 +1331,7 @@ static int32_t essential_ransac(const tvo_relpose_config *cfg, const tvo_point2d
     double best_cost = INFINITY, eps = 0.0;
     int32_t best_inl = 0, need = cfg->max_iters, it;
     const int32_t stride = visit_stride(n);
-    double min_sep2 = 1e-6 * thr2;
+    double min_sep2 = RP_MIN_SEP2 * thr2;
     for (it = 0; it < need && it < cfg->max_iters; ++it) {
         int32_t idx[8];
         double a[8][2], b[8][2];
@@ -1308,7 +1366,7 @@ static int32_t essential_ransac(const tvo_relpose_config *cfg, const tvo_point2d
             best_inl = inl;
             memcpy(Ebest, Es[m], 9 * sizeof(double));
             double Elo[9];
-            if (best_inl >= 2 * s && lo_refine(Ebest, x1, x2, n, thr2, s == 8 ? RP_LO_ROUNDS_8PT : 2, mask, Elo)) {
+            if (best_inl >= 2 * s && lo_refine(Ebest, x1, x2, n, thr2, s == 8 ? RP_LO_ROUNDS_8PT : RP_LO_ROUNDS_5PT, mask, Elo)) {
                 int32_t inl2 = 0;
                 double c2 = msac_cost(Elo, x1, x2, n, stride, thr2, best_cost, 0.0, &inl2);
                 if (c2 < best_cost) {
@@ -1350,16 +1408,16 @@ static int32_t polish(const tvo_relpose_config *cfg, double R[9], double t[3], c
                     rr[0] = sampson2(E, &x1[i], &x2[i]);
             }
             double r2 = rr[i & 1];
-            uint8_t in = (uint8_t)(r2 < 9.0 * thr2);
+            uint8_t in = (uint8_t)(r2 < RP_POLISH_BAND2 * thr2);
             changed += round > 0 && in != mask[i];
             mask[i] = in;
             if (in)
                 buf[m++] = r2;
         }
-        if (m < 6 || cfg->refine_iters == 0)
+        if (m < RP_LO_MIN_POINTS || cfg->refine_iters == 0)
             break;
         double med = tvo_la_select_kth(buf, m, m / 2);
-        double c2 = 2.5 * 2.5 * 1.4826 * 1.4826 * med;
+        double c2 = RP_POLISH_K2 * med;
         if (c2 > thr2)
             c2 = thr2;
         if (!(c2 > 1e-24))
@@ -1373,6 +1431,353 @@ static int32_t polish(const tvo_relpose_config *cfg, double R[9], double t[3], c
     }
     essential_from_pose(R, t, E);
     return mark_inliers(E, x1, x2, n, thr2, mask);
+}
+
+/* ---- the estimator's stages ------------------------------------------------------------------- */
+
+/* The working state of one tvo_relpose_estimate call: the input, the squared threshold and the
+ * scratch arrays (n doubles, four masks of n bytes) */
+typedef struct rp_work {
+    const tvo_relpose_config *cfg;
+    const tvo_point2d *x1, *x2;
+    int32_t n;
+    double thr2;
+    double *buf;
+    uint8_t *mask_e; /* inliers of the chosen pose */
+    uint8_t *mask_r; /* inliers of the rotation-only model */
+    uint8_t *mask_h; /* inliers of the homography, then of the plane's twin */
+    uint8_t *mask_c; /* candidate pose's inliers (and the epipolar RANSAC's scratch) */
+} rp_work;
+
+/* The pose chosen so far and what the homography stage found */
+typedef struct rp_choice {
+    double R[9], t[3];
+    int32_t inl;                 /* inliers (mask_e) */
+    int32_t good;                /* inliers in front of both cameras */
+    int use_h;                   /* the homography's decomposition was chosen */
+    int ambiguous;               /* the plane's twins explain the data about equally well */
+    double Rtw[2][9], ttw[2][3]; /* the twins, polished, when ambiguous */
+} rp_choice;
+
+/* Stage 0: the input checks of relpose.h in their order, then the scratch arrays */
+static tvo_status prepare(const tvo_relpose_config *cfg, const tvo_point2d *x1, const tvo_point2d *x2, int32_t n,
+                          void *scratch, size_t scratch_size, rp_work *w)
+{
+    tvo_status st = check_config(cfg);
+    if (st != TVO_OK)
+        return st;
+    if (n < (cfg->method == TVO_RELPOSE_8PT ? 8 : 5))
+        return TVO_ERR_TOO_FEW;
+    if (scratch_size < tvo_relpose_scratch_size(n))
+        return TVO_ERR_NO_MEMORY;
+    for (int32_t i = 0; i < n; ++i) {
+        if (!isfinite(x1[i].x) || !isfinite(x1[i].y) || !isfinite(x2[i].x) || !isfinite(x2[i].y))
+            return TVO_ERR_NOT_FINITE;
+        if (fabs(x1[i].x) > RP_MAX_COORD || fabs(x1[i].y) > RP_MAX_COORD || fabs(x2[i].x) > RP_MAX_COORD ||
+            fabs(x2[i].y) > RP_MAX_COORD)
+            return TVO_ERR_RANGE;
+    }
+    if (collinear(x1, n) || collinear(x2, n))
+        return TVO_ERR_DEGENERATE;
+    tvo_arena arena;
+    tvo_arena_init(&arena, scratch, scratch_size);
+    w->buf = (double *)tvo_arena_alloc(&arena, (size_t)n * sizeof(double));
+    w->mask_e = (uint8_t *)tvo_arena_alloc(&arena, (size_t)n);
+    w->mask_r = (uint8_t *)tvo_arena_alloc(&arena, (size_t)n);
+    w->mask_h = (uint8_t *)tvo_arena_alloc(&arena, (size_t)n);
+    w->mask_c = (uint8_t *)tvo_arena_alloc(&arena, (size_t)n);
+    if (w->buf == NULL || w->mask_e == NULL || w->mask_r == NULL || w->mask_h == NULL || w->mask_c == NULL)
+        return TVO_ERR_NO_MEMORY;
+    w->cfg = cfg;
+    w->x1 = x1;
+    w->x2 = x2;
+    w->n = n;
+    w->thr2 = cfg->threshold * cfg->threshold;
+    return TVO_OK;
+}
+
+/* Stage 2: the rotation-only model (seeded by the e_inl epipolar inliers of E when there are enough,
+ * else its own 2-point RANSAC) in Rrot with its inliers in mask_r; the rotation-compensated parallax
+ * (median angle between Rrot f1 and f2 over the epipolar inliers, degrees) and R_rot go to out.
+ * Returns the rotation model's inlier count. */
+static int32_t rotation_stage(const rp_work *w, const double E[9], int32_t e_inl, double Rrot[9], tvo_relpose *out)
+{
+    const int seeded = e_inl >= RP_MIN_SAMPLE;
+    const double wide2 = RP_WIDE2 * w->thr2;
+    int32_t r_inl = seeded ? rotation_from_inliers(E, w->x1, w->x2, w->n, wide2, w->mask_e, Rrot, w->mask_r)
+                           : rotation_ransac(w->cfg, w->x1, w->x2, w->n, wide2, Rrot, w->mask_r);
+    const uint8_t *pmask = seeded ? w->mask_e : w->mask_r;
+    int32_t m = 0;
+    for (int32_t i = 0; i < w->n; ++i) {
+        if (!pmask[i])
+            continue;
+        double f1[3], f2[3], u[3], c[3];
+        bearing(&w->x1[i], f1);
+        bearing(&w->x2[i], f2);
+        tvo_la_mat3_vec(Rrot, f1, u);
+        tvo_la_cross(u, f2, c);
+        w->buf[m++] = tvo_dm_atan2(sqrt(dot3(c, c)), dot3(u, f2));
+    }
+    out->parallax_deg = m > 0 ? tvo_la_select_kth(w->buf, m, m / 2) * RP_DEG_PER_RAD : 0.0;
+    if (pose_finite(Rrot, out->t))
+        memcpy(out->R_rot, Rrot, 9 * sizeof(double));
+    return r_inl;
+}
+
+/* Rotation-only when the rotation-compensated parallax is low AND the rotation model explains most
+ * of the epipolar inliers (at twice the threshold), or when the epipolar model failed. The median
+ * parallax alone is not enough: a rotation absorbs the mean flow of a translation (sideways motion
+ * looks like a turn for distant points), and the median of what remains can fall below the bound
+ * while most points still contradict the rotation model (a narrow stereo baseline at a few metres:
+ * test_sideways_baseline). Under pure rotation or a tiny baseline the rotation inliers (2 px chord)
+ * contain about all epipolar inliers (1 px Sampson), so RP_ROT_SHARE leaves those rotation-only. */
+static int rotation_only(const tvo_relpose_config *cfg, double parallax, int32_t r_inl, int32_t e_inl)
+{
+    int rot_explains = (double)r_inl >= RP_ROT_SHARE * (double)e_inl;
+    return (parallax < cfg->min_parallax_deg && rot_explains) || e_inl < RP_MIN_SAMPLE;
+}
+
+/* Stage 2's result: t = 0, R from the rotation model, its inliers in the mask */
+static void rotation_result(const rp_work *w, const double Rrot[9], int32_t r_inl, int32_t e_inl,
+                            tvo_relpose *out, uint8_t *inlier_mask)
+{
+    if (!pose_finite(Rrot, out->t))
+        return; /* identity + LOW_CONFIDENCE already set */
+    const double parallax = out->parallax_deg, min_par = w->cfg->min_parallax_deg;
+    memcpy(out->R, Rrot, 9 * sizeof(double));
+    memcpy(out->R_alt, Rrot, 9 * sizeof(double));
+    out->t[0] = out->t[1] = out->t[2] = 0.0;
+    out->inliers = r_inl;
+    out->flags = TVO_RELPOSE_FLAG_ROTATION_ONLY;
+    if (parallax < min_par)
+        out->flags |= TVO_RELPOSE_FLAG_LOW_PARALLAX;
+    if (r_inl < w->cfg->min_inliers || r_inl < RP_MIN_ROT_INLIERS || (e_inl < RP_MIN_SAMPLE && parallax >= min_par))
+        out->flags |= TVO_RELPOSE_FLAG_LOW_CONFIDENCE;
+    if (inlier_mask != NULL)
+        memcpy(inlier_mask, w->mask_r, (size_t)w->n);
+}
+
+/* Stage 3: the pose of E chosen by cheirality over its inliers, polished */
+static void epipolar_pose(const rp_work *w, const double E[9], rp_choice *c)
+{
+    memset(c, 0, sizeof *c);
+    decompose_essential(E, w->x1, w->x2, w->n, w->mask_e, c->R, c->t);
+    c->inl = polish(w->cfg, c->R, c->t, w->x1, w->x2, w->n, w->thr2, w->mask_e, w->buf);
+    c->good = good_count(c->R, c->t, w->x1, w->x2, w->n, w->thr2, w->mask_e);
+}
+
+/* A 4-point sample with each index moved to an epipolar inlier (bounded tries, no duplicates) */
+static void sample_from_inliers(rp_rng *rng, int32_t n, const uint8_t *mask, int32_t idx[4])
+{
+    rng_sample(rng, n, 4, idx);
+    for (int k = 0; k < 4; ++k)
+        for (int tries = 0; tries < RP_H_SAMPLE_TRIES && !mask[idx[k]]; ++tries) {
+            int32_t v = (int32_t)(((uint64_t)rng_next(rng) * (uint64_t)n) >> 32);
+            int dup = 0;
+            for (int j = 0; j < 4; ++j)
+                dup |= j != k && idx[j] == v;
+            if (!dup)
+                idx[k] = v;
+        }
+}
+
+/* Stage 4a: homography RANSAC. A plane matters only when it holds a large share (RP_H_SHARE) of the
+ * inl epipolar inliers: then either it is the dominant structure, or the epipolar RANSAC itself may
+ * have picked the plane's twin (whose inliers are the plane's points). Its points are epipolar
+ * inliers too, so the samples are drawn from them; the iteration bound is what a 4-point sample needs
+ * at the epipolar inlier ratio (at least RP_H_MIN_ITERS: with every point an epipolar inlier the
+ * bound is 1, and one degenerate sample would miss the plane), the adaptive count uses the plane's
+ * share of the epipolar inliers, and hypotheses are dropped by the bail-out test as soon as they fall
+ * clearly below that share. Returns the best score (<= 0: no plane), the model in Hb. */
+static double homography_ransac(const rp_work *w, int32_t inl, double Hb[9])
+{
+    const tvo_relpose_config *cfg = w->cfg;
+    const int32_t n = w->n, stride = visit_stride(n);
+    memset(Hb, 0, 9 * sizeof(double)); /* written with the first model that scores above -1 */
+    rp_rng rng;
+    rng_seed(&rng, cfg->seed ^ RP_H_SEED_SALT);
+    double inv_s2 = 1.0 / w->thr2, best = -1.0;
+    int32_t cap = ransac_needed(cfg->confidence, inl, n, 4, cfg->max_iters);
+    if (cap < RP_H_MIN_ITERS)
+        cap = RP_H_MIN_ITERS < cfg->max_iters ? RP_H_MIN_ITERS : cfg->max_iters;
+    int32_t need = cap, h_inl = 0;
+    const double eps_min = RP_H_SHARE * (double)inl / (double)n;
+    for (int32_t it = 0; it < need && it < cap; ++it) {
+        int32_t idx[4], c = 0;
+        double H[9], Hi[9];
+        sample_from_inliers(&rng, n, w->mask_e, idx);
+        if (!homography_4pt(w->x1, w->x2, idx, H))
+            continue;
+        adjugate3(H, Hi);
+        double eps = (double)h_inl / (double)n;
+        double sc = homography_score(H, Hi, w->x1, w->x2, n, inv_s2, best, NULL, &c, stride,
+                                     eps > eps_min ? eps : eps_min);
+        if (sc > best) {
+            best = sc;
+            h_inl = c;
+            memcpy(Hb, H, sizeof H);
+            need = ransac_needed(cfg->confidence, h_inl, inl > 0 ? inl : n, 4, cap);
+        }
+    }
+    return best;
+}
+
+/* Stage 4b: the inliers of Hb (mask_h, *h_inl), and a DLT refit on them that replaces Hb when it
+ * scores at least as well. Returns Hb's score. */
+static double homography_refit(const rp_work *w, double Hb[9], double best, int32_t *h_inl)
+{
+    const double inv_s2 = 1.0 / w->thr2;
+    double Hi[9], Hr[9];
+    adjugate3(Hb, Hi);
+    homography_score(Hb, Hi, w->x1, w->x2, w->n, inv_s2, -1.0, w->mask_h, h_inl, 1, 0.0);
+    if (!homography_dlt(w->x1, w->x2, w->n, w->mask_h, Hr))
+        return best;
+    double Hri[9];
+    int32_t c2 = 0;
+    adjugate3(Hr, Hri);
+    double s2 = homography_score(Hr, Hri, w->x1, w->x2, w->n, inv_s2, -1.0, NULL, &c2, 1, 0.0);
+    if (s2 >= best) {
+        best = s2;
+        memcpy(Hb, Hr, sizeof Hr);
+        homography_score(Hb, Hri, w->x1, w->x2, w->n, inv_s2, -1.0, w->mask_h, h_inl, 1, 0.0);
+    }
+    return best;
+}
+
+/* Stage 4c: Hb's decompositions (up to 16) with the count of the plane's inliers in front of both
+ * cameras (gk, at twice the threshold); *kb the best, *kb2 the best clearly different one (the
+ * plane's "twin" solution), -1 when none. Returns the number of decompositions. */
+static int plane_candidates(const rp_work *w, const double Hb[9], double Rs[16][9], double ts[16][3],
+                            int32_t gk[16], int *kb, int *kb2)
+{
+    const double wide2 = RP_WIDE2 * w->thr2;
+    int nc = decompose_homography(Hb, Rs, ts);
+    for (int k = 0; k < 16; ++k)
+        gk[k] = -1;
+    *kb = *kb2 = -1;
+    for (int k = 0; k < nc; ++k) {
+        /* decompose_homography emits each (R, t) followed by (R, -t): one pass for both */
+        if (k % 2 == 0 && k + 1 < nc && same_rotation(Rs[k], Rs[k + 1]) && ts[k + 1][0] == -ts[k][0] &&
+            ts[k + 1][1] == -ts[k][1] && ts[k + 1][2] == -ts[k][2])
+            gk[k] = good_count2(Rs[k], ts[k], w->x1, w->x2, w->n, wide2, w->mask_h, &gk[k + 1]);
+        else if (gk[k] < 0)
+            gk[k] = good_count(Rs[k], ts[k], w->x1, w->x2, w->n, wide2, w->mask_h);
+        if (*kb < 0 || gk[k] > gk[*kb])
+            *kb = k;
+    }
+    for (int k = 0; *kb >= 0 && k < nc; ++k)
+        if (poses_differ(Rs[k], ts[k], Rs[*kb], ts[*kb]) && (*kb2 < 0 || gk[k] > gk[*kb2]))
+            *kb2 = k;
+    return nc;
+}
+
+/* A candidate pose (R, t) of the plane with its inlier count, cheirality-consistent count and
+ * inliers (in mask) */
+typedef struct rp_cand {
+    double R[9], t[3];
+    int32_t inl, good;
+} rp_cand;
+
+static void polish_candidate(const rp_work *w, const double R[9], const double t[3], uint8_t *mask, rp_cand *c)
+{
+    memcpy(c->R, R, sizeof c->R);
+    memcpy(c->t, t, sizeof c->t);
+    c->inl = polish(w->cfg, c->R, c->t, w->x1, w->x2, w->n, w->thr2, mask, w->buf);
+    c->good = good_count(c->R, c->t, w->x1, w->x2, w->n, w->thr2, mask);
+}
+
+/* Stage 4d: the best decomposition kb (inliers in mask_c) and its twin kb2 (mask_h) polished. When
+ * both explain the data about equally well (RP_TWIN_SHARE of each other's and of the epipolar pose's
+ * good count) the choice is ambiguous and the twins go to ch. Returns in h the better of the two,
+ * its inliers in mask_c. */
+static void plane_pose(const rp_work *w, rp_choice *ch, double Rs[16][9], double ts[16][3], const int32_t gk[16],
+                       int kb, int kb2, rp_cand *h)
+{
+    polish_candidate(w, Rs[kb], ts[kb], w->mask_c, h);
+    if (kb2 < 0 || gk[kb2] < RP_MIN_GOOD)
+        return;
+    rp_cand tw;
+    polish_candidate(w, Rs[kb2], ts[kb2], w->mask_h, &tw);
+    if (poses_differ(tw.R, tw.t, h->R, h->t) && (double)tw.good >= RP_TWIN_SHARE * h->good &&
+        (double)h->good >= RP_TWIN_SHARE * tw.good && (double)tw.good >= RP_TWIN_SHARE * ch->good) {
+        ch->ambiguous = 1;
+        memcpy(ch->Rtw[0], h->R, sizeof h->R);
+        memcpy(ch->ttw[0], h->t, sizeof h->t);
+        memcpy(ch->Rtw[1], tw.R, sizeof tw.R);
+        memcpy(ch->ttw[1], tw.t, sizeof tw.t);
+    }
+    if (tw.good > h->good && pose_finite(tw.R, tw.t)) {
+        *h = tw;
+        memcpy(w->mask_c, w->mask_h, (size_t)w->n);
+    }
+}
+
+/* Stage 4: homography model selection (dominant plane). The homography's decompositions are always
+ * tried when the plane holds RP_H_SHARE of the epipolar inliers (a plane's twin solution can win the
+ * epipolar RANSAC); they replace the epipolar pose when they put more points in front of both
+ * cameras, or as many when the homography explains the data (score ratio above RP_H_RATIO). */
+static void homography_stage(const rp_work *w, rp_choice *ch)
+{
+    double Hb[9], Ecur[9];
+    double best = homography_ransac(w, ch->inl, Hb);
+    if (!(best > 0.0))
+        return;
+    essential_from_pose(ch->R, ch->t, Ecur);
+    double se = essential_score(Ecur, w->x1, w->x2, w->n, 1.0 / w->thr2);
+    int32_t h_inl = 0;
+    best = homography_refit(w, Hb, best, &h_inl);
+    int h_wins = best / (best + se) > RP_H_RATIO;
+    if (!(h_inl >= RP_H_MIN_INLIERS && (double)h_inl >= RP_H_SHARE * (double)ch->inl))
+        return;
+    double Rs[16][9], ts[16][3];
+    int32_t gk[16];
+    int kb, kb2;
+    plane_candidates(w, Hb, Rs, ts, gk, &kb, &kb2);
+    if (kb < 0 || gk[kb] < RP_MIN_GOOD)
+        return;
+    rp_cand h;
+    plane_pose(w, ch, Rs, ts, gk, kb, kb2, &h);
+    if ((h.good > ch->good || (h_wins && h.good >= ch->good)) && pose_finite(h.R, h.t)) {
+        memcpy(ch->R, h.R, sizeof h.R);
+        memcpy(ch->t, h.t, sizeof h.t);
+        memcpy(w->mask_e, w->mask_c, (size_t)w->n);
+        ch->inl = h.inl;
+        ch->good = h.good;
+        ch->use_h = 1;
+    }
+}
+
+/* Stage 5: the chosen pose (unit t), its flags, the twin when ambiguous, the inlier mask */
+static void pose_result(const rp_work *w, const rp_choice *ch, tvo_relpose *out, uint8_t *inlier_mask)
+{
+    if (!pose_finite(ch->R, ch->t))
+        return; /* identity + LOW_CONFIDENCE */
+    double nt = sqrt(dot3(ch->t, ch->t));
+    if (!(nt > 0.0))
+        return;
+    memcpy(out->R, ch->R, sizeof out->R);
+    for (int j = 0; j < 3; ++j)
+        out->t[j] = ch->t[j] / nt;
+    out->inliers = ch->inl;
+    out->flags = ch->use_h ? TVO_RELPOSE_FLAG_HOMOGRAPHY : 0;
+    memcpy(out->R_alt, out->R, sizeof out->R);
+    memcpy(out->t_alt, out->t, sizeof out->t);
+    if (ch->inl < w->cfg->min_inliers || ch->inl < RP_MIN_SAMPLE || ch->good < ch->inl / 2) {
+        out->flags |= TVO_RELPOSE_FLAG_LOW_CONFIDENCE;
+    } else if (ch->ambiguous) {
+        /* the twin that is not the chosen pose (the chosen one may be the epipolar pose) */
+        int k = poses_differ(ch->Rtw[0], ch->ttw[0], ch->R, ch->t) ? 0 : 1;
+        double na = sqrt(dot3(ch->ttw[k], ch->ttw[k]));
+        out->flags |= TVO_RELPOSE_FLAG_LOW_CONFIDENCE;
+        if (na > 0.0 && pose_finite(ch->Rtw[k], ch->ttw[k]) && poses_differ(ch->Rtw[k], ch->ttw[k], ch->R, ch->t)) {
+            out->flags |= TVO_RELPOSE_FLAG_AMBIGUOUS;
+            memcpy(out->R_alt, ch->Rtw[k], sizeof out->R_alt);
+            for (int j = 0; j < 3; ++j)
+                out->t_alt[j] = ch->ttw[k][j] / na;
+        }
+    }
+    if (inlier_mask != NULL)
+        memcpy(inlier_mask, w->mask_e, (size_t)w->n);
 }
 
 tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_point2d *x1,
@@ -1391,260 +1796,36 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
         cfg = *cfg_in;
     else
         tvo_relpose_config_default(&cfg);
-    tvo_status st = check_config(&cfg);
+    rp_work w;
+    tvo_status st = prepare(&cfg, x1, x2, n, scratch, scratch_size, &w);
     if (st != TVO_OK)
         return st;
-    int smin = cfg.method == TVO_RELPOSE_8PT ? 8 : 5;
-    if (n < smin)
-        return TVO_ERR_TOO_FEW;
-    if (scratch_size < tvo_relpose_scratch_size(n))
-        return TVO_ERR_NO_MEMORY;
-    for (int32_t i = 0; i < n; ++i) {
-        if (!isfinite(x1[i].x) || !isfinite(x1[i].y) || !isfinite(x2[i].x) || !isfinite(x2[i].y))
-            return TVO_ERR_NOT_FINITE;
-        if (fabs(x1[i].x) > RP_MAX_COORD || fabs(x1[i].y) > RP_MAX_COORD || fabs(x2[i].x) > RP_MAX_COORD ||
-            fabs(x2[i].y) > RP_MAX_COORD)
-            return TVO_ERR_RANGE;
-    }
-    if (collinear(x1, n) || collinear(x2, n))
-        return TVO_ERR_DEGENERATE;
-
-    tvo_arena arena;
-    tvo_arena_init(&arena, scratch, scratch_size);
-    double *buf = (double *)tvo_arena_alloc(&arena, (size_t)n * sizeof(double));
-    uint8_t *mask_e = (uint8_t *)tvo_arena_alloc(&arena, (size_t)n);
-    uint8_t *mask_r = (uint8_t *)tvo_arena_alloc(&arena, (size_t)n);
-    uint8_t *mask_h = (uint8_t *)tvo_arena_alloc(&arena, (size_t)n);
-    uint8_t *mask_c = (uint8_t *)tvo_arena_alloc(&arena, (size_t)n);
-    if (buf == NULL || mask_e == NULL || mask_r == NULL || mask_h == NULL || mask_c == NULL)
-        return TVO_ERR_NO_MEMORY;
-
-    const double thr2 = cfg.threshold * cfg.threshold;
 
     /* 1. epipolar RANSAC */
     double E[9];
     int32_t iters = 0;
-    int32_t e_inl = essential_ransac(&cfg, x1, x2, n, thr2, E, &iters, mask_c);
+    int32_t e_inl = essential_ransac(&cfg, x1, x2, n, w.thr2, E, &iters, w.mask_c);
     out->iterations = iters;
     if (e_inl > 0)
-        mark_inliers(E, x1, x2, n, thr2, mask_e);
+        mark_inliers(E, x1, x2, n, w.thr2, w.mask_e);
     else
-        memset(mask_e, 0, (size_t)n);
+        memset(w.mask_e, 0, (size_t)n);
 
-    /* 2. rotation-only model and rotation-compensated parallax */
+    /* 2. rotation-only model, rotation-compensated parallax, rotation-only result */
     double Rrot[9];
-    int32_t r_inl = e_inl >= 5 ? rotation_from_inliers(E, x1, x2, n, 4.0 * thr2, mask_e, Rrot, mask_r)
-                               : rotation_ransac(&cfg, x1, x2, n, 4.0 * thr2, Rrot, mask_r);
-    const uint8_t *pmask = e_inl >= 5 ? mask_e : mask_r;
-    int32_t m = 0;
-    for (int32_t i = 0; i < n; ++i) {
-        if (!pmask[i])
-            continue;
-        double f1[3], f2[3], u[3], c[3];
-        bearing(&x1[i], f1);
-        bearing(&x2[i], f2);
-        tvo_la_mat3_vec(Rrot, f1, u);
-        tvo_la_cross(u, f2, c);
-        buf[m++] = tvo_dm_atan2(sqrt(dot3(c, c)), dot3(u, f2));
-    }
-    double parallax = m > 0 ? tvo_la_select_kth(buf, m, m / 2) * (180.0 / RP_PI) : 0.0;
-    out->parallax_deg = parallax;
-    if (pose_finite(Rrot, out->t))
-        memcpy(out->R_rot, Rrot, sizeof Rrot);
-
-    /* Rotation-only when the rotation-compensated parallax is low AND the rotation model explains
-     * most of the epipolar inliers (at twice the threshold). The median parallax alone is not
-     * enough: a rotation absorbs the mean flow of a translation (sideways motion looks like a turn
-     * for distant points), and the median of what remains can fall below the bound while most
-     * points still contradict the rotation model (an 11 cm stereo baseline at 2-8 m: 36 of 130
-     * epipolar inliers fit the rotation; in test_sideways_baseline up to half do). Under pure
-     * rotation or a tiny baseline the rotation inliers (2 px chord) contain ~all epipolar inliers
-     * (1 px Sampson), so 80 % leaves those cases rotation-only. */
-    int rot_explains = (double)r_inl >= RP_ROT_SHARE * (double)e_inl;
-    if ((parallax < cfg.min_parallax_deg && rot_explains) || e_inl < 5) {
-        if (!pose_finite(Rrot, out->t))
-            return TVO_OK; /* identity + LOW_CONFIDENCE already set */
-        memcpy(out->R, Rrot, sizeof Rrot);
-        memcpy(out->R_alt, Rrot, sizeof Rrot);
-        out->t[0] = out->t[1] = out->t[2] = 0.0;
-        out->inliers = r_inl;
-        out->flags = TVO_RELPOSE_FLAG_ROTATION_ONLY;
-        if (parallax < cfg.min_parallax_deg)
-            out->flags |= TVO_RELPOSE_FLAG_LOW_PARALLAX;
-        if (r_inl < cfg.min_inliers || r_inl < 3 || (e_inl < 5 && parallax >= cfg.min_parallax_deg))
-            out->flags |= TVO_RELPOSE_FLAG_LOW_CONFIDENCE;
-        if (inlier_mask != NULL)
-            memcpy(inlier_mask, mask_r, (size_t)n);
+    int32_t r_inl = rotation_stage(&w, E, e_inl, Rrot, out);
+    if (rotation_only(&cfg, out->parallax_deg, r_inl, e_inl)) {
+        rotation_result(&w, Rrot, r_inl, e_inl, out, inlier_mask);
         return TVO_OK;
     }
 
-    /* 3. pose from the epipolar model, refined */
-    double R[9], t[3];
-    decompose_essential(E, x1, x2, n, mask_e, R, t);
-    int32_t inl = polish(&cfg, R, t, x1, x2, n, thr2, mask_e, buf);
-    int32_t good = good_count(R, t, x1, x2, n, thr2, mask_e);
-    int use_h = 0, ambiguous = 0;
-    double Rtw[2][9], ttw[2][3]; /* the plane's two twin poses, polished, when ambiguous */
+    /* 3. pose from the epipolar model, refined; 4. a dominant plane's pose competes with it */
+    rp_choice ch;
+    epipolar_pose(&w, E, &ch);
+    if (cfg.use_homography)
+        homography_stage(&w, &ch);
 
-    /* 4. homography model selection (dominant plane) */
-    if (cfg.use_homography) {
-        rp_rng rng;
-        rng_seed(&rng, cfg.seed ^ 0x486F6DULL);
-        double inv_s2 = 1.0 / thr2, Hb[9], best = -1.0;
-        /* A plane matters only when it holds a large share (RP_H_SHARE) of the epipolar inliers:
-         * then either it is the dominant structure, or the epipolar RANSAC itself may have picked the
-         * plane's twin (whose inliers are the plane's points). Its points are epipolar inliers too,
-         * so the 4-point samples are drawn from the epipolar inliers (rejection sampling; the
-         * iteration bound is what a 4-point sample needs at the epipolar inlier ratio, and the
-         * adaptive count uses the plane's share of the epipolar inliers), and hypotheses are
-         * dropped by the bail-out test as soon as they fall clearly below that share. */
-        int32_t cap = ransac_needed(cfg.confidence, inl, n, 4, cfg.max_iters);
-        /* all points epipolar inliers gives cap = 1, and one degenerate sample then missed the
-           plane (its twin, returned by the epipolar model, went out unflagged): a floor */
-        if (cap < RP_H_MIN_ITERS)
-            cap = RP_H_MIN_ITERS < cfg.max_iters ? RP_H_MIN_ITERS : cfg.max_iters;
-        int32_t need = cap, h_inl = 0;
-        const int32_t stride = visit_stride(n);
-        const double eps_min = RP_H_SHARE * (double)inl / (double)n;
-        for (int32_t it = 0; it < need && it < cap; ++it) {
-            int32_t idx[4];
-            double H[9], Hi[9];
-            rng_sample(&rng, n, 4, idx);
-            for (int k = 0; k < 4; ++k) /* move each index to an epipolar inlier (bounded tries) */
-                for (int tries = 0; tries < 32 && !mask_e[idx[k]]; ++tries) {
-                    int32_t v = (int32_t)(((uint64_t)rng_next(&rng) * (uint64_t)n) >> 32);
-                    int dup = 0;
-                    for (int j = 0; j < 4; ++j)
-                        dup |= j != k && idx[j] == v;
-                    if (!dup)
-                        idx[k] = v;
-                }
-            if (!homography_4pt(x1, x2, idx, H))
-                continue;
-            adjugate3(H, Hi);
-            int32_t c = 0;
-            double eps = (double)h_inl / (double)n;
-            double sc = homography_score(H, Hi, x1, x2, n, inv_s2, best, NULL, &c, stride,
-                                         eps > eps_min ? eps : eps_min);
-            if (sc > best) {
-                best = sc;
-                h_inl = c;
-                memcpy(Hb, H, sizeof H);
-                need = ransac_needed(cfg.confidence, h_inl, inl > 0 ? inl : n, 4, cap);
-            }
-        }
-        if (best > 0.0) {
-            double Ecur[9], Hi[9];
-            essential_from_pose(R, t, Ecur);
-            double se = essential_score(Ecur, x1, x2, n, inv_s2);
-            adjugate3(Hb, Hi);
-            homography_score(Hb, Hi, x1, x2, n, inv_s2, -1.0, mask_h, &h_inl, 1, 0.0);
-            double Hr[9];
-            if (homography_dlt(x1, x2, n, mask_h, Hr)) {
-                double Hri[9];
-                int32_t c2 = 0;
-                adjugate3(Hr, Hri);
-                double s2 = homography_score(Hr, Hri, x1, x2, n, inv_s2, -1.0, NULL, &c2, 1, 0.0);
-                if (s2 >= best) {
-                    best = s2;
-                    memcpy(Hb, Hr, sizeof Hr);
-                    homography_score(Hb, Hri, x1, x2, n, inv_s2, -1.0, mask_h, &h_inl, 1, 0.0);
-                }
-            }
-            /* The homography's decompositions are always tried (a plane's twin solution can win
-             * the epipolar RANSAC); they replace the epipolar pose when they put more points in
-             * front of both cameras, or as many when the homography explains the data (ratio). */
-            double ratio = best / (best + se);
-            int h_wins = ratio > RP_H_RATIO;
-            if (h_inl >= 8 && (double)h_inl >= RP_H_SHARE * (double)inl) {
-                double Rs[16][9], ts[16][3];
-                int nc = decompose_homography(Hb, Rs, ts);
-                int32_t gk[16];
-                for (int k = 0; k < 16; ++k)
-                    gk[k] = -1;
-                int kb = -1, kb2 = -1;
-                for (int k = 0; k < nc; ++k) {
-                    /* decompose_homography emits each (R, t) followed by (R, -t): one pass for both */
-                    if (k % 2 == 0 && k + 1 < nc && same_rotation(Rs[k], Rs[k + 1]) &&
-                        ts[k + 1][0] == -ts[k][0] && ts[k + 1][1] == -ts[k][1] && ts[k + 1][2] == -ts[k][2])
-                        gk[k] = good_count2(Rs[k], ts[k], x1, x2, n, 4.0 * thr2, mask_h, &gk[k + 1]);
-                    else if (gk[k] < 0)
-                        gk[k] = good_count(Rs[k], ts[k], x1, x2, n, 4.0 * thr2, mask_h);
-                    if (kb < 0 || gk[k] > gk[kb])
-                        kb = k;
-                }
-                /* the best clearly different candidate: the plane's "twin" solution */
-                for (int k = 0; kb >= 0 && k < nc; ++k)
-                    if (poses_differ(Rs[k], ts[k], Rs[kb], ts[kb]) && (kb2 < 0 || gk[k] > gk[kb2]))
-                        kb2 = k;
-                if (kb >= 0 && gk[kb] >= 5) {
-                    double Rh[9], th[3], R2[9], t2[3];
-                    memcpy(Rh, Rs[kb], sizeof Rh);
-                    memcpy(th, ts[kb], sizeof th);
-                    int32_t inl_h = polish(&cfg, Rh, th, x1, x2, n, thr2, mask_c, buf);
-                    int32_t good_h = good_count(Rh, th, x1, x2, n, thr2, mask_c);
-                    if (kb2 >= 0 && gk[kb2] >= 5) {
-                        memcpy(R2, Rs[kb2], sizeof R2);
-                        memcpy(t2, ts[kb2], sizeof t2);
-                        int32_t inl_2 = polish(&cfg, R2, t2, x1, x2, n, thr2, mask_h, buf);
-                        int32_t good_2 = good_count(R2, t2, x1, x2, n, thr2, mask_h);
-                        if (poses_differ(R2, t2, Rh, th) && (double)good_2 >= 0.85 * good_h &&
-                            (double)good_h >= 0.85 * good_2 && (double)good_2 >= 0.85 * good) {
-                            ambiguous = 1;
-                            memcpy(Rtw[0], Rh, sizeof Rh);
-                            memcpy(ttw[0], th, sizeof th);
-                            memcpy(Rtw[1], R2, sizeof R2);
-                            memcpy(ttw[1], t2, sizeof t2);
-                        }
-                        if (good_2 > good_h && pose_finite(R2, t2)) {
-                            memcpy(Rh, R2, sizeof R2);
-                            memcpy(th, t2, sizeof t2);
-                            memcpy(mask_c, mask_h, (size_t)n);
-                            inl_h = inl_2;
-                            good_h = good_2;
-                        }
-                    }
-                    if ((good_h > good || (h_wins && good_h >= good)) && pose_finite(Rh, th)) {
-                        memcpy(R, Rh, sizeof Rh);
-                        memcpy(t, th, sizeof th);
-                        memcpy(mask_e, mask_c, (size_t)n);
-                        inl = inl_h;
-                        good = good_h;
-                        use_h = 1;
-                    }
-                }
-            }
-        }
-    }
-
-    if (!pose_finite(R, t))
-        return TVO_OK; /* identity + LOW_CONFIDENCE */
-    double nt = sqrt(dot3(t, t));
-    if (!(nt > 0.0))
-        return TVO_OK;
-    memcpy(out->R, R, sizeof R);
-    out->t[0] = t[0] / nt;
-    out->t[1] = t[1] / nt;
-    out->t[2] = t[2] / nt;
-    out->inliers = inl;
-    out->flags = use_h ? TVO_RELPOSE_FLAG_HOMOGRAPHY : 0;
-    memcpy(out->R_alt, out->R, sizeof out->R);
-    memcpy(out->t_alt, out->t, sizeof out->t);
-    if (inl < cfg.min_inliers || inl < 5 || good < inl / 2) {
-        out->flags |= TVO_RELPOSE_FLAG_LOW_CONFIDENCE;
-    } else if (ambiguous) {
-        /* the twin that is not the chosen pose (the chosen one may be the epipolar pose) */
-        int k = poses_differ(Rtw[0], ttw[0], R, t) ? 0 : 1;
-        double na = sqrt(dot3(ttw[k], ttw[k]));
-        out->flags |= TVO_RELPOSE_FLAG_LOW_CONFIDENCE;
-        if (na > 0.0 && pose_finite(Rtw[k], ttw[k]) && poses_differ(Rtw[k], ttw[k], R, t)) {
-            out->flags |= TVO_RELPOSE_FLAG_AMBIGUOUS;
-            memcpy(out->R_alt, Rtw[k], sizeof out->R_alt);
-            for (int j = 0; j < 3; ++j)
-                out->t_alt[j] = ttw[k][j] / na;
-        }
-    }
-    if (inlier_mask != NULL)
-        memcpy(inlier_mask, mask_e, (size_t)n);
+    /* 5. the result */
+    pose_result(&w, &ch, out, inlier_mask);
     return TVO_OK;
 }

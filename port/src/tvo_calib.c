@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo port: calibration import (see tinyvo/port/calib.h). */
 #include "tinyvo/port/calib.h"
 
@@ -16,10 +17,9 @@
 static void tvo_calib_err(char *err, size_t err_size, const char *fmt, ...)
 {
     va_list ap;
-    if (err == NULL || err_size == 0)
-        return;
     va_start(ap, fmt);
-    vsnprintf(err, err_size, fmt, ap);
+    if (err != NULL && err_size > 0)
+        vsnprintf(err, err_size, fmt, ap);
     va_end(ap);
 }
 

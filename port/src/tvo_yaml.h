@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo port, internal: the YAML subset shared by the sensor.yaml and calibration readers
  * (tvo_euroc.c, tvo_calib.c). Not installed; not part of the public API.
  *

@@ -9,8 +9,9 @@
 #      a library path such as /usr/lib/.../libm.so);
 #   4. test/external through find_package(tinyvo COMPONENTS port) (tinyvo::tinyvo, tinyvo::port) and through
 #      `pkg-config tinyvo-port`, each run (test/external/main.c: version, PNG round trip, 8 VO frames, model);
-#   5. shared only: SONAME libtinyvo.so.<SOVERSION> (and _port, _v4l2), the programs need those names;
-#      static only: the programs need no libtinyvo*.so.
+#   5. the installed programs (tvo_replay, tvo_track_pair, tvo_live) run from the moved tree (shared: through
+#      their $ORIGIN-relative RPATH); shared only: SONAME libtinyvo.so.<SOVERSION> (and _port, _v4l2), the
+#      programs need those names; static only: the programs need no libtinyvo*.so.
 # Usage: test/external/run.sh [static|shared ...]   (default: static shared)
 # Environment: TVO_EXT_PREFIX (default /tmp/tvo-prefix; the moved tree is $TVO_EXT_PREFIX-moved), JOBS.
 set -euo pipefail
@@ -33,7 +34,7 @@ for kind in "${KINDS[@]}"; do
   MOVED="$PREFIX-moved"
   echo "== [external] $kind: build, install to $PREFIX, move to $MOVED"
   cmake -S . -B "$B" -G Ninja -DCMAKE_BUILD_TYPE=Release -DBUILD_SHARED_LIBS=$shared -DTVO_WERROR=ON \
-        -DTVO_BUILD_TESTS=OFF -DTVO_BUILD_BENCH=OFF -DTVO_BUILD_EXAMPLES=OFF >/dev/null
+        -DTVO_BUILD_TESTS=OFF -DTVO_BUILD_BENCH=OFF -DTVO_BUILD_EXAMPLES=ON >/dev/null
   cmake --build "$B" -j"$JOBS" >/dev/null
   rm -rf "$PREFIX" "$MOVED"
   cmake --install "$B" --prefix "$PREFIX" >/dev/null
@@ -88,7 +89,11 @@ for kind in "${KINDS[@]}"; do
      || fail "pkg-config build: tvo_external failed"
   unset PKG_CONFIG_PATH
 
-  # 5. libraries
+  # 5. libraries; the installed programs run from the moved tree without LD_LIBRARY_PATH
+  for exe in tvo_replay tvo_track_pair tvo_live; do
+    [ -x "$P/bin/$exe" ] || fail "$P/bin/$exe not installed"
+    "$P/bin/$exe" --version >/dev/null || fail "installed $exe does not run from the moved tree"
+  done
   if [ "$shared" = ON ]; then
     for lib in tinyvo tinyvo_port tinyvo_v4l2; do
       so=$(ls "$LIBDIR/lib$lib.so."*.*.* 2>/dev/null | head -n 1)
@@ -98,7 +103,7 @@ for kind in "${KINDS[@]}"; do
       [ -L "$LIBDIR/$soname" ] || fail "$LIBDIR/$soname (the SONAME link) is missing"
       echo "[external] $(basename "$so"): SONAME $soname"
     done
-    for exe in "$E/tvo_external" "$B/ext-pkgconfig"; do
+    for exe in "$E/tvo_external" "$B/ext-pkgconfig" "$P/bin/tvo_replay"; do
       readelf -d "$exe" | grep -q "NEEDED.*\[libtinyvo\.so\.[0-9]" || fail "$exe does not need libtinyvo.so.N"
       readelf -d "$exe" | grep -q "NEEDED.*\[libtinyvo_port\.so\.[0-9]" || fail "$exe does not need libtinyvo_port.so.N"
     done

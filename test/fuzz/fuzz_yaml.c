@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fuzz harness: the sensor.yaml reader (tvo_euroc_parse_sensor_yaml, tinyvo/port/euroc.h), the
  * calibration importer on the same text (tvo_calib_parse, tinyvo/port/calib.h: format detection and
  * each forced format, camchain cameras cam0 and cam1), and the camera models they produce.

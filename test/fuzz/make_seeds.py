@@ -6,7 +6,7 @@ beside them as crash-* / leak-* / timeout-* files, never regenerated). Determini
 Sources: exporter output (tinyvo_tools.nnfmt / nngolden: micro models written here, plus a copy of
 test/data/nn/tiny.tvonn), files in the EuRoC/ASL formats written here by tinyvo_tools.trajio (the writer
 the synth tool uses) with made-up values, small PNGs of a procedural texture, and hand-made edge cases.
-Nothing comes from ../shared/data: its files must not be copied into the repository, not even in part.
+Nothing comes from the data folder (TVO_DATA_DIR): its files must not be copied into the repository, not even in part.
 """
 from __future__ import annotations
 
@@ -136,6 +136,34 @@ def seeds_yaml(out: pathlib.Path) -> None:
         b"T_BS:\n  data: [0,-1,0,0, 1,0,0,0, 0,0,1,0, 0,0,0,1]\n")
 
 
+# ---- dataset (TUM RGB-D, KITTI odometry) ----------------------------------------------------------
+def seeds_dataset(out: pathlib.Path) -> None:
+    """Frame list, then "\\n---\\n", then a pose file (fuzz_dataset.c); made-up values in the formats of
+    TUM's rgb.txt / groundtruth.txt and KITTI's times.txt / calib.txt / poses."""
+    from tinyvo_tools import trajio
+
+    rng = np.random.default_rng(5)
+    poses = np.stack([trajio.pose_from_pq(rng.normal(size=3), q / np.linalg.norm(q)) for q in rng.normal(size=(3, 4))])
+    t = np.array([1305031102_175304000 + k * 33_333_000 for k in range(3)], dtype=np.int64)
+    out.mkdir(parents=True, exist_ok=True)
+    tmp = out / "tmp-gt.txt"
+    trajio.write_tum(str(tmp), trajio.Trajectory(t, poses))
+    tum_gt = b"# ground truth trajectory\n# timestamp tx ty tz qx qy qz qw\n" + tmp.read_bytes()
+    trajio.write_kitti_poses(str(tmp), trajio.Trajectory(t, poses))
+    kitti_poses = tmp.read_bytes()
+    tmp.unlink()
+    rgb = (b"# color images\n# timestamp filename\n1305031102.175304 rgb/a.png\n"
+           b"1305031102.208637 rgb/a.png\n1305031102.241970 rgb/missing.png\n")
+    put(out, "tum.txt", rgb + b"\n---\n" + tum_gt)
+    put(out, "tum_bad_rows.txt", rgb + b"1305031102.3 ../x.png\nx rgb/a.png\n1.5\n" + b"\n---\n" + tum_gt)
+    times = b"0.000000e+00\n1.036000e-01\n2.073000e-01\n"
+    put(out, "kitti.txt", times + b"\n---\n" + kitti_poses)
+    put(out, "kitti_bad_time.txt", b"0.0\nnan\n0.2\n" + b"\n---\n" + kitti_poses)
+    put(out, "kitti_calib.txt", b"P0: 7.070912e+02 0 6.018873e+02 0 0 7.070912e+02 1.831104e+02 0 0 0 1 0\n"
+        b"P1: 7.070912e+02 0 6.018873e+02 -3.798145e+02 0 7.070912e+02 1.831104e+02 0 0 0 1 0\n")
+    put(out, "kitti_not_rigid.txt", times + b"\n---\n" + b"1 0 0 0 0 2 0 0 0 0 1 0\n" * 3)
+
+
 # ---- png ------------------------------------------------------------------------------------------
 def png_chunk(kind: bytes, body: bytes) -> bytes:
     return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
@@ -225,6 +253,7 @@ def main() -> None:
     seeds_nn(corpus / "nn")
     seeds_csv(corpus / "csv")
     seeds_yaml(corpus / "yaml")
+    seeds_dataset(corpus / "dataset")
     seeds_png(corpus / "png")
     seeds_vo(corpus / "vo")
     total = sum(p.stat().st_size for p in corpus.rglob("*") if p.is_file())

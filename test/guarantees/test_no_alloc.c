@@ -6,8 +6,8 @@
  * stdio, ...) and every shared library, so an allocation hidden in a libc call is counted too.
  *
  * Counted: tvo_vo_process over the scripted synthetic sequence of tvo_guarantee.h (all VO states, re-
- * detection, hostile frames), over the shared EuRoC keyframes and head frames when ../shared/data is
- * present (decoded BEFORE counting starts), tvo_vo_reset, tvo_vo_refine, tvo_nn_run of the paper model
+ * detection, hostile frames), over the EuRoC keyframes and head frames of the data folder (TVO_DATA_DIR)
+ * when present (decoded BEFORE counting starts), tvo_vo_reset, tvo_vo_refine, tvo_nn_run of the paper model
  * and tvo_traj_step. Everything that may allocate (VO/model memory, PNG decoding, cmocka) happens
  * outside the counting windows. Not built with TVO_SANITIZE (ASan owns the allocator there). */
 #include "tvo_guarantee.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Calibration import (tinyvo/port/calib.h) on real files of each kind (test/data/calib, SOURCES.md
  * says where each comes from), the EuRoC sample's own sensor.yaml (skipped without TVO_DATA_DIR),
  * edits of the real files that turn them into models the core cannot represent, and truncated /

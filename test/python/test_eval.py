@@ -1,5 +1,7 @@
+# SPDX-License-Identifier: Apache-2.0
 """Tests of tinyvo_tools.eval: standard metrics (evo), per-DoF RPE, the paper protocol, T_BS, CLI."""
 import json
+import pathlib
 
 import numpy as np
 import pytest
@@ -184,6 +186,170 @@ def test_cli_writes_json_and_plots(tmp_path, capsys):
     # no overlap in time: a clear error and exit code 2
     far = Trajectory(g.t_ns + 10**13, est.poses)
     trajio.write_tum(str(tmp_path / "far.txt"), far)
-    assert tev.main(["--est", str(tmp_path / "far.txt"), "--gt", str(synth_dir), "--quiet"]) == 2
+    assert tev.main(["--est", str(tmp_path / "far.txt"), "--gt", str(synth_dir), "--quiet"]) == 1
     assert "association failed" in capsys.readouterr().err
-    assert tev.main(["--est", str(tmp_path / "missing.txt"), "--gt", str(synth_dir), "--quiet"]) == 2
+    assert tev.main(["--est", str(tmp_path / "missing.txt"), "--gt", str(synth_dir), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "missing.txt" in err and "Traceback" not in err
+
+
+# ---- ground-truth formats: EuRoC csv, TUM, KITTI, and the files that could be more than one --------
+
+TUM_HEADER = "# ground truth trajectory\n# file: 'rgbd_dataset_freiburg1_xyz.bag'\n# timestamp tx ty tz qx qy qz qw\n"
+
+
+def write_tum_gt(path, traj, header=TUM_HEADER):
+    """A TUM RGB-D groundtruth.txt: TUM's three header lines, then t tx ty tz qx qy qz qw (seconds)."""
+    trajio.write_tum(str(path), traj)
+    body = path.read_text()
+    path.write_text(header + body)
+
+
+def test_tum_groundtruth_is_read_with_w_last(tmp_path):
+    """The reported failure: a TUM ground truth (quaternion x y z w) was read w first, giving a rotation
+    ATE of ~178 deg. Read by its header now, with T_BS identity (TUM poses are camera poses)."""
+    g = cam(gt_body(150))
+    write_tum_gt(tmp_path / "groundtruth.txt", g)
+    trajio.write_tum(str(tmp_path / "est.txt"), g)
+    fmt, why = trajio.detect_pose_format(str(tmp_path / "groundtruth.txt"))
+    assert fmt == "tum" and "header" in why
+    ev = tev.evaluate_files(str(tmp_path / "est.txt"), str(tmp_path / "groundtruth.txt"), metric_scale=True)
+    s = ev.result["standard"]
+    assert s["ate_rotation_deg"]["rmse"] < 1e-6 and s["ate_m"]["rmse"] < 1e-9
+    assert s["rpe_frame"]["rotation_deg"]["rmse"] < 1e-6
+    assert ev.result["inputs"]["ground_truth_format"] == "tum"
+    assert ev.result["inputs"]["T_BS"].startswith("identity")
+    # the same file read w first (what happened before): a wrong rotation, so the check above can fail
+    wrong = trajio.read_euroc_groundtruth(str(tmp_path / "groundtruth.txt"))
+    bad = tev.evaluate(g, wrong, T_BS=np.eye(4), metric_scale=True).result["standard"]
+    assert bad["ate_rotation_deg"]["rmse"] > 10.0
+    # a TUM folder: its groundtruth.txt
+    assert tev.load_groundtruth(str(tmp_path))[2] == "tum"
+    # without the header: 8 space-separated columns with seconds is TUM too
+    trajio.write_tum(str(tmp_path / "plain.txt"), g)
+    assert trajio.detect_pose_format(str(tmp_path / "plain.txt"))[0] == "tum"
+
+
+def test_euroc_csv_detected(tmp_path):
+    g = gt_body(80)
+    trajio.write_euroc_groundtruth(str(tmp_path / "data.csv"), g)
+    fmt, why = trajio.detect_pose_format(str(tmp_path / "data.csv"))
+    assert fmt == "euroc" and "w first" in why
+    # header-less EuRoC csv: commas and ns
+    (tmp_path / "nohead.csv").write_text("".join(ln for ln in (tmp_path / "data.csv").read_text().splitlines(True)
+                                                 if not ln.startswith("#")))
+    assert trajio.detect_pose_format(str(tmp_path / "nohead.csv"))[0] == "euroc"
+    tr, fmt, _ = trajio.read_trajectory(str(tmp_path / "nohead.csv"))
+    assert fmt == "euroc" and np.allclose(tr.poses, g.poses, atol=1e-8)
+
+
+def test_ambiguous_files_are_refused(tmp_path):
+    g = gt_body(60)
+    p, q = trajio.pq_from_pose(g.poses)
+    # 8 space-separated columns, ns timestamps, no header: EuRoC order or TUM with ns?
+    amb = tmp_path / "amb.txt"
+    amb.write_text("".join(f"{t} {' '.join(map(str, pi))} {' '.join(map(str, qi))}\n" for t, pi, qi in zip(g.t_ns, p, q)))
+    with pytest.raises(ValueError, match="cannot tell the quaternion order.*timestamps in ns.*--gt-format"):
+        trajio.detect_pose_format(str(amb))
+    est = tmp_path / "est.txt"
+    trajio.write_tum(str(est), cam(g))
+    with pytest.raises(ValueError, match="cannot tell"):
+        tev.evaluate_files(str(est), str(amb))
+    # named: read as EuRoC (w first) it is the trajectory
+    ev = tev.evaluate_files(str(est), str(amb), gt_format="euroc", metric_scale=True)
+    assert ev.result["standard"]["ate_m"]["rmse"] < 1e-6
+    assert ev.result["inputs"]["ground_truth_format_why"] == "named (euroc)"
+    # comma-separated with seconds: neither EuRoC (ns) nor TUM (spaces)
+    sec = tmp_path / "sec.csv"
+    sec.write_text("".join(f"{t / 1e9:.6f},{','.join(map(str, pi))},{','.join(map(str, qi))}\n"
+                           for t, pi, qi in zip(g.t_ns, p, q)))
+    with pytest.raises(ValueError, match="8 comma-separated columns.*timestamps in s"):
+        trajio.detect_pose_format(str(sec))
+    # not a quaternion in columns 5-8
+    nq = tmp_path / "nq.txt"
+    nq.write_text("1.0 0 0 0 0.5 0.5 0.5 0.1\n2.0 0 0 0 0.5 0.5 0.5 0.1\n")
+    with pytest.raises(ValueError, match="not a unit quaternion"):
+        trajio.detect_pose_format(str(nq))
+    seven = tmp_path / "seven.txt"
+    seven.write_text("1 2 3 4 5 6 7\n")
+    with pytest.raises(ValueError, match="7 space-separated columns"):
+        trajio.detect_pose_format(str(seven))
+    mixed = tmp_path / "mixed.txt"
+    mixed.write_text("1 0 0 0 0 0 0 1\n2 0 0 0 0 0 0 1 5\n")
+    with pytest.raises(ValueError, match="rows of"):
+        trajio.detect_pose_format(str(mixed))
+
+
+def test_kitti_poses_and_times(tmp_path):
+    g = cam(gt_body(70))
+    t0 = g.t_ns[0]
+    seq = tmp_path / "sequences" / "04"
+    seq.mkdir(parents=True)
+    (tmp_path / "poses").mkdir()
+    trajio.write_kitti_poses(str(tmp_path / "poses" / "04.txt"), g)
+    (seq / "times.txt").write_text("".join(f"{(t - t0) * 1e-9:.6e}\n" for t in g.t_ns))
+    fmt, why = trajio.detect_pose_format(str(tmp_path / "poses" / "04.txt"))
+    assert fmt == "kitti" and "rotation" in why
+    # times found in KITTI's layout (../sequences/04/times.txt)
+    tr, fmt, _ = trajio.read_trajectory(str(tmp_path / "poses" / "04.txt"))
+    assert fmt == "kitti" and len(tr) == 70
+    assert np.allclose(tr.poses, g.poses, atol=1e-8)
+    assert abs(int(tr.t_ns[5]) - int(g.t_ns[5] - t0)) <= 500  # %.6e keeps us over these few seconds
+    # the sequence folder itself
+    tr2, fmt2, _ = trajio.read_trajectory(str(seq))
+    assert fmt2 == "kitti" and np.allclose(tr2.poses, tr.poses)
+    # an estimate on KITTI's clock against it: ~0
+    est = Trajectory(tr.t_ns, tr.poses)
+    trajio.write_tum(str(tmp_path / "est.txt"), est)
+    ev = tev.evaluate_files(str(tmp_path / "est.txt"), str(tmp_path / "poses" / "04.txt"), metric_scale=True)
+    assert ev.result["standard"]["ate_m"]["rmse"] < 1e-6 and ev.result["inputs"]["T_BS"].startswith("identity")
+    # no times anywhere: refused, naming the option
+    (tmp_path / "lone").mkdir()
+    trajio.write_kitti_poses(str(tmp_path / "lone" / "p.txt"), g)
+    with pytest.raises(ValueError, match="no timestamps.*--gt-times"):
+        trajio.read_trajectory(str(tmp_path / "lone" / "p.txt"))
+    tr3, _, _ = trajio.read_trajectory(str(tmp_path / "lone" / "p.txt"), times=str(seq / "times.txt"))
+    assert len(tr3) == 70
+    # a times file of another length
+    (tmp_path / "short.txt").write_text("0.0\n0.1\n")
+    with pytest.raises(ValueError, match="70 poses but 2 times"):
+        trajio.read_kitti_poses(str(tmp_path / "lone" / "p.txt"), str(tmp_path / "short.txt"))
+
+
+def test_kitti_real_poses(tmp_path):
+    """KITTI 06's real camera poses (the shared sample stores them as a EuRoC csv) written as a KITTI
+    poses file with its times: read back identically."""
+    import os
+    d = os.environ.get("TVO_DATA_DIR") or str(pathlib.Path(__file__).resolve().parents[2] / ".." / "shared" / "data")
+    gt_csv = pathlib.Path(d) / "kitti" / "kitti06_51" / "mav0" / "state_groundtruth_estimate0" / "data.csv"
+    if not gt_csv.exists():
+        pytest.skip(f"{gt_csv} not found (shared KITTI sample)")
+    src = trajio.read_euroc_groundtruth(str(gt_csv))
+    trajio.write_kitti_poses(str(tmp_path / "06.txt"), src)
+    (tmp_path / "times.txt").write_text("".join(f"{(t - src.t_ns[0]) * 1e-9:.9e}\n" for t in src.t_ns))
+    tr, fmt, _ = trajio.read_trajectory(str(tmp_path / "06.txt"))
+    assert fmt == "kitti" and len(tr) == len(src) == 51
+    assert np.allclose(tr.poses, src.poses, atol=1e-8)
+    assert np.all(np.abs((tr.t_ns + src.t_ns[0]) - src.t_ns) <= 1)
+
+
+def test_cli_gt_format(tmp_path, capsys):
+    g = cam(gt_body(90))
+    p, q = trajio.pq_from_pose(g.poses)
+    amb = tmp_path / "amb.txt"
+    amb.write_text("".join(f"{t} {' '.join(map(str, pi))} {' '.join(map(str, qi))}\n" for t, pi, qi in zip(g.t_ns, p, q)))
+    trajio.write_tum(str(tmp_path / "est.txt"), g)
+    assert tev.main(["--est", str(tmp_path / "est.txt"), "--gt", str(amb), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("tinyvo-eval: error:") and "cannot tell" in err and err.count("\n") == 1
+    assert tev.main(["--est", str(tmp_path / "est.txt"), "--gt", str(amb), "--gt-format", "euroc", "--tbs",
+                     "/nonexistent.yaml"]) == 1
+    capsys.readouterr()
+    rc = tev.main(["--est", str(tmp_path / "est.txt"), "--gt", str(amb), "--gt-format", "euroc",
+                   "--metric-scale", "--frame", "body"])
+    out = capsys.readouterr().out
+    assert rc == 0 and out.startswith("ground truth: euroc (named (euroc))")
+    with pytest.raises(SystemExit) as e:
+        tev.main(["--est", "x", "--gt", "y", "--gt-format", "evo"])
+    assert e.value.code == 2
+    assert "--gt-format" in capsys.readouterr().err

@@ -1,6 +1,10 @@
+# SPDX-License-Identifier: Apache-2.0
 """End to end: render a short synthetic sequence, replay it through tvo_replay with ground-truth step
 lengths, evaluate with evo, and check the accuracy against a threshold the current code meets with
-margin (measured: ATE 0.039 m Sim(3), 114/120 frames ok, 3 lost on this seed; threshold 0.15 m)."""
+margin (measured: ATE 0.039 m Sim(3), 114/120 frames ok, 3 lost on this seed; threshold 0.15 m).
+Also: the command-line convention of the C programs (--help, --version, unknown option, missing file;
+exit codes 0/1/2, one line), a malformed data.csv row (reported, counted, skipped), and the KITTI and
+TUM RGB-D layouts of tvo_replay built from the shared KITTI 06 sample (skipped without it)."""
 import json
 import math
 import os
@@ -110,8 +114,259 @@ def test_bench_alternating_runs(replayed, tmp_path):
     ratios = sorted(r["ratio"] for r in res["runs"])
     assert all(r > 0 and math.isfinite(r) for r in ratios)
     assert res["ratio_median_of_runs"] == pytest.approx(0.5 * (ratios[0] + ratios[1]))
-    for name in ("tinyvo", "opencv"):
+    for name in ("tinyvo", "opencv", "opencv_plain", "opencv_fb"):
         assert math.isfinite(res[name]["eval"]["standard"]["ate_m"]["rmse"])
+    plain = sorted(r["ratio_plain"] for r in res["runs"])  # the plain pipeline (no fb check) ran too
+    assert res["opencv_plain"]["ratio_median_of_runs"] == pytest.approx(0.5 * (plain[0] + plain[1]))
     bad = subprocess.run([sys.executable, "-m", "tinyvo_tools.bench", "--euroc", str(seq), "--repeat", "0",
                           "--replay", str(REPLAY), "--out", str(out)], capture_output=True, text=True)
     assert bad.returncode == 2 and "--repeat must be >= 1" in bad.stderr
+
+
+# ---- the C programs' command-line convention ------------------------------------------------------
+
+BUILD = REPLAY.parents[2]
+PROGRAMS = {
+    "tvo_replay": BUILD / "examples" / "replay" / "tvo_replay",
+    "tvo_track_pair": BUILD / "examples" / "track_pair" / "tvo_track_pair",
+    "tvo_live": BUILD / "examples" / "live" / "tvo_live",
+}
+# a run of each that fails on a missing file (tvo_live: before it opens any camera)
+MISSING_FILE = {
+    "tvo_replay": ["--euroc", "/nonexistent/seq", "--out", "/tmp/tvo_x.txt"],
+    "tvo_track_pair": ["/nonexistent_a.png", "/nonexistent_b.png"],
+    "tvo_live": ["--calib", "/nonexistent/calib.yaml", "--device", "/nonexistent/video9"],
+}
+
+
+def project_version():
+    import re
+    m = re.search(r"project\(tinyvo VERSION ([0-9.]+)", (ROOT / "CMakeLists.txt").read_text())
+    return m.group(1)
+
+
+def program(name):
+    exe = PROGRAMS[name]
+    if not exe.exists():
+        if name == "tvo_live":
+            pytest.skip(f"{exe} not built (needs the V4L2 port, TVO_WITH_V4L2)")
+        pytest.fail(f"{exe} not built (set TVO_BUILD_DIR)")
+    return str(exe)
+
+
+def run(args):
+    return subprocess.run(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, timeout=60)
+
+
+@pytest.mark.parametrize("name", sorted(PROGRAMS))
+def test_cli_convention(name):
+    exe = program(name)
+    r = run([exe, "--help"])
+    assert r.returncode == 0 and r.stdout.startswith(f"usage: {name}") and r.stderr == ""
+    assert "--version" in r.stdout and "--quiet" in r.stdout
+    r = run([exe, "--version"])
+    assert r.returncode == 0 and r.stdout == f"{name} {project_version()}\n"
+    r = run([exe, "--bogus"])
+    assert r.returncode == 2 and r.stdout == ""
+    assert r.stderr.count("\n") == 1 and f"{name}: unknown option '--bogus'" in r.stderr
+    r = run([exe] + MISSING_FILE[name])
+    assert r.returncode == 1, r.stderr
+    assert r.stderr.count("\n") == 1 and "/nonexistent" in r.stderr and r.stderr.startswith(f"{name}: ")
+
+
+def test_cli_usage_errors_name_the_option():
+    replay, pair = program("tvo_replay"), program("tvo_track_pair")
+    for args, part in ((["--euroc"], "--euroc needs a value"), (["--out", "x"], "one of --euroc, --tum, --kitti"),
+                       (["--euroc", "a", "--tum", "b", "--out", "x"], "--tum: only one of"),
+                       (["--euroc", "a", "--out", "x", "--poses", "p"], "--poses goes with --kitti"),
+                       (["--euroc", "a", "--out", "x", "--calib-cam", "cam1"], "--calib-cam goes with --calib"),
+                       (["--euroc", "a"], "--out is required")):
+        r = run([replay] + args)
+        assert r.returncode == 2 and part in r.stderr and r.stderr.count("\n") == 1, (args, r.stderr)
+    for args, part in ((["--max", "0", "a.png", "b.png"], "--max"), (["a.png"], "two images"),
+                       (["a.png", "b.png", "c.png"], "too many arguments")):
+        r = run([pair] + args)
+        assert r.returncode == 2 and part in r.stderr and r.stderr.count("\n") == 1, (args, r.stderr)
+
+
+def test_live_checks_before_the_camera(tmp_path):
+    live = program("tvo_live")
+    missing_dev = ["--device", "/nonexistent/video9"]
+    r = run([live, "--calib"])  # a value option at the end: needs a value (not "unknown")
+    assert r.returncode == 2 and "--calib needs a value" in r.stderr
+    r = run([live, "--frames", "-3"])
+    assert r.returncode == 2 and "--frames" in r.stderr
+    # a calibration the core cannot represent, a missing model, an unwritable --out: refused before
+    # the (missing) device is looked at
+    omni = ROOT / "test" / "data" / "calib" / "kalibr_wiki_camchain_radtan_omni.yaml"
+    r = run([live, "--calib", str(omni), "--calib-cam", "cam1"] + missing_dev)
+    assert r.returncode == 1 and "camera_model 'omni'" in r.stderr and "no camera" not in r.stderr
+    r = run([live, "--model", str(tmp_path / "none.tvonn")] + missing_dev)
+    assert r.returncode == 1 and "none.tvonn" in r.stderr
+    r = run([live, "--out", str(tmp_path / "no" / "dir" / "t.txt")] + missing_dev)
+    assert r.returncode == 1 and "cannot write" in r.stderr
+    # a good calibration: now the device is the error
+    ros = ROOT / "test" / "data" / "calib" / "ros_plumb_bob_euroc_cam0.yaml"
+    r = run([live, "--calib", str(ros), "--out", str(tmp_path / "t.txt")] + missing_dev)
+    assert r.returncode == 1 and "no camera at /nonexistent/video9" in r.stderr
+
+
+# ---- malformed frame-list rows ---------------------------------------------------------------------
+
+def copy_seq_with_csv(src_seq, dst, edit):
+    """A copy of an ASL sequence (symlinked files) whose cam0/data.csv is edit(lines)."""
+    mav = dst / "mav0"
+    (mav / "cam0").mkdir(parents=True)
+    for p in (src_seq / "mav0").iterdir():
+        if p.name != "cam0":
+            os.symlink(p, mav / p.name)
+    for p in (src_seq / "mav0" / "cam0").iterdir():
+        if p.name != "data.csv":
+            os.symlink(p, mav / "cam0" / p.name)
+    lines = (src_seq / "mav0" / "cam0" / "data.csv").read_text().splitlines(True)
+    (mav / "cam0" / "data.csv").write_text("".join(edit(lines)))
+
+
+def test_replay_malformed_row_is_skipped(replayed, tmp_path):
+    traj, _, _ = replayed
+    seq = traj.parent / "seq"
+
+    def corrupt(lines):  # line 11 of the file: a row with a broken timestamp
+        lines[10] = "14x" + lines[10][3:]
+        return lines
+
+    bad = tmp_path / "bad"
+    copy_seq_with_csv(seq, bad, corrupt)
+    out, stats = tmp_path / "t.txt", tmp_path / "s.json"
+    r = run([str(REPLAY), "--euroc", str(bad), "--out", str(out), "--stats", str(stats), "--scale", "gt", "--quiet"])
+    assert r.returncode == 0, r.stderr
+    assert "cam0/data.csv:11: bad timestamp '14x" in r.stderr and "row skipped" in r.stderr
+    st = json.loads(stats.read_text())
+    assert st["skipped"]["bad_row"] == 1 and st["frames"]["skipped"] == 1
+    assert st["frames"]["processed"] == 119 and st["dataset"] == "euroc"
+    assert len(out.read_text().splitlines()) == 119
+    # --strict: the row is an error
+    r = run([str(REPLAY), "--euroc", str(bad), "--out", str(out), "--strict"])
+    assert r.returncode == 1 and "data.csv: line 11: bad timestamp" in r.stderr and r.stderr.count("\n") == 1
+
+
+# ---- KITTI and TUM layouts built from the shared KITTI 06 sample ---------------------------------
+
+def kitti06():
+    d = pathlib.Path(os.environ.get("TVO_DATA_DIR") or ROOT.parent / "shared" / "data") / "kitti" / "kitti06_51" / "mav0"
+    if not (d / "cam0" / "data.csv").exists():
+        pytest.skip(f"{d} not found (the shared KITTI 06 sample)")
+    from tinyvo_tools import trajio
+    rows = [ln.split(",") for ln in (d / "cam0" / "data.csv").read_text().splitlines() if ln and ln[0] != "#"]
+    gt = trajio.read_euroc_groundtruth(str(d / "state_groundtruth_estimate0" / "data.csv"))
+    return d, [(int(t), f.strip()) for t, f in rows], gt
+
+
+def seconds(t_ns, t0):
+    """The frame time as KITTI/TUM text: seconds since t0 with 6 decimals (TUM's precision)."""
+    return f"{(t_ns - t0) // 1000 / 1e6:.6f}"
+
+
+@pytest.fixture(scope="module")
+def kitti_layout(tmp_path_factory):
+    """KITTI odometry layout: sequences/06/{image_0, times.txt, calib.txt}, poses/06.txt."""
+    from tinyvo_tools import trajio
+    d, frames, gt = kitti06()
+    root = tmp_path_factory.mktemp("kitti")
+    seq = root / "sequences" / "06"
+    (seq / "image_0").mkdir(parents=True)
+    (root / "poses").mkdir()
+    t0 = frames[0][0]
+    for i, (t, f) in enumerate(frames):
+        os.symlink(d / "cam0" / "data" / f, seq / "image_0" / f"{i:06d}.png")
+    (seq / "times.txt").write_text("".join(seconds(t, t0) + "\n" for t, _ in frames))
+    cam = trajio.read_sensor_yaml(str(d / "cam0" / "sensor.yaml"))
+    fx, fy, cx, cy = cam.intrinsics
+    (seq / "calib.txt").write_text(f"P0: {fx:.12e} 0 {cx:.12e} 0 0 {fy:.12e} {cy:.12e} 0 0 0 1 0\n"
+                                   f"P1: {fx:.12e} 0 {cx:.12e} -3.798145000000e+02 0 {fy:.12e} {cy:.12e} 0 0 0 1 0\n")
+    idx = trajio.associate(gt.t_ns, [t for t, _ in frames], 1000)[0]
+    trajio.write_kitti_poses(str(root / "poses" / "06.txt"), trajio.Trajectory(gt.t_ns[idx], gt.poses[idx]))
+    return root, seq, d, frames, gt
+
+
+def test_replay_kitti(kitti_layout, tmp_path):
+    root, seq, _, frames, _ = kitti_layout
+    out, stats = tmp_path / "k.txt", tmp_path / "k.json"
+    r = run([str(REPLAY), "--kitti", str(seq), "--out", str(out), "--stats", str(stats), "--scale", "gt", "--quiet"])
+    assert r.returncode == 0, r.stderr
+    st = json.loads(stats.read_text())
+    assert st["dataset"] == "kitti" and st["width"] == 1226 and st["height"] == 370
+    assert st["frames"]["processed"] == 51 and st["frames"]["skipped"] == 0
+    ev = tmp_path / "ev.json"
+    e = subprocess.run([sys.executable, "-m", "tinyvo_tools.eval", "--est", str(out), "--gt", str(seq), "--out", str(ev),
+                        "--metric-scale"], capture_output=True, text=True)
+    assert e.returncode == 0, e.stderr
+    res = json.loads(ev.read_text())
+    assert res["inputs"]["ground_truth_format"] == "kitti" and res["poses"]["associated"] == 51
+    ate = res["standard"]["ate_m"]["rmse"]
+    print(f"KITTI 06 layout, 51 frames, --scale gt: ATE SE(3) {ate:.3f} m over {res['gt_path_length_m']:.1f} m")
+    assert math.isfinite(ate) and ate < 0.1 * res["gt_path_length_m"]
+    # poses named explicitly, and missing ones
+    r = run([str(REPLAY), "--kitti", str(seq), "--poses", str(root / "poses" / "06.txt"), "--out", str(out), "--quiet"])
+    assert r.returncode == 0, r.stderr
+    r = run([str(REPLAY), "--kitti", str(seq), "--poses", str(root / "poses" / "07.txt"), "--out", str(out)])
+    assert r.returncode == 1 and "poses/07.txt not found" in r.stderr and r.stderr.count("\n") == 1
+    # a folder without its times
+    bare = tmp_path / "bare"
+    bare.mkdir()
+    os.symlink(seq / "image_0", bare / "image_0")
+    os.symlink(seq / "calib.txt", bare / "calib.txt")
+    r = run([str(REPLAY), "--kitti", str(bare), "--out", str(out)])
+    assert r.returncode == 1 and "times.txt not found" in r.stderr
+    os.symlink(seq / "times.txt", bare / "times.txt")
+    r = run([str(REPLAY), "--kitti", str(bare), "--out", str(out), "--scale", "gt"])
+    assert r.returncode == 1 and "needs ground truth" in r.stderr and "no poses file" in r.stderr
+
+
+def test_replay_tum_layout(kitti_layout, tmp_path):
+    """TUM RGB-D layout (rgb.txt and groundtruth.txt with TUM's header lines, colour PNGs in rgb/) of the
+    same real frames and poses: the replay reads the colour frames as grey, so with the same camera
+    (the sample's own sensor.yaml through --calib) it gives the KITTI layout's trajectory exactly."""
+    cv2 = pytest.importorskip("cv2")
+    from tinyvo_tools import trajio
+    root, seq, d, frames, gt = kitti_layout
+    tum = tmp_path / "tum_seq"
+    (tum / "rgb").mkdir(parents=True)
+    t0 = frames[0][0]
+    rgb = ["# color images\n", "# file: 'kitti06_51 as TUM RGB-D'\n", "# timestamp filename\n"]
+    for t, f in frames:
+        g = cv2.imread(str(d / "cam0" / "data" / f), cv2.IMREAD_GRAYSCALE)
+        name = f"rgb/{seconds(t, t0)}.png"
+        assert cv2.imwrite(str(tum / name), cv2.merge([g, g, g]))  # 3 channels: the loader converts
+        rgb.append(f"{seconds(t, t0)} {name}\n")
+    (tum / "rgb.txt").write_text("".join(rgb))
+    kt = trajio.read_kitti_poses(str(root / "poses" / "06.txt"), str(seq / "times.txt"))
+    p, q = trajio.pq_from_pose(kt.poses)
+    (tum / "groundtruth.txt").write_text(
+        "# ground truth trajectory\n# file: 'kitti06_51 as TUM RGB-D'\n# timestamp tx ty tz qx qy qz qw\n" +
+        "".join(f"{seconds(int(t) + t0, t0)} {pi[0]:.9f} {pi[1]:.9f} {pi[2]:.9f} {qi[1]:.12f} {qi[2]:.12f} "
+                f"{qi[3]:.12f} {qi[0]:.12f}\n" for t, pi, qi in zip(kt.t_ns, p, q)))
+    calib = d / "cam0" / "sensor.yaml"
+    a, b = tmp_path / "tum.txt", tmp_path / "kitti.txt"
+    r = run([str(REPLAY), "--tum", str(tum), "--calib", str(calib), "--out", str(a), "--scale", "gt", "--quiet"])
+    assert r.returncode == 0, r.stderr
+    r = run([str(REPLAY), "--kitti", str(seq), "--out", str(b), "--scale", "gt", "--quiet"])
+    assert r.returncode == 0, r.stderr
+    ta, tb = a.read_text().splitlines(), b.read_text().splitlines()
+    assert len(ta) == len(tb) == 51
+    for la, lb in zip(ta, tb):
+        va, vb = [float(x) for x in la.split()], [float(x) for x in lb.split()]
+        assert max(abs(x - y) for x, y in zip(va, vb)) < 1e-6, (la, lb)
+    # eval reads the TUM folder's groundtruth.txt as TUM (w last)
+    e = subprocess.run([sys.executable, "-m", "tinyvo_tools.eval", "--est", str(a), "--gt", str(tum), "--metric-scale"],
+                       capture_output=True, text=True)
+    assert e.returncode == 0 and e.stdout.startswith("ground truth: tum"), e.stderr
+    # no camera: TUM folders carry none and this name names no freiburg camera
+    r = run([str(REPLAY), "--tum", str(tum), "--out", str(a)])
+    assert r.returncode == 1 and "carries no calibration" in r.stderr
+    # a calibration of another size: refused before the first frame
+    wrong = ROOT / "test" / "data" / "calib" / "opencv_charuco.yml"
+    r = run([str(REPLAY), "--tum", str(tum), "--calib", str(wrong), "--out", str(a)])
+    assert r.returncode == 1 and "640x480 but the frames are 1226x370" in r.stderr
+    r = run([str(REPLAY), "--kitti", str(seq), "--calib", str(wrong), "--out", str(b)])
+    assert r.returncode == 1 and "is for 640x480 but the frames" in r.stderr

@@ -220,6 +220,48 @@ static void test_fb_check_with_guess(void **state)
     }
 }
 
+/* The short way back (fb_levels): a large motion through 3 levels is checked on level 0 only, from the
+ * start point; good tracks pass, the occluded one fails as with the full check, and the forward
+ * positions are those of the full check (the way back only decides the status). */
+static void test_fb_levels(void **state)
+{
+    tvo_point2f p0[64], full[64], shrt[64], q0[2] = { { 60.3f, 45.6f }, { 100.3f, 75.6f } }, q1[2];
+    uint8_t st_full[64], st_short[64], st[2];
+    int n;
+    (void)state;
+    build(3, 7.4, -5.2);
+    grid_points(p0, &n);
+    F.cfg.fb_check = 1;
+    F.cfg.fb_max_error = 0.5f;
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, full, st_full, NULL, n, F.scratch, sizeof(F.scratch)),
+                     TVO_OK);
+    F.cfg.fb_levels = 1;
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, shrt, st_short, NULL, n, F.scratch, sizeof(F.scratch)),
+                     TVO_OK);
+    for (int i = 0; i < n; ++i) {
+        assert_int_equal(st_full[i], TVO_LK_TRACKED);
+        assert_int_equal(st_short[i], TVO_LK_TRACKED);
+        assert_memory_equal(&full[i], &shrt[i], sizeof(tvo_point2f));
+    }
+    {
+        tvo_image ib = tvo_image_make(W, H, W, F.b);
+        for (int y = 30; y < 61; ++y)
+            for (int x = 54; x < 85; ++x)
+                F.b[y * W + x] = (uint8_t)(128 + 90 * sin(0.9 * x) * cos(0.7 * y + 0.4 * x));
+        assert_int_equal(tvo_pyramid_build(&F.pb, &ib), TVO_OK);
+    }
+    for (int lv = 0; lv <= 2; ++lv) {
+        F.cfg.fb_levels = lv;
+        assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, q0, q1, st, NULL, 2, F.scratch, sizeof(F.scratch)),
+                         TVO_OK);
+        assert_int_equal(st[0], TVO_LK_LOST);
+        assert_int_equal(st[1], TVO_LK_TRACKED);
+    }
+    F.cfg.fb_check = 0; /* the forward track alone accepts the occluded point */
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, q0, q1, st, NULL, 2, F.scratch, sizeof(F.scratch)), TVO_OK);
+    assert_int_equal(st[0], TVO_LK_TRACKED);
+}
+
 static void test_points_outside_and_at_borders(void **state)
 {
     tvo_point2f p0[12] = { { -100.0f, 10.0f }, { 1e30f, 5.0f }, { 5.0f, -1e30f }, { W + 50.0f, H / 2.0f },
@@ -357,6 +399,13 @@ static void test_bad_inputs(void **state)
     assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, st, err, 3, s, ss), TVO_ERR_ARG);
     c.fb_max_error = INFINITY;
     assert_int_equal(tvo_lk_config_check(&c), TVO_ERR_NOT_FINITE);
+    c = F.cfg;
+    c.fb_levels = -1;
+    assert_int_equal(tvo_lk_config_check(&c), TVO_ERR_ARG);
+    c.fb_levels = TVO_MAX_PYR_LEVELS + 1;
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, st, err, 3, s, ss), TVO_ERR_ARG);
+    c.fb_levels = TVO_MAX_PYR_LEVELS;
+    assert_int_equal(tvo_lk_config_check(&c), TVO_OK);
     assert_int_equal(tvo_lk_config_check(NULL), TVO_ERR_NULL);
     assert_int_equal(tvo_lk_scratch_size(NULL), 0);
     /* not enough levels: pyramids have 3, max_level 3 needs 4 */
@@ -615,6 +664,7 @@ int main(void)
         cmocka_unit_test(test_initial_flow),
         cmocka_unit_test(test_fb_check_and_periodic_guess),
         cmocka_unit_test(test_fb_check_with_guess),
+        cmocka_unit_test(test_fb_levels),
         cmocka_unit_test(test_points_outside_and_at_borders),
         cmocka_unit_test(test_random_points_everywhere),
         cmocka_unit_test(test_small_image_skips_small_levels),

@@ -1,7 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* PnP: P3P solver, RANSAC, refinement, bad input, determinism and stack use.
- * Synthetic scenes: f = 450 px, 752x480 image, points 2..12 m in front of a camera at a random pose
- * (any rotation, centre within +-5 m of the world origin), seeded generator. */
+ * Synthetic scenes from tvo_pnp_scene.h (f = 450 px, points 2..12 m deep, random camera pose). */
 #define _POSIX_C_SOURCE 200809L /* pthread_attr_setstack */
 #include "tvo_test.h"
 #include <math.h>
@@ -11,70 +10,7 @@
 #include "tinyvo/pnp.h"
 #include "tinyvo/se3.h"
 
-#define F_PX 450.0
-#define HALF_W (376.0 / F_PX)
-#define HALF_H (240.0 / F_PX)
-#define MAXN 400
-#define DEG (180.0 / 3.14159265358979323846)
-
-static double urand(uint64_t *s)
-{
-    return (double)(tvo_test_rand(s) >> 11) * (1.0 / 9007199254740992.0);
-}
-
-static double nrand(uint64_t *s)
-{
-    double u1 = urand(s), u2 = urand(s);
-    if (u1 < 1e-300)
-        u1 = 1e-300;
-    return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
-}
-
-typedef struct pscene {
-    tvo_pose T; /* ground truth T_c_w */
-    double X[MAXN][3];
-    tvo_point2d x[MAXN];
-    uint8_t outlier[MAXN];
-    int n, n_out;
-} pscene;
-
-static void random_pose(uint64_t *s, double max_angle, double box, tvo_pose *T)
-{
-    double ax[3] = {nrand(s), nrand(s), nrand(s)};
-    double na = sqrt(ax[0] * ax[0] + ax[1] * ax[1] + ax[2] * ax[2]), ang = max_angle * urand(s), w[3], C[3];
-    for (int k = 0; k < 3; ++k) {
-        w[k] = ax[k] / na * ang;
-        C[k] = box * (2.0 * urand(s) - 1.0);
-    }
-    tvo_rotvec_to_rot(w, T->R);
-    for (int r = 0; r < 3; ++r)
-        T->t[r] = -(T->R[3 * r] * C[0] + T->R[3 * r + 1] * C[1] + T->R[3 * r + 2] * C[2]);
-}
-
-/* n points in front of the true camera; noise in pixels; outliers: random image points */
-static void make_pscene(pscene *sc, uint64_t seed, int n, double noise_px, double outlier_ratio)
-{
-    uint64_t s = seed * 0x9E3779B97F4A7C15ULL + 777;
-    random_pose(&s, 3.14159, 5.0, &sc->T);
-    tvo_pose Twc = tvo_pose_inverse(&sc->T);
-    sc->n = n;
-    sc->n_out = 0;
-    for (int i = 0; i < n; ++i) {
-        double u = (2.0 * urand(&s) - 1.0) * HALF_W, v = (2.0 * urand(&s) - 1.0) * HALF_H;
-        double z = 2.0 + 10.0 * urand(&s);
-        double Xc[3] = {u * z, v * z, z};
-        tvo_pose_transform_point(&Twc, Xc, sc->X[i]);
-        sc->outlier[i] = (uint8_t)(urand(&s) < outlier_ratio);
-        if (sc->outlier[i]) {
-            sc->x[i].x = (2.0 * urand(&s) - 1.0) * HALF_W;
-            sc->x[i].y = (2.0 * urand(&s) - 1.0) * HALF_H;
-            sc->n_out++;
-        } else {
-            sc->x[i].x = u + noise_px / F_PX * nrand(&s);
-            sc->x[i].y = v + noise_px / F_PX * nrand(&s);
-        }
-    }
-}
+#include "tvo_pnp_scene.h"
 
 static double rot_err(const tvo_pose *A, const tvo_pose *B)
 {
@@ -369,6 +305,78 @@ static void test_ransac_bounded(void **state)
         assert_true(ni >= cfg.min_inliers);
 }
 
+/* all points on one plane (a floor or a wall: common in VO), and a far scene (20..80 m, a road) */
+static void test_ransac_planar_and_far(void **state)
+{
+    (void)state;
+    for (uint64_t seed = 1400; seed < 1410; ++seed) {
+        pscene sc;
+        make_pscene(&sc, seed, 150, 0.5, 0.2);
+        tvo_pose Twc = tvo_pose_inverse(&sc.T);
+        uint64_t s = seed;
+        for (int i = 0; i < sc.n; ++i) {
+            /* re-place point i on the plane z_c = 4 + 0.5 x_c (tilted), or 20..80 m deep for odd seeds */
+            double u = (2.0 * urand(&s) - 1.0) * HALF_W, v = (2.0 * urand(&s) - 1.0) * HALF_H;
+            double z = (seed & 1) ? 20.0 + 60.0 * urand(&s) : 4.0 / (1.0 - 0.5 * u);
+            double Xc[3] = {u * z, v * z, z};
+            tvo_pose_transform_point(&Twc, Xc, sc.X[i]);
+            if (!sc.outlier[i]) {
+                sc.x[i].x = u + 0.5 / F_PX * nrand(&s);
+                sc.x[i].y = v + 0.5 / F_PX * nrand(&s);
+            }
+        }
+        tvo_pose T = tvo_pose_identity();
+        int32_t ni = 0;
+        assert_int_equal(tvo_pnp_ransac(NULL, (const double (*)[3])sc.X, sc.x, sc.n, &T, NULL, &ni, g_scratch,
+                                        sizeof g_scratch), TVO_OK);
+        assert_true(ni >= (sc.n - sc.n_out) * 9 / 10);
+        /* (seen: planar up to 0.06 deg / 4 mm, far up to 0.03 deg / 2.3 cm) */
+        assert_true(rot_err(&T, &sc.T) * DEG < 0.15);
+        assert_true(c_err(&T, &sc.T) < ((seed & 1) ? 0.15 : 0.02));
+    }
+}
+
+/* use_guess: a prediction near the truth is the first hypothesis, so one sample is enough even at 40 %
+ * outliers; a non-finite guess is ignored (the same result as without one); the result is refined */
+static void test_ransac_guess(void **state)
+{
+    (void)state;
+    tvo_pnp_config cfg;
+    tvo_pnp_config_default(&cfg);
+    cfg.max_iterations = 1;
+    cfg.use_guess = 1;
+    int plain_ok = 0;
+    for (uint64_t seed = 1300; seed < 1320; ++seed) {
+        pscene sc;
+        make_pscene(&sc, seed, 200, 0.5, 0.4);
+        tvo_pose T = perturb(&sc.T, seed, 0.002, 0.01); /* ~0.1 deg, 1 cm: a good prediction */
+        int32_t ni = 0;
+        assert_int_equal(tvo_pnp_ransac(&cfg, (const double (*)[3])sc.X, sc.x, sc.n, &T, NULL, &ni, g_scratch,
+                                        sizeof g_scratch), TVO_OK);
+        assert_true(rot_err(&T, &sc.T) * DEG < 0.2 && c_err(&T, &sc.T) < 0.08);
+        assert_true(ni >= (sc.n - sc.n_out) * 95 / 100);
+        /* the same single sample without the guess */
+        tvo_pnp_config c0 = cfg;
+        c0.use_guess = 0;
+        tvo_pose P = tvo_pose_identity();
+        int32_t np = 0;
+        plain_ok += tvo_pnp_ransac(&c0, (const double (*)[3])sc.X, sc.x, sc.n, &P, NULL, &np, g_scratch,
+                                   sizeof g_scratch) == TVO_OK && rot_err(&P, &sc.T) * DEG < 0.2;
+        /* a NaN guess: as without a guess */
+        tvo_pose G = tvo_pose_identity(), Q = T;
+        Q.R[0] = NAN;
+        int32_t nq = 0;
+        tvo_status sq = tvo_pnp_ransac(&cfg, (const double (*)[3])sc.X, sc.x, sc.n, &Q, NULL, &nq, g_scratch,
+                                       sizeof g_scratch);
+        tvo_status sg = tvo_pnp_ransac(&c0, (const double (*)[3])sc.X, sc.x, sc.n, &G, NULL, &np, g_scratch,
+                                       sizeof g_scratch);
+        assert_int_equal(sq, sg);
+        assert_true(pose_equal(&Q, &G) && nq == (sq == TVO_OK ? np : 0));
+    }
+    print_message("ransac with max_iterations = 1: 20 of 20 with a guess, %d of 20 without\n", plain_ok);
+    assert_true(plain_ok < 20); /* at 40 % outliers one random sample is often not enough */
+}
+
 /* ---- bad input ---------------------------------------------------------------------------------- */
 
 static void expect_unchanged(const tvo_pose *before, const tvo_pose *after, int32_t ni)
@@ -397,7 +405,7 @@ static void test_ransac_bad_input(void **state)
     expect_unchanged(&T0, &T, ni);
 
     /* config values: zero, NaN, out of range */
-    for (int c = 0; c < 12; ++c) {
+    for (int c = 0; c < 14; ++c) {
         tvo_pnp_config_default(&cfg);
         switch (c) {
         case 0: cfg.threshold = 0.0; break;
@@ -411,6 +419,8 @@ static void test_ransac_bad_input(void **state)
         case 8: cfg.huber = NAN; break;
         case 9: cfg.min_inliers = 2; break;
         case 10: cfg.threshold = INFINITY; break;
+        case 11: cfg.use_guess = 2; break;
+        case 12: cfg.use_guess = -1; break;
         default: cfg.huber = -1.0; break;
         }
         ni = 5;
@@ -767,6 +777,8 @@ int main(void)
         cmocka_unit_test(test_ransac_nan_points_skipped),
         cmocka_unit_test(test_ransac_deterministic),
         cmocka_unit_test(test_ransac_bounded),
+        cmocka_unit_test(test_ransac_guess),
+        cmocka_unit_test(test_ransac_planar_and_far),
         cmocka_unit_test(test_ransac_bad_input),
         cmocka_unit_test(test_ransac_degenerate_scenes),
         cmocka_unit_test(test_refine_converges),

@@ -1,2 +1,3 @@
-"""tinyvo's Python tools. Each module is a command: python -m tinyvo_tools.<module> --help."""
+"""tinyvo's Python tools. Each program is a console script (tinyvo-synth, tinyvo-eval, ...; tools/pyproject.toml),
+also runnable as python -m tinyvo_tools.<module>; every one has --help."""
 __version__ = "0.1.0"

@@ -1,18 +1,22 @@
-"""Side-by-side benchmark: tinyvo's replay against an OpenCV pipeline doing the same job.
+"""Side-by-side benchmark: tinyvo's replay against OpenCV pipelines doing the same job.
 
     python -m tinyvo_tools.bench --euroc DIR [--frames N] [--replay build/release/examples/replay/tvo_replay]
-                                 [--out OUTDIR] [--repeat N]
+                                 [--out OUTDIR] [--repeat N] [--pipeline plain|fb|both]
 
-Both run on the same frames, single thread, in one session, with ground-truth step lengths:
+All run on the same frames, single thread, in one session, with ground-truth step lengths:
   tinyvo : tvo_replay --scale gt (its per-stage timings come from --stats: median and p90 per frame)
-  OpenCV : goodFeaturesToTrack (300 corners, re-detect below 200, min distance 10 px), calcOpticalFlowPyrLK
-           (21x21, maxLevel 3, 30 iterations / 0.01) with a forward-backward check (1 px),
-           undistortPoints, findEssentialMat (RANSAC, p = 0.999, 1 px) and recoverPose.
-Per-frame times exclude PNG decoding for both. Accuracy of both trajectories comes from
-tinyvo_tools.eval (evo). With --repeat N the two alternate N times: the table shows the last run, the
-ratio line the median of the N per-run ratios (the figure to quote on a shared machine). OpenCV is a test/benchmark dependency only; the library never uses it.
+  OpenCV, two pipelines (undistortPoints, findEssentialMat (RANSAC, p = 0.999, 1 px) and recoverPose in both):
+    fb    : goodFeaturesToTrack (300 corners, re-detect below 200, min distance 10 px), calcOpticalFlowPyrLK
+            (21x21, maxLevel 3, 30 iterations / 0.01) forward and backward, a track kept when it comes back
+            within 1 px (the check tinyvo does);
+    plain : goodFeaturesToTrack (500 corners, re-detect below 200, min distance 10 px), one calcOpticalFlowPyrLK
+            pass (21x21, maxLevel 3, 30 iterations / 0.01), no forward-backward check.
+  --pipeline both (default) runs the two.
+Per-frame times exclude PNG decoding for all. Accuracy of the trajectories comes from tinyvo_tools.eval (evo).
+With --repeat N tinyvo and the pipelines alternate N times: the table shows the last run, the ratio lines
+the median of the N per-run ratios (the figure to quote on a shared machine). OpenCV is a test/benchmark
+dependency only; the library never uses it.
 """
-import argparse
 import json
 import os
 import subprocess
@@ -21,7 +25,7 @@ import time
 
 import numpy as np
 
-from . import trajio
+from . import cli, trajio
 
 
 def _rot_to_quat_xyzw(R):
@@ -29,8 +33,12 @@ def _rot_to_quat_xyzw(R):
     return Rotation.from_matrix(R).as_quat()
 
 
-def opencv_pipeline(seq_dir, cam="cam0", max_frames=None, max_corners=300, min_tracks=200):
-    """Run the OpenCV pipeline over a EuRoC folder. Returns (t_ns, poses T_W_C (N,4,4), per-frame ms)."""
+PIPELINES = {"fb": dict(max_corners=300, fb_check=True), "plain": dict(max_corners=500, fb_check=False)}
+
+
+def opencv_pipeline(seq_dir, cam="cam0", max_frames=None, max_corners=300, min_tracks=200, fb_check=True):
+    """Run an OpenCV pipeline over a EuRoC folder (see the module doc: fb_check True is "fb", False with 500
+    corners "plain"). Returns (t_ns, poses T_W_C (N,4,4), per-frame ms)."""
     import cv2
     cv2.setNumThreads(1)
     camdir = os.path.join(seq_dir, "mav0", cam)
@@ -56,8 +64,11 @@ def opencv_pipeline(seq_dir, cam="cam0", max_frames=None, max_corners=300, min_t
         t0 = time.perf_counter()
         if prev is not None and pts is not None and len(pts) >= 8:
             nxt, st, _ = cv2.calcOpticalFlowPyrLK(prev, img, pts, None, **lk)
-            back, st2, _ = cv2.calcOpticalFlowPyrLK(img, prev, nxt, None, **lk)
-            good = (st[:, 0] == 1) & (st2[:, 0] == 1) & (np.linalg.norm(back - pts, axis=2)[:, 0] < 1.0)
+            if fb_check:
+                back, st2, _ = cv2.calcOpticalFlowPyrLK(img, prev, nxt, None, **lk)
+                good = (st[:, 0] == 1) & (st2[:, 0] == 1) & (np.linalg.norm(back - pts, axis=2)[:, 0] < 1.0)
+            else:
+                good = st[:, 0] == 1
             p0, p1 = pts[good], nxt[good]
             pts = p1
             if len(p0) >= 8:
@@ -99,47 +110,75 @@ def _eval(traj_path, seq_dir, out_json):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = cli.parser("tinyvo-bench", __doc__)
     ap.add_argument("--euroc", required=True, help="EuRoC/ASL folder (holding mav0/)")
     ap.add_argument("--frames", type=int, default=0, help="frames to use (0 = all)")
-    ap.add_argument("--replay", default=os.path.join("build", "release", "examples", "replay", "tvo_replay"))
-    ap.add_argument("--out", default=os.path.join("out", "bench"))
+    ap.add_argument("--replay", default=os.path.join("build", "release", "examples", "replay", "tvo_replay"),
+                    help="tvo_replay binary (default build/release/examples/replay/tvo_replay)")
+    ap.add_argument("--out", default=os.path.join("out", "bench"),
+                    help="output folder: trajectories, evaluations, bench.json (default out/bench)")
     ap.add_argument("--repeat", type=int, default=1,
-                    help="alternate the two pipelines this many times and report the median of the per-run "
+                    help="alternate the pipelines this many times and report the median of the per-run "
                          "ratios (a load change on a shared machine then biases one run, not the figure)")
+    ap.add_argument("--pipeline", choices=("plain", "fb", "both"), default="both",
+                    help="OpenCV pipeline(s) to compare with (module doc)")
     a = ap.parse_args(argv)
     if a.repeat < 1:
         ap.error("--repeat must be >= 1")
+    if a.frames < 0:
+        ap.error("--frames must be >= 0")
+    return cli.run(ap.prog, lambda: _main(a))
+
+
+def _main(a) -> int:
+    if not os.path.isdir(os.path.join(a.euroc, "mav0")):
+        raise cli.Failure(f"{a.euroc}: no mav0/ folder (not an EuRoC/ASL sequence)")
+    if not (os.path.isfile(a.replay) and os.access(a.replay, os.X_OK)):
+        raise cli.Failure(f"{a.replay}: no tvo_replay program there (build it or pass --replay)")
     os.makedirs(a.out, exist_ok=True)
+    say = (lambda *x: None) if a.quiet else print
+    names = ["plain", "fb"] if a.pipeline == "both" else [a.pipeline]
 
     tvo_traj = os.path.join(a.out, "tinyvo.txt")
     stats_path = os.path.join(a.out, "tinyvo_stats.json")
     cmd = [a.replay, "--euroc", a.euroc, "--out", tvo_traj, "--scale", "gt", "--stats", stats_path, "--quiet"]
     if a.frames:
         cmd += ["--max-frames", str(a.frames)]
-    runs = []  # (tinyvo median ms, opencv median ms) per alternation
+    runs = []  # per alternation: tinyvo median ms and each pipeline's median ms
+    last = {}
     for _ in range(a.repeat):
         subprocess.run(cmd, check=True)
         with open(stats_path) as fh:
             stats = json.load(fh)
-        t_ns, poses, ms = opencv_pipeline(a.euroc, max_frames=a.frames or None)
-        runs.append((stats["timing_us"]["total"]["median"] / 1e3, float(np.median(ms[1:]))))
-    cv_traj = os.path.join(a.out, "opencv.txt")
-    trajio.write_tum(cv_traj, trajio.Trajectory(t_ns, poses, "camera"))
+        run = {"tinyvo": stats["timing_us"]["total"]["median"] / 1e3}
+        for name in names:
+            t_ns, poses, ms = opencv_pipeline(a.euroc, max_frames=a.frames or None, **PIPELINES[name])
+            run[name] = float(np.median(ms[1:]))
+            last[name] = (t_ns, poses, ms)
+        for name in names:  # "ratio": against the fb pipeline (the key of the single-pipeline output)
+            run["ratio" if name == "fb" else f"ratio_{name}"] = run["tinyvo"] / run[name]
+        runs.append(run)
 
     ev_t = _eval(tvo_traj, a.euroc, os.path.join(a.out, "tinyvo_eval.json"))
-    ev_c = _eval(cv_traj, a.euroc, os.path.join(a.out, "opencv_eval.json"))
     tv_med = stats["timing_us"]["total"]["median"] / 1e3
     tv_p90 = stats["timing_us"]["total"]["p90"] / 1e3
-    cv_med, cv_p90 = float(np.median(ms[1:])), float(np.percentile(ms[1:], 90))
-    result = {
-        "frames": int(len(t_ns)),
-        "tinyvo": {"median_ms": tv_med, "p90_ms": tv_p90, "eval": ev_t, "stats": stats},
-        "opencv": {"median_ms": cv_med, "p90_ms": cv_p90, "eval": ev_c},
-        "ratio_median_tinyvo_over_opencv": tv_med / cv_med if cv_med > 0 else None,
-        "runs": [{"tinyvo_median_ms": t, "opencv_median_ms": c, "ratio": t / c} for t, c in runs],
-        "ratio_median_of_runs": float(np.median([t / c for t, c in runs])),
-    }
+    result = {"frames": int(len(last[names[0]][0])),
+              "tinyvo": {"median_ms": tv_med, "p90_ms": tv_p90, "eval": ev_t, "stats": stats},
+              "runs": runs}
+    for name in names:
+        t_ns, poses, ms = last[name]
+        path = os.path.join(a.out, f"opencv_{name}.txt")
+        trajio.write_tum(path, trajio.Trajectory(t_ns, poses, "camera"))
+        ev = _eval(path, a.euroc, os.path.join(a.out, f"opencv_{name}_eval.json"))
+        med, p90 = float(np.median(ms[1:])), float(np.percentile(ms[1:], 90))
+        result[f"opencv_{name}"] = {"median_ms": med, "p90_ms": p90, "eval": ev,
+                                    "ratio_median_tinyvo_over_opencv": tv_med / med if med > 0 else None,
+                                    "ratios_of_runs": [r["tinyvo"] / r[name] for r in runs],
+                                    "ratio_median_of_runs": float(np.median([r["tinyvo"] / r[name] for r in runs]))}
+    if "fb" in names:  # the keys of the earlier single-pipeline output
+        result["opencv"] = result["opencv_fb"]
+        result["ratio_median_tinyvo_over_opencv"] = result["opencv_fb"]["ratio_median_tinyvo_over_opencv"]
+        result["ratio_median_of_runs"] = result["opencv_fb"]["ratio_median_of_runs"]
     with open(os.path.join(a.out, "bench.json"), "w") as fh:
         json.dump(result, fh, indent=2)
 
@@ -148,17 +187,22 @@ def main(argv=None):
         ate = std["ate_m"]["rmse"]
         rpe_t = std["rpe_frame"]["translation_m"]["rmse"]
         rpe_r = std["rpe_frame"]["rotation_deg"]["rmse"]
-        return (f"{name:8s} {med:9.3f} {p90:9.3f}   ATE({std['alignment']['type']}) {ate:.4f} m   "
+        return (f"{name:13s} {med:9.3f} {p90:9.3f}   ATE({std['alignment']['type']}) {ate:.4f} m   "
                 f"RPE/frame {rpe_t:.5f} m {rpe_r:.3f} deg")
-    print(f"frames: {len(t_ns)} ({a.euroc})")
-    print(f"{'':8s} {'median ms':>9s} {'p90 ms':>9s}")
-    print(row("tinyvo", tv_med, tv_p90, ev_t))
-    print(row("opencv", cv_med, cv_p90, ev_c))
-    print(f"ratio tinyvo/opencv (median per frame): {result['ratio_median_tinyvo_over_opencv']:.3f}")
-    if len(runs) > 1:
-        rs = " ".join(f"{t / c:.3f}" for t, c in runs)
-        print(f"{len(runs)} alternating runs, ratios: {rs}; median of runs {result['ratio_median_of_runs']:.3f}")
-    print(f"written: {os.path.join(a.out, 'bench.json')}")
+    say(f"frames: {result['frames']} ({a.euroc})")
+    say(f"{'':13s} {'median ms':>9s} {'p90 ms':>9s}")
+    say(row("tinyvo", tv_med, tv_p90, ev_t))
+    for name in names:
+        r = result[f"opencv_{name}"]
+        say(row(f"opencv {name}", r["median_ms"], r["p90_ms"], r["eval"]))
+    for name in names:
+        r = result[f"opencv_{name}"]
+        line = f"ratio tinyvo/opencv {name} (median per frame): {r['ratio_median_tinyvo_over_opencv']:.3f}"
+        if len(runs) > 1:
+            rs = " ".join(f"{x:.3f}" for x in r["ratios_of_runs"])
+            line += f"; {len(runs)} alternating runs: {rs}; median of runs {r['ratio_median_of_runs']:.3f}"
+        say(line)
+    say(f"written: {os.path.join(a.out, 'bench.json')}")
     return 0
 
 

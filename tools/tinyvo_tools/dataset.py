@@ -1,7 +1,7 @@
 """Dataset builder for the per-DoF networks: VO features paired with ground-truth relative poses.
 
-    python -m tinyvo_tools.dataset SEQDIR [SEQDIR ...] -o DATASET.npz [--replay build/x/examples/replay/tvo_replay]
-                                   [--work DIR] [--states 0,2] [--name SEQDIR=NAME ...]
+    tinyvo-dataset SEQDIR [SEQDIR ...] -o DATASET.npz [--replay build/x/examples/replay/tvo_replay]
+                   [--work DIR] [--states 0,2] [--name SEQDIR=NAME ...] [--quiet]
 
 For every EuRoC/ASL sequence folder (holding mav0/, real or rendered by tinyvo_tools.synth) it runs
 ``tvo_replay --features`` (or reads an existing features csv given as ``SEQDIR:FEATURES.csv``) and pairs
@@ -22,7 +22,6 @@ training sequences only and stores them in the model.
 """
 from __future__ import annotations
 
-import argparse
 import os
 import subprocess
 import sys
@@ -31,7 +30,7 @@ from typing import Dict, Optional, Sequence
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from . import nnfmt, trajio
+from . import cli, nnfmt, trajio
 
 CSV_COLUMNS = ["t_ns", "state", "relpose_flags", "pose_status", "inliers"] + nnfmt.FEATURES
 # tvo_replay since the relative scale (vo.h, tvo_vo_result.rel_scale) appends these two; older files lack them
@@ -221,33 +220,49 @@ def save(path: str, data: Dict[str, np.ndarray]) -> None:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m tinyvo_tools.dataset", description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("sequences", nargs="+", help="EuRoC folders (or FOLDER:FEATURES.csv)")
+    ap = cli.parser("tinyvo-dataset", __doc__)
+    ap.add_argument("sequences", nargs="+", help="EuRoC folders (or FOLDER:FEATURES.csv to reuse a features csv)")
     ap.add_argument("-o", "--out", required=True, help="dataset .npz to write")
     ap.add_argument("--replay", default=None, help="tvo_replay binary (default: $TVO_REPLAY or build/*/...)")
     ap.add_argument("--work", default=None, help="folder for the features csv files (default: next to --out)")
+    ap.add_argument("--name", action="append", default=[], metavar="SEQDIR=NAME",
+                    help="name the rows of sequence SEQDIR NAME instead of the folder's name (repeatable)")
     ap.add_argument("--speedup", default="", help="speed augmentation factors, e.g. 2,3: each sequence "
                     "named in --speedup-seqs is also added as NAME_x<k> (every k-th frame, k times faster)")
     ap.add_argument("--speedup-seqs", default="", help="comma-separated sequence names to augment (training only!)")
     ap.add_argument("--states", default="0,2", help="VO states kept (0 ok, 1 init, 2 rotation-only, 3 lost)")
     a = ap.parse_args(argv)
+    names = {}
+    for spec in a.name:
+        d, eq, n = spec.partition("=")
+        if not eq or not d or not n:
+            ap.error(f"--name {spec!r}: expected SEQDIR=NAME")
+        names[d.rstrip("/")] = n
+    try:
+        states = tuple(int(x) for x in a.states.split(",") if x)
+        factors = [int(x) for x in a.speedup.split(",") if x]
+    except ValueError:
+        ap.error(f"--states {a.states!r} / --speedup {a.speedup!r}: comma-separated integers")
+    if not states or any(x not in (STATE_OK, STATE_INIT, STATE_ROT_ONLY, STATE_LOST) for x in states):
+        ap.error(f"--states {a.states!r}: VO states 0..3")
+    if any(k < 2 for k in factors):
+        ap.error(f"--speedup {a.speedup!r}: factors >= 2")
+    return cli.run(ap.prog, lambda: _main(a, names, states, factors))
+
+
+def _main(a, names, states, factors) -> int:
     work = a.work or os.path.join(os.path.dirname(os.path.abspath(a.out)), "features")
     seqs = list(a.sequences)
-    try:
-        aug = set(x for x in a.speedup_seqs.split(",") if x)
-        for k in (int(x) for x in a.speedup.split(",") if x):
-            for spec in a.sequences:
-                d = spec.split(":")[0].rstrip("/")
-                if os.path.basename(d) in aug:
-                    seqs.append(speedup_sequence(d, os.path.join(work, "speedup", f"{os.path.basename(d)}_x{k}"), k))
-        data = build(seqs, work, a.replay or default_replay(),
-                     states=tuple(int(s) for s in a.states.split(",") if s))
-    except (OSError, ValueError, RuntimeError) as e:
-        print(f"dataset: error: {e}", file=sys.stderr)
-        return 2
+    aug = set(x for x in a.speedup_seqs.split(",") if x)
+    for k in factors:
+        for spec in a.sequences:
+            d = spec.split(":")[0].rstrip("/")
+            if os.path.basename(d) in aug:
+                seqs.append(speedup_sequence(d, os.path.join(work, "speedup", f"{os.path.basename(d)}_x{k}"), k))
+    data = build(seqs, work, a.replay or default_replay(), names=names, states=states,
+                 log=lambda *x: cli.log(a.quiet, *x))
     save(a.out, data)
-    print(f"wrote {a.out}: {len(data['features'])} rows from {len(set(data['sequence'].tolist()))} sequences")
+    cli.log(a.quiet, f"wrote {a.out}: {len(data['features'])} rows from {len(set(data['sequence'].tolist()))} sequences")
     return 0
 
 

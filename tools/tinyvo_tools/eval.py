@@ -1,12 +1,20 @@
-"""Trajectory evaluation against EuRoC ground truth: the standard metrics (via evo) and the paper's protocol.
+# SPDX-License-Identifier: Apache-2.0
+"""Trajectory evaluation against ground truth: the standard metrics (via evo) and the paper's protocol.
 
-    python -m tinyvo_tools.eval --est TRAJ.txt --gt <EuRoC dir | groundtruth csv/txt> [--tbs sensor.yaml]
-                                [--metric-scale] [--out RESULT.json] [--plots DIR]
+    tinyvo-eval --est TRAJ.txt --gt <EuRoC / TUM / KITTI folder | pose file> [--gt-format F]
+                [--gt-times times.txt] [--tbs sensor.yaml] [--metric-scale] [--out RESULT.json] [--plots DIR]
 
 - ``--est``: TUM file ``t tx ty tz qx qy qz qw`` (seconds), camera pose in the world (``--frame body``
   if it is a body pose).
-- Ground truth (body poses) is moved to the camera frame with ``T_BS``: from ``--tbs``, else the cam0
-  ``sensor.yaml`` of the EuRoC folder, else EuRoC cam0's ``T_BS`` (said so in the output).
+- ``--gt``: a EuRoC csv (``timestamp_ns, p, q w x y z``: body poses), a TUM file (``t p qx qy qz qw``,
+  seconds: camera poses) or KITTI poses (12 numbers per line: camera poses; times from ``--gt-times``,
+  or the ``times.txt`` next to it or in ``../sequences/<seq>/``), or a folder of one of these datasets.
+  The format is read from the file's header, separator, column count, timestamp magnitude and
+  quaternion norm; a file that fits more than one (8 space-separated columns with ns timestamps, say)
+  is refused with the reason, and ``--gt-format euroc|tum|kitti`` names it.
+- EuRoC ground truth (body poses) is moved to the camera frame with ``T_BS``: from ``--tbs``, else the
+  cam0 ``sensor.yaml`` of the EuRoC folder, else EuRoC cam0's ``T_BS`` (said so in the output). TUM and
+  KITTI ground truth is the camera's pose already (``T_BS`` identity unless ``--tbs``).
 - Association by nearest timestamp (``--max-diff``, default 10 ms), with evo's ``sync``.
 
 Metrics (see docs/evaluation.md):
@@ -19,7 +27,6 @@ Metrics (see docs/evaluation.md):
 """
 from __future__ import annotations
 
-import argparse
 import copy
 import json
 import os
@@ -29,7 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from . import trajio
+from . import cli, trajio
 from .trajio import Trajectory, EUROC_CAM0_T_BS
 
 PAPER_LABEL = ("paper protocol (Boloorchi Tabrizi & Crick): NO alignment, the estimate's relative motions "
@@ -185,27 +192,32 @@ def evaluate(est: Trajectory, gt_body: Trajectory, T_BS=None, metric_scale: bool
     return Evaluation(result, t_s, gt_poses, est_al, paper_protocol_poses(gt_poses, est_raw), dof)
 
 
-def load_groundtruth(path: str):
-    """(body Trajectory, path of the cam0 sensor.yaml next to it or None)."""
-    return trajio.read_euroc_groundtruth(path), trajio.find_cam_yaml(path)
+def load_groundtruth(path: str, fmt: str = "auto", times=None):
+    """(Trajectory, path of the cam0 sensor.yaml next to it or None, format, why). EuRoC ground truth
+    is the body's pose, TUM and KITTI ground truth the camera's."""
+    gt, fmt, why = trajio.read_trajectory(path, fmt, times)
+    return gt, (trajio.find_cam_yaml(path) if fmt == "euroc" else None), fmt, why
 
 
 def evaluate_files(est_path: str, gt_path: str, tbs_yaml: str | None = None, metric_scale: bool = False,
                    max_diff_s: float = 0.01, frame: str = "camera", plots_dir: str | None = None,
-                   out_json: str | None = None) -> Evaluation:
+                   out_json: str | None = None, gt_format: str = "auto", gt_times: str | None = None) -> Evaluation:
     """The command line's work as a function (used by the bench and the README demo)."""
     est = trajio.read_tum(est_path, frame)
-    gt, auto_yaml = load_groundtruth(gt_path)
+    gt, auto_yaml, fmt, why = load_groundtruth(gt_path, gt_format, gt_times)
     if frame == "body":
         T_BS, tbs_src = np.eye(4), "not used (--frame body)"
     elif tbs_yaml:
         T_BS, tbs_src = trajio.read_sensor_yaml(tbs_yaml).T_BS, os.path.abspath(tbs_yaml)
+    elif fmt != "euroc":
+        T_BS, tbs_src = np.eye(4), f"identity ({fmt} ground truth is the camera's pose)"
     elif auto_yaml:
         T_BS, tbs_src = trajio.read_sensor_yaml(auto_yaml).T_BS, auto_yaml
     else:
         T_BS, tbs_src = EUROC_CAM0_T_BS, "EuRoC cam0 T_BS (built in; pass --tbs to change)"
     ev = evaluate(est, gt, T_BS, metric_scale, max_diff_s, frame)
-    ev.result["inputs"] = {"estimate": os.path.abspath(est_path), "ground_truth": gt.source, "T_BS": tbs_src}
+    ev.result["inputs"] = {"estimate": os.path.abspath(est_path), "ground_truth": gt.source,
+                           "ground_truth_format": fmt, "ground_truth_format_why": why, "T_BS": tbs_src}
     if plots_dir:
         ev.result["plots"] = make_plots(ev, plots_dir)
     if out_json:
@@ -285,29 +297,35 @@ def format_summary(res: dict) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m tinyvo_tools.eval", description=__doc__.split("\n\n")[0])
+    ap = cli.parser("tinyvo-eval", __doc__)
     ap.add_argument("--est", required=True, help="estimated trajectory, TUM format (seconds)")
-    ap.add_argument("--gt", required=True, help="EuRoC folder, ground-truth csv, or groundtruth txt")
+    ap.add_argument("--gt", required=True,
+                    help="ground truth: a EuRoC, TUM RGB-D or KITTI folder, or a EuRoC csv, TUM or KITTI poses file")
+    ap.add_argument("--gt-format", choices=("auto",) + trajio.POSE_FORMATS, default="auto",
+                    help="format of --gt (default auto: detected, ambiguous files refused)")
+    ap.add_argument("--gt-times", help="KITTI times.txt for a KITTI poses file (default: found next to it)")
     ap.add_argument("--tbs", help="sensor.yaml whose T_BS moves ground truth to the camera frame")
     ap.add_argument("--metric-scale", action="store_true", help="SE(3) alignment (metric output)")
     ap.add_argument("--frame", choices=("camera", "body"), default="camera", help="frame of --est poses")
     ap.add_argument("--max-diff", type=float, default=0.01, help="association tolerance, s (default 0.01)")
     ap.add_argument("--out", help="write the result JSON here")
     ap.add_argument("--plots", help="write PNG plots into this folder")
-    ap.add_argument("--quiet", action="store_true")
     a = ap.parse_args(argv)
-    try:
-        ev = evaluate_files(a.est, a.gt, a.tbs, a.metric_scale, a.max_diff, a.frame, a.plots, a.out)
-    except (OSError, ValueError) as e:
-        print(f"eval: error: {e}", file=sys.stderr)
-        return 2
-    if not a.quiet:
-        print(format_summary(ev.result))
-        if a.plots:
-            print("plots: " + ", ".join(ev.result["plots"]))
-        if a.out:
-            print(f"result: {a.out}")
-    return 0
+
+    def body():
+        ev = evaluate_files(a.est, a.gt, a.tbs, a.metric_scale, a.max_diff, a.frame, a.plots, a.out,
+                            a.gt_format, a.gt_times)
+        if not a.quiet:
+            inp = ev.result["inputs"]
+            print(f"ground truth: {inp['ground_truth_format']} ({inp['ground_truth_format_why']})")
+            print(format_summary(ev.result))
+            if a.plots:
+                print("plots: " + ", ".join(ev.result["plots"]))
+            if a.out:
+                print(f"result: {a.out}")
+        return 0
+
+    return cli.run(ap.prog, body)
 
 
 if __name__ == "__main__":

@@ -1,22 +1,23 @@
 """Exporter: float checkpoint -> int8 weights file (docs/weights-format.md) + golden vectors + report.
 
-    python -m tinyvo_tools.export model.ckpt.npz DATASET.npz -o model.tvonn [--golden model.golden]
-        [--hidden-copies 1,2,2]
+    tinyvo-export model.ckpt.npz DATASET.npz -o model.tvonn [--golden model.golden]
+        [--hidden-copies 1,2,2] [--quiet]
 
 Activation ranges are calibrated on the training rows of DATASET (the sequences the checkpoint was
 trained on; its validation sequences are never used for calibration). The report compares the
 quantised model (NumPy integer reference == the C interpreter) with the float model per DoF on the
-validation rows (all rows if there are none): RMS difference divided by that DoF's ground-truth std.
+validation rows (all rows if there are none): RMS difference divided by that DoF's ground-truth std,
+printed as JSON on stdout (not with --quiet).
 """
 from __future__ import annotations
 
-import argparse
 import json
 import os
+import sys
 
 import numpy as np
 
-from . import nnfmt, quant, train
+from . import cli, nnfmt, quant, train
 
 GOLDEN_GENERATOR = "tinyvo_tools.export 1"
 
@@ -72,12 +73,12 @@ def export(branches, meta, features, targets, seq, out_path, golden_path=None, n
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("checkpoint")
-    ap.add_argument("dataset", help="the training dataset .npz ('synthetic' for train.py's demo data)")
-    ap.add_argument("-o", "--out", required=True)
+    ap = cli.parser("tinyvo-export", __doc__)
+    ap.add_argument("checkpoint", help="float checkpoint .npz written by tinyvo-train (or tinyvo-pact)")
+    ap.add_argument("dataset", help="the training dataset .npz ('synthetic' for tinyvo-train's demo data)")
+    ap.add_argument("-o", "--out", required=True, help="int8 weights file to write (.tvonn)")
     ap.add_argument("--golden", default=None, help="also write golden vectors here")
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--seed", type=int, default=0, help="seed of the golden-vector inputs (default 0)")
     ap.add_argument("--calibration", type=int, default=quant.CALIBRATION_DEFAULT, choices=[1, 2, 3],
                     help="quantisation calibration rule (quant.py; 1: files exported before rule 2; 3: tried)")
     ap.add_argument("--hidden-copies", default=None, metavar="K1,K2,...",
@@ -90,6 +91,10 @@ def main(argv=None):
             copies = [int(v) for v in args.hidden_copies.split(",")]
         except ValueError:
             ap.error(f"--hidden-copies {args.hidden_copies!r}: comma-separated integers")
+    return cli.run(ap.prog, lambda: _main(args, ap, copies))
+
+
+def _main(args, ap, copies) -> int:
     branches, meta = quant.load_checkpoint(args.checkpoint)
     if args.dataset == "synthetic":
         f, t, seq = train.synthetic_dataset(np.random.default_rng(meta.get("seed", 0)), 20000)
@@ -100,8 +105,9 @@ def main(argv=None):
                      hidden_copies=copies)
     except ValueError as e:
         ap.error(str(e))
-    print(json.dumps(rep, indent=2))
+    cli.log(args.quiet, json.dumps(rep, indent=2))
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

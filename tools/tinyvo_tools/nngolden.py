@@ -1,6 +1,6 @@
 """Regenerates test/data/nn/: small weights files and golden input/output vectors for the C tests.
 
-    python -m tinyvo_tools.nngolden [--out test/data/nn]
+    python -m tinyvo_tools.nngolden [--out test/data/nn] [--quiet]      (a developer tool: no console script)
 
 Writes (deterministic, seed 5):
   tiny.tvonn       6 branches 11 -> 16 -> 8 -> 1, one activation per branch (relu, leaky_relu, elu,
@@ -22,12 +22,12 @@ gave the same float32 outputs as version 3's.
 """
 from __future__ import annotations
 
-import argparse
 import pathlib
+import sys
 
 import numpy as np
 
-from . import nnfmt, quant
+from . import cli, nnfmt, quant
 
 GENERATOR_VERSION = 4
 GENERATOR = f"tinyvo_tools.nngolden {GENERATOR_VERSION}"
@@ -52,27 +52,34 @@ def test_inputs(rng, n):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = cli.parser("python -m tinyvo_tools.nngolden", __doc__)
     root = pathlib.Path(__file__).resolve().parents[2]
-    ap.add_argument("--out", type=pathlib.Path, default=root / "test" / "data" / "nn")
+    ap.add_argument("--out", type=pathlib.Path, default=root / "test" / "data" / "nn",
+                    help="output folder (default: test/data/nn of the source tree)")
     args = ap.parse_args(argv)
+    return cli.run(ap.prog, lambda: _main(args))
+
+
+def _main(args) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(5)
     for name, sizes, n in (("tiny", (16, 8), 256), ("paper", (256, 32, 32), 64)):
         model, _, _ = make_model(rng, sizes)
-        write_pair(args.out, name, model, test_inputs(rng, n), GENERATOR)
+        write_pair(args.out, name, model, test_inputs(rng, n), GENERATOR, args.quiet)
     # step-length models (1.1); generated after tiny and paper so that those stay unchanged
     calib = quant.synthetic_features(rng, 2000)
     ls = quant.random_float_branch(rng, nnfmt.DOF_LOG_STEP, "elu", sizes=(16, 8))
     ls.out_scale, ls.out_offset = 12.0, -4.0  # outputs beyond [-16, 8] on the widened inputs
     fbs = [ls] + [quant.random_float_branch(rng, d, a, sizes=(16, 8))
                   for d, a in ((3, "relu"), (4, "tanh"), (5, "sigmoid"))]
-    write_pair(args.out, "step", quant.quantize_model(fbs, calib, calibration=1), test_inputs(rng, 256), GENERATOR)
+    write_pair(args.out, "step", quant.quantize_model(fbs, calib, calibration=1), test_inputs(rng, 256), GENERATOR,
+               args.quiet)
     fbs = [quant.random_float_branch(rng, nnfmt.DOF_STEP, "selu", sizes=(16, 8))]
-    write_pair(args.out, "steplin", quant.quantize_model(fbs, calib, calibration=1), test_inputs(rng, 256), GENERATOR)
+    write_pair(args.out, "steplin", quant.quantize_model(fbs, calib, calibration=1), test_inputs(rng, 256), GENERATOR,
+               args.quiet)
 
 
-def write_pair(out, name, model, x, generator):
+def write_pair(out, name, model, x, generator, quiet=False):
     """NAME.tvonn and NAME.golden (6 outputs for a model without a step-length branch, else 7)."""
     data = nnfmt.write(model)
     (out / f"{name}.tvonn").write_bytes(data)
@@ -80,8 +87,8 @@ def write_pair(out, name, model, x, generator):
     if not model.output_mask & (1 << nnfmt.OUT_STEP):
         y = y[:, :6]
     nnfmt.write_golden(out / f"{name}.golden", x, y, generator)
-    print(f"{name}: {len(data)} bytes, format 1.{model.minor}, {model.macs} MACs, {len(x)} golden vectors")
+    cli.log(quiet, f"{name}: {len(data)} bytes, format 1.{model.minor}, {model.macs} MACs, {len(x)} golden vectors")
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -1,8 +1,8 @@
 """Synthetic EuRoC/ASL sequences: a seeded, textured 3D room rendered along a trajectory.
 
-    python -m tinyvo_tools.synth --out DIR [--trajectory FILE | --builtin NAME] [--frames N]
-                                 [--camera euroc|kitti|tum] [--seed S] [--noise SIGMA] [--blur SIGMA]
-                                 [--start-time SEC]
+    tinyvo-synth --out DIR [--trajectory FILE | --builtin NAME] [--frames N]
+                 [--camera euroc|kitti|tum] [--rate HZ] [--seed S] [--noise SIGMA] [--blur SIGMA]
+                 [--start-time SEC] [--quiet]
 
 writes DIR/mav0/cam0/data/<t_ns>.png (8-bit grey, 752x480 for the default camera), mav0/cam0/data.csv,
 mav0/cam0/sensor.yaml (EuRoC cam0 intrinsics, radial-tangential distortion, T_BS, 20 Hz; or another
@@ -24,7 +24,6 @@ How it renders (see docs/synth.md):
 """
 from __future__ import annotations
 
-import argparse
 import math
 import os
 import struct
@@ -35,7 +34,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import trajio
+from . import cli, trajio
 from .trajio import CameraInfo, Trajectory, EUROC_CAM0_T_BS
 
 TILE = 16
@@ -782,7 +781,7 @@ def render_sequence(out_dir: str, traj_body: Trajectory, n_frames: int | None = 
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m tinyvo_tools.synth", description=__doc__.split("\n\n")[0])
+    ap = cli.parser("tinyvo-synth", "\n\n".join(__doc__.split("\n\n")[:3]) + "\n\nMore: docs/synth.md.")
     ap.add_argument("--out", required=True, help="output folder (gets mav0/...)")
     src = ap.add_mutually_exclusive_group()
     src.add_argument("--trajectory", help="EuRoC ground truth csv/txt (body poses, ns) or TUM (camera poses, s)")
@@ -795,8 +794,11 @@ def main(argv=None) -> int:
     ap.add_argument("--noise", type=float, default=1.5, help="Gaussian noise sigma, grey levels (default 1.5)")
     ap.add_argument("--blur", type=float, default=0.6, help="Gaussian blur sigma, pixels (default 0.6)")
     ap.add_argument("--start-time", type=float, default=0.0, help="seconds skipped at the trajectory start")
-    ap.add_argument("--quiet", action="store_true")
     a = ap.parse_args(argv)
+    return cli.run(ap.prog, lambda: _main(a, ap))
+
+
+def _main(a, ap) -> int:
     if a.frames is not None and a.frames <= 0:
         ap.error("--frames must be positive")
     if a.noise < 0 or a.blur < 0:

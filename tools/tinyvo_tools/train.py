@@ -1,7 +1,7 @@
 """Trainer of the per-DoF networks (the paper's deep-learning system), PyTorch (Debian's python3-torch).
 
-    python -m tinyvo_tools.train DATASET.npz -o model.ckpt.npz [--act relu | --act tx=selu,ty=tanh,...]
-           [--val-sequences MH_04,V1_02] [--epochs 100] [--joint-epochs 20] [--seed 0]
+    tinyvo-train DATASET.npz -o model.ckpt.npz [--act relu | --act tx=selu,ty=tanh,...]
+           [--val-sequences MH_04,V1_02] [--epochs 100] [--joint-epochs 20] [--seed 0] [--quiet]
 
 DATASET.npz (written by the dataset builder): `features` (N x 11 float32, enum tvo_feature),
 `targets` (N x 6 float32: tx ty tz rx ry rz ground-truth relative pose prev->cur in the prev camera
@@ -18,20 +18,20 @@ weights per output channel, hidden layers requantised with the exporter's ranges
 training rows every epoch; straight-through gradients), `noise` the float pass with uniform noise of one
 int8 step on inputs and hidden pre-activations, `consist` the float pass plus `--qat-weight` x the mean
 squared difference between the fake-quantised and the float output. `--pact-epochs N` (off by default;
-instead of stage 3): PACT, each hidden relu clipped at a trained bound (pact_finetune; `python -m
-tinyvo_tools.pact` applies it to a checkpoint, with 0 epochs the bound is the training rows' maximum, as
+instead of stage 3): PACT, each hidden relu clipped at a trained bound (pact_finetune; `tinyvo-pact`
+applies it to a checkpoint, with 0 epochs the bound is the training rows' maximum, as
 in the shipped step model). Input normalisation (mean/std) and target normalisation are fitted on the training rows only and
-stored in the checkpoint (tinyvo_tools.quant.save_checkpoint); export.py quantises it.
+stored in the checkpoint (tinyvo_tools.quant.save_checkpoint); tinyvo-export quantises it.
 Seeded: same data + seed -> same checkpoint (single-threaded torch).
 """
 from __future__ import annotations
 
-import argparse
+import sys
 from typing import Dict, Optional, Sequence
 
 import numpy as np
 
-from . import __version__, nnfmt, quant
+from . import __version__, cli, nnfmt, quant
 
 DEFAULT_SIZES = (256, 32, 32)
 
@@ -399,7 +399,7 @@ def train(features: np.ndarray, targets: np.ndarray, activations: Dict[int, str]
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = cli.parser("tinyvo-train", __doc__)
     ap.add_argument("dataset", help=".npz with features, targets, sequence (or 'synthetic' for a demo)")
     ap.add_argument("-o", "--out", required=True, help="checkpoint to write (.npz)")
     ap.add_argument("--act", default="relu", help="activation for all branches or tx=selu,ty=tanh,...")
@@ -407,18 +407,20 @@ def main(argv=None):
                     help="branches to train: DoF names, or 'step' / 'log_step' (one step-length branch, alone "
                          "or with rx,ry,rz; never with tx ty tz)")
     ap.add_argument("--val-sequences", default="", help="comma-separated sequences held out (never fitted)")
-    ap.add_argument("--epochs", type=int, default=100)
-    ap.add_argument("--joint-epochs", type=int, default=20)
-    ap.add_argument("--batch", type=int, default=256)
-    ap.add_argument("--lr", type=float, default=2e-4)
-    ap.add_argument("--sizes", default="256,32,32", help="hidden layer sizes")
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--epochs", type=int, default=100, help="stage-1 epochs per branch (default 100)")
+    ap.add_argument("--joint-epochs", type=int, default=20, help="stage-2 joint fine-tuning epochs (default 20)")
+    ap.add_argument("--batch", type=int, default=256, help="minibatch rows (default 256)")
+    ap.add_argument("--lr", type=float, default=2e-4, help="RMSprop learning rate (default 2e-4)")
+    ap.add_argument("--sizes", default="256,32,32", help="hidden layer sizes (default 256,32,32)")
+    ap.add_argument("--seed", type=int, default=0, help="seed of the initialisation and the batch order (default 0)")
     ap.add_argument("--input-clip", type=float, default=0.0,
                     help="input domain: clamp each input to its training [p, 100-p] percentiles (+margin); 0: off")
-    ap.add_argument("--input-clip-margin", type=float, default=0.25)
+    ap.add_argument("--input-clip-margin", type=float, default=0.25,
+                    help="margin added to each side of the input domain, in units of its width (default 0.25)")
     ap.add_argument("--qat-epochs", type=int, default=0, help="stage 3: int8-aware fine-tuning epochs (0: off)")
     ap.add_argument("--qat-lr", type=float, default=None, help="its learning rate (default: lr / 10)")
-    ap.add_argument("--qat-mode", default="fq", choices=QAT_MODES)
+    ap.add_argument("--qat-mode", default="fq", choices=QAT_MODES,
+                    help="stage 3: fake-quantised pass (fq), int8-step noise (noise) or consistency loss (consist)")
     ap.add_argument("--qat-weight", type=float, default=100.0, help="consistency weight (--qat-mode consist)")
     ap.add_argument("--pact-epochs", type=int, default=0,
                     help="PACT fine-tuning epochs after stage 2 (relu branches clip at trained bounds; 0: off)")
@@ -426,22 +428,37 @@ def main(argv=None):
     ap.add_argument("--pact-decay", type=float, default=0.0, help="its L2 weight on the bounds")
     ap.add_argument("--pact-init", type=float, default=1.0, help="initial bound: this x the layer's training max")
     args = ap.parse_args(argv)
+    try:
+        sizes = tuple(int(s) for s in args.sizes.split(","))
+    except ValueError:
+        ap.error(f"--sizes {args.sizes!r}: comma-separated integers")
+    try:
+        acts = parse_activations(args.act)
+    except ValueError as e:
+        ap.error(f"--act {args.act!r}: {e}")
+    try:
+        dofs = [nnfmt.DOFS.index(d.strip()) for d in args.dofs.split(",") if d.strip()]
+        nnfmt.check_dofs(dofs)
+    except ValueError as e:
+        ap.error(f"--dofs {args.dofs!r}: {e}")
+    if args.epochs < 0 or args.joint_epochs < 0 or args.batch < 1:
+        ap.error("--epochs and --joint-epochs must be >= 0, --batch >= 1")
+    return cli.run(ap.prog, lambda: _main(args, sizes, acts, dofs))
+
+
+def _main(args, sizes, acts, dofs) -> int:
     if args.dataset == "synthetic":
         f, t, seq = synthetic_dataset(np.random.default_rng(args.seed), 20000)
     else:
         f, t, seq = load_dataset(args.dataset)
     val = [s for s in args.val_sequences.split(",") if s]
     tr, _ = split_rows(seq, val)
-    sizes = tuple(int(s) for s in args.sizes.split(","))
-    acts = parse_activations(args.act)
-    dofs = [nnfmt.DOFS.index(d.strip()) for d in args.dofs.split(",") if d.strip()]
-    nnfmt.check_dofs(dofs)
     branches = train(f[tr], t[tr], acts, sizes=sizes, dofs=dofs, epochs=args.epochs, joint_epochs=args.joint_epochs,
                      batch=args.batch, lr=args.lr, seed=args.seed,
                      input_clip=args.input_clip, input_clip_margin=args.input_clip_margin,
                      qat_epochs=args.qat_epochs, qat_lr=args.qat_lr, qat_mode=args.qat_mode,
                      qat_weight=args.qat_weight, pact_epochs=args.pact_epochs, pact_lr=args.pact_lr,
-                     pact_decay=args.pact_decay, pact_init=args.pact_init)
+                     pact_decay=args.pact_decay, pact_init=args.pact_init, progress=not args.quiet)
     quant.save_checkpoint(args.out, branches, {
         "tinyvo_tools": __version__, "dataset": args.dataset, "val_sequences": val,
         "train_sequences": sorted(set(seq[tr].tolist())), "sizes": list(sizes), "epochs": args.epochs,
@@ -451,8 +468,9 @@ def main(argv=None):
         "qat_mode": args.qat_mode, "qat_weight": args.qat_weight, "pact_epochs": args.pact_epochs,
         "pact_lr": args.pact_lr, "pact_decay": args.pact_decay, "pact_init": args.pact_init,
         "feature_layout_id": nnfmt.FEAT_LAYOUT_ID})
-    print(f"wrote {args.out}: {len(branches)} branches, trained on {int(tr.sum())} rows")
+    cli.log(args.quiet, f"wrote {args.out}: {len(branches)} branches, trained on {int(tr.sum())} rows")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Trajectory and EuRoC/ASL file I/O shared by tinyvo's Python tools.
 
 Conventions (see ../shared/DESIGN.md):
@@ -11,7 +12,13 @@ File formats:
 - EuRoC ground-truth csv: ``#timestamp, p_RS_R_x [m], ..., q_RS_w [], q_RS_x [], ...`` comma separated,
   the first 8 columns required, further columns ignored.
 - Ground-truth txt (../shared/data/euroc/groundtruth/*.txt): the same 8 columns, space separated.
-- TUM: ``t tx ty tz qx qy qz qw`` with t in seconds.
+- TUM: ``t tx ty tz qx qy qz qw`` with t in seconds (TUM RGB-D's groundtruth.txt: the camera's pose).
+- KITTI odometry poses: 12 numbers per line, the row-major 3x4 camera pose ``T_W_C`` of frame i; no
+  timestamps (they are in the sequence's ``times.txt``, one per line in seconds).
+
+``detect_pose_format`` tells these apart by their header, separator, column count, timestamp magnitude
+and quaternion norm, and refuses (ValueError, saying why) a file it cannot place; ``read_trajectory``
+reads any of them, detected or named.
 """
 from __future__ import annotations
 
@@ -338,3 +345,198 @@ def find_cam_yaml(path: str, cam: str = "cam0"):
         if os.path.isfile(c):
             return c
     return None
+
+
+# --------------------------------------------------------------------------------------------------
+# pose-file formats: EuRoC csv, TUM, KITTI
+
+POSE_FORMATS = ("euroc", "tum", "kitti")
+_QTOKEN = re.compile(r"^q(?:_[a-z0-9]+)*_?([wxyz])$")
+
+
+def _header_and_rows(path: str, max_rows: int = 50):
+    """(comment/header lines, first data rows as token lists, separator ',' or ' ')."""
+    header, rows, comma = [], [], False
+    with open(path, "r", encoding="utf-8") as f:
+        for line in f:
+            s = line.strip()
+            if not s:
+                continue
+            if s.startswith("#") or s[0].isalpha():
+                if not rows:
+                    header.append(s)
+                continue
+            comma = comma or ("," in s)
+            rows.append([p for p in re.split(r"[,\s]+", s) if p])
+            if len(rows) >= max_rows:
+                break
+    return header, rows, "," if comma else " "
+
+
+def _header_quat_order(header) -> str | None:
+    """'wxyz' or 'xyzw' when the header names the quaternion components (EuRoC's q_RS_w, TUM's qx)."""
+    order = []
+    for h in header:
+        for tok in re.split(r"[^A-Za-z0-9_]+", h.lower()):
+            m = _QTOKEN.match(tok)
+            if m and m.group(1) not in order:
+                order.append(m.group(1))
+    if "w" in order and "x" in order:
+        return "wxyz" if order.index("w") < order.index("x") else "xyzw"
+    return None
+
+
+def detect_pose_format(path: str) -> tuple:
+    """(format, why) of a pose file: 'euroc' (EuRoC ground-truth csv: ns, position, quaternion w first),
+    'tum' (seconds, position, quaternion x y z w) or 'kitti' (12 numbers of a 3x4 pose, no time).
+    Raises ValueError naming what was seen when the file could be more than one of them (e.g. 8
+    space-separated columns with nanosecond timestamps) or none."""
+    path = str(path)
+    header, rows, sep = _header_and_rows(path)
+    if not rows:
+        raise ValueError(f"{path}: no data rows")
+    ncols = {len(r) for r in rows}
+    if len(ncols) != 1:
+        raise ValueError(f"{path}: rows of {sorted(ncols)} columns: not one pose format")
+    n = ncols.pop()
+    try:
+        vals = np.array([[float(x) for x in r] for r in rows])
+    except ValueError as e:
+        raise ValueError(f"{path}: {e}") from None
+    seen = f"{n} {'comma' if sep == ',' else 'space'}-separated columns"
+    order = _header_quat_order(header)
+    if n == 12 and order is None:
+        R = vals[0, [0, 1, 2, 4, 5, 6, 8, 9, 10]].reshape(3, 3)
+        if np.allclose(R @ R.T, np.eye(3), atol=1e-2) and np.linalg.det(R) > 0:
+            return "kitti", f"{seen}, a rotation in columns 1-3, 5-7, 9-11: KITTI poses"
+        raise ValueError(f"{path}: {seen} but no rotation matrix in them: not KITTI poses; "
+                         "pass --gt-format to say what it is")
+    if n < 8:
+        raise ValueError(f"{path}: {seen}: neither EuRoC (t p q, 8+), TUM (8) nor KITTI (12)")
+    qn = np.linalg.norm(vals[:, 4:8], axis=1)
+    if not np.all(np.abs(qn - 1.0) < 0.01):
+        raise ValueError(f"{path}: {seen}, but columns 5-8 are not a unit quaternion (norm {qn[0]:.4g}): "
+                         "not a EuRoC or TUM pose file")
+    t0 = abs(vals[0, 0])
+    unit = "ns" if t0 >= 1e11 else "s"
+    if order == "wxyz":
+        return "euroc", f"the header names the quaternion w first ({seen}): EuRoC"
+    if order == "xyzw":
+        if n != 8:
+            raise ValueError(f"{path}: a TUM header (qx .. qw) but {n} columns (TUM has 8)")
+        return "tum", f"the header names the quaternion x y z w ({seen}): TUM"
+    if sep == "," and unit == "ns":
+        return "euroc", f"{seen} with timestamps in ns: EuRoC csv"
+    if sep == " " and n == 8 and unit == "s":
+        return "tum", f"{seen} with timestamps in seconds: TUM"
+    raise ValueError(f"{path}: cannot tell the quaternion order: {seen}, no header naming the columns, "
+                     f"timestamps in {unit} ({t0:.3g}); EuRoC files are comma-separated with ns and w "
+                     "first, TUM files space-separated with seconds and w last; pass --gt-format euroc|tum")
+
+
+def read_kitti_times(path: str) -> np.ndarray:
+    """KITTI times.txt: one time in seconds per line -> int64 ns (rounded)."""
+    out = []
+    with open(str(path), "r", encoding="utf-8") as f:
+        for lineno, line in enumerate(f, 1):
+            s = line.strip()
+            if not s:
+                continue
+            try:
+                t = float(s)
+            except ValueError:
+                raise ValueError(f"{path}:{lineno}: bad time {s!r}") from None
+            if not np.isfinite(t) or t < 0:
+                raise ValueError(f"{path}:{lineno}: bad time {s!r}")
+            out.append(int(round(t * 1e9)))
+    if not out:
+        raise ValueError(f"{path}: no times")
+    return np.array(out, dtype=np.int64)
+
+
+def find_kitti_times(poses_path: str):
+    """times.txt for a KITTI poses file: next to it, or KITTI's sequences/<seq>/times.txt beside
+    poses/<seq>.txt; None when there is none."""
+    p = os.path.abspath(str(poses_path))
+    d, stem = os.path.dirname(p), os.path.splitext(os.path.basename(p))[0]
+    for c in (os.path.join(d, "times.txt"), os.path.join(os.path.dirname(d), "sequences", stem, "times.txt")):
+        if os.path.isfile(c):
+            return c
+    return None
+
+
+def read_kitti_poses(path: str, times=None) -> Trajectory:
+    """KITTI poses (camera poses T_W_C, 12 numbers per line). times: int64 ns per pose, or the path of
+    times.txt, or None to look for it (find_kitti_times); the counts must agree."""
+    path = str(path)
+    rows = []
+    with open(path, "r", encoding="utf-8") as f:
+        for lineno, line in enumerate(f, 1):
+            s = line.strip()
+            if not s:
+                continue
+            parts = s.split()
+            if len(parts) != 12:
+                raise ValueError(f"{path}:{lineno}: expected 12 numbers (a 3x4 pose), got {len(parts)}")
+            try:
+                rows.append([float(x) for x in parts])
+            except ValueError as e:
+                raise ValueError(f"{path}:{lineno}: {e}") from None
+    if not rows:
+        raise ValueError(f"{path}: no poses")
+    if times is None:
+        times = find_kitti_times(path)
+        if times is None:
+            raise ValueError(f"{path}: KITTI poses carry no timestamps and no times.txt was found next to them "
+                             "or in ../sequences/<seq>/: pass --gt-times FILE")
+    if isinstance(times, (str, os.PathLike)):
+        times = read_kitti_times(times)
+    times = np.asarray(times, dtype=np.int64)
+    if len(times) != len(rows):
+        raise ValueError(f"{path}: {len(rows)} poses but {len(times)} times")
+    a = np.array(rows, dtype=np.float64)
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{path}: non-finite values")
+    T = np.tile(np.eye(4), (len(a), 1, 1))
+    T[:, :3, :4] = a.reshape(-1, 3, 4)
+    R = T[:, :3, :3]
+    if not np.allclose(R @ np.swapaxes(R, 1, 2), np.eye(3), atol=1e-3):
+        raise ValueError(f"{path}: a rotation block is not a rotation")
+    return Trajectory(times, T, "camera", path)
+
+
+def write_kitti_poses(path: str, traj: Trajectory) -> None:
+    """Write KITTI poses (12 numbers per line; the times are not written)."""
+    with open(path, "w", encoding="utf-8", newline="\n") as f:
+        for T in traj.poses:
+            f.write(" ".join(f"{v:.9e}" for v in T[:3, :4].reshape(-1)) + "\n")
+
+
+def read_trajectory(path: str, fmt: str = "auto", times=None):
+    """(Trajectory, format, why) from a pose file or a dataset folder (EuRoC: mav0's ground truth, body
+    poses; TUM RGB-D: groundtruth.txt; KITTI sequence: its poses file), the format detected
+    (detect_pose_format) or named ('euroc', 'tum', 'kitti'). TUM and KITTI poses are camera poses."""
+    path = str(path)
+    if fmt not in ("auto",) + POSE_FORMATS:
+        raise ValueError(f"unknown pose format {fmt!r} (auto, euroc, tum, kitti)")
+    if os.path.isdir(path):
+        if os.path.isfile(os.path.join(path, "groundtruth.txt")) and fmt in ("auto", "tum"):
+            path, fmt, why = os.path.join(path, "groundtruth.txt"), "tum", "a TUM RGB-D folder's groundtruth.txt"
+            return read_tum(path, "camera"), fmt, why
+        if os.path.isfile(os.path.join(path, "times.txt")) and fmt in ("auto", "kitti"):
+            name = os.path.basename(os.path.normpath(path))
+            for c in (os.path.join(path, "poses.txt"),
+                      os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(path))), "poses", name + ".txt")):
+                if os.path.isfile(c):
+                    tr = read_kitti_poses(c, os.path.join(path, "times.txt") if times is None else times)
+                    return tr, "kitti", "a KITTI sequence folder's poses and times.txt"
+            raise ValueError(f"{path}: a KITTI sequence folder without poses (poses.txt, ../../poses/{name}.txt)")
+        return read_euroc_groundtruth(path), "euroc", "a EuRoC folder's state_groundtruth_estimate0/data.csv"
+    why = f"named ({fmt})"
+    if fmt == "auto":
+        fmt, why = detect_pose_format(path)
+    if fmt == "euroc":
+        return read_euroc_groundtruth(path), fmt, why
+    if fmt == "tum":
+        return read_tum(path, "camera"), fmt, why
+    return read_kitti_poses(path, times), fmt, why

@@ -22,18 +22,10 @@
  * only when re-distorting it reproduces the input to TVO_CAMERA_UNDISTORT_TOL (normalised units,
  * 5e-7 px for f = 500; converged points reach ~1e-15).
  *
- * Accuracy (measured by test/oracle/test_camera_oracle.py on a grid every 8 px over the whole image,
- * corners and edges included, for EuRoC cam0/cam1, a 5-coefficient 1280x720 camera and an equidistant
- * lens; run it with -s to print the figures):
- *   - against cv2.undistortPointsIter / cv2.fisheye.undistortPoints run to convergence (criteria
- *     100 iterations, eps 1e-14): max difference < 4e-15 normalised units (test tolerance 1e-12).
- *   - reprojection residual (cv2.projectPoints of the result minus the input pixel): < 4e-13 px.
- *   - against plain cv2.undistortPoints (OpenCV's default: 5 fixed-point iterations) the difference
- *     grows towards the image corners, where OpenCV has not converged: up to 1.2e-3 normalised units on
- *     EuRoC cam0, i.e. OpenCV's default result reprojects up to 0.29 px away from its input there.
- *     tinyvo is the more accurate one; compare with undistortPointsIter when checking it.
- *   - distort() matches cv2.projectPoints / cv2.fisheye.projectPoints to < 1e-9 px; the float array
- *     version rounds to float (distort(undistort(p)) == p to < 1e-4 px).
+ * Accuracy: converged points agree with OpenCV's undistortPointsIter / fisheye.undistortPoints run to
+ * convergence (plain undistortPoints stops after five fixed-point iterations, short of the root towards
+ * the image corners); distort() agrees with cv2.projectPoints / cv2.fisheye.projectPoints, the float
+ * array version rounded to float. test/oracle/test_camera_oracle.py checks both (docs/design.md).
  * Cost: distort ~30 flops per point; undistort typically 3-6 Newton iterations (~300 flops) per point.
  * No memory beyond the arguments; all functions are reentrant. */
 #ifndef TINYVO_CAMERA_H

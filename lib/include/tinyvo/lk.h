@@ -23,7 +23,8 @@
  *   - with fb_check: tracking back from the found position does not return within fb_max_error px
  *     of the start (or the backward track is lost itself); with use_initial_flow the way back starts
  *     from the guess's displacement reversed (found position - (guess - start)), without it at zero
- *     displacement, so a guessed large motion is checked as far as it was tracked.
+ *     displacement, so a guessed large motion is checked as far as it was tracked. With fb_levels
+ *     k > 0 the way back runs on levels k-1..0 only and starts at the start point itself.
  * At coarser levels a failure only means that level adds nothing (OpenCV's behaviour). */
 #ifndef TINYVO_LK_H
 #define TINYVO_LK_H
@@ -58,6 +59,12 @@ typedef struct tvo_lk_config {
     float fb_max_error;      /* px, > 0, largest accepted forward-backward distance; default 1.0 */
     int32_t force_portable;  /* nonzero: only the portable C kernels, no SIMD; the results are
                                 bit-identical either way (all window sums are exact integers); default 0 */
+    int32_t fb_levels;       /* with fb_check: pyramid levels the way back uses, 0..TVO_MAX_PYR_LEVELS;
+                                0: all of the forward track's (the full check); k > 0: levels k-1..0 only,
+                                starting from the start point (prev_pts, scaled), which costs about k /
+                                (max_level + 1) of a full backward track. A point that drifted fails it
+                                as the full check; one that jumped onto a repeated pattern may pass it;
+                                default 0 */
 } tvo_lk_config;
 
 /* The defaults above (OpenCV's defaults for win 21, 3 levels, fb check off). */

@@ -8,7 +8,7 @@
  *     (the scale is unobservable) or is all zero for a rotation-only result.
  *   - Everything is double precision and deterministic for a given seed (no global state).
  *
- * What tvo_relpose_estimate does (see docs/geometry.md for the details and the costs)
+ * What tvo_relpose_estimate does (docs/design.md, "Relative pose", gives the reasons)
  *   1. checks the input (NULLs, n, NaN/Inf, |x| > 1e6, fewer than 5 distinct points, all points
  *      collinear in either image -> error status);
  *   2. RANSAC (MSAC scoring of the Sampson error with an exact and a statistical bail-out,
@@ -57,7 +57,6 @@ typedef struct tvo_relpose_config {
     double min_parallax_deg;    /* median rotation-compensated parallax (degrees) below which the
                                    result is rotation-only; >= 0, 0 disables; default 0.5 */
     int32_t min_inliers;        /* fewer inliers -> LOW_CONFIDENCE; >= 0; default 15 */
-    /* ---- added fields (the defaults are what tvo_relpose_config_default sets) ---- */
     int32_t use_homography;     /* 1: score a homography for dominant planes (default); 0: never */
     int32_t refine_iters;       /* Levenberg-Marquardt iterations per refinement round, 0..100;
                                    default 10 (0 disables the refinement) */
@@ -96,16 +95,17 @@ typedef struct tvo_relpose {
  * LU elimination of the 10x20 cubic constraints, degree-10 hidden-variable polynomial solved by
  * Sturm sequences). x1, x2: normalised coordinates of 5 correspondences (x2^T E x1 = 0).
  * Writes up to 10 essential matrices (row-major, Frobenius norm 1) to E and returns how many;
- * 0 for a degenerate sample or NULL pointers. Cost ~19k instructions (x86-64 SSE2; ~4 us median
- * on the development machine; docs/geometry.md). */
+ * 0 for a degenerate sample or NULL pointers. Cost: about 19k instructions (x86-64 with SSE2), no
+ * memory beyond the arguments. */
 int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10][9]);
 
 /* Normalised 8-point: E from >= 8 correspondences (Hartley-normalised; exactly 8: null vector of
  * the 8x9 system by Gaussian elimination with complete pivoting, refused below rank 8; more:
  * least squares, smallest eigenvector of the 9x9 normal matrix), then projected onto the essential
  * manifold with singular values (1, 1, 0). x1, x2: n normalised points as x[i][0], x[i][1]. Returns
- * 1 on success, 0 for n < 8, NULL pointers or degenerate input. Cost (median, this machine): n = 8
- * ~1 us, n = 9 ~15 us (the Jacobi eigen-decomposition) + ~0.05 us per further point. */
+ * 1 on success, 0 for n < 8, NULL pointers or degenerate input. Cost: n = 8, one elimination of the
+ * 8x9 system; n > 8, O(n) to build the 9x9 normal matrix plus its Jacobi eigen-decomposition, about
+ * 15 times the cost of n = 8. */
 int tvo_essential_8pt(const double (*x1)[2], const double (*x2)[2], int32_t n, double E[9]);
 
 /* Bytes of scratch memory tvo_relpose_estimate needs for up to max_points correspondences
@@ -121,8 +121,8 @@ size_t tvo_relpose_scratch_size(int32_t max_points);
  * TVO_ERR_NO_MEMORY (scratch too small), TVO_ERR_NOT_FINITE (a NaN/Inf coordinate),
  * TVO_ERR_RANGE (|coordinate| > 1e6), TVO_ERR_DEGENERATE (fewer than 5 distinct points or all
  * points collinear in one image); on error *out is R = I, t = 0, LOW_CONFIDENCE and the mask is 0.
- * Cost: ~2.7M instructions (~0.5 ms) for 300 points with 30 % outliers (see docs/geometry.md); bounded
- * by cfg->max_iters. */
+ * Cost: about 2.75M instructions (x86-64 with SSE2) for 300 points with 30 % outliers and the default
+ * configuration (docs/evaluation.md); at most cfg->max_iters RANSAC iterations, each linear in n. */
 tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg, const tvo_point2d *x1,
                                 const tvo_point2d *x2, int32_t n, tvo_relpose *out,
                                 uint8_t *inlier_mask, void *scratch, size_t scratch_size);

@@ -13,6 +13,7 @@
 #include "tinyvo/camera.h"
 #include "tinyvo/se3.h"
 #include "tinyvo/relpose.h"
+#include "tinyvo/ba.h"
 #include "tinyvo/nn.h"
 #include "tinyvo/vo.h"
 

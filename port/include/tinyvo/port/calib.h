@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo port: camera calibration import from the files calibration tools write.
  *
  * Formats read (docs/calibration.md has an example of each):

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo port: EuRoC / ASL dataset folder reader.
  *
  * Layout read (the ASL format of the EuRoC MAV dataset):
@@ -62,6 +63,21 @@ typedef struct tvo_euroc tvo_euroc; /* opaque */
  * sensor.yaml, data.csv or ground-truth csv: "<path>:<line>: <what>" in err), TVO_ERR_NO_MEMORY.
  * *seq is NULL after an error. */
 tvo_status tvo_euroc_open(tvo_euroc **seq, const char *dir, const char *cam, char *err, size_t err_size);
+
+/* Flag of tvo_euroc_open_ex (and tvo_tum_open / tvo_kitti_open, dataset.h): a malformed row of the
+ * frame list (data.csv, rgb.txt, times.txt) is skipped instead of failing the open; each one is kept
+ * as a message "<path>:<line>: <what>" (tvo_euroc_bad_row). A list with no good row still fails. */
+#define TVO_EUROC_SKIP_BAD_ROWS 1u
+/* Skipped rows whose messages are kept (all are counted); message length, bytes with terminator. */
+#define TVO_EUROC_MAX_BAD_ROWS 256
+#define TVO_EUROC_BAD_ROW_MSG 320
+/* tvo_euroc_open with flags (0 or TVO_EUROC_SKIP_BAD_ROWS). tvo_euroc_open(...) = flags 0. */
+tvo_status tvo_euroc_open_ex(tvo_euroc **seq, const char *dir, const char *cam, unsigned flags, char *err,
+                             size_t err_size);
+/* Frame-list rows skipped at open (0 for NULL), and the message of skipped row i (i below the count
+ * and below TVO_EUROC_MAX_BAD_ROWS; else NULL). Owned by seq. */
+int32_t tvo_euroc_bad_row_count(const tvo_euroc *seq);
+const char *tvo_euroc_bad_row(const tvo_euroc *seq, int32_t i);
 void tvo_euroc_close(tvo_euroc *seq); /* NULL is fine */
 
 /* Number of frames (0 for NULL). */
@@ -70,7 +86,8 @@ int32_t tvo_euroc_frame_count(const tvo_euroc *seq);
 int64_t tvo_euroc_frame_time(const tvo_euroc *seq, int32_t i);
 /* File name of frame i (inside <cam>/data/), or NULL when out of range. Owned by seq. */
 const char *tvo_euroc_frame_file(const tvo_euroc *seq, int32_t i);
-/* Full path of frame i into path[size]. TVO_ERR_NULL, TVO_ERR_RANGE (bad i), TVO_ERR_NO_MEMORY (size
+/* Full path of frame i into path[size] (<cam>/data/<file>; for TUM and KITTI sequences the folder's
+ * <file>, dataset.h). TVO_ERR_NULL, TVO_ERR_RANGE (bad i), TVO_ERR_NO_MEMORY (size
  * too small; path then holds an empty string). */
 tvo_status tvo_euroc_frame_path(const tvo_euroc *seq, int32_t i, char *path, size_t size);
 /* Decode frame i into buf (capacity >= width * height of the camera) as 8-bit grey, packed.
