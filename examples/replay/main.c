@@ -402,6 +402,7 @@ int main(int argc, char **argv)
     long counts_map[TVO_MAP_STATE_COUNT] = { 0 }, map_keyframes = 0;
     map_scale msc;
     tvo_pose T_w_c_vo_prev = { { 0 }, { 0 } }; /* the VO's world pose of the previous frame (map on) */
+    int vo_reset_pending = 0; /* the VO was reset: its next T_w_c starts again from the identity, in a new unit */
     tvo_vo_track *trk = NULL;
     FILE *tracks = NULL;
     long n_frames, processed = 0, gaps = 0, gt_missing = 0, timed = 0;
@@ -593,8 +594,10 @@ int main(int argc, char **argv)
                     skip_names[skip], o.strict ? " (--strict: stopping)" : "");
             if (o.strict)
                 goto cleanup;
-            if (skip != SKIP_TIMESTAMP)
-                tvo_vo_reset(vo); /* the next good frame starts new tracks */
+            if (skip != SKIP_TIMESTAMP) {
+                tvo_vo_reset(vo); /* the next good frame starts new tracks (and a new map) */
+                vo_reset_pending = 1;
+            }
             continue;
         }
         t_dec = tvo_clock_now_ns() - t_dec;
@@ -605,6 +608,7 @@ int main(int argc, char **argv)
             if (o.strict)
                 goto cleanup;
             tvo_vo_reset(vo);
+            vo_reset_pending = 1;
         }
         t_last = t_ns;
 
@@ -658,7 +662,16 @@ int main(int argc, char **argv)
             if (cfg.map) {
                 /* the map's pose: integrate the VO's world motion with the map's scale factor */
                 double gt_len = -1.0, src = -1.0, vo_len;
-                tvo_pose rel = processed == 0 ? tvo_pose_identity() : tvo_pose_relative(&T_w_c_vo_prev, &res.T_w_c);
+                tvo_pose rel;
+                if (vo_reset_pending) {
+                    /* the trajectory goes on from its last pose; the new map's unit is its own, so the
+                       scale source sets the factor again */
+                    T_w_c_vo_prev = tvo_pose_identity();
+                    memset(&msc, 0, sizeof(msc));
+                    msc.s = o.scale == SCALE_NONE ? 1.0 : 0.0;
+                    vo_reset_pending = 0;
+                }
+                rel = processed == 0 ? tvo_pose_identity() : tvo_pose_relative(&T_w_c_vo_prev, &res.T_w_c);
                 vo_len = sqrt(rel.t[0] * rel.t[0] + rel.t[1] * rel.t[1] + rel.t[2] * rel.t[2]);
                 if (gt_ok && have_prev_gt) {
                     tvo_pose g = tvo_pose_body_to_camera_relative(&T_w_b_prev, &T_w_b, &T_bs);

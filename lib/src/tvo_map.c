@@ -148,6 +148,12 @@ tvo_status tvo_map_init(tvo_map *m, const tvo_vo_config *cfg, tvo_arena *a)
     m->lm = (tvo_map_lm *)tvo_arena_alloc(a, (size_t)m->max_lm * sizeof(tvo_map_lm));
     if (m->lm == NULL)
         return TVO_ERR_NO_MEMORY;
+    tvo_map_reset(m);
+    return TVO_OK;
+}
+
+void tvo_map_reset(tvo_map *m)
+{
     tvo_map_clear(m);
     for (int32_t i = 0; i < TVO_MAP_RING; ++i)
         m->ring[i].serial = -1;
@@ -155,7 +161,6 @@ tvo_status tvo_map_init(tvo_map *m, const tvo_vo_config *cfg, tvo_arena *a)
     m->serial = -1;
     m->speed = 0.0;
     m->losses = 0;
-    return TVO_OK;
 }
 
 void tvo_map_clear(tvo_map *m)
@@ -608,6 +613,11 @@ static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr,
     pc.threshold = TVO_MAP_PNP_THRESHOLD_PX / focal(cfg);
     pc.huber = pc.threshold;
     pc.min_inliers = cfg->map_min_points;
+    if (R_cur_prev != NULL && cfg->map_rot_prior > 0.0) {
+        /* this frame's two-view rotation turns the last pose: a prior on the rotation */
+        tvo_la_mat3_mul(R_cur_prev, m->last_T_c_w.R, pc.rot_prior);
+        pc.rot_prior_weight = cfg->map_rot_prior;
+    }
     *T = predict(m, t_ns, R_cur_prev);
     st = tvo_pnp_refine(&pc, (const double(*)[3])X, x, NULL, k, T, inl, &ni, NULL);
     if (st != TVO_OK || 2 * ni < k) {
@@ -944,10 +954,15 @@ static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
     mark_tracked(m, tr);
     out->state = TVO_MAP_TRACKING;
     out->points = n_in;
-    if (need_keyframe(m, cfg, &T, n_in, depth_med))
-        add_keyframe(m, cfg, tr, t_ns, &T, scratch, scratch_size, out);
-    else
+    if (need_keyframe(m, cfg, &T, n_in, depth_med)) {
+        /* the frame keeps its tracking pose (what it was measured to be when it came); the map keeps the
+           adjusted keyframe, on which the next frames are posed (reporting the adjusted pose instead
+           puts each correction into one frame's step: a jump in the per-frame rotation) */
+        tvo_pose Tk = T;
+        add_keyframe(m, cfg, tr, t_ns, &Tk, scratch, scratch_size, out);
+    } else {
         m->frames_since_kf++;
+    }
     if (!tvo_pose_is_finite(&T)) {
         lose(m, tr, t_ns, T_c_w_prior, out);
         return;

@@ -111,8 +111,10 @@ size_t tvo_map_layout_size(const tvo_vo_config *cfg);
 size_t tvo_map_scratch_size(const tvo_vo_config *cfg);
 /* Carve the map's arrays from arena a (in the order of tvo_map_layout_size). TVO_ERR_NO_MEMORY. */
 tvo_status tvo_map_init(tvo_map *m, const tvo_vo_config *cfg, tvo_arena *a);
-/* Forget keyframes and landmarks (the speed and the loss count are kept). */
+/* Forget keyframes and landmarks (the speed, the loss count and the frame ring are kept). */
 void tvo_map_clear(tvo_map *m);
+/* Back to the state after tvo_map_init (everything forgotten). */
+void tvo_map_reset(tvo_map *m);
 
 /* One frame after the VO's two-view step. R_cur_prev: the two-view rotation of this frame (NULL when
  * none), T_c_w_prior: the pose the VO would report without the map (the two-view chain), used as the

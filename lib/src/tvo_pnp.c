@@ -177,7 +177,9 @@ static int config_ok(const tvo_pnp_config *c)
 {
     return c->threshold > 0.0 && c->threshold < DBL_MAX && c->confidence > 0.0 && c->confidence < 1.0 &&
            c->max_iterations >= 1 && c->refine_iterations >= 1 && c->huber > 0.0 && c->huber < DBL_MAX &&
-           c->min_inliers >= 3 && (c->use_guess == 0 || c->use_guess == 1);
+           c->min_inliers >= 3 && (c->use_guess == 0 || c->use_guess == 1) && c->rot_prior_weight >= 0.0 &&
+           c->rot_prior_weight < DBL_MAX &&
+           (c->rot_prior_weight == 0.0 || tvo_rot_orthogonality_error(c->rot_prior) < 1e-6);
 }
 
 /* on error: leave a finite pose as given, replace a non-finite one by the identity */
@@ -200,6 +202,8 @@ void tvo_pnp_config_default(tvo_pnp_config *cfg)
     cfg->min_inliers = 12;
     cfg->seed = 0x5eedULL;
     cfg->use_guess = 0;
+    cfg->rot_prior[0] = cfg->rot_prior[4] = cfg->rot_prior[8] = 1.0;
+    cfg->rot_prior_weight = 0.0;
 }
 
 size_t tvo_pnp_scratch_size(int32_t max_points)
@@ -715,7 +719,7 @@ static void se3_left_update(const double d[6], tvo_pose *T)
 /* Robust cost of the selected points at T (a point behind the camera costs rho(1)) and the IRLS normal
  * equations H d = -g of the points in front; returns their count. */
 static int32_t evaluate(const tvo_pose *T, const double (*X)[3], const tvo_point2d *x, const uint8_t *use,
-                        int32_t n, double k, double H[36], double g[6], double *cost)
+                        int32_t n, double k, const tvo_pnp_config *cfg, double H[36], double g[6], double *cost)
 {
     const double pen = huber_rho(1.0, k), k2 = k * k;
     int32_t used = 0;
@@ -777,6 +781,18 @@ static int32_t evaluate(const tvo_pose *T, const double (*X)[3], const tvo_point
         H[35] += wq * q + wr * r;
         ++used;
     }
+    if (cfg->rot_prior_weight > 0.0) {
+        /* r = log(R R_p^T); for the left increment exp(w) R, dr/dw = I to first order */
+        const double wp = cfg->rot_prior_weight;
+        double D[9], r[3];
+        tvo_la_mat3_mul_bt(R, cfg->rot_prior, D);
+        tvo_rot_to_rotvec(D, r);
+        c += 0.5 * wp * dot3(r, r);
+        for (int a = 0; a < 3; ++a) {
+            g[a] += wp * r[a];
+            H[7 * a] += wp;
+        }
+    }
     for (int ia = 0; ia < 6; ++ia)
         for (int ib = 0; ib < ia; ++ib)
             H[6 * ia + ib] = H[6 * ib + ia];
@@ -790,7 +806,7 @@ static void refine_core(const tvo_pnp_config *cfg, const double (*X)[3], const t
 {
     const double k = cfg->huber;
     double H[36], g[6], Hn[36], gn[6], mu = PNP_MU0, cost;
-    int32_t used = evaluate(T, X, x, use, n, k, H, g, &cost);
+    int32_t used = evaluate(T, X, x, use, n, k, cfg, H, g, &cost);
     for (int32_t it = 0; it < cfg->refine_iterations && used >= 3; ++it) {
         double A[36], b[6], d[6];
         memcpy(A, H, sizeof A);
@@ -808,7 +824,7 @@ static void refine_core(const tvo_pnp_config *cfg, const double (*X)[3], const t
         tvo_pose Tn = *T;
         se3_left_update(d, &Tn);
         double cn = DBL_MAX;
-        int32_t usedn = tvo_pose_is_finite(&Tn) ? evaluate(&Tn, X, x, use, n, k, Hn, gn, &cn) : 0;
+        int32_t usedn = tvo_pose_is_finite(&Tn) ? evaluate(&Tn, X, x, use, n, k, cfg, Hn, gn, &cn) : 0;
         double nw = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
         double nv = sqrt(d[3] * d[3] + d[4] * d[4] + d[5] * d[5]);
         int tiny = nw < PNP_TINY && nv < PNP_TINY * (1.0 + sqrt(dot3(T->t, T->t)));

@@ -121,9 +121,10 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->map_init_parallax_deg = 1.0;
     cfg->map_tri_parallax_deg = 0.5;
     cfg->map_kf_baseline = 0.1;
-    cfg->map_kf_points_ratio = 0.6;
+    cfg->map_kf_points_ratio = 0.8;
     cfg->map_kf_max_frames = 30;
     cfg->map_ba_iterations = 5;
+    cfg->map_rot_prior = 400.0;
     cfg->clock = NULL;
     cfg->clock_user = NULL;
 }
@@ -166,7 +167,7 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (cfg->map_max_landmarks < 16 || cfg->map_max_landmarks > 100000)
         return 0;
-    if (cfg->map_min_points < 6 || cfg->map_min_points > cfg->max_tracks)
+    if (cfg->map_min_points < 6 || cfg->map_min_points > 100000) /* above max_tracks: never a map */
         return 0;
     if (!(cfg->map_init_parallax_deg > 0.0 && cfg->map_init_parallax_deg <= 30.0) ||
         !(cfg->map_tri_parallax_deg > 0.0 && cfg->map_tri_parallax_deg <= 30.0))
@@ -176,6 +177,8 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (cfg->map_kf_max_frames < 1 || cfg->map_kf_max_frames > 100000 || cfg->map_ba_iterations < 1 ||
         cfg->map_ba_iterations > 100)
+        return 0;
+    if (!(cfg->map_rot_prior >= 0.0 && cfg->map_rot_prior <= 1e12))
         return 0;
     return 1;
 }
@@ -318,11 +321,10 @@ void tvo_vo_reset(tvo_vo *vo)
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
     vo->has_pose0 = 0;
     vo->has_kf = 0;
-    if (vo->cfg.map) {
-        if (vo->map.active)
-            vo->map.losses++;
-        tvo_map_clear(&vo->map);
-    }
+    if (vo->cfg.map)
+        tvo_map_reset(&vo->map);
+    vo->T_c_w = tvo_pose_identity();
+    vo->next_id = 0;
     vo->has_pred = 0;
 }
 

@@ -164,6 +164,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cfg.lk.win_size = 5 + 4 * (hdr[7] & 7u);
     cfg.lk.force_portable = (hdr[7] >> 3) & 1;
     cfg.lk.max_level = hdr[5] & 3;
+    /* the local map: on for three inputs in four, with windows of 3..6 keyframes and landmark capacities
+       from below to above the track count (header byte 6's bits, beside the scene seed) */
+    cfg.map = (hdr[6] & 3u) != 0;
+    cfg.map_window = 3 + (int32_t)((hdr[6] >> 2) & 3u);
+    cfg.map_max_landmarks = 16 + (int32_t)(hdr[4] * ((hdr[6] >> 4) & 3u));
+    cfg.map_min_points = 6 + (int32_t)((hdr[6] >> 6) * 4u);
     while ((need = tvo_vo_required_size(&cfg)) == 0 && cfg.lk.max_level > 0)
         cfg.lk.max_level--;
     TVO_FUZZ_CHECK(need > 0); /* every size from 16x16 up is valid with one level */

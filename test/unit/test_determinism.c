@@ -37,6 +37,7 @@
 #define EXPECT_RELPOSE   0x738ab310f9910f06ULL
 #define EXPECT_NN        0x7780412f62c17499ULL
 #define EXPECT_VO        0xca2d97807cbf5eabULL
+#define EXPECT_MAP       0x0ULL
 /* ==== end of EXPECTED DIGESTS ==== */
 
 #define W 320
@@ -489,8 +490,8 @@ static void test_vo(void **state)
     size_t need;
     void *mem;
     tvo_traj traj;
-    digest d;
-    int ok_frames = 0;
+    digest d, dm;
+    int ok_frames = 0, map_frames = 0;
     tvo_vo_config_default(&cfg, &cam);
     need = tvo_vo_required_size(&cfg);
     mem = malloc(need);
@@ -498,6 +499,7 @@ static void test_vo(void **state)
     assert_int_equal(tvo_vo_init(&vo, &cfg, mem, need), TVO_OK);
     tvo_traj_init(&traj, &s->gt[0]);
     dg_init(&d);
+    dg_init(&dm);
     for (int k = 0; k < FRAMES; ++k) {
         tvo_vo_result res;
         tvo_image img = tvo_image_make(W, H, W, s->img[k]);
@@ -524,6 +526,18 @@ static void test_vo(void **state)
         }
         dg_pose(&d, &traj.T_w_c);
         trace("vo", k, &d);
+        /* the local map: the world pose and what the map did */
+        dg_pose(&dm, &res.T_w_c);
+        dg_i32(&dm, (int32_t)res.map_state);
+        dg_i32(&dm, res.keyframe);
+        dg_i32(&dm, res.map_points);
+        dg_i32(&dm, res.map_new_points);
+        dg_i32(&dm, res.map_landmarks);
+        dg_i32(&dm, res.map_losses);
+        dg_i32(&dm, res.ba_iterations);
+        dg_i32(&dm, res.ba_flags);
+        trace("map", k, &dm);
+        map_frames += res.map_state == TVO_MAP_TRACKING;
         if (verbose()) {
             printf("  vo %d: state %d flags %d tracked %d inliers %d new %d tracks %d parallax %a\n", k,
                    (int)res.state, (int)res.relpose_flags, (int)res.tracked, (int)res.inliers,
@@ -543,8 +557,11 @@ static void test_vo(void **state)
         const double dx = traj.T_w_c.t[0] - g->t[0], dy = traj.T_w_c.t[1] - g->t[1], dz = traj.T_w_c.t[2] - g->t[2];
         assert_true(sqrt(dx * dx + dy * dy + dz * dz) < 0.15);
     }
+    /* ...and the map tracks most of the frames */
+    assert_true(map_frames >= FRAMES / 2);
     free(mem);
     assert_true(check_digest("vo", "EXPECT_VO", d.h, EXPECT_VO));
+    assert_true(check_digest("map", "EXPECT_MAP", dm.h, EXPECT_MAP));
 }
 
 int main(void)

@@ -77,11 +77,17 @@ typedef struct tvo_pnp_config {
     int32_t min_inliers;       /* fewer inliers -> TVO_ERR_TOO_FEW; >= 3; default 12 */
     uint64_t seed;             /* seed of the deterministic generator (splitmix64-seeded xorshift, the
                                   scheme of relpose); default 0x5eed */
-    /* ---- added fields (the defaults are what tvo_pnp_config_default sets) ---- */
     int32_t use_guess;         /* tvo_pnp_ransac: 1 = the pose passed in *T_c_w (when finite) is scored
                                   as the first hypothesis, before any sample (a motion-model prediction:
                                   with many inliers the adaptive count then stops after a few samples);
                                   0 = *T_c_w is output only; 0 or 1, default 0 */
+    double rot_prior[9];       /* a rotation R_p (row-major) the refinement pulls the pose's rotation
+                                  toward, e.g. the previous pose turned by a gyroscope's or a two-view
+                                  estimate's rotation: the cost gains rot_prior_weight / 2 |log(R R_p^T)|^2
+                                  (rotation vector, rad). Used when rot_prior_weight > 0 */
+    double rot_prior_weight;   /* >= 0 and finite, in normalised image units^2 per rad^2: a weight w
+                                  counts as much as one point's reprojection error with sigma_obs^2 =
+                                  1 / w per rad^2 of rotation; default 0 (no prior) */
 } tvo_pnp_config;
 
 /* Fill cfg with the defaults above. NULL is ignored. */

@@ -147,18 +147,23 @@ typedef struct tvo_vo_config {
     int32_t map;                /* 1: on; 0: two-view only (the VO of earlier versions); default 1 */
     int32_t map_window;         /* keyframes in the window, [3, TVO_VO_MAX_WINDOW]; default 6 */
     int32_t map_max_landmarks;  /* landmark capacity, [16, 100000]; default 2 x max_tracks */
-    int32_t map_min_points;     /* a frame with fewer PnP inliers loses the map, [6, max_tracks]; default 20 */
+    int32_t map_min_points;     /* a frame with fewer PnP inliers loses the map, [6, 100000] (above
+                                   max_tracks: the map never tracks); default 20 */
     double map_init_parallax_deg; /* the initial pair needs this median parallax, (0, 30]; default 1 */
     double map_tri_parallax_deg;  /* a track is triangulated when its rays are this far apart, (0, 30];
                                    default 1 */
     double map_kf_baseline;     /* a new keyframe when the camera moved more than this x the median depth
                                    of its landmarks since the last keyframe, (0, 10]; default 0.1 */
     double map_kf_points_ratio; /* ...or when fewer than this share of the last keyframe's landmarks
-                                   remain inliers, [0, 1]; default 0.6 */
+                                   remain inliers, [0, 1]; default 0.8 */
     int32_t map_kf_max_frames;  /* ...or after this many frames, [1, 100000]; default 30 (and after
                                    keyframe_max_rot_deg of rotation) */
     int32_t map_ba_iterations;  /* Levenberg-Marquardt iterations of the bundle adjustment, [1, 100];
                                    default 5 */
+    double map_rot_prior;       /* weight of this frame's two-view rotation (turning the last pose) as a
+                                   prior on its map pose (pnp.h, rot_prior_weight), [0, 1e12]; 0: none;
+                                   default 400 (as much as 400 points: the per-frame rotation then
+                                   follows the two-view estimate, the map corrects its drift) */
     tvo_clock_fn clock;         /* optional (NULL: no timings) */
     void *clock_user;
 } tvo_vo_config;
@@ -234,8 +239,9 @@ tvo_status tvo_vo_init(tvo_vo **vo, const tvo_vo_config *cfg, void *mem, size_t 
  * res->T_prev_cur is always finite. */
 tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_vo_result *res);
 
-/* Forget the tracks: the next frame initialises again (after a gap, a bad frame, ...). The map is
- * dropped too (counted as a loss when it was tracking); T_w_c continues from the last pose. */
+/* Forget the tracks and the map: the object behaves as after tvo_vo_init() (the next frame initialises
+ * again, T_w_c starts from the identity in a new unit of length). For a gap or a bad frame; a caller that
+ * chains trajectories across the reset (as tvo_replay does) composes the new T_w_c onto its last pose. */
 void tvo_vo_reset(tvo_vo *vo);
 
 /* Read-only view of the current tracks (for drawing or logging): copies min(count, capacity) of them into
