@@ -19,6 +19,9 @@
 #define PIVOT_SINGULAR 1e-10 /* undamped reduced system: pivot / diagonal entry */
 #define PIVOT_DAMPED 1e-14  /* damped reduced system: pivot / diagonal entry */
 
+/* Memory (see "Memory" in ba.h): per observation only its index in the by-point order and its usable
+ * flag; the Jacobians, IRLS weights and W blocks are recomputed from the state (the linearisation
+ * point) by point_blocks() for every system build and back-substitution. */
 typedef struct ba_ws {
     /* poses [max_poses] */
     int32_t *slot;      /* index in the reduced system, -1 when not optimised */
@@ -26,25 +29,29 @@ typedef struct ba_ws {
     tvo_pose *pose_bak;
     double (*Hc)[36];   /* J^T W J of the pose (6x6, row-major) */
     double (*gc)[6];    /* J^T W r of the pose */
+    int32_t *tpos;      /* [slot]: position in the current point's touched list, -1 when not in it */
+    int32_t *tlist;     /* slots the current point's observations touch, in order of first appearance */
+    double (*Wp)[18];   /* [touched]: sum of the point's W = Jc^T W Jx (6x3) in that free pose */
+    double (*Yp)[18];   /* [touched]: Wp V^-1 (6x3) */
     /* points [max_points] */
     uint8_t *pstate;
     int32_t *pt_nuse;
     int32_t *pt_start; /* [max_points + 1]: observations of point j are pt_obs[pt_start[j] .. pt_start[j+1]) */
     double (*X_bak)[3];
-    double (*V)[9];    /* J^T W J of the point (3x3) */
+    double (*V)[6];    /* J^T W J of the point: upper triangle 00 01 02 11 12 22 */
     double (*gx)[3];
-    double (*Vi)[9];   /* inverse of the damped V */
     double (*dx)[3];
     /* observations [max_obs] */
     int32_t *pt_obs;
-    uint8_t *ouse;     /* usable at the current linearisation */
-    double (*W)[18];   /* Jc^T W Jx (6x3) for a free pose and a free point */
-    double (*Y)[18];   /* W Vi (6x3) */
+    uint8_t *ouse;     /* usable (decided at the first linearisation) */
     /* reduced system, n = 6 * max_poses */
     double *S;         /* n x n, row stride n_cur */
     double *b;
     double *dc;
 } ba_ws;
+
+/* index of (a, b) in a packed symmetric 3x3 (ba_ws.V) */
+static const int8_t sym3[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
 
 static int cfg_valid(const tvo_ba_config *c)
 {
@@ -101,18 +108,19 @@ static size_t carve(const tvo_ba_config *c, uint8_t *base, ba_ws *ws)
     TVO_BA_TAKE(pose_bak, np);
     TVO_BA_TAKE(Hc, np);
     TVO_BA_TAKE(gc, np);
+    TVO_BA_TAKE(tpos, np);
+    TVO_BA_TAKE(tlist, np);
+    TVO_BA_TAKE(Wp, np);
+    TVO_BA_TAKE(Yp, np);
     TVO_BA_TAKE(pstate, nx);
     TVO_BA_TAKE(pt_nuse, nx);
     TVO_BA_TAKE(pt_start, nx + 1u);
     TVO_BA_TAKE(X_bak, nx);
     TVO_BA_TAKE(V, nx);
     TVO_BA_TAKE(gx, nx);
-    TVO_BA_TAKE(Vi, nx);
     TVO_BA_TAKE(dx, nx);
     TVO_BA_TAKE(pt_obs, no);
     TVO_BA_TAKE(ouse, no);
-    TVO_BA_TAKE(W, no);
-    TVO_BA_TAKE(Y, no);
     TVO_BA_TAKE(S, n * n);
     TVO_BA_TAKE(b, n);
     TVO_BA_TAKE(dc, n);
@@ -266,6 +274,61 @@ static void chol_solve(const double *L, int n, const double *b, double *x)
 
 /* ---- linearisation ---------------------------------------------------------------------------- */
 
+/* One observation linearised at the current state. */
+typedef struct obs_lin {
+    double r0, r1;     /* residual */
+    double w0, w1;     /* IRLS weights */
+    double cost;       /* 1/2 rho of both components */
+    double Jc[2][6];   /* d r / d (omega, v) of the pose */
+    double Jx[2][3];   /* d r / d X */
+} obs_lin;
+
+/* Linearises observation o at the current state; 0 when it is not usable (non-finite x, y or residual,
+ * Z_c < min_depth). The same state gives bit-identical values, which lets the system builds and the
+ * back-substitution recompute them instead of storing them. Inlined (where the compiler is told to
+ * optimise for speed): it runs about 16 times per observation and call. */
+#if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
+#define BA_INLINE static inline __attribute__((always_inline))
+#else
+#define BA_INLINE static inline
+#endif
+BA_INLINE int lin_obs(const tvo_ba_config *c, const tvo_ba_problem *p, const tvo_ba_obs *o, obs_lin *L)
+{
+    const tvo_pose *T = &p->T_c_w[o->pose];
+    double P[3], iz, u, v;
+    if (!(isfinite(o->x) && isfinite(o->y)))
+        return 0;
+    to_camera(T, p->X[o->point], P);
+    if (!(P[2] >= c->min_depth))
+        return 0;
+    iz = 1.0 / P[2];
+    u = P[0] * iz;
+    v = P[1] * iz;
+    L->r0 = u - o->x;
+    L->r1 = v - o->y;
+    if (!(isfinite(L->r0) && isfinite(L->r1)))
+        return 0;
+    L->cost = huber_half(L->r0, c->huber, &L->w0) + huber_half(L->r1, c->huber, &L->w1);
+    /* d(u, v)/dP = iz [1 0 -u; 0 1 -v]; dP/d(omega, v) = [-[P]x  I]; dP/dX = R */
+    L->Jc[0][0] = -u * v;
+    L->Jc[0][1] = 1.0 + u * u;
+    L->Jc[0][2] = -v;
+    L->Jc[0][3] = iz;
+    L->Jc[0][4] = 0.0;
+    L->Jc[0][5] = -u * iz;
+    L->Jc[1][0] = -1.0 - v * v;
+    L->Jc[1][1] = u * v;
+    L->Jc[1][2] = u;
+    L->Jc[1][3] = 0.0;
+    L->Jc[1][4] = iz;
+    L->Jc[1][5] = -v * iz;
+    for (int a = 0; a < 3; ++a) {
+        L->Jx[0][a] = iz * (T->R[a] - u * T->R[6 + a]);
+        L->Jx[1][a] = iz * (T->R[3 + a] - v * T->R[6 + a]);
+    }
+    return 1;
+}
+
 /* Builds the per-pose and per-point blocks at the current state, marks usable observations (first:
  * from all of them; later: from those usable before, which accepted steps keep usable), decides the held
  * points and the free-pose slots. Returns the cost (over the usable observations); counts to
@@ -274,7 +337,6 @@ static void chol_solve(const double *L, int n, const double *b, double *x)
 static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *ws, int first, int32_t *n_used,
                         int32_t *n_skipped_obs, int32_t *n_held, int32_t *n_free_poses, int *pose_starved)
 {
-    const double k_h = c->huber;
     double cost = 0.0;
     int32_t used = 0, nfree = 0, held = 0;
     *pose_starved = 0;
@@ -291,88 +353,49 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
     }
     for (int32_t k = 0; k < p->n_obs; ++k) {
         const tvo_ba_obs *o = &p->obs[k];
-        const tvo_pose *T = &p->T_c_w[o->pose];
-        const int pose_free = !p->pose_fixed[o->pose];
-        const int pt_free = ws->pstate[o->point] == PT_FREE;
-        double P[3], iz, u, v, r0, r1, w0, w1, Jc[2][6], Jx[2][3];
+        obs_lin L;
         if (!first && !ws->ouse[k])
             continue; /* the usable set is the first linearisation's for the whole call */
         ws->ouse[k] = 0;
-        if (!(isfinite(o->x) && isfinite(o->y)))
-            continue;
-        to_camera(T, p->X[o->point], P);
-        if (!(P[2] >= c->min_depth))
-            continue;
-        iz = 1.0 / P[2];
-        u = P[0] * iz;
-        v = P[1] * iz;
-        r0 = u - o->x;
-        r1 = v - o->y;
-        if (!(isfinite(r0) && isfinite(r1)))
+        if (!lin_obs(c, p, o, &L))
             continue;
         ws->ouse[k] = 1;
         used++;
         ws->pose_nuse[o->pose]++;
         ws->pt_nuse[o->point]++;
-        cost += huber_half(r0, k_h, &w0) + huber_half(r1, k_h, &w1);
-        /* d(u, v)/dP = iz [1 0 -u; 0 1 -v]; dP/d(omega, v) = [-[P]x  I]; dP/dX = R */
-        Jc[0][0] = -u * v;
-        Jc[0][1] = 1.0 + u * u;
-        Jc[0][2] = -v;
-        Jc[0][3] = iz;
-        Jc[0][4] = 0.0;
-        Jc[0][5] = -u * iz;
-        Jc[1][0] = -1.0 - v * v;
-        Jc[1][1] = u * v;
-        Jc[1][2] = u;
-        Jc[1][3] = 0.0;
-        Jc[1][4] = iz;
-        Jc[1][5] = -v * iz;
-        for (int a = 0; a < 3; ++a) {
-            Jx[0][a] = iz * (T->R[a] - u * T->R[6 + a]);
-            Jx[1][a] = iz * (T->R[3 + a] - v * T->R[6 + a]);
-        }
-        if (pose_free) {
+        cost += L.cost;
+        if (!p->pose_fixed[o->pose]) {
             double *H = ws->Hc[o->pose], *g = ws->gc[o->pose];
             for (int a = 0; a < 6; ++a) {
-                const double wa0 = w0 * Jc[0][a], wa1 = w1 * Jc[1][a];
+                const double wa0 = L.w0 * L.Jc[0][a], wa1 = L.w1 * L.Jc[1][a];
                 for (int b = a; b < 6; ++b) /* upper triangle; mirrored below */
-                    H[6 * a + b] += wa0 * Jc[0][b] + wa1 * Jc[1][b];
-                g[a] += wa0 * r0 + wa1 * r1;
+                    H[6 * a + b] += wa0 * L.Jc[0][b] + wa1 * L.Jc[1][b];
+                g[a] += wa0 * L.r0 + wa1 * L.r1;
             }
         }
-        if (pt_free) {
+        if (ws->pstate[o->point] == PT_FREE) {
             double *Vj = ws->V[o->point], *g = ws->gx[o->point];
             for (int a = 0; a < 3; ++a) {
-                const double wa0 = w0 * Jx[0][a], wa1 = w1 * Jx[1][a];
-                for (int b = a; b < 3; ++b) /* upper triangle; mirrored below */
-                    Vj[3 * a + b] += wa0 * Jx[0][b] + wa1 * Jx[1][b];
-                g[a] += wa0 * r0 + wa1 * r1;
-            }
-            if (pose_free) {
-                double *Wk = ws->W[k];
-                for (int a = 0; a < 6; ++a) {
-                    const double wa0 = w0 * Jc[0][a], wa1 = w1 * Jc[1][a];
-                    for (int b = 0; b < 3; ++b)
-                        Wk[3 * a + b] = wa0 * Jx[0][b] + wa1 * Jx[1][b];
-                }
+                const double wa0 = L.w0 * L.Jx[0][a], wa1 = L.w1 * L.Jx[1][a];
+                for (int b = a; b < 3; ++b)
+                    Vj[sym3[a][b]] += wa0 * L.Jx[0][b] + wa1 * L.Jx[1][b];
+                g[a] += wa0 * L.r0 + wa1 * L.r1;
             }
         }
     }
     /* held points: too few usable observations or an ill-conditioned block */
     for (int32_t j = 0; j < p->n_points; ++j) {
-        double Vi[9], tr, fro = 0.0;
+        double V9[9], Vi[9], tr, fro = 0.0;
         if (ws->pstate[j] != PT_FREE)
             continue;
-        ws->V[j][3] = ws->V[j][1];
-        ws->V[j][6] = ws->V[j][2];
-        ws->V[j][7] = ws->V[j][5];
-        if (ws->pt_nuse[j] < 2 || !chol3_inv(ws->V[j], PIVOT_POINT, Vi)) {
+        for (int a = 0; a < 9; ++a)
+            V9[a] = ws->V[j][sym3[a / 3][a % 3]];
+        if (ws->pt_nuse[j] < 2 || !chol3_inv(V9, PIVOT_POINT, Vi)) {
             ws->pstate[j] = PT_HELD;
             held++;
             continue;
         }
-        tr = ws->V[j][0] + ws->V[j][4] + ws->V[j][8];
+        tr = V9[0] + V9[4] + V9[8];
         for (int a = 0; a < 9; ++a)
             fro += Vi[a] * Vi[a];
         if (!(tr * sqrt(fro) <= c->max_point_cond)) {
@@ -382,6 +405,7 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
     }
     for (int32_t i = 0; i < p->n_poses; ++i) {
         ws->slot[i] = -1;
+        ws->tpos[i] = -1;
         if (p->pose_fixed[i])
             continue;
         for (int a = 1; a < 6; ++a)
@@ -400,10 +424,63 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
     return isfinite(cost) ? cost : INFINITY;
 }
 
+/* Inverse of free point j's damped block (factor dmp on the diagonal) to Vi; 0 when not positive
+ * definite. */
+static int point_inv(const ba_ws *ws, int32_t j, double dmp, double Vi[9])
+{
+    double Vd[9];
+    for (int a = 0; a < 9; ++a)
+        Vd[a] = ws->V[j][sym3[a / 3][a % 3]];
+    Vd[0] *= dmp;
+    Vd[4] *= dmp;
+    Vd[8] *= dmp;
+    return chol3_inv(Vd, 0.0, Vi);
+}
+
+/* Recomputes free point j's blocks W = Jc^T W Jx with its free poses at the current state (the
+ * linearisation point), summed per pose into ws->Wp[m] for the touched slots ws->tlist[m], m < the
+ * returned count (in order of first appearance; ws->tpos is -1 again on return). */
+static int32_t point_blocks(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *ws, int32_t j)
+{
+    const int32_t k0 = ws->pt_start[j], k1 = ws->pt_start[j + 1];
+    int32_t nt = 0;
+    for (int32_t q = k0; q < k1; ++q) {
+        const int32_t k = ws->pt_obs[q];
+        const int32_t s = ws->slot[p->obs[k].pose];
+        obs_lin L;
+        double *Wm;
+        int32_t m;
+        if (!ws->ouse[k] || s < 0 || !lin_obs(c, p, &p->obs[k], &L))
+            continue;
+        m = ws->tpos[s];
+        if (m < 0) {
+            m = nt++;
+            ws->tpos[s] = m;
+            ws->tlist[m] = s;
+            Wm = ws->Wp[m];
+            for (int a = 0; a < 6; ++a) {
+                const double wa0 = L.w0 * L.Jc[0][a], wa1 = L.w1 * L.Jc[1][a];
+                for (int b = 0; b < 3; ++b)
+                    Wm[3 * a + b] = wa0 * L.Jx[0][b] + wa1 * L.Jx[1][b];
+            }
+        } else {
+            Wm = ws->Wp[m];
+            for (int a = 0; a < 6; ++a) {
+                const double wa0 = L.w0 * L.Jc[0][a], wa1 = L.w1 * L.Jc[1][a];
+                for (int b = 0; b < 3; ++b)
+                    Wm[3 * a + b] += wa0 * L.Jx[0][b] + wa1 * L.Jx[1][b];
+            }
+        }
+    }
+    for (int32_t m = 0; m < nt; ++m)
+        ws->tpos[ws->tlist[m]] = -1;
+    return nt;
+}
+
 /* Builds and solves the damped system (lambda; Cholesky pivot bound rel) into ws->dc (poses, by slot)
  * and ws->dx (free points). Returns 0 when a factorisation fails. With solve == 0 only the reduced
  * system's factorisation is attempted (the singularity test). */
-static int build_solve(const tvo_ba_problem *p, ba_ws *ws, int32_t nfree, double lambda, double rel, int solve)
+static int build_solve(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *ws, int32_t nfree, double lambda, double rel, int solve)
 {
     const int n = 6 * nfree;
     const double dmp = 1.0 + lambda;
@@ -422,39 +499,31 @@ static int build_solve(const tvo_ba_problem *p, ba_ws *ws, int32_t nfree, double
         }
     }
     for (int32_t j = 0; j < p->n_points; ++j) {
-        double Vd[9];
-        const int32_t k0 = ws->pt_start[j], k1 = ws->pt_start[j + 1];
+        double Vi[9];
+        const double *g = ws->gx[j];
+        int32_t nt;
         if (ws->pstate[j] != PT_FREE)
             continue;
-        memcpy(Vd, ws->V[j], sizeof Vd);
-        Vd[0] *= dmp;
-        Vd[4] *= dmp;
-        Vd[8] *= dmp;
-        if (!chol3_inv(Vd, 0.0, ws->Vi[j]))
+        if (!point_inv(ws, j, dmp, Vi))
             return 0;
-        for (int32_t q = k0; q < k1; ++q) {
-            const int32_t k = ws->pt_obs[q];
-            const int32_t sk = ws->slot[p->obs[k].pose];
-            const double *Wk = ws->W[k], *Vi = ws->Vi[j], *g = ws->gx[j];
-            double *Yk = ws->Y[k];
-            if (!ws->ouse[k] || sk < 0)
-                continue;
+        nt = point_blocks(c, p, ws, j);
+        for (int32_t m = 0; m < nt; ++m) {
+            const int32_t sk = ws->tlist[m];
+            const double *Wk = ws->Wp[m];
+            double *Yk = ws->Yp[m];
             for (int a = 0; a < 6; ++a) {
                 for (int b2 = 0; b2 < 3; ++b2)
                     Yk[3 * a + b2] = Wk[3 * a] * Vi[b2] + Wk[3 * a + 1] * Vi[3 + b2] + Wk[3 * a + 2] * Vi[6 + b2];
                 ws->b[6 * sk + a] += Yk[3 * a] * g[0] + Yk[3 * a + 1] * g[1] + Yk[3 * a + 2] * g[2];
             }
         }
-        for (int32_t q = k0; q < k1; ++q) {
-            const int32_t k = ws->pt_obs[q];
-            const int32_t sk = ws->slot[p->obs[k].pose];
-            if (!ws->ouse[k] || sk < 0)
-                continue;
-            for (int32_t q2 = k0; q2 < k1; ++q2) {
-                const int32_t l = ws->pt_obs[q2];
-                const int32_t sl = ws->slot[p->obs[l].pose];
-                const double *Yk = ws->Y[k], *Wl = ws->W[l];
-                if (!ws->ouse[l] || sl < 0 || sl > sk)
+        for (int32_t m = 0; m < nt; ++m) {
+            const int32_t sk = ws->tlist[m];
+            const double *Yk = ws->Yp[m];
+            for (int32_t m2 = 0; m2 < nt; ++m2) {
+                const int32_t sl = ws->tlist[m2];
+                const double *Wl = ws->Wp[m2];
+                if (sl > sk)
                     continue;
                 for (int a = 0; a < 6; ++a) {
                     double *row = S + (size_t)(6 * sk + a) * (size_t)n + (size_t)(6 * sl);
@@ -470,23 +539,20 @@ static int build_solve(const tvo_ba_problem *p, ba_ws *ws, int32_t nfree, double
         return 1;
     if (n > 0)
         chol_solve(S, n, ws->b, ws->dc);
-    /* back-substitution: dx_j = Vi (-gx_j - sum_k W_k^T dc_k) */
+    /* back-substitution: dx_j = Vi (-gx_j - sum_k W_k^T dc_k), W_k and Vi recomputed */
     for (int32_t j = 0; j < p->n_points; ++j) {
-        double t[3];
-        const int32_t k0 = ws->pt_start[j], k1 = ws->pt_start[j + 1];
-        const double *Vi = ws->Vi[j];
+        double t[3], Vi[9];
+        int32_t nt;
         if (ws->pstate[j] != PT_FREE)
             continue;
+        if (!point_inv(ws, j, dmp, Vi))
+            return 0; /* not reached: the same block factored above */
+        nt = point_blocks(c, p, ws, j);
         t[0] = -ws->gx[j][0];
         t[1] = -ws->gx[j][1];
         t[2] = -ws->gx[j][2];
-        for (int32_t q = k0; q < k1; ++q) {
-            const int32_t k = ws->pt_obs[q];
-            const int32_t sk = ws->slot[p->obs[k].pose];
-            const double *Wk = ws->W[k], *d;
-            if (!ws->ouse[k] || sk < 0)
-                continue;
-            d = ws->dc + 6 * sk;
+        for (int32_t m = 0; m < nt; ++m) {
+            const double *Wk = ws->Wp[m], *d = ws->dc + 6 * ws->tlist[m];
             for (int b2 = 0; b2 < 3; ++b2)
                 for (int a = 0; a < 6; ++a)
                     t[b2] -= Wk[3 * a + b2] * d[a];
@@ -558,7 +624,7 @@ static double predicted_drop(const tvo_ba_problem *p, const ba_ws *ws, double la
             continue;
         for (int a = 0; a < 3; ++a) {
             const double d = ws->dx[j][a];
-            s += d * (lambda * ws->V[j][4 * a] * d - ws->gx[j][a]);
+            s += d * (lambda * ws->V[j][sym3[a][a]] * d - ws->gx[j][a]);
         }
     }
     return 0.5 * s;
@@ -647,7 +713,7 @@ tvo_status tvo_ba_solve(const tvo_ba_config *cfg, tvo_ba_problem *p, void *scrat
     if (starved)
         r.flags |= TVO_BA_FLAG_SINGULAR;
     /* the undamped reduced system: is every free pose determined? */
-    if (nfree > 0 && !build_solve(p, &ws, nfree, 0.0, PIVOT_SINGULAR, 0))
+    if (nfree > 0 && !build_solve(cfg, p, &ws, nfree, 0.0, PIVOT_SINGULAR, 0))
         r.flags |= TVO_BA_FLAG_SINGULAR;
     lambda = cfg->lambda_init;
     backup(p, &ws);
@@ -668,7 +734,7 @@ tvo_status tvo_ba_solve(const tvo_ba_config *cfg, tvo_ba_problem *p, void *scrat
             converged = 1;
             break;
         }
-        if (!build_solve(p, &ws, nfree, lambda, PIVOT_DAMPED, 1)) {
+        if (!build_solve(cfg, p, &ws, nfree, lambda, PIVOT_DAMPED, 1)) {
             r.iterations++;
             r.flags |= TVO_BA_FLAG_SINGULAR;
             lambda *= 10.0;

@@ -6,12 +6,12 @@
 #include <arm_neon.h>
 
 /* NEON kernels (aarch64; armv7 built with -mfpu=neon): the same strips and the same integers as the
- * SSE2 ones above and the portable C path. Differences in form only: products are widening
+ * SSE2 ones of tvo_lk_sse2.c and the portable C path. Differences in form only: products are widening
  * multiply-accumulates by a weight (vmlal_n) instead of pair products (madd), and the descale
  * (v + 2^(n-1)) >> n is one rounding narrowing shift (vrshrn_n), which rounds in wider precision, so
  * no rounding term is carried and, as in the C path, a negative v rounds toward -infinity. */
 
-/* int32 lane sums to the int64 lanes of *acc (pairwise; see lk_acc_epi64 for why). */
+/* int32 lane sums to the int64 lanes of *acc (pairwise; see lk_acc_epi64 in tvo_lk_sse2.c for why). */
 LK_INLINE int64_t lk_hsum_s64_neon(int64x2_t v)
 {
     return vgetq_lane_s64(v, 0) + vgetq_lane_s64(v, 1);

@@ -1,8 +1,8 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* Windowed bundle adjustment (tvo_ba_solve, tvo_ba_obs_errors): synthetic windows of 6 poses along a
  * path and 200 points; convergence without noise, with 0.5 px noise and with 10 % gross outliers,
- * points at infinity, a singular window, an already optimal state, the documented statuses, and the
- * stack used by one solve. Focal length 458 px converts pixels to the normalised units. */
+ * points at infinity, a singular window, an already optimal state, the documented statuses, duplicated
+ * observations, the scratch budget, and the stack used by one solve. Focal length 458 px converts pixels to the normalised units. */
 #define _POSIX_C_SOURCE 200809L /* pthread_attr_setstack, posix_memalign */
 #include <math.h>
 #include <pthread.h>
@@ -775,6 +775,80 @@ static void test_unaligned_scratch_deterministic(void **state)
     free(b);
 }
 
+/* Every observation listed twice (the copies after all originals, so each point's list holds each of
+ * its poses twice, apart): the cost, the normal equations and the gradient all double, the damping is
+ * relative, so the solve takes the same steps; the result matches the single listing to rounding. */
+static void test_duplicated_observations(void **state)
+{
+    scene *a = make_scene(200, 0.5, 0.05, 21), *b = make_scene(200, 0.5, 0.05, 21);
+    tvo_ba_report ra, rb;
+    double dmax = 0.0;
+    (void)state;
+    assert_true(2 * b->n_obs <= NOBS_MAX);
+    for (int32_t k = 0; k < b->n_obs; ++k)
+        b->obs[b->n_obs + k] = b->obs[k];
+    b->n_obs *= 2;
+    b->p.n_obs = b->n_obs;
+    perturb(a, 0.01, 0.03, 0.1, 14);
+    perturb(b, 0.01, 0.03, 0.1, 14);
+    assert_int_equal(solve(a, OUTLIER_ITERS, &ra), TVO_OK);
+    assert_int_equal(solve(b, OUTLIER_ITERS, &rb), TVO_OK);
+    print_rep("single", &ra);
+    print_rep("duplicated", &rb);
+    assert_true(ra.accepted >= 3);
+    assert_int_equal(ra.iterations, rb.iterations);
+    assert_int_equal(ra.accepted, rb.accepted);
+    assert_int_equal(ra.flags, rb.flags);
+    assert_int_equal(ra.points_skipped, rb.points_skipped);
+    assert_int_equal(ra.poses_free, rb.poses_free);
+    assert_true(fabs(rb.cost_initial - 2.0 * ra.cost_initial) <= 1e-12 * rb.cost_initial);
+    assert_true(fabs(rb.cost_final - 2.0 * ra.cost_final) <= 1e-9 * rb.cost_final);
+    for (int i = 0; i < NPOSE; ++i) {
+        for (int e = 0; e < 9; ++e)
+            dmax = fmax(dmax, fabs(a->T[i].R[e] - b->T[i].R[e]));
+        for (int e = 0; e < 3; ++e)
+            dmax = fmax(dmax, fabs(a->T[i].t[e] - b->T[i].t[e]));
+    }
+    for (int32_t j = 0; j < a->n_pt; ++j)
+        for (int e = 0; e < 3; ++e)
+            dmax = fmax(dmax, fabs(a->X[j][e] - b->X[j][e]));
+    fprintf(stderr, "duplicated: largest difference %.3g\n", dmax);
+    assert_true(dmax < 1e-9);
+    free(a);
+    free(b);
+}
+
+/* The scratch contract of ba.h: at most 64 B per observation and 160 B per point beyond the reduced
+ * system and the per-pose blocks, e.g. below 64 KB for an embedded window of 6 poses, 300 points and
+ * 1200 observations. */
+static void test_scratch_budget(void **state)
+{
+    tvo_ba_config cfg;
+    size_t base, more_obs, more_pts, reduced;
+    (void)state;
+    tvo_ba_config_default(&cfg);
+    cfg.max_poses = 6;
+    cfg.max_points = 300;
+    cfg.max_obs = 1200;
+    base = tvo_ba_scratch_size(&cfg);
+    reduced = (size_t)(36 * 36 + 2 * 36) * sizeof(double);
+    fprintf(stderr, "scratch 6 poses, 300 points, 1200 observations: %zu bytes\n", base);
+    assert_true(base > reduced);
+    assert_true(base <= 64u * 1200u + 160u * 300u + reduced + 1024u * 6u);
+    assert_true(base < 64000u);
+    cfg.max_obs = 1200 + 1000;
+    more_obs = tvo_ba_scratch_size(&cfg);
+    cfg.max_obs = 1200;
+    cfg.max_points = 300 + 1000;
+    more_pts = tvo_ba_scratch_size(&cfg);
+    assert_true(more_obs > base && more_obs - base <= 64u * 1000u);
+    assert_true(more_pts > base && more_pts - base <= 160u * 1000u);
+    cfg.max_points = 150;
+    cfg.max_obs = 900;
+    fprintf(stderr, "scratch 6 poses, 150 points, 900 observations: %zu bytes\n", tvo_ba_scratch_size(&cfg));
+    assert_true(tvo_ba_scratch_size(&cfg) < 48000u);
+}
+
 /* ---- stack: one solve on a painted thread stack ---------------------------------------------------- */
 #if defined(__SANITIZE_ADDRESS__) || !defined(__OPTIMIZE__)
 #define BA_STACK_BOUND (64 * 1024)
@@ -863,6 +937,8 @@ int main(void)
         cmocka_unit_test(test_hostile_inputs_finite),
         cmocka_unit_test(test_statuses),
         cmocka_unit_test(test_unaligned_scratch_deterministic),
+        cmocka_unit_test(test_duplicated_observations),
+        cmocka_unit_test(test_scratch_budget),
         cmocka_unit_test(test_stack),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -24,7 +24,9 @@ Inputs:
 
 Output by extension: .gif (animated GIF, Pillow, adaptive palette per frame, loops), .avi (Motion-JPEG
 through OpenCV's VideoWriter: always available in opencv-python-headless), .mp4 (MPEG-4 part 2, fourcc
-mp4v, through the FFmpeg bundled with opencv-python(-headless) wheels). Frames with no row in TRACKS.csv
+mp4v, through the FFmpeg bundled with opencv-python(-headless) wheels). A GIF is held in memory until it
+is written (about width x height bytes per frame): for long sequences use .avi / .mp4, or --stride and
+--height. Frames with no row in TRACKS.csv
 (e.g. the VO was lost) are drawn without tracks. Exit status: 0 written, 1 unreadable or malformed input
 (one line naming the file and row), 2 usage error.
 """

@@ -50,15 +50,28 @@
  * the solve goes on with damped steps (the undetermined directions stay near their start values).
  *
  * Cost. On the bench-like window of test/bench/bench_ba.c (6 poses, 2 of them fixed, 300 points each seen
- * by 4 poses, 1200 observations, 0.5 px noise and 5 % outliers, 5 iterations all accepted): 11.6 M
+ * by 4 poses, 1200 observations, 0.5 px noise and 5 % outliers, 5 iterations all accepted): 13.6 M
  * instructions per call (callgrind, x86-64, gcc -O3: `valgrind --tool=callgrind
- * --toggle-collect=tvo_ba_solve bench_ba --callgrind`, total / 10 calls), of which 60 % build and solve
- * the systems (6 of them: 5 damped steps and the undamped check), 31 % linearise (5 times). A 10-pose
- * window (500 points, 2000 observations, `bench_ba --poses 10`): 23.5 M instructions per call.
- * Scaling per iteration: O(obs) to linearise and to evaluate a trial step, O(points) for the 3x3 point
- * blocks, O(sum over points of obs_per_point^2) (<= O(obs * poses)) for the Schur complement,
- * O((6 free poses)^3 / 6) for the reduced system's Cholesky. No allocation (everything lives in the
- * caller's scratch), stack below 4 KB (1,160 B measured by test_ba on x86-64 -O3), no recursion, only + - * / sqrt and tvo_dm_* (bit-identical on
+ * --toggle-collect=tvo_ba_solve bench_ba --callgrind`, total / 10 calls), of which 71 % build and solve
+ * the systems (6 of them: 5 damped steps and the undamped check; 21 % of the total recomputes the
+ * observations' Jacobians and W blocks there, see Memory), 25 % linearise (5 times). A 10-pose window (500 points,
+ * 2000 observations, `bench_ba --poses 10`): 27.3 M instructions per call.
+ * Scaling per iteration: O(obs) to linearise, to evaluate a trial step and for each system build and
+ * back-substitution, O(points) for the 3x3 point blocks, O(sum over points of poses_per_point^2)
+ * (<= O(obs * poses)) for the Schur complement, O((6 free poses)^3 / 6) for the reduced system's
+ * Cholesky.
+ *
+ * Memory. Nothing is stored per observation but a 4-byte index (the observations grouped by point,
+ * by a stable counting sort at the start of the call) and a usable flag. The observations' Jacobians,
+ * IRLS weights and pose-point blocks W = Jc^T W Jx are recomputed from the state, point by point, for
+ * each system build (summed per pose of the point, then W V^-1 W^T goes straight into the 6x6 blocks of
+ * the reduced system) and again in the back-substitution; they are bit-identical to the
+ * linearisation's since the state is then the linearisation point, so the robust weights are the same
+ * within an iteration without being stored. Per point: V (upper triangle), its gradient, its step,
+ * the backup for the bit-exact restore (V^-1 is recomputed in the back-substitution). Sizes in
+ * tvo_ba_scratch_size().
+ * No allocation (everything lives in the caller's scratch), stack below 4 KB (1,408 B measured by test_ba
+ * on x86-64 -O3), no recursion, only + - * / sqrt and tvo_dm_* (bit-identical on
  * every IEEE-754 double target). Reentrant: no global state. */
 #ifndef TINYVO_BA_H
 #define TINYVO_BA_H
@@ -137,8 +150,9 @@ typedef struct tvo_ba_report {
 } tvo_ba_report;
 
 /* Bytes of scratch tvo_ba_solve() needs for problems within cfg's capacities; 0 for an invalid (or
- * NULL) config. About 293 B per max_obs + 225 B per max_points + 440 B per max_poses + (6 max_poses)^2
- * doubles (432,736 B for 6 poses, 300 points, 1200 observations; 1,464,736 B for the defaults). */
+ * NULL) config. 5 B per max_obs + 129 B per max_points + 832 B per max_poses + (6 max_poses)^2 doubles
+ * (the reduced system), each array rounded up to 16 B, + 16 B: 60,128 B for 6 poses, 300 points, 1200
+ * observations; 39,296 B for 6 / 150 / 900; 189,760 B for the defaults. */
 size_t tvo_ba_scratch_size(const tvo_ba_config *cfg);
 
 /* Runs the bundle adjustment on p (poses and points updated in place; on any error status or with
