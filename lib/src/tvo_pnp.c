@@ -173,13 +173,22 @@ static double reproj_err2(const tvo_pose *T, const double X[3], const tvo_point2
     return du * du + dv * dv;
 }
 
+/* a finite rotation matrix (orthonormal within 1e-6, determinant +1) */
+static int prior_ok(const double R[9])
+{
+    for (int k = 0; k < 9; ++k)
+        if (!isfinite(R[k]))
+            return 0;
+    return tvo_rot_orthogonality_error(R) < 1e-6 && tvo_la_mat3_det(R) > 0.0;
+}
+
 static int config_ok(const tvo_pnp_config *c)
 {
     return c->threshold > 0.0 && c->threshold < DBL_MAX && c->confidence > 0.0 && c->confidence < 1.0 &&
            c->max_iterations >= 1 && c->refine_iterations >= 1 && c->huber > 0.0 && c->huber < DBL_MAX &&
            c->min_inliers >= 3 && (c->use_guess == 0 || c->use_guess == 1) && c->rot_prior_weight >= 0.0 &&
            c->rot_prior_weight < DBL_MAX &&
-           (c->rot_prior_weight == 0.0 || tvo_rot_orthogonality_error(c->rot_prior) < 1e-6);
+           (c->rot_prior_weight == 0.0 || prior_ok(c->rot_prior));
 }
 
 /* on error: leave a finite pose as given, replace a non-finite one by the identity */

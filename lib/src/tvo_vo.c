@@ -124,7 +124,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->map_kf_points_ratio = 0.8;
     cfg->map_kf_max_frames = 30;
     cfg->map_ba_iterations = 5;
-    cfg->map_rot_prior = 400.0;
+    cfg->map_rot_prior = 100.0;
     cfg->clock = NULL;
     cfg->clock_user = NULL;
 }

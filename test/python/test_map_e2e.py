@@ -17,9 +17,9 @@ DATA = pathlib.Path(os.environ.get("TVO_DATA_DIR", ROOT.parent / "shared" / "dat
 
 # sequence: (max ATE Sim(3) m, max per-frame rotation RPE deg, frames)
 CASES = {
-    "kitti07_160": (0.60, 0.045, 160),   # measured 0.467 m, 0.036 deg
-    "kitti06_51": (0.06, 0.070, 51),     # measured 0.029 m, 0.061 deg
-    "kitti01_51": (0.55, 0.055, 51),     # measured 0.388 m, 0.045 deg
+    "kitti07_160": (0.55, 0.045, 160),   # measured 0.436 m, 0.036 deg
+    "kitti06_51": (0.07, 0.070, 51),     # measured 0.046 m, 0.061 deg
+    "kitti01_51": (0.50, 0.055, 51),     # measured 0.365 m, 0.045 deg
 }
 
 

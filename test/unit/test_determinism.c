@@ -37,7 +37,7 @@
 #define EXPECT_RELPOSE   0x738ab310f9910f06ULL
 #define EXPECT_NN        0x7780412f62c17499ULL
 #define EXPECT_VO        0xca2d97807cbf5eabULL
-#define EXPECT_MAP       0x0ULL
+#define EXPECT_MAP       0x1da76a01ce1a642aULL
 /* ==== end of EXPECTED DIGESTS ==== */
 
 #define W 320

@@ -162,8 +162,9 @@ typedef struct tvo_vo_config {
                                    default 5 */
     double map_rot_prior;       /* weight of this frame's two-view rotation (turning the last pose) as a
                                    prior on its map pose (pnp.h, rot_prior_weight), [0, 1e12]; 0: none;
-                                   default 400 (as much as 400 points: the per-frame rotation then
-                                   follows the two-view estimate, the map corrects its drift) */
+                                   default 100 (as much as 100 points' reprojection errors: the
+                                   per-frame rotation mostly follows the two-view estimate, the map
+                                   corrects its drift) */
     tvo_clock_fn clock;         /* optional (NULL: no timings) */
     void *clock_user;
 } tvo_vo_config;
