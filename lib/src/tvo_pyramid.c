@@ -31,20 +31,31 @@ static tvo_status pyr_geometry(int32_t width, int32_t height, int32_t levels, in
     return TVO_OK;
 }
 
-size_t tvo_pyramid_required_size(int32_t width, int32_t height, int32_t levels)
+/* Bytes of the layout, with (own0 = 1) or without (0) a level 0 of its own. */
+static size_t pyr_required(int32_t width, int32_t height, int32_t levels, int own0)
 {
     int32_t w[TVO_MAX_PYR_LEVELS], h[TVO_MAX_PYR_LEVELS], l;
     size_t total = TVO_ARENA_ALIGN - 1u; /* slack to align the caller's block */
     if (pyr_geometry(width, height, levels, w, h) != TVO_OK)
         return 0;
-    for (l = 0; l < levels; ++l)
+    for (l = own0 ? 0 : 1; l < levels; ++l)
         total = tvo_size_add(total, tvo_arena_round(tvo_size_mul((size_t)pyr_stride(w[l]), (size_t)h[l])));
     total = tvo_size_add(total, tvo_arena_round(tvo_size_mul((size_t)width, sizeof(uint16_t))));
     return total == SIZE_MAX ? 0 : total;
 }
 
-tvo_status tvo_pyramid_init(tvo_pyramid *p, int32_t width, int32_t height, int32_t levels, void *mem,
-                            size_t mem_size)
+size_t tvo_pyramid_required_size(int32_t width, int32_t height, int32_t levels)
+{
+    return pyr_required(width, height, levels, 1);
+}
+
+size_t tvo_pyramid_required_size_borrowed(int32_t width, int32_t height, int32_t levels)
+{
+    return pyr_required(width, height, levels, 0);
+}
+
+static tvo_status pyr_init(tvo_pyramid *p, int32_t width, int32_t height, int32_t levels, void *mem, size_t mem_size,
+                           int own0)
 {
     int32_t w[TVO_MAX_PYR_LEVELS], h[TVO_MAX_PYR_LEVELS], l;
     tvo_arena arena;
@@ -58,7 +69,7 @@ tvo_status tvo_pyramid_init(tvo_pyramid *p, int32_t width, int32_t height, int32
     st = pyr_geometry(width, height, levels, w, h);
     if (st != TVO_OK)
         return st;
-    need = tvo_pyramid_required_size(width, height, levels);
+    need = pyr_required(width, height, levels, own0);
     if (need == 0 || mem_size < need)
         return TVO_ERR_NO_MEMORY;
     tvo_arena_init(&arena, mem, mem_size);
@@ -66,6 +77,8 @@ tvo_status tvo_pyramid_init(tvo_pyramid *p, int32_t width, int32_t height, int32
         p->width[l] = w[l];
         p->height[l] = h[l];
         p->stride[l] = pyr_stride(w[l]);
+        if (l == 0 && !own0)
+            continue; /* borrowed: set by tvo_pyramid_build_borrowed / tvo_pyramid_keep_level0 */
         p->data[l] = (uint8_t *)tvo_arena_alloc(&arena, (size_t)p->stride[l] * (size_t)h[l]);
         if (p->data[l] == NULL) { /* cannot happen after the size check; stay safe anyway */
             memset(p, 0, sizeof(*p));
@@ -78,7 +91,20 @@ tvo_status tvo_pyramid_init(tvo_pyramid *p, int32_t width, int32_t height, int32
         return TVO_ERR_NO_MEMORY;
     }
     p->levels = levels;
+    p->own0 = own0;
     return TVO_OK;
+}
+
+tvo_status tvo_pyramid_init(tvo_pyramid *p, int32_t width, int32_t height, int32_t levels, void *mem,
+                            size_t mem_size)
+{
+    return pyr_init(p, width, height, levels, mem, mem_size, 1);
+}
+
+tvo_status tvo_pyramid_init_borrowed(tvo_pyramid *p, int32_t width, int32_t height, int32_t levels, void *mem,
+                                     size_t mem_size)
+{
+    return pyr_init(p, width, height, levels, mem, mem_size, 0);
 }
 
 static uint8_t pyr_down_border(const uint16_t *tmp, int32_t w, int32_t x)
@@ -158,25 +184,74 @@ tvo_status tvo_pyr_down(const tvo_image *src, tvo_image *dst, uint16_t *row_tmp)
     return TVO_OK;
 }
 
-tvo_status tvo_pyramid_build(tvo_pyramid *p, const tvo_image *img)
+/* Checks shared by the builds: a laid-out pyramid and a valid view of its size. */
+static tvo_status pyr_build_check(const tvo_pyramid *p, const tvo_image *img)
 {
     tvo_status st;
-    int32_t l, y;
     if (p == NULL || img == NULL)
         return TVO_ERR_NULL;
-    if (p->levels < 1 || p->levels > TVO_MAX_PYR_LEVELS || p->data[0] == NULL || p->row_tmp == NULL)
+    if (p->levels < 1 || p->levels > TVO_MAX_PYR_LEVELS || p->row_tmp == NULL)
         return TVO_ERR_STATE;
     st = tvo_image_check(img);
     if (st != TVO_OK)
         return st;
     if (img->width != p->width[0] || img->height != p->height[0])
         return TVO_ERR_MISMATCH;
-    for (y = 0; y < img->height; ++y)
-        memcpy(p->data[0] + (size_t)y * (size_t)p->stride[0], img->data + (size_t)y * (size_t)img->stride,
-               (size_t)img->width);
+    return TVO_OK;
+}
+
+static void pyr_build_upper(tvo_pyramid *p)
+{
+    int32_t l;
     for (l = 1; l < p->levels; ++l)
         pyr_down_raw(p->data[l - 1], p->width[l - 1], p->height[l - 1], p->stride[l - 1], p->data[l],
                      p->width[l], p->height[l], p->stride[l], p->row_tmp);
+}
+
+tvo_status tvo_pyramid_build(tvo_pyramid *p, const tvo_image *img)
+{
+    tvo_status st = pyr_build_check(p, img);
+    int32_t y;
+    if (st != TVO_OK)
+        return st;
+    if (p->own0 == 0)
+        return TVO_ERR_STATE;
+    for (y = 0; y < img->height; ++y)
+        memcpy(p->data[0] + (size_t)y * (size_t)p->stride[0], img->data + (size_t)y * (size_t)img->stride,
+               (size_t)img->width);
+    pyr_build_upper(p);
+    return TVO_OK;
+}
+
+tvo_status tvo_pyramid_build_borrowed(tvo_pyramid *p, const tvo_image *img)
+{
+    tvo_status st = pyr_build_check(p, img);
+    if (st != TVO_OK)
+        return st;
+    if (p->own0 != 0)
+        return TVO_ERR_STATE;
+    p->data[0] = img->data;
+    p->stride[0] = img->stride;
+    pyr_build_upper(p);
+    return TVO_OK;
+}
+
+tvo_status tvo_pyramid_keep_level0(tvo_pyramid *p, uint8_t *dst, int32_t dst_stride)
+{
+    int32_t y;
+    if (p == NULL || dst == NULL)
+        return TVO_ERR_NULL;
+    if (p->levels < 1 || p->own0 != 0 || p->data[0] == NULL)
+        return TVO_ERR_STATE;
+    if (dst_stride < p->width[0] || dst_stride > TVO_IMAGE_MAX_STRIDE)
+        return TVO_ERR_SIZE;
+    if (dst != p->data[0]) {
+        for (y = 0; y < p->height[0]; ++y)
+            memcpy(dst + (size_t)y * (size_t)dst_stride, p->data[0] + (size_t)y * (size_t)p->stride[0],
+                   (size_t)p->width[0]);
+    }
+    p->data[0] = dst;
+    p->stride[0] = dst_stride;
     return TVO_OK;
 }
 

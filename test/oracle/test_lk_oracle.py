@@ -22,7 +22,8 @@ class Pyramid(ctypes.Structure):
                 ("height", ctypes.c_int32 * MAX_LEVELS),
                 ("stride", ctypes.c_int32 * MAX_LEVELS),
                 ("data", ctypes.POINTER(ctypes.c_uint8) * MAX_LEVELS),
-                ("row_tmp", ctypes.POINTER(ctypes.c_uint16))]
+                ("row_tmp", ctypes.POINTER(ctypes.c_uint16)),
+                ("own0", ctypes.c_int32)]
 
 
 class Image(ctypes.Structure):

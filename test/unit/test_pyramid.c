@@ -130,6 +130,52 @@ static void test_values_match_reference(void **state)
         assert_memory_equal(p.data[2] + y * p.stride[2], ref2 + y * 25, 25);
 }
 
+/* A borrowed level 0: the same levels as a full pyramid, level 0 a view of the image until
+ * tvo_pyramid_keep_level0 copies it; one width x height level less memory; wrong kinds refused. */
+static void test_borrowed_level0(void **state)
+{
+    static uint8_t src[97 * 61], kept[100 * 61], mem_full[1 << 16], mem_b[1 << 16];
+    uint64_t seed = 777;
+    tvo_pyramid full, b, zero;
+    const size_t need_full = tvo_pyramid_required_size(97, 61, 3);
+    const size_t need_b = tvo_pyramid_required_size_borrowed(97, 61, 3);
+    tvo_image img = tvo_image_make(97, 61, 97, src);
+    (void)state;
+    for (size_t i = 0; i < sizeof(src); ++i)
+        src[i] = (uint8_t)(tvo_test_rand(&seed) >> 56);
+    assert_true(need_b > 0 && need_b + 97 * 61 <= need_full && need_b + 112 * 61 >= need_full);
+    assert_int_equal(tvo_pyramid_required_size_borrowed(97, 61, 0), 0);
+    assert_int_equal(tvo_pyramid_init_borrowed(&b, 97, 61, 3, mem_b, need_b - 1), TVO_ERR_NO_MEMORY);
+    assert_int_equal(tvo_pyramid_init_borrowed(&b, 97, 61, 3, mem_b + 3, need_b), TVO_OK);
+    assert_int_equal(tvo_pyramid_keep_level0(&b, kept, 100), TVO_ERR_STATE); /* not built yet */
+    assert_int_equal(tvo_pyramid_build(&b, &img), TVO_ERR_STATE);
+    assert_int_equal(tvo_pyramid_init(&full, 97, 61, 3, mem_full, sizeof(mem_full)), TVO_OK);
+    assert_int_equal(tvo_pyramid_build_borrowed(&full, &img), TVO_ERR_STATE);
+    assert_int_equal(tvo_pyramid_keep_level0(&full, kept, 100), TVO_ERR_STATE);
+    assert_int_equal(tvo_pyramid_build(&full, &img), TVO_OK);
+    assert_int_equal(tvo_pyramid_build_borrowed(&b, &img), TVO_OK);
+    assert_true(b.data[0] == src && b.stride[0] == 97);
+    for (int l = 1; l < 3; ++l)
+        for (int y = 0; y < full.height[l]; ++y)
+            assert_memory_equal(b.data[l] + y * b.stride[l], full.data[l] + y * full.stride[l], (size_t)full.width[l]);
+    assert_int_equal(tvo_pyramid_keep_level0(&b, kept, 96), TVO_ERR_SIZE);
+    assert_int_equal(tvo_pyramid_keep_level0(NULL, kept, 100), TVO_ERR_NULL);
+    assert_int_equal(tvo_pyramid_keep_level0(&b, NULL, 100), TVO_ERR_NULL);
+    assert_int_equal(tvo_pyramid_keep_level0(&b, kept, 100), TVO_OK);
+    memset(src, 0, sizeof(src)); /* the pyramid no longer reads the image */
+    assert_true(b.data[0] == kept && b.stride[0] == 100);
+    for (int y = 0; y < 61; ++y)
+        assert_memory_equal(kept + y * 100, full.data[0] + y * full.stride[0], 97);
+    {
+        const tvo_image l0 = tvo_pyramid_level(&b, 0);
+        assert_int_equal(tvo_image_check(&l0), TVO_OK);
+        assert_true(l0.data == kept && l0.stride == 100);
+    }
+    memset(&zero, 0, sizeof(zero));
+    assert_int_equal(tvo_pyramid_build_borrowed(&zero, &img), TVO_ERR_STATE);
+    assert_int_equal(tvo_pyramid_build_borrowed(NULL, &img), TVO_ERR_NULL);
+}
+
 static void test_pyr_down_tiny(void **state)
 {
     uint8_t src[7 * 7], out[4 * 4], ref[4 * 4];
@@ -176,6 +222,7 @@ int main(void)
         cmocka_unit_test(test_required_size_and_geometry),
         cmocka_unit_test(test_bad_inputs),
         cmocka_unit_test(test_values_match_reference),
+        cmocka_unit_test(test_borrowed_level0),
         cmocka_unit_test(test_pyr_down_tiny),
         cmocka_unit_test(test_constant_image_stays_constant),
     };

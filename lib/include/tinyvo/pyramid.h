@@ -31,9 +31,11 @@ typedef struct tvo_pyramid {
     int32_t levels;                        /* levels including level 0, 1..TVO_MAX_PYR_LEVELS */
     int32_t width[TVO_MAX_PYR_LEVELS];     /* pixels; width[l + 1] = (width[l] + 1) / 2 */
     int32_t height[TVO_MAX_PYR_LEVELS];    /* pixels; height[l + 1] = (height[l] + 1) / 2 */
-    int32_t stride[TVO_MAX_PYR_LEVELS];    /* bytes between rows, >= width, multiple of 16 */
+    int32_t stride[TVO_MAX_PYR_LEVELS];    /* bytes between rows, >= width, multiple of 16 (a borrowed
+                                              level 0: the stride of the image it points to) */
     uint8_t *data[TVO_MAX_PYR_LEVELS];     /* inside the caller's memory, 16-byte aligned */
     uint16_t *row_tmp;                     /* internal: build row buffer, inside the caller's memory */
+    int32_t own0;                          /* internal: 1 level 0 in the caller's memory, 0 borrowed */
 } tvo_pyramid;
 
 /* Bytes of memory tvo_pyramid_init() needs for this geometry (any alignment of mem is fine: the
@@ -52,6 +54,24 @@ tvo_status tvo_pyramid_init(tvo_pyramid *p, int32_t width, int32_t height, int32
  * size given to init (TVO_ERR_MISMATCH otherwise); TVO_ERR_NULL / TVO_ERR_SIZE for a bad view,
  * TVO_ERR_STATE for a pyramid that was not initialised. img may not overlap the pyramid memory. */
 tvo_status tvo_pyramid_build(tvo_pyramid *p, const tvo_image *img);
+
+/* A pyramid with a borrowed level 0: the caller holds level 0, the pyramid's memory only levels 1.. and
+ * the row buffer (tvo_pyramid_required_size_borrowed: the full size less one width x height level, e.g.
+ * 76,800 bytes less at 320x240). For a tracker that keeps one frame's level 0 between calls and reads the
+ * current frame's level 0 from the caller's image:
+ *   tvo_pyramid_build_borrowed(p, img): level 0 becomes a view of img (not copied: img must stay unchanged
+ *     and valid while p is used), levels 1.. are computed from it into p's memory; same pixels as
+ *     tvo_pyramid_build. Errors as tvo_pyramid_build; TVO_ERR_STATE for a pyramid of tvo_pyramid_init.
+ *   tvo_pyramid_keep_level0(p, dst, dst_stride): copies level 0 into dst (width x height bytes at
+ *     dst_stride >= width, not overlapping the image level 0 points to; dst equal to it: no copy) and
+ *     points level 0 there, so p no longer depends on img. TVO_ERR_NULL, TVO_ERR_STATE (not a borrowed
+ *     pyramid, or not built), TVO_ERR_SIZE (dst_stride below width or above TVO_IMAGE_MAX_STRIDE).
+ * tvo_pyramid_build on a borrowed pyramid returns TVO_ERR_STATE. */
+size_t tvo_pyramid_required_size_borrowed(int32_t width, int32_t height, int32_t levels);
+tvo_status tvo_pyramid_init_borrowed(tvo_pyramid *p, int32_t width, int32_t height, int32_t levels, void *mem,
+                                     size_t mem_size);
+tvo_status tvo_pyramid_build_borrowed(tvo_pyramid *p, const tvo_image *img);
+tvo_status tvo_pyramid_keep_level0(tvo_pyramid *p, uint8_t *dst, int32_t dst_stride);
 
 /* A view of one level (its pixels stay owned by the pyramid's memory). An invalid pyramid or a level
  * outside 0..levels-1 gives an empty view (all fields 0, data NULL) that tvo_image_check() refuses. */
