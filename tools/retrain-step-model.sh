@@ -15,9 +15,10 @@
 #      judges its choices with)
 #   3. clip the step branch's hidden relus at their layer's training maximum (tinyvo_tools.pact)
 #   4. export to int8 with hidden-channel copies 1,1,2 (tinyvo_tools.export): OUT_DIR/step.tvonn
-#   5. evaluate on the validation sequences through the C interpreter (tinyvo_tools.suite, ATE SE(3)):
-#      the model with the scale filter a = 0.01 (the shipped use) and alone, raw VO with the constant
-#      training-mean step and with ground-truth step lengths; OUT_DIR/summary.md has every table.
+#   5. evaluate on the validation sequences through the C interpreter (tinyvo_tools.suite, ATE SE(3),
+#      tvo_replay's defaults, i.e. with the local map): the model as the scale source with the filter
+#      a = 0.01 (the shipped use) and alone, the constant training-mean step and ground-truth step
+#      lengths as the scale source; OUT_DIR/summary.md has the table.
 # Deterministic: the same renders and front end give a byte-identical step.tvonn.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -91,10 +92,11 @@ import json, sys
 out, const = sys.argv[1], float(sys.argv[2])
 ex = json.load(open(f"{out}/export.json"))
 rows = [("model + filter a = 0.01 (shipped use)", "model_filter"), ("model alone (--scale model)", "model_alone"),
-        (f"raw VO + constant step {const:.4f} m (training mean)", "const_step"), ("raw VO + ground-truth step", "gt_scale")]
+        (f"constant step {const:.4f} m (training mean)", "const_step"), ("ground-truth step lengths", "gt_scale")]
 res = {k: json.load(open(f"{out}/eval_{k}.json")) for _, k in rows}
 names = [r["name"] for r in res["gt_scale"]["sequences"]]
-print("ATE SE(3) RMSE, m, validation sequences (tvo_replay through the C interpreter; tinyvo_tools.suite)\n")
+print("ATE SE(3) RMSE, m, validation sequences, by scale source (tvo_replay through the C interpreter; "
+      "tinyvo_tools.suite)\n")
 print("| method | " + " | ".join(names) + " | mean |")
 print("|---|" + "---|" * (len(names) + 1))
 for label, k in rows:
