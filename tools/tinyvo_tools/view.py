@@ -208,6 +208,15 @@ class TrajPanel:
         return np.stack([self.size / 2 + q[:, 0], self.size / 2 - q[:, 1]], axis=1)
 
 
+def _text(img: np.ndarray, text: str, org: Tuple[int, int], colour, scale: float = 0.45) -> None:
+    """text at org (baseline left) on a dark box, legible on any image"""
+    import cv2
+    (tw, th), base = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, 1)
+    x, y = org
+    cv2.rectangle(img, (x - 3, y - th - 3), (x + tw + 3, y + base + 1), (0, 0, 0), -1)
+    cv2.putText(img, text, (x, y), cv2.FONT_HERSHEY_SIMPLEX, scale, colour, 1, cv2.LINE_AA)
+
+
 def render_frame(img: np.ndarray, tracks: Optional[FrameTracks], history: Dict[int, List[Tuple[float, float]]],
                  panel: Optional[TrajPanel], traj_px: np.ndarray, kf_px: np.ndarray, scale: float,
                  label: str) -> np.ndarray:
@@ -228,13 +237,12 @@ def render_frame(img: np.ndarray, tracks: Optional[FrameTracks], history: Dict[i
             cv2.circle(left, c, 3, col, -1 if fl & FLAG_LANDMARK else 1, cv2.LINE_AA)
         if tracks.keyframe:
             cv2.rectangle(left, (1, 1), (left.shape[1] - 2, left.shape[0] - 2), KEYFRAME_BGR, 3)
-            cv2.putText(left, "keyframe", (8, left.shape[0] - 10), cv2.FONT_HERSHEY_SIMPLEX, 0.5, KEYFRAME_BGR, 1,
-                        cv2.LINE_AA)
+            _text(left, "keyframe", (8, left.shape[0] - 10), KEYFRAME_BGR, 0.5)
         n_in = int(np.count_nonzero(tracks.flags & FLAG_INLIER))
         label = f"{label}  tracks {len(tracks.ids)}  inliers {n_in}"
     else:
         label = f"{label}  no tracks"
-    cv2.putText(left, label, (8, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 255), 1, cv2.LINE_AA)
+    _text(left, label, (8, 18), (255, 255, 255))
     if panel is None:
         return left
     right = np.full((left.shape[0], panel.size, 3), PANEL_BG, np.uint8)
@@ -248,8 +256,7 @@ def render_frame(img: np.ndarray, tracks: Optional[FrameTracks], history: Dict[i
         x, y = traj_px[-1]
         cv2.circle(right, (round(x), round(y + off)), 4, INLIER_BGR, -1, cv2.LINE_AA)
     axes = "xyz"
-    cv2.putText(right, f"trajectory ({axes[panel.a]}-{axes[panel.b]} plane)", (8, 18), cv2.FONT_HERSHEY_SIMPLEX,
-                0.45, (255, 255, 255), 1, cv2.LINE_AA)
+    _text(right, f"trajectory ({axes[panel.a]}-{axes[panel.b]} plane)", (8, 18), (255, 255, 255))
     return np.hstack([left, right])
 
 
