@@ -13,7 +13,8 @@
 #      their $ORIGIN-relative RPATH); shared only: SONAME libtinyvo.so.<SOVERSION> (and _port, _v4l2), the
 #      programs need those names; static only: the programs need no libtinyvo*.so.
 # Usage: test/external/run.sh [static|shared ...]   (default: static shared)
-# Environment: TVO_EXT_PREFIX (default /tmp/tvo-prefix; the moved tree is $TVO_EXT_PREFIX-moved), JOBS.
+# Environment: TVO_EXT_PREFIX (default /tmp/tvo-prefix: $TVO_EXT_PREFIX-<kind>, moved to ...-<kind>-moved),
+# TVO_EXT_BUILD (build folders $TVO_EXT_BUILD-<kind>, default build/external), JOBS.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 cd "$ROOT"
@@ -21,6 +22,7 @@ JOBS="${JOBS:-2}"
 KINDS=("$@")
 [ ${#KINDS[@]} -eq 0 ] && KINDS=(static shared)
 PREFIX_BASE="${TVO_EXT_PREFIX:-/tmp/tvo-prefix}"
+BUILD_BASE="${TVO_EXT_BUILD:-$ROOT/build/external}"
 fail() { echo "[external] FAIL: $*" >&2; exit 1; }
 
 for kind in "${KINDS[@]}"; do
@@ -29,7 +31,7 @@ for kind in "${KINDS[@]}"; do
     shared) shared=ON ;;
     *) echo "usage: test/external/run.sh [static|shared ...]" >&2; exit 2 ;;
   esac
-  B="$ROOT/build/adopt-install-$kind"
+  B="$BUILD_BASE-$kind"
   PREFIX="$PREFIX_BASE-$kind"
   MOVED="$PREFIX-moved"
   echo "== [external] $kind: build, install to $PREFIX, move to $MOVED"
