@@ -12,7 +12,9 @@
 
 struct tvo_vo {
     tvo_vo_config cfg;
-    tvo_pyramid pyr[2];
+    tvo_pyramid pyr[2];       /* level 0 borrowed: the current frame's is the caller's image, the previous
+                                 frame's is the copy in level0 (made at the end of each frame) */
+    uint8_t *level0;          /* [width x height] */
     int32_t cur;              /* index of the pyramid that receives the next frame */
     int32_t has_prev;         /* a previous frame with tracks exists */
     int64_t t_prev;
@@ -116,7 +118,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->track_prediction = 0; /* on: larger motion per frame tracked, but the EuRoC renders got worse */
     cfg->map = 1;
     cfg->map_window = 6;
-    cfg->map_max_landmarks = 2 * cfg->max_tracks;
+    cfg->map_max_landmarks = 0; /* 2 x max_tracks */
     cfg->map_min_points = 20;
     cfg->map_init_parallax_deg = 1.0;
     cfg->map_tri_parallax_deg = 0.5;
@@ -165,7 +167,7 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (cfg->map_window < 3 || cfg->map_window > TVO_VO_MAX_WINDOW)
         return 0;
-    if (cfg->map_max_landmarks < 16 || cfg->map_max_landmarks > 100000)
+    if (cfg->map_max_landmarks != 0 && (cfg->map_max_landmarks < 16 || cfg->map_max_landmarks > 100000))
         return 0;
     if (cfg->map_min_points < 6 || cfg->map_min_points > 100000) /* above max_tracks: never a map */
         return 0;
@@ -201,11 +203,12 @@ static size_t layout_size(const tvo_vo_config *cfg)
 {
     const size_t n = (size_t)cfg->max_tracks;
     const int32_t levels = cfg->lk.max_level + 1;
-    size_t pyr = tvo_pyramid_required_size(cfg->camera.width, cfg->camera.height, levels);
+    size_t pyr = tvo_pyramid_required_size_borrowed(cfg->camera.width, cfg->camera.height, levels);
     size_t s = tvo_arena_round(sizeof(tvo_vo));
     if (pyr == 0)
         return 0;
     s = tvo_size_add(s, tvo_size_mul(2, tvo_arena_round(pyr)));
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul((size_t)cfg->camera.width, (size_t)cfg->camera.height)));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2f))) * 2);
     s = tvo_size_add(s, tvo_arena_round(n) * 4);                        /* st ok1 ok2 mask */
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))) * 2);
@@ -223,29 +226,43 @@ static size_t layout_size(const tvo_vo_config *cfg)
     return tvo_size_add(s, TVO_ARENA_ALIGN); /* slack for an unaligned block */
 }
 
-size_t tvo_vo_required_size(const tvo_vo_config *cfg)
+/* cfg with its automatic values filled in (map_max_landmarks 0: 2 x max_tracks). */
+static tvo_vo_config resolved(const tvo_vo_config *cfg)
 {
-    if (!config_valid(cfg))
-        return 0;
-    return layout_size(cfg);
+    tvo_vo_config c = *cfg;
+    if (c.map_max_landmarks == 0)
+        c.map_max_landmarks = 2 * c.max_tracks;
+    return c;
 }
 
-tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg, void *mem, size_t mem_size)
+size_t tvo_vo_required_size(const tvo_vo_config *cfg)
 {
+    tvo_vo_config c;
+    if (!config_valid(cfg))
+        return 0;
+    c = resolved(cfg);
+    return layout_size(&c);
+}
+
+tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, size_t mem_size)
+{
+    tvo_vo_config cfg_r;
+    const tvo_vo_config *cfg = &cfg_r;
     tvo_arena a;
     tvo_vo *vo;
     size_t n, pyr;
     int32_t levels;
-    if (out == NULL || cfg == NULL || mem == NULL)
+    if (out == NULL || cfg_in == NULL || mem == NULL)
         return TVO_ERR_NULL;
     *out = NULL;
-    if (!config_valid(cfg))
+    if (!config_valid(cfg_in))
         return TVO_ERR_ARG;
+    cfg_r = resolved(cfg_in);
     if (mem_size < layout_size(cfg))
         return TVO_ERR_NO_MEMORY;
     n = (size_t)cfg->max_tracks;
     levels = cfg->lk.max_level + 1;
-    pyr = tvo_pyramid_required_size(cfg->camera.width, cfg->camera.height, levels);
+    pyr = tvo_pyramid_required_size_borrowed(cfg->camera.width, cfg->camera.height, levels);
     tvo_arena_init(&a, mem, mem_size);
     vo = (tvo_vo *)tvo_arena_alloc(&a, sizeof(tvo_vo));
     if (vo == NULL)
@@ -257,10 +274,13 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg, void *mem, size_t
         tvo_status st;
         if (pm == NULL)
             return TVO_ERR_NO_MEMORY;
-        st = tvo_pyramid_init(&vo->pyr[i], cfg->camera.width, cfg->camera.height, levels, pm, pyr);
+        st = tvo_pyramid_init_borrowed(&vo->pyr[i], cfg->camera.width, cfg->camera.height, levels, pm, pyr);
         if (st != TVO_OK)
             return st;
     }
+    vo->level0 = (uint8_t *)tvo_arena_alloc(&a, (size_t)cfg->camera.width * (size_t)cfg->camera.height);
+    if (vo->level0 == NULL)
+        return TVO_ERR_NO_MEMORY;
     vo->pts = (tvo_point2f *)tvo_arena_alloc(&a, n * sizeof(tvo_point2f));
     vo->next = (tvo_point2f *)tvo_arena_alloc(&a, n * sizeof(tvo_point2f));
     vo->st = (uint8_t *)tvo_arena_alloc(&a, n);
@@ -804,7 +824,7 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
     t0 = now_ns(vo);
     pc = &vo->pyr[vo->cur];
     pp = &vo->pyr[vo->cur ^ 1];
-    st = tvo_pyramid_build(pc, frame);
+    st = tvo_pyramid_build_borrowed(pc, frame); /* level 0 is the caller's frame until the end of the call */
     if (st != TVO_OK)
         return st;
     t1 = now_ns(vo);
@@ -1033,6 +1053,9 @@ done:
     }
     vo->has_prev = 1;
     vo->t_prev = t_ns;
+    /* the frame becomes the previous one: its level 0 moves into our memory (the caller's image may
+       change after the call); the old previous level 0 is not needed any more */
+    (void)tvo_pyramid_keep_level0(pc, vo->level0, w);
     vo->cur ^= 1;
     fill_features(res, res->features);
     res->stage_ns[TVO_STAGE_TOTAL] = now_ns(vo) - t0;

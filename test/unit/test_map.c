@@ -416,6 +416,7 @@ static void test_map_config(void **state)
     REFUSED(map_window, 2);
     REFUSED(map_window, TVO_VO_MAX_WINDOW + 1);
     REFUSED(map_max_landmarks, 15);
+    REFUSED(map_max_landmarks, -1);
     REFUSED(map_min_points, 5);
     REFUSED(map_min_points, 100001);
     REFUSED(map_init_parallax_deg, 0.0);

@@ -146,7 +146,7 @@ typedef struct tvo_vo_config {
        windowed bundle adjustment at each new keyframe */
     int32_t map;                /* 1: on; 0: two-view only (the VO of earlier versions); default 1 */
     int32_t map_window;         /* keyframes in the window, [3, TVO_VO_MAX_WINDOW]; default 6 */
-    int32_t map_max_landmarks;  /* landmark capacity, [16, 100000]; default 2 x max_tracks */
+    int32_t map_max_landmarks;  /* landmark capacity, [16, 100000], or 0: 2 x max_tracks; default 0 */
     int32_t map_min_points;     /* a frame with fewer PnP inliers loses the map, [6, 100000] (above
                                    max_tracks: the map never tracks); default 20 */
     double map_init_parallax_deg; /* the initial pair needs this median parallax, (0, 30]; default 1 */
