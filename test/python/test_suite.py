@@ -100,12 +100,16 @@ def test_extra_args_reach_the_replay_and_failures_are_rows(seqs, tmp_path):
 
 def test_refusals(seqs, tmp_path):
     _, line, kf = seqs
+    # usage errors: exit 2
     for args in (["--seq", line, "--", "--scale", "gt"],        # the suite sets --scale itself
-                 ["--seq", line, "--repeat", "0"],
-                 ["--seq", tmp_path / "nowhere"],
+                 ["--seq", line, "--repeat", "0"]):
+        p = suite("--replay", REPLAY, *args)
+        assert p.returncode == 2, args
+    # runtime errors (missing or unusable inputs): exit 1, one line
+    for args in (["--seq", tmp_path / "nowhere"],
                  ["--seq", kf],                                  # nothing left to run
                  ["--seq", tmp_path]):                           # no sequence in it
         p = suite("--replay", REPLAY, *args)
-        assert p.returncode == 2, args
+        assert p.returncode == 1, args
     p = suite("--replay", tmp_path / "no_replay", "--seq", line)
-    assert p.returncode == 2 and "not an executable" in p.stderr
+    assert p.returncode == 1 and "not an executable" in p.stderr and len(p.stderr.strip().splitlines()) == 1

@@ -1,6 +1,6 @@
 """Evaluation suite: tvo_replay over several EuRoC/ASL sequences, one table.
 
-    python -m tinyvo_tools.suite --replay PATH/tvo_replay --seq DIR [--seq DIR ...]
+    tinyvo-suite --replay PATH/tvo_replay --seq DIR [--seq DIR ...]
                                  [--scale none|gt|propagate|model|const] [--repeat N] [--out RESULTS.json]
                                  [--keep DIR] [-- extra tvo_replay arguments]
 
@@ -36,7 +36,7 @@ import tempfile
 
 import numpy as np
 
-from . import eval as tvo_eval
+from . import cli, eval as tvo_eval
 from . import trajio
 
 METRIC_MODES = ("gt", "propagate", "model", "const")
@@ -197,8 +197,7 @@ def main(argv=None) -> int:
     if "--" in argv:
         k = argv.index("--")
         argv, extra = argv[:k], argv[k + 1:]
-    ap = argparse.ArgumentParser(prog="python -m tinyvo_tools.suite", description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = cli.parser("tinyvo-suite", __doc__)
     ap.add_argument("--replay", required=True, help="the tvo_replay binary")
     ap.add_argument("--seq", action="append", required=True,
                     help="sequence folder (EuRoC/ASL layout) or a folder of them; repeatable")
@@ -215,46 +214,49 @@ def main(argv=None) -> int:
     bad = [x for x in extra if x.split("=")[0] in _RESERVED]
     if bad:
         ap.error(f"the suite sets {', '.join(_RESERVED)} itself (got {' '.join(bad)} after --)")
-    if not (os.path.isfile(a.replay) and os.access(a.replay, os.X_OK)):
-        ap.error(f"--replay {a.replay}: not an executable file")
-    try:
-        seqs, skipped = expand_sequences(a.seq)
-    except (OSError, ValueError) as e:
-        ap.error(str(e))
-    for s, why in skipped:
-        print(f"suite: skipping {s}: {why}", file=sys.stderr)
-    if not seqs:
-        ap.error("no sequence to run")
+    def body():
+        if not (os.path.isfile(a.replay) and os.access(a.replay, os.X_OK)):
+            raise cli.Failure(f"--replay {a.replay}: not an executable file")
+        try:
+            seqs, skipped = expand_sequences(a.seq)
+        except (OSError, ValueError) as e:
+            raise cli.Failure(str(e)) from None
+        for s, why in skipped:
+            print(f"suite: skipping {s}: {why}", file=sys.stderr)
+        if not seqs:
+            raise cli.Failure("no sequence to run")
+        tmp = None
+        base = os.path.abspath(a.keep) if a.keep else (tmp := tempfile.mkdtemp(prefix="tvo_suite_"))
+        rows = []
+        try:
+            for name, seq in zip(_names(seqs), seqs):
+                work = os.path.join(base, name.replace(os.sep, "_"))
+                os.makedirs(work, exist_ok=True)
+                row = run_sequence(os.path.abspath(a.replay), seq, a.scale, work, extra, a.repeat)
+                row["name"] = name
+                rows.append(row)
+                if "error" in row:
+                    print(f"suite: {name}: {row['error']}", file=sys.stderr)
+        finally:
+            if tmp:
+                shutil.rmtree(tmp, ignore_errors=True)
+        tot = totals(rows)
+        sys.stderr.flush()
+        if not a.quiet:
+            print(f"tvo_replay --scale {a.scale}{(' ' + ' '.join(extra)) if extra else ''} "
+                  f"({a.replay}; repeat {a.repeat})")
+            print(format_table(rows, tot, a.scale))
+        if a.out:
+            d = os.path.dirname(os.path.abspath(a.out))
+            os.makedirs(d, exist_ok=True)
+            with open(a.out, "w", encoding="utf-8") as f:
+                json.dump({"tool": "tinyvo_tools.suite", "replay": os.path.abspath(a.replay), "scale": a.scale,
+                           "extra_args": extra, "repeat": a.repeat,
+                           "skipped": [{"path": s, "reason": w} for s, w in skipped],
+                           "sequences": rows, "total": tot}, f, indent=2)
+        return 1 if tot["failed"] else 0
 
-    tmp = None
-    base = os.path.abspath(a.keep) if a.keep else (tmp := tempfile.mkdtemp(prefix="tvo_suite_"))
-    rows = []
-    try:
-        for name, seq in zip(_names(seqs), seqs):
-            work = os.path.join(base, name.replace(os.sep, "_"))
-            os.makedirs(work, exist_ok=True)
-            row = run_sequence(os.path.abspath(a.replay), seq, a.scale, work, extra, a.repeat)
-            row["name"] = name
-            rows.append(row)
-            if "error" in row:
-                print(f"suite: {name}: {row['error']}", file=sys.stderr)
-    finally:
-        if tmp:
-            shutil.rmtree(tmp, ignore_errors=True)
-    tot = totals(rows)
-    sys.stderr.flush()
-    print(f"tvo_replay --scale {a.scale}{(' ' + ' '.join(extra)) if extra else ''} "
-          f"({a.replay}; repeat {a.repeat})")
-    print(format_table(rows, tot, a.scale))
-    if a.out:
-        d = os.path.dirname(os.path.abspath(a.out))
-        os.makedirs(d, exist_ok=True)
-        with open(a.out, "w", encoding="utf-8") as f:
-            json.dump({"tool": "tinyvo_tools.suite", "replay": os.path.abspath(a.replay), "scale": a.scale,
-                       "extra_args": extra, "repeat": a.repeat,
-                       "skipped": [{"path": s, "reason": w} for s, w in skipped],
-                       "sequences": rows, "total": tot}, f, indent=2)
-    return 1 if tot["failed"] else 0
+    return cli.run(ap.prog, body)
 
 
 if __name__ == "__main__":
