@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Install rules shared by every target (included by the top CMakeLists.txt after lib/ and port/):
 #   <libdir>/cmake/tinyvo/   CMake package: find_package(tinyvo [COMPONENTS port v4l2]) gives
 #                            tinyvo::tinyvo, tinyvo::port, tinyvo::v4l2 (those that were built) and

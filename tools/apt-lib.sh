@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Debian package helpers, sourced by the tools/*.sh scripts (not run on its own).
 
 # tvo_deb_installed PKG: true when the package (or PKG:arch) is installed.

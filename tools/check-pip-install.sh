@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The Python tools as a user installs them: `pip install ./tools` into a fresh venv, then every console
 # script of tools/pyproject.toml ([project.scripts]) must answer --help (exit 0, first line
 # "usage: <script> ...") and --version ("<script> <version>"). The venv is made with

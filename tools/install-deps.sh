@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Installs what tinyvo needs on a fresh Debian (bookworm) machine, idempotently:
 #   - Debian packages (apt-get update first; only when running as root and something is missing)
 #   - a Python venv in .venv with the pinned tools/requirements.txt and the tools package

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Machine-independent cost of the VO and the replay's peak memory:
 #   tools/profile-replay.sh EUROC_DIR [FRAMES] [REPLAY_BINARY]
 # 1. instructions per frame: runs tvo_replay under `valgrind --tool=callgrind`, collecting only inside

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Guest instructions executed by a cross-built program under qemu-user, in total and inside one object
 # file's .text (e.g. tvo_lk.c.o): the ARM counterpart of the callgrind counts of tools/profile-replay.sh.
 #   tools/qemu-insn-count.sh TRIPLE MAPFILE OBJECT -- PROGRAM [ARGS...]

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Retrain the shipped step-length model (models/MODEL_CARD.md) for the current front end, and measure it:
 #   tools/retrain-step-model.sh RENDERS_DIR OUT_DIR [REPLAY_BINARY]
 #

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Cross builds for ARM Linux, unit tests run under qemu-user:
 #   tools/run-cross.sh [aarch64-linux-gnu] [arm-linux-gnueabihf] [arm-linux-gnueabihf-neon]   (default: all three)
 # For each target: configures build/<triple> with cmake/toolchains/<triple>.cmake (core library,

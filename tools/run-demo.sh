@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The main job (README): installs what is needed, builds tinyvo, renders a short synthetic EuRoC-format
 # sequence along a built-in trajectory (no external data needed), replays it through the VO with
 # ground-truth step lengths, evaluates it (ATE/RPE, evo) and prints where the plots are.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Fuzzes tinyvo's parsers and the VO with libFuzzer (clang), one harness at a time (docs/fuzzing.md).
 #
 #   tools/run-fuzz.sh [-t SECONDS] [HARNESS...]     HARNESS: nn csv yaml png dataset vo (default: all)
@@ -19,7 +20,7 @@ SECONDS_EACH=600
 while getopts "t:h" opt; do
   case $opt in
     t) SECONDS_EACH=$OPTARG ;;
-    *) sed -n '2,13p' "$0"; exit 2 ;;
+    *) sed -n '3,14p' "$0"; exit 2 ;;
   esac
 done
 shift $((OPTIND - 1))

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The VO on a Cortex-M7 model: unit tests and a short QVGA replay under qemu-system-arm -M mps2-an500
 # (an MPS2 board with a Cortex-M7; newlib with semihosting for stdout and files).
 #   tools/run-mcu.sh
@@ -21,7 +22,7 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
 BUILD="${BUILD:-build/mcu}"
 MCU_TESTS="${MCU_TESTS:-test_dmath test_se3 test_core test_camera test_pyramid test_nn test_corners test_lk test_relpose test_determinism}"
-MEM="${TVO_MCU_MEM:-286720}"
+MEM="${TVO_MCU_MEM:-262144}"
 PY="${PYTHON:-$ROOT/.venv/bin/python}"
 DATA="${TVO_DATA_DIR:-$ROOT/../shared/data}"
 . "$ROOT/tools/apt-lib.sh"

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Static analysis of lib/, port/ and examples/ (issue 7): cppcheck and clang-tidy from Debian, with the
 # checked-in configuration (.clang-tidy at the top, tools/cppcheck-suppressions.txt with a reason per
 # line). Any finding fails the script. Run by tools/run-tests.sh after the ASan stage.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The test command (README, .ci/run): installs what is needed, then builds and runs every test:
 #   1. Release build with -Werror, all ctest tests (unit, port, guarantees, fuzz-corpus replays; -j2)
 #   2. the OpenCV oracle tests (pytest, test/oracle) and the Python tool tests (test/python) against it
@@ -51,8 +52,8 @@ echo "== Cortex-M7 / M4 core builds, link check, M7 .text <= 96 KiB (tools/size-
 TVO_WERROR=ON bash tools/size-report.sh
 
 echo "== static analysis (cppcheck + clang-tidy, tools/run-static.sh; ~3 min)"
-# SPDX line in every source file: enabled once tools/spdx.sh --add has been run over the tree
-# bash tools/spdx.sh --check
+# an SPDX licence line in every source file (tools/spdx.sh --add inserts it in new ones)
+bash tools/spdx.sh --check
 bash tools/run-static.sh
 
 echo "== ARM cross builds, unit tests under qemu-user (aarch64, armhf; ~7 min)"

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Cortex-M build of the C core and its size report.
 #   tools/size-report.sh [m7|m4 ...]        (default: m7 m4)
 # For each core: configures build/cortex-<core> with cmake/toolchains/cortex-<core>.cmake and

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # SPDX licence lines in the source files (docs/licence.md).
 #   tools/spdx.sh --check   list the files without an SPDX-License-Identifier line; exit 1 if any
 #   tools/spdx.sh --add     insert "SPDX-License-Identifier: <id>" as the first comment line of each of them

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Cross build for aarch64-linux-gnu (Debian cross compiler gcc-aarch64-linux-gnu), Linux userland.
 #   cmake -S . -B build/aarch64-linux-gnu -G Ninja --toolchain cmake/toolchains/aarch64-linux-gnu.cmake \
 #         -DTVO_BUILD_PORT=OFF -DTVO_BUILD_EXAMPLES=OFF

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Cross build for arm-linux-gnueabihf with NEON (ARMv7-A cores that have it: Cortex-A7, A8, A9, A15,
 # and ARMv8 cores in 32-bit mode). Same as arm-linux-gnueabihf.cmake plus -mfpu=neon, which defines
 # __ARM_NEON and so compiles in tinyvo's NEON kernels (LK tracking). Debian's armhf compiler defaults to

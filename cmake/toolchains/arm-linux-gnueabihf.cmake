@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Cross build for arm-linux-gnueabihf (Debian cross compiler gcc-arm-linux-gnueabihf), Linux userland.
 #   cmake -S . -B build/arm-linux-gnueabihf -G Ninja --toolchain cmake/toolchains/arm-linux-gnueabihf.cmake \
 #         -DTVO_BUILD_PORT=OFF -DTVO_BUILD_EXAMPLES=OFF

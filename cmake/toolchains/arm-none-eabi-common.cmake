@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Shared part of the bare-metal Cortex-M toolchain files (cortex-m7.cmake, cortex-m4.cmake).
 # Needs TVO_CPU_FLAGS set by the including file. Builds the C core only:
 #   cmake -S . -B build/cortex-m7 -G Ninja --toolchain cmake/toolchains/cortex-m7.cmake -DTVO_CORE_ONLY=ON

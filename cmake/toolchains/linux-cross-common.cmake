@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Shared part of the ARM Linux cross toolchains (aarch64-linux-gnu.cmake, arm-linux-gnueabihf.cmake):
 # the including file sets CMAKE_SYSTEM_PROCESSOR, TVO_CROSS_TRIPLE (Debian cross compiler prefix) and
 # TVO_QEMU_NAME (qemu-user binary for the target).

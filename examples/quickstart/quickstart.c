@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The README's quickstart: the VO on a sequence of 8-bit grey frames, integrated into a trajectory.
  * Everything between the README markers is copied verbatim into README.md (a ctest test checks that
  * the two agree); below them, a stand-in frame source (a textured plane the camera approaches) so

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Fails unless README.md contains, verbatim, the lines of quickstart.c between "/* README-BEGIN */" and
 # "/* README-END */" (the README shows them in a ```c block).
 file(READ "${SRC}" src)

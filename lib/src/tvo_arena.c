@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 #include "tinyvo/arena.h"
 
 void tvo_arena_init(tvo_arena *arena, void *mem, size_t size)

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: pinhole camera models with radial-tangential or equidistant distortion (see camera.h). */
 #include "tinyvo/camera.h"
 #include "tinyvo/dmath.h"

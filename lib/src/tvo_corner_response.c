@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Harris and Shi-Tomasi (minimum eigenvalue) corner responses, OpenCV-compatible (ksize 3 Sobel,
  * BORDER_REFLECT_101). See tinyvo/corners.h.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Bucketed corner detection: FAST-9 with non-max suppression, a per-cell shortlist by FAST score,
  * Harris / Shi-Tomasi ranking of the shortlist, and greedy selection with a minimum spacing.
  * See tinyvo/corners.h for the contract. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Deterministic elementary functions (see dmath.h): Taylor / atanh series on small reduced arguments,
  * constants as hexadecimal literals (computed with mpmath at 300 bits), only correctly rounded or exact
  * operations, so the result bits are the same on every IEEE-754 double target. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Normalised 8-point algorithm (Hartley) on normalised image coordinates, projected onto the
  * essential manifold. With exactly 8 correspondences (the RANSAC sample) the null vector of the 8x9
  * system comes from Gaussian elimination with complete pivoting; with more, from the smallest

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* FAST-9 corner detector (16-pixel circle, 9 contiguous), OpenCV-compatible corner set, score and
  * 3x3 non-max suppression. See tinyvo/corners.h for the contract.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Minimal 5-point essential matrix solver (Nister's formulation, written from the paper).
  *
  * 1. Each correspondence gives one row of x2^T E x1 = 0 in the 9 entries of E; the 4-dimensional

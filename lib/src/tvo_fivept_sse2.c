@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The five-point solver's SSE2 stages (see tvo_fivept_impl.h; the portable versions are in
  * tvo_fivept.c). Two rows, two columns or two products per instruction, one per lane, each lane with
  * the operations of the portable stage in the same order, so the results are bit-identical. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Small dense linear algebra for the geometry: 3x3 helpers, 3x3 SVD (one-sided Jacobi), symmetric
  * Jacobi eigen-decomposition, Gaussian elimination and Sturm-sequence polynomial root finding. */
 #include "tinyvo/linalg.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Pyramidal Lucas-Kanade tracking, OpenCV-compatible arithmetic (see tinyvo/lk.h): the driver and the
  * portable reference kernels. The SSE2 and NEON kernels are in tvo_lk_sse2.c and tvo_lk_neon.c (what
  * they share with this file: tvo_lk_impl.h); each gives the same integers as the kernels here.

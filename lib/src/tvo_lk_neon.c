@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The Lucas-Kanade window kernels in NEON (aarch64; armv7 built with -mfpu=neon; see tvo_lk_impl.h).
  * Same integers as the portable kernels of tvo_lk.c and the SSE2 ones of tvo_lk_sse2.c. */
 #include "tvo_lk_impl.h"

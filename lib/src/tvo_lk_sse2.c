@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The Lucas-Kanade window kernels in SSE2 (x86; see tvo_lk_impl.h). Same integers as the portable
  * kernels of tvo_lk.c, strip by strip of 8 columns. */
 #include "tvo_lk_impl.h"

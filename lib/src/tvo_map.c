@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: the VO's local map. See tvo_map.h for the design and vo.h for the configuration. */
 #include "tvo_map.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: the VO's local map (internal to the VO object; see vo.h for what users see of it).
  *
  * Keyframes in a sliding window, landmarks triangulated between them, frame poses from PnP on the

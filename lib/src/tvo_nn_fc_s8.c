@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: fully connected int8 kernels (int8 x int8 -> int32), portable C.
  *
  * The inner loop is a plain dot product over contiguous rows that GCC and Clang vectorise at -O2/-O3

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: 256-entry int8 lookup-table activation. */
 #include "tinyvo/nn.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: weights-file validation, loading into caller memory, and the per-frame run.
  * Format: docs/weights-format.md. Nothing in the file is trusted: tvo_nn_validate() checks every
  * field before tvo_nn_load() copies anything. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: the input stage of a branch: normalise float features and quantise them to int8.
  * float32 arithmetic only (each step rounded to float), ties-to-even rounding (rintf in the default
  * rounding mode), so that NumPy's float32 reference gives the same bits. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Gaussian image pyramid, bit-exact with cv::pyrDown (see tinyvo/pyramid.h). */
 #include "tinyvo/pyramid.h"
 

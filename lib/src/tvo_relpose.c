@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Relative pose: RANSAC around the 5-point / 8-point solvers, Sampson scoring, rotation-only
  * model for low parallax, homography model selection for dominant planes, LM refinement on the
  * (R, unit t) manifold and cheirality-based decomposition. See tinyvo/relpose.h. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: SE(3) / SO(3) helpers (see se3.h). */
 #include "tinyvo/se3.h"
 #include "tinyvo/dmath.h"

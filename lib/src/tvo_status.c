@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 #include "tinyvo/status.h"
 
 const char *tvo_status_str(tvo_status status)

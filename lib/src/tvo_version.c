@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Library version at run time (version.h). */
 #include "tinyvo/version.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: the VO object. See vo.h for the per-frame data flow. */
 #include "tinyvo/vo.h"
 

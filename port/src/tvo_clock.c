@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo port: monotonic clock. */
 #include "tinyvo/port/clock.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo port: PNG <-> 8-bit grey via libspng (see tinyvo/port/png.h). */
 #include "tinyvo/port/png.h"
 

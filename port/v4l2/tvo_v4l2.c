@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo port: V4L2 mmap-streaming capture. See tinyvo/port/v4l2.h. */
 #define _POSIX_C_SOURCE 200809L
 

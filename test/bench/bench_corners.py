@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Benchmark: corner detection, tinyvo vs OpenCV, same EuRoC frames, one process, single thread.
 
   TVO_BUILD_DIR=build/release .venv/bin/python test/bench/bench_corners.py [--frames N] [--repeat R]

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Benchmark: tinyvo pyramids + pyramidal LK vs OpenCV, in ONE process, single thread.
 
 On EuRoC V1_01_easy_head cam0 -> cam1 pairs (real stereo, disparities up to tens of px) and on

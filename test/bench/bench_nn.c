@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Benchmark of the int8 per-DoF networks: all branches of a model per frame (tvo_nn_run_all), single
  * thread. Prints per model the MAC count and the median / p90 microseconds per frame, and a checksum of
  * the outputs the model provides (tvo_nn_output_mask: a step-only model's missing DoFs are NaN by

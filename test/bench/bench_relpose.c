@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Relative-pose benchmark and accuracy evaluation (not a test).
  *   bench_relpose [trials]   (default 1000)
  * 1. minimal 5-point solve time (median and best of 20 x 1000 calls: the best is the figure least

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Benchmark: tinyvo_relpose_estimate vs cv2.findEssentialMat (+ recoverPose) on the same synthetic
 input, one process, single thread. 300 correspondences, 30 % outliers, 0.5 px noise, f = 460.
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Deliberately simple FAST-9 reference for the tests (no table, no SIMD, no early rejection): the
  * corner set and scores tvo_fast9_detect must reproduce (corners.h). Written from the definition:
  *   - the 16-pixel Bresenham circle of radius 3, OpenCV's order starting at (0, 3);

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Deterministic xorshift64* generator for test and benchmark inputs (no cmocka needed). */
 #ifndef TVO_RAND_H
 #define TVO_RAND_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Synthetic two-view scenes for the relative-pose tests and benchmark: f = 460 px, 752x480 image,
  * points 1..8 m deep (or on one plane), seeded generator. Used by test/unit/test_relpose.c and
  * test/bench/bench_relpose.c (which does not link cmocka). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A tiny ray caster for tests: a pinhole camera inside a box room whose six walls carry value-noise
  * texture. Used by test_vo.c (VO end to end) and test_determinism.c (cross-target digests).
  *

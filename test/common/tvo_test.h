@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Helpers shared by the cmocka unit tests. Include after <cmocka.h>'s prerequisites. */
 #ifndef TVO_TEST_H
 #define TVO_TEST_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A program outside the tinyvo tree, built against an installed tinyvo (test/external/run.sh): once with
  * find_package(tinyvo COMPONENTS port) and once with pkg-config. It uses the core and the port layer as a
  * user would:

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Install tinyvo to a non-default prefix and build a project outside the tree against it
 # (tools/run-tests.sh). For each kind of library (static, then shared with BUILD_SHARED_LIBS=ON):
 #   1. configure with the default prefix, build lib/ + port/, `cmake --install --prefix $PREFIX`, then MOVE

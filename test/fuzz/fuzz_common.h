@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo fuzz harnesses: shared helpers (test/fuzz/, see docs/fuzzing.md).
  *
  * Every harness defines LLVMFuzzerTestOneInput(). Built with clang and -DTVO_BUILD_FUZZ=ON it links

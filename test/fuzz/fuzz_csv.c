@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fuzz harness: the EuRoC csv readers (tinyvo/port/euroc.h): tvo_euroc_parse_frames_csv (cam data.csv)
  * and tvo_euroc_parse_groundtruth (state_groundtruth_estimate0/data.csv and the space-separated
  * trajectory text), both on the same input.

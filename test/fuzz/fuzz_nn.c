@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fuzz harness: the weights-file loader and interpreter (tinyvo/nn.h).
  *
  * The input is a weights file. It is loaded twice: as given (exercises the size, magic, version and

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fuzz harness: PNG frame loading (tvo_png_decode_gray8, tinyvo/port/png.h; libspng underneath).
  *
  * The input is a PNG file. A first call without a buffer reads the header (TVO_ERR_NO_MEMORY with the

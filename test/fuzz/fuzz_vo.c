@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Fuzz harness: the visual odometry (tinyvo/vo.h) fed with arbitrary image bytes and timestamps.
  *
  * Input layout (bytes past the end read as zero):

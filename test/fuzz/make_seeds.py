@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Writes the seed inputs of test/fuzz/corpus/<name>/ (seed-*; crash inputs found by the fuzzer are kept
 beside them as crash-* / leak-* / timeout-* files, never regenerated). Deterministic.
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Replay driver for the fuzz harnesses when libFuzzer is not available (gcc builds, the ASan build of
  * tools/run-tests.sh): runs LLVMFuzzerTestOneInput once on every regular file named on the command
  * line or found (not recursively, in name order) in a directory named there. Exit status 0 when every

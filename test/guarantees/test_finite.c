@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Guarantee: never a NaN or infinite pose, whatever the input (issue 7).
  *
  * tvo_vo_process is fed random, black, white, constant, alternating and checkerboard frames and the

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The documented limits of docs/limits.md: at and just beyond each one, the status each call returns. */
 #include "tvo_guarantee.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Guarantee: no heap allocation after init in the per-frame path (issue 7).
  *
  * This executable defines malloc, calloc, realloc, free and the aligned allocators itself; they forward

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Guarantee: identical output for identical input (issue 7), within one build.
  *
  * The same frames go through two fresh VO objects whose memory blocks were filled with different garbage

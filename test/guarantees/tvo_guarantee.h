@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Inputs shared by the guarantee tests (test/guarantees): a synthetic scene rendered here, "hostile"
  * frames, the per-DoF paper model, and the shared EuRoC keyframes when present.
  *

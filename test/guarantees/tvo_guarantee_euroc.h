@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The shared EuRoC sample folders as input to the guarantee tests that link the port layer
  * (test_no_alloc, test_repeat, test_stack): open $TVO_DATA_DIR/euroc/<name> (cam0) through the port's
  * reader and decode its first frames into one heap block, before anything is measured. */

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Frames for the microcontroller replay (test/mcu/mcu_replay.c): a real sequence cut to QVGA.
 
     python test/mcu/make_frames.py --euroc DIR --out frames.bin [--frames N] [--width 320 --height 240]

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo on a microcontroller: a short replay of QVGA frames with the VO and the per-DoF networks in one
  * fixed block of TVO_MCU_MEM bytes (no heap for the library), the same program on the host and on the
  * Cortex-M7 model (qemu-system-arm -M mps2-an500, file I/O through semihosting).
@@ -87,6 +88,8 @@ static void mcu_config(tvo_vo_config *cfg, const tvo_camera *cam)
     cfg->keyframe_min_tracks = 40;
     cfg->detect.max_corners = cfg->max_tracks; /* the scratch is sized for this many (vo.h) */
     cfg->lk.max_level = 2;
+    cfg->map_window = 5;           /* the local map: 5 keyframes, 160 landmarks */
+    cfg->map_max_landmarks = 160;
 }
 
 /* A pinhole camera without distortion. */

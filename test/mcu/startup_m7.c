@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Bare-metal start for the Cortex-M7 model (qemu-system-arm -M mps2-an500): vector table, FPU on,
  * .bss cleared, newlib's semihosting handles opened (librdimon), static constructors, main, exit.
  * qemu loads every section of the ELF at its address, so .data needs no copy here. Faults end the run

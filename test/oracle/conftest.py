@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Shared fixtures of the OpenCV oracle tests: the ctypes handle on the C core and the data folder."""
 import ctypes
 import os

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Camera models against OpenCV: tvo_camera_undistort vs cv2.undistortPoints(Iter) (radial-tangential,
 4 and 5 coefficients) and cv2.fisheye.undistortPoints (equidistant); tvo_camera_distort vs
 cv2.projectPoints / cv2.fisheye.projectPoints. A dense grid over the whole image, corners included.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Oracle tests of tinyvo's corner module against OpenCV (opencv-python-headless, pinned in the venv).
 
 - FAST-9 without non-max suppression: exactly OpenCV's corner set (TYPE_9_16), several EuRoC frames and

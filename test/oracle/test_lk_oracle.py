@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Pyramids and pyramidal Lucas-Kanade vs OpenCV (cv2.pyrDown / buildOpticalFlowPyramid /
 calcOpticalFlowPyrLK), on the real EuRoC cam0 -> cam1 pairs and on synthetic sub-pixel shifts.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The C int8 interpreter (lib/src/tvo_nn_*.c) against the NumPy integer reference (tinyvo_tools.nnfmt),
 bit for bit: golden vectors of test/data/nn, >= 10,000 random inputs per activation, and the loader's
 refusals of corrupted files."""

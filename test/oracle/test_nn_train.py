@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The trainer's code on tiny data: a few steps of stage 1 and stage 2, checkpoint round trip, export,
 load in C via ctypes, bit-exact against the NumPy reference, and the quantised-vs-float gap."""
 import numpy as np

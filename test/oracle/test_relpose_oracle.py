@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Relative pose (tinyvo_relpose_estimate) against OpenCV findEssentialMat + recoverPose.
 
 1. Synthetic scenes (f = 460, 752x480, 0.5 px noise, 30 % outliers): tinyvo is at least as accurate

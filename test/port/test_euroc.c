@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* EuRoC / ASL reader: the real sample folders (skipped without TVO_DATA_DIR), the parsers on malformed
  * buffers (missing keys, bad numbers, truncation at every length, ...), and malformed folders written
  * to a temporary directory. */

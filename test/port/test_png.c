@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* PNG port: decoding of every colour type / bit depth to grey, corrupt and truncated files, sizes,
  * round trip through the writer, a real EuRoC frame. The test PNGs are written by a tiny independent
  * encoder below (stored deflate blocks, own CRC-32 and Adler-32), so the decoder is checked against

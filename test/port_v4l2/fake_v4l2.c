@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Scripted fake V4L2 device: see fake_v4l2.h. */
 #include "fake_v4l2.h"
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* A scripted fake V4L2 capture device for the port's tests (no camera on CI machines).
  *
  * fake_dev_sys() returns a tvo_v4l2_sys table whose calls act on one fake_dev: it answers the

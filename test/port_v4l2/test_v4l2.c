@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* V4L2 capture port against a scripted fake device (fake_v4l2.c): every path checks the status
  * and that everything opened/mapped was released. */
 #include "tvo_test.h"

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """One command-line convention for every program (Python tools and the C programs):
 
 - --help: the help on stdout, first line "usage: <program> ...", exit 0, nothing on stderr;

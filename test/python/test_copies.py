@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Hidden-channel copies in the exporter (quant.copy_offsets, quantize_branch(hidden_copies=...)): k copies
 of a clipped relu channel, biases offset by copy_offsets levels, are one channel with k times finer levels
 (Hermite's identity), with the float model untouched."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Tests of tinyvo_tools.dataset (features csv + ground truth -> training pairs) and of the pieces of
 tinyvo_tools.tables that do not need training. Fast: a fake features csv and a generated trajectory; the
 end-to-end test with tvo_replay on a tiny rendered sequence runs only when the replay binary is built."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The product's documentation talks about the product, not about how it was developed.
 
 README.md, CHANGELOG.md and every docs/*.md must not contain a commit hash, the word "session", an

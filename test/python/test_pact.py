@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Clipped relu layers (PACT: FloatBranch.act_clip, train.pact_finetune) and the exporter's handling of them
 (rule 2 requantises a clipped layer over exactly [0, bound]), and rule 3's sequential weight rounding."""
 import numpy as np

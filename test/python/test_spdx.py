@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tools/spdx.sh on a scratch git repository: --check lists the source files without an SPDX line (exit 1),
 --add inserts it in each language's comment syntax (shebang and Python coding line kept first, other
 files untouched, modes kept), after which --check passes and a second --add changes nothing."""

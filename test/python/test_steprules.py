@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tinyvo_tools.steprules on tiny data: two 16-frame rendered sequences, their dataset and features from
 the real tvo_replay, each rule with one seed and one epoch, the oracle with the shipped step model. Checks
 the tables, results.json (candidates, figures, passing and chosen consistent with the rule) and refusals."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tinyvo_tools.suite on a tiny rendered sequence with the real tvo_replay: the table, the JSON rows (taken
 from the replay's stats and from tinyvo_tools.eval), folder expansion, the skipping of an irregular
 (keyframe) folder, the alignment per scale mode, --repeat, and the refusals."""

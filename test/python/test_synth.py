@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Tests of tinyvo_tools.synth (synthetic EuRoC sequences) and tinyvo_tools.trajio."""
 import os
 import pathlib

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tinyvo-view (tinyvo_tools.view): a replay rendered into an animated GIF / a video.
 
 The tracks file is made here from a 12-frame synthetic sequence with OpenCV (corners tracked by LK,

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Camera models: validation, known values, distort/undistort round trips, bad input. */
 #include <math.h>
 

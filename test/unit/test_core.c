@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Core helpers: status strings, image views, arena. */
 #include "tvo_test.h"
 #include "tinyvo/arena.h"

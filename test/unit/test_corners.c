@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Corner module: FAST-9 (vs the simple reference, synthetic known corners, bands, capacity),
  * Harris / Shi-Tomasi responses, bucketed detection (spread, spacing, existing points, determinism),
  * and bad input. The OpenCV comparison lives in test/oracle/test_corners_oracle.py. */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Determinism across targets: the same synthetic input gives bit-identical corners, tracks, camera
  * undistortion, relative poses, network outputs and VO poses on x86-64, aarch64 and armhf.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo/dmath.h: the deterministic elementary functions against libm (accuracy; libm itself is within
  * about 0.5-1 ulp) and their special values. Cross-target bit identity is checked by test_determinism. */
 #include "tvo_test.h"

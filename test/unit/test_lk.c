@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Pyramidal Lucas-Kanade: known shifts, forward-backward check, points outside, bad inputs. */
 #include <math.h>
 

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The VO's local map end to end on frames rendered from the textured box room of test/common/tvo_room.h:
  * one consistent scale over a long run, keyframes and landmarks, pure rotation before and after the map
  * exists, a loss and the new map that continues the trajectory, the tracks view, and the map's config

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The int8 network interpreter: golden vectors (test/data/nn, written by tinyvo_tools.nngolden) bit for
  * bit, and every kind of bad weights file refused with its precise status, one corruption at a time
  * (with the CRC recomputed so that the check behind it is reached). */

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Image pyramids: geometry, sizes, exact pyrDown values on small cases, bad inputs. */
 #include "tvo_test.h"
 #include "tinyvo/pyramid.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* Relative pose: 5-point solver, 8-point, RANSAC pipeline, rotation-only, planar scenes, bad input.
  * Synthetic scenes: f = 460 px, 752x480 image, points 1..8 m deep, seeded generator. */
 #include "tvo_test.h"

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* SE(3)/SO(3) helpers: identities, round trips (incl. near 0 and pi), the ground-truth transformation. */
 #include <math.h>
 

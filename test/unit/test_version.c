@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* version.h: the run-time version equals the header's, the macros agree with each other, and both
  * equal project(VERSION) of the top CMakeLists.txt (read from TVO_SOURCE_DIR, set by ctest). */
 #include <setjmp.h>

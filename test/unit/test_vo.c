@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The VO object end to end on frames rendered here from a textured 3D box room with known poses,
  * plus its bad-input contract. */
 #include "tvo_test.h"

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The command-line conventions every tinyvo tool follows (one module, so that they cannot drift):
 
 - ``--help``: the help text on stdout, exit 0; ``--version``: "<program> <version>" on stdout, exit 0;

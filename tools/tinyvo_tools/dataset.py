@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Dataset builder for the per-DoF networks: VO features paired with ground-truth relative poses.
 
     tinyvo-dataset SEQDIR [SEQDIR ...] -o DATASET.npz [--replay build/x/examples/replay/tvo_replay]

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Exporter: float checkpoint -> int8 weights file (docs/weights-format.md) + golden vectors + report.
 
     tinyvo-export model.ckpt.npz DATASET.npz -o model.tvonn [--golden model.golden]

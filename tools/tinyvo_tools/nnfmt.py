@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tinyvo's flat weights file (docs/weights-format.md): writer, reader and the NumPy integer reference.
 
 The reference (`reference_run`) performs exactly the arithmetic of lib/src/tvo_nn_*.c: float32 input

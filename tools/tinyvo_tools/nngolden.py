@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Regenerates test/data/nn/: small weights files and golden input/output vectors for the C tests.
 
     python -m tinyvo_tools.nngolden [--out test/data/nn] [--quiet]      (a developer tool: no console script)

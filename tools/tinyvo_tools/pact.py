@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Clip the relu layers of a trained checkpoint (PACT-style bounds, train.pact_finetune) and write a new one.
 
     tinyvo-pact MODEL.ckpt.npz DATASET.npz -o CLIPPED.ckpt.npz [--dofs log_step]

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Float per-DoF networks (torch-free) and their post-training int8 quantisation.
 
 A FloatBranch is what the trainer's checkpoint holds for one DoF: the input feature ids, the input

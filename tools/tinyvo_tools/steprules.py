@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The step-length model's selection rules and scale oracles, rerun whenever the front end's features change.
 
     python -m tinyvo_tools.steprules domain --dataset D.npz --features DIR --seq-root DIR --out DIR [options]

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Evaluation suite: tvo_replay over several EuRoC/ASL sequences, one table.
 
     tinyvo-suite --replay PATH/tvo_replay --seq DIR [--seq DIR ...]

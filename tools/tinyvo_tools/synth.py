@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Synthetic EuRoC/ASL sequences: a seeded, textured 3D room rendered along a trajectory.
 
     tinyvo-synth --out DIR [--trajectory FILE | --builtin NAME] [--frames N]

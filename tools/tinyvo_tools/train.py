@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Trainer of the per-DoF networks (the paper's deep-learning system), PyTorch (Debian's python3-torch).
 
     tinyvo-train DATASET.npz -o model.ckpt.npz [--act relu | --act tx=selu,ty=tanh,...]

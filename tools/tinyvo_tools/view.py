@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """A picture of what the VO sees: a replay rendered into an animated GIF or a video.
 
     tinyvo-view --seq DIR --tracks TRACKS.csv [--traj TRAJ.txt] -o OUT.gif|OUT.avi|OUT.mp4

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: pinhole camera models with radial-tangential (OpenCV "plumb bob") or equidistant (OpenCV
  * fisheye / Kalibr "equidistant") lens distortion.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: corner detection. FAST-9 corners, Harris / Shi-Tomasi responses, and a bucketed detector
  * that spreads new corners over the image for tracking.
  *

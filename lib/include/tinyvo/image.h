@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: the 8-bit grey image view.
  *
  * A view does not own its pixels. width, height and stride are const: a view is made once with

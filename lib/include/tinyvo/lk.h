@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: pyramidal Lucas-Kanade sparse optical flow (8-bit grey), OpenCV-compatible.
  *
  * The algorithm is the one of cv::calcOpticalFlowPyrLK (Bouguet's pyramidal LK) with the same

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: the per-DoF networks as a quantised int8 interpreter.
  *
  * A model is a flat weights file (format: docs/weights-format.md, written by

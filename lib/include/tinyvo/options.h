@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: library options. Every option has an #ifndef default here; override them on the compiler
  * command line (-DTVO_MAX_IMAGE_DIM=2048), never by editing this file. */
 #ifndef TINYVO_OPTIONS_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: Gaussian image pyramids (8-bit grey) in caller-provided memory.
  *
  * Level 0 is a copy of the input image; level l+1 is level l downsampled by 2 exactly as OpenCV's

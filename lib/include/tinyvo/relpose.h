@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: two-view relative pose from normalised correspondences.
  *
  * Conventions

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: SE(3) / SO(3) helpers and the paper's ground-truth transformation.
  *
  * Conventions: T_a_b maps points from frame b to frame a: p_a = R p_b + t. R is a row-major 3x3

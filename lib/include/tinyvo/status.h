@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: the one status enum shared by every module.
  *
  * Functions that can fail return tvo_status: TVO_OK (0) on success, a negative code otherwise.

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: umbrella header. Include this, or only the module headers you need. */
 #ifndef TINYVO_TINYVO_H
 #define TINYVO_TINYVO_H

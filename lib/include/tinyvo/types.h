@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: small shared value types. */
 #ifndef TINYVO_TYPES_H
 #define TINYVO_TYPES_H

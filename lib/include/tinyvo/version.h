@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: library version, at compile time (macros) and at run time (tvo_version()).
  *
  * The numbers follow project(VERSION) of the top CMakeLists.txt; a CMake configure step refuses to

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: the monocular visual odometry object.
  *
  * Per frame: pyramid -> LK tracking of the current tracks (forward-backward checked) -> undistortion

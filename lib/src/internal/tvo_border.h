@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo internal: image border handling shared by the pyramid, the corner responses and LK. */
 #ifndef TVO_BORDER_H
 #define TVO_BORDER_H

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo internal: the five-point solver's stages (tvo_fivept.c) and what its portable and SIMD
  * versions (tvo_fivept.c, tvo_fivept_sse2.c) share.
  *

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo internal: what the pyramidal Lucas-Kanade tracker (tvo_lk.c: the portable reference kernels
  * and the driver) shares with its per-architecture window kernels (tvo_lk_sse2.c, tvo_lk_neon.c).
  *

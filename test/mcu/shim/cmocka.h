@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* The part of cmocka's API the unit tests use, for the bare-metal Cortex-M7 run (tools/run-mcu.sh):
  * no mocking, no signal handling; a failed assertion prints its place and ends the test (longjmp), the
  * group goes on with the next test. cmocka_run_group_tests returns the number of failed tests and

@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: a bump allocator over caller-provided memory.
  *
  * Modules carve their working memory out of the block the caller hands to their *_init() call; the

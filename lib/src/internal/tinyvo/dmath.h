@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: deterministic elementary functions.
  *
  * libm's sin, cos, tan, atan, atan2, log, log1p, exp and hypot are not correctly rounded, and their last bit

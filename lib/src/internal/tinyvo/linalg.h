@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: small dense linear-algebra helpers used by the geometry (relative pose, 5/8-point).
  *
  * All matrices are row-major double arrays of the stated fixed size; no function allocates, none

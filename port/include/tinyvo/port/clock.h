@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo port: a monotonic clock for timing (POSIX clock_gettime). */
 #ifndef TINYVO_PORT_CLOCK_H
 #define TINYVO_PORT_CLOCK_H

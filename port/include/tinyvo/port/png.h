@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo port: PNG frames via libspng (port layer only; lib/ never sees a file format).
  *
  * Every colour type and bit depth that libspng decodes is accepted (grey 1/2/4/8/16 bit, grey+alpha,

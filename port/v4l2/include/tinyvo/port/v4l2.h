@@ -1,3 +1,4 @@
+/* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo port: Linux V4L2 video capture (mmap streaming), Linux only.
  *
  * Opens a V4L2 capture device, negotiates an 8-bit luma format, maps several driver buffers and
