@@ -8,10 +8,10 @@
  *
  * FRAMES.bin (written by test/mcu/make_frames.py): "TVOFRM1\0", int32 width, height, count, 0, double fx, fy,
  * cx, cy (pinhole, no distortion), then per frame int64 t_ns and width*height grey bytes, little endian.
- * Output: the TUM trajectory (unit steps, %.17g), every result's fields per frame in hexadecimal floating
- * point (RESULTS.txt: where a difference starts), and on stdout lines "mcu: key value" with the memory
- * figures, the frames processed and an FNV-1a digest over every result (state, counts, raw pose, rel_scale,
- * network outputs). The host and target digests must be equal (tools/run-mcu.sh compares them).
+ * Output: the TUM trajectory (the map's T_w_c, %.17g), every result's fields per frame in hexadecimal
+ * floating point (RESULTS.txt: where a difference starts), and on stdout lines "mcu: key value" with the
+ * memory figures, the frames processed and an FNV-1a digest over every result (state, counts, raw pose,
+ * rel_scale, the map's state, counts and world pose, network outputs). The host and target digests must be equal (tools/run-mcu.sh compares them).
  * Before the replay it checks two refusals at init: a camera too large for the block (TVO_ERR_NO_MEMORY
  * from tvo_vo_init, before any frame) and a frame of the wrong size (TVO_ERR_SIZE, VO unchanged). */
 #include <stdint.h>
@@ -124,8 +124,6 @@ int main(int argc, char **argv)
     tvo_vo_config cfg, big;
     tvo_vo *vo = NULL;
     tvo_nn *nn = NULL;
-    tvo_traj traj;
-    tvo_pose I = tvo_pose_identity();
     size_t vo_size, nn_size = 0, model_size;
     FILE *fp, *fm, *fo, *fr;
     tvo_status st;
@@ -189,7 +187,6 @@ int main(int argc, char **argv)
     fr = fopen(res_path, "w");
     if (fo == NULL || fr == NULL)
         return fail("output file", TVO_ERR_IO);
-    tvo_traj_init(&traj, &I);
     for (int32_t k = 0; k < count; ++k) {
         uint8_t tb[8];
         int64_t t_ns = 0;
@@ -213,7 +210,6 @@ int main(int argc, char **argv)
         ++processed;
         memset(out, 0, sizeof out);
         (void)tvo_nn_run_all(nn, res.features, out);
-        (void)tvo_traj_step(&traj, &res.T_prev_cur, res.state == TVO_VO_OK ? 1.0 : 0.0);
         {
             const int32_t state = (int32_t)res.state; /* the enum's size is the ABI's (1 byte on arm-none-eabi) */
             digest(&state, sizeof state);
@@ -227,6 +223,14 @@ int main(int argc, char **argv)
         digest(&res.rel_scale, sizeof res.rel_scale);
         digest(res.features, sizeof res.features);
         digest(out, sizeof out);
+        {
+            /* the local map: the world pose (the trajectory written below) and what the map did */
+            const int32_t mi[5] = { (int32_t)res.map_state, res.keyframe, res.map_points, res.map_landmarks,
+                                    res.map_losses };
+            digest(mi, sizeof mi);
+            digest(res.T_w_c.R, sizeof res.T_w_c.R);
+            digest(res.T_w_c.t, sizeof res.T_w_c.t);
+        }
         fprintf(fr, "%d %d %d %d %d %d", (int)k, (int)res.state, (int)res.tracked, (int)res.inliers,
                 (int)res.new_corners, (int)res.tracks);
         for (int i = 0; i < 9; ++i)
@@ -234,6 +238,12 @@ int main(int argc, char **argv)
         for (int i = 0; i < 3; ++i)
             put_f64(fr, res.T_prev_cur.t[i]);
         put_f64(fr, res.rel_scale);
+        fprintf(fr, " | %d %d %d %d", (int)res.map_state, (int)res.keyframe, (int)res.map_points,
+                (int)res.map_landmarks);
+        for (int i = 0; i < 9; ++i)
+            put_f64(fr, res.T_w_c.R[i]);
+        for (int i = 0; i < 3; ++i)
+            put_f64(fr, res.T_w_c.t[i]);
         fprintf(fr, " |");
         for (int i = 0; i < TVO_FEAT_COUNT; ++i)
             put_f32(fr, res.features[i]);
@@ -241,9 +251,9 @@ int main(int argc, char **argv)
         for (int i = 0; i < TVO_NN_OUT_COUNT; ++i)
             put_f32(fr, out[i]);
         fprintf(fr, "\n");
-        tvo_rot_to_quat(traj.T_w_c.R, q);
-        fprintf(fo, "%.9f %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", (double)t_ns * 1e-9, traj.T_w_c.t[0],
-                traj.T_w_c.t[1], traj.T_w_c.t[2], q[1], q[2], q[3], q[0]);
+        tvo_rot_to_quat(res.T_w_c.R, q); /* the map's trajectory (its own unit) */
+        fprintf(fo, "%.9f %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", (double)t_ns * 1e-9, res.T_w_c.t[0],
+                res.T_w_c.t[1], res.T_w_c.t[2], q[1], q[2], q[3], q[0]);
     }
     fclose(fo);
     fclose(fr);
