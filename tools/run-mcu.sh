@@ -15,7 +15,7 @@
 #    prints the memory figures and the guest instructions per frame counted by qemu
 #    (tools/qemu-insn-count.sh: in the tinyvo core's code, and in total), from a 30- and a 10-frame run.
 #    Without the data the replay is skipped with a message.
-# Environment: BUILD (default build/mcu), MCU_TESTS (default below), TVO_MCU_MEM (bytes, default 286720),
+# Environment: BUILD (default build/mcu), MCU_TESTS (default below), TVO_MCU_MEM (bytes, default 262144),
 # PYTHON (default .venv/bin/python, needs numpy and opencv). Exit 1 on any failure.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

@@ -796,70 +796,30 @@ static void map_new_tracks(tvo_vo *vo, int32_t first)
     tvo_map_new_tracks(&vo->map, &tr, first);
 }
 
-tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_vo_result *res)
-{
-    tvo_status st;
-    tvo_pyramid *pc, *pp;
-    int64_t t0, t1;
-    const int32_t w = vo != NULL ? vo->cfg.camera.width : 0, h = vo != NULL ? vo->cfg.camera.height : 0;
-    int32_t m, pose0_next = 0; /* whether this frame's pose is a unit translation for the next rel_scale */
-    int32_t pred_next = 0;     /* whether this frame's rotation predicts the next frame's tracks */
-    int predicted = 0;         /* whether LK started from predicted positions (x1 / ok1 then hold pts') */
-    int kf = KF_NONE;          /* what the keyframe rotation did this frame */
+/* What one frame's stages hand to each other (tvo_vo_process). */
+typedef struct frame_ctx {
+    tvo_pyramid *pc, *pp;      /* this frame's pyramid, the previous frame's */
+    int32_t m;                 /* correspondences (tracks with both ends) */
+    int32_t pose0_next;        /* this frame's pose is a unit translation for the next rel_scale */
+    int32_t pred_next;         /* this frame's rotation predicts the next frame's tracks */
+    int predicted;             /* LK started from predicted positions (x1 / ok1 then hold pts') */
+    int kf;                    /* what the keyframe rotation did this frame */
+    double kpar;               /* its parallax */
     double R2v[9];             /* this frame's two-view rotation (X_cur = R X_prev), valid when has_R2v */
-    int has_R2v = 0;
-    double kpar = 0.0;         /* its parallax */
-    if (res == NULL)
-        return TVO_ERR_NULL;
-    result_clear(res, TVO_VO_LOST);
-    if (vo == NULL || frame == NULL)
-        return TVO_ERR_NULL;
-    st = tvo_image_check(frame);
-    if (st != TVO_OK)
-        return st;
-    if (frame->width != w || frame->height != h)
-        return TVO_ERR_SIZE;
-    if (vo->has_prev && t_ns <= vo->t_prev)
-        return TVO_ERR_ARG;
+    int has_R2v;
+} frame_ctx;
 
-    t0 = now_ns(vo);
-    pc = &vo->pyr[vo->cur];
-    pp = &vo->pyr[vo->cur ^ 1];
-    st = tvo_pyramid_build_borrowed(pc, frame); /* level 0 is the caller's frame until the end of the call */
-    if (st != TVO_OK)
-        return st;
-    t1 = now_ns(vo);
-    res->stage_ns[TVO_STAGE_PYRAMID] = t1 - t0;
-
-    if (!vo->has_prev) {
-        vo->n = 0;
-        res->state = TVO_VO_INITIALISING;
-        t1 = now_ns(vo);
-        map_step(vo, res, t_ns, NULL);
-        res->stage_ns[TVO_STAGE_MAP] = now_ns(vo) - t1;
-        t1 = now_ns(vo);
-        res->new_corners = redetect(vo, pc);
-        res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
-        t1 = now_ns(vo);
-        map_new_tracks(vo, 0);
-        res->stage_ns[TVO_STAGE_MAP] += now_ns(vo) - t1;
-        goto done;
-    }
-    {
-        /* t_ns > t_prev here, but the difference of two int64 timestamps can exceed INT64_MAX: saturate */
-        const uint64_t dt = (uint64_t)t_ns - (uint64_t)vo->t_prev;
-        res->dt_ns = dt > (uint64_t)INT64_MAX ? INT64_MAX : (int64_t)dt;
-    }
-
-    /* 1. track */
-    t1 = now_ns(vo);
-    {
-        tvo_lk_config lkc = vo->cfg.lk;
-        predicted = predict_tracks(vo, res->dt_ns);
-        if (predicted)
-            lkc.use_initial_flow = 1;
-        st = tvo_lk_track(&lkc, pp, pc, vo->pts, vo->next, vo->st, NULL, vo->n, vo->scratch, vo->scratch_size);
-    }
+/* 1. LK tracking of the tracks into this frame; the tracks that leave the image are dropped. */
+static void stage_track(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
+{
+    const int32_t w = vo->cfg.camera.width, h = vo->cfg.camera.height;
+    tvo_lk_config lkc = vo->cfg.lk;
+    tvo_status st;
+    fc->predicted = predict_tracks(vo, res->dt_ns);
+    if (fc->predicted)
+        lkc.use_initial_flow = 1;
+    st = tvo_lk_track(&lkc, fc->pp, fc->pc, vo->pts, vo->next, vo->st, NULL, vo->n, vo->scratch,
+                      vo->scratch_size);
     if (st != TVO_OK)
         memset(vo->st, 0, (size_t)vo->n);
     for (int32_t i = 0; i < vo->n; ++i) {
@@ -867,176 +827,207 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
         if (vo->st[i] && !(q.x >= 0.0f && q.y >= 0.0f && q.x <= (float)(w - 1) && q.y <= (float)(h - 1)))
             vo->st[i] = 0;
     }
-    m = compact(vo, vo->n, vo->st);
-    for (int32_t i = 0; i < m; ++i)
+    fc->m = compact(vo, vo->n, vo->st);
+    for (int32_t i = 0; i < fc->m; ++i)
         vo->age[i]++;
-    res->tracked = m;
-    res->stage_ns[TVO_STAGE_TRACK] = now_ns(vo) - t1;
+    res->tracked = fc->m;
+}
 
-    /* 2. undistort both ends to normalised coordinates */
-    t1 = now_ns(vo);
-    if (m > 0) {
-        if (!predicted) /* else x1 / ok1 are the prediction's, compacted with the tracks */
-            tvo_camera_undistort(&vo->cfg.camera, vo->pts, vo->x1, vo->ok1, m);
-        tvo_camera_undistort(&vo->cfg.camera, vo->next, vo->x2, vo->ok2, m);
-        for (int32_t i = 0; i < m; ++i)
-            vo->ok1[i] = (uint8_t)(vo->ok1[i] && vo->ok2[i]);
-        m = compact(vo, m, vo->ok1);
+/* 2. Both ends of every track to normalised coordinates; tracks that cannot be undistorted go. */
+static void stage_undistort(tvo_vo *vo, frame_ctx *fc)
+{
+    const int32_t m = fc->m;
+    if (m <= 0)
+        return;
+    if (!fc->predicted) /* else x1 / ok1 are the prediction's, compacted with the tracks */
+        tvo_camera_undistort(&vo->cfg.camera, vo->pts, vo->x1, vo->ok1, m);
+    tvo_camera_undistort(&vo->cfg.camera, vo->next, vo->x2, vo->ok2, m);
+    for (int32_t i = 0; i < m; ++i)
+        vo->ok1[i] = (uint8_t)(vo->ok1[i] && vo->ok2[i]);
+    fc->m = compact(vo, m, vo->ok1);
+}
+
+/* 3a. The relative pose of the m correspondences, with the two fallbacks: the epipolar model alone when
+ * the homography won but none of its decompositions held up, and the rotation-only model alone when no
+ * epipolar pose can be trusted. */
+static tvo_status estimate_pose(tvo_vo *vo, const tvo_relpose_config *rc, int32_t m, tvo_relpose *rp)
+{
+    tvo_status st = relpose_tracks(vo, rc, m, rp);
+    if (st == TVO_OK && (rp->flags & TVO_RELPOSE_FLAG_HOMOGRAPHY) &&
+        (rp->flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE) && !(rp->flags & TVO_RELPOSE_FLAG_AMBIGUOUS) &&
+        rc->use_homography) {
+        /* the homography won the model selection but none of its decompositions held up: the
+           epipolar model still may, so ask for it alone before calling the frame lost (not when
+           the plane's twins are both fine: the epipolar model alone would return one of them
+           unflagged, and they are resolved below) */
+        tvo_relpose_config re = *rc;
+        re.use_homography = 0;
+        st = relpose_tracks(vo, &re, m, rp);
     }
-    res->stage_ns[TVO_STAGE_UNDISTORT] = now_ns(vo) - t1;
+    if (st == TVO_OK && (rp->flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE) &&
+        !(rp->flags & (TVO_RELPOSE_FLAG_AMBIGUOUS | TVO_RELPOSE_FLAG_ROTATION_ONLY))) {
+        /* no epipolar pose we can trust (too few cheirality-consistent inliers): the rotation
+           usually still is, so ask for the rotation-only model alone rather than lose the frame */
+        tvo_relpose rr;
+        tvo_relpose_config ro = *rc;
+        ro.min_parallax_deg = 180.0; /* every parallax is below it */
+        if (relpose_tracks(vo, &ro, m, &rr) == TVO_OK && !(rr.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE))
+            *rp = rr;
+    }
+    return st;
+}
 
-    /* 3. relative pose */
-    t1 = now_ns(vo);
-    if (m < vo->cfg.min_pose_tracks) {
+/* 3b. The keyframe rotation (cfg.keyframe): replaces rp's rotation by R_cK R_pK^T when the keyframe
+ * estimate is trustworthy and better placed (and re-fits the translation direction to it), else chains
+ * R_pK; the result's keyframe_age says which. */
+static void apply_keyframe_rotation(tvo_vo *vo, frame_ctx *fc, const tvo_relpose_config *rc, tvo_relpose *rp,
+                                    tvo_vo_result *res)
+{
+    double R_cK[9];
+    if (vo->kf_age >= 1)
+        fc->kf = keyframe_rotation(vo, rc, fc->m, rp, res->state, R_cK, &fc->kpar);
+    if (fc->kf == KF_USED) {
+        tvo_la_mat3_mul_bt(R_cK, vo->R_pK, rp->R); /* R_cp = R_cK R_pK^T */
+        if (res->state == TVO_VO_OK && vo->cfg.keyframe_translation) {
+            /* the 5-point direction belongs to the 5-point rotation: re-fit it to the new one */
+            double tn[3];
+            if (translation_given_rotation(vo, rp->R, fc->m, tn))
+                memcpy(rp->t, tn, sizeof(tn));
+        }
+        memcpy(vo->R_pK, R_cK, sizeof(R_cK));
+        res->keyframe_age = vo->kf_age + 1;
+    } else {
+        tvo_la_mat3_mul(rp->R, vo->R_pK, R_cK); /* chain: R_cK = R_cp R_pK */
+        memcpy(vo->R_pK, R_cK, sizeof(R_cK));
+    }
+    vo->kf_age++;
+}
+
+/* 3c. A trustworthy estimate rp becomes the frame's relative pose: the state (plane twins resolved, the
+ * rotation check), the keyframe rotation, the result's pose and counts, the inliers carried on and the
+ * relative scale. */
+static void accept_pose(tvo_vo *vo, frame_ctx *fc, const tvo_relpose_config *rc, tvo_relpose *rp,
+                        tvo_vo_result *res)
+{
+    /* rp: X_cur = R X_prev + t, i.e. T_cur_prev; report T_prev_cur */
+    tvo_pose T_cur_prev;
+    double Rf[9], tf[3]; /* the frame-to-frame pose (the relative scale's geometry) */
+    if (rp->flags & TVO_RELPOSE_FLAG_AMBIGUOUS)
+        res->state = resolve_ambiguous(vo, *rc, fc->m, rp);
+    else
+        res->state = (rp->flags & TVO_RELPOSE_FLAG_ROTATION_ONLY) ? TVO_VO_ROTATION_ONLY : TVO_VO_OK;
+    if (res->state == TVO_VO_OK && rotation_check_fails(rp)) {
+        memcpy(rp->R, rp->R_rot, sizeof(rp->R));
+        rp->t[0] = rp->t[1] = rp->t[2] = 0.0;
+        res->state = TVO_VO_ROTATION_ONLY;
+    }
+    memcpy(Rf, rp->R, sizeof(Rf));
+    memcpy(tf, rp->t, sizeof(tf));
+    if (vo->cfg.keyframe && vo->has_kf)
+        apply_keyframe_rotation(vo, fc, rc, rp, res);
+    memcpy(T_cur_prev.R, rp->R, sizeof(rp->R));
+    memcpy(T_cur_prev.t, rp->t, sizeof(rp->t));
+    memcpy(vo->R_pred, rp->R, sizeof(rp->R));
+    memcpy(fc->R2v, rp->R, sizeof(rp->R));
+    fc->has_R2v = 1;
+    fc->pred_next = 1;
+    res->T_prev_cur = tvo_pose_inverse(&T_cur_prev);
+    res->relpose_flags = rp->flags;
+    res->inliers = rp->inliers;
+    res->parallax_deg = rp->parallax_deg;
+    if (res->state == TVO_VO_ROTATION_ONLY)
+        res->T_prev_cur.t[0] = res->T_prev_cur.t[1] = res->T_prev_cur.t[2] = 0.0;
+    else
+        memcpy(vo->t_dir, tf, sizeof(vo->t_dir)); /* the twins' prior: frame-to-frame directions */
+    /* carry the inliers (the outliers are bad tracks) */
+    fc->m = compact(vo, fc->m, vo->mask);
+    if (res->state == TVO_VO_OK && vo->has_pose0)
+        res->rel_scale = relative_scale(vo, Rf, tf, fc->m, &res->rel_scale_points);
+    for (int32_t i = 0; i < fc->m; ++i) {
+        vo->pts[i] = vo->next[i];
+        vo->x0[i] = vo->x1[i]; /* frame k-1 becomes k-2 of the next frame */
+        vo->has0[i] = 1;
+    }
+    vo->n = fc->m;
+    if (res->state == TVO_VO_OK) {
+        memcpy(vo->R0, Rf, sizeof(vo->R0));
+        memcpy(vo->t0, tf, sizeof(vo->t0));
+        fc->pose0_next = 1;
+    }
+    if (!tvo_pose_is_finite(&res->T_prev_cur)) { /* cannot happen by contract; never emit it */
+        res->T_prev_cur = tvo_pose_identity();
+        res->state = TVO_VO_LOST;
+        res->rel_scale = TVO_VO_REL_SCALE_NONE;
+        fc->pose0_next = 0;
+        fc->pred_next = 0;
+        fc->has_R2v = 0;
+    }
+}
+
+/* 3. The frame's relative pose: LOST with too few correspondences (the tracks start again here) or
+ * without a trustworthy estimate (the tracks are kept), else accept_pose. */
+static void stage_pose(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
+{
+    tvo_relpose rp;
+    tvo_relpose_config rc = vo->cfg.relpose;
+    const double f = 0.5 * (vo->cfg.camera.fx + vo->cfg.camera.fy);
+    tvo_status st;
+    int ambiguous;
+    if (fc->m < vo->cfg.min_pose_tracks) {
         res->state = TVO_VO_LOST;
         vo->n = 0; /* re-initialise on this frame */
-    } else {
-        tvo_relpose rp;
-        tvo_relpose_config rc = vo->cfg.relpose;
-        const double f = 0.5 * (vo->cfg.camera.fx + vo->cfg.camera.fy);
-        rc.threshold = vo->cfg.pose_threshold_px / f;
-        st = relpose_tracks(vo, &rc, m, &rp);
-        if (st == TVO_OK && (rp.flags & TVO_RELPOSE_FLAG_HOMOGRAPHY) &&
-            (rp.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE) && !(rp.flags & TVO_RELPOSE_FLAG_AMBIGUOUS) &&
-            rc.use_homography) {
-            /* the homography won the model selection but none of its decompositions held up: the
-               epipolar model still may, so ask for it alone before calling the frame lost (not when
-               the plane's twins are both fine: the epipolar model alone would return one of them
-               unflagged, and they are resolved below) */
-            tvo_relpose_config re = rc;
-            re.use_homography = 0;
-            st = relpose_tracks(vo, &re, m, &rp);
-        }
-        if (st == TVO_OK && (rp.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE) &&
-            !(rp.flags & (TVO_RELPOSE_FLAG_AMBIGUOUS | TVO_RELPOSE_FLAG_ROTATION_ONLY))) {
-            /* no epipolar pose we can trust (too few cheirality-consistent inliers): the rotation
-               usually still is, so ask for the rotation-only model alone rather than lose the frame */
-            tvo_relpose rr;
-            tvo_relpose_config ro = rc;
-            ro.min_parallax_deg = 180.0; /* every parallax is below it */
-            if (relpose_tracks(vo, &ro, m, &rr) == TVO_OK && !(rr.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE))
-                rp = rr;
-        }
-        res->pose_status = st;
-        int ambiguous = st == TVO_OK && (rp.flags & TVO_RELPOSE_FLAG_AMBIGUOUS);
-        if (st != TVO_OK || ((rp.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE) && !ambiguous)) {
-            /* keep the tracks, but report no motion we could trust */
-            res->state = TVO_VO_LOST;
-            res->relpose_flags = st == TVO_OK ? rp.flags : 0;
-            vo->n = m;
-            for (int32_t i = 0; i < m; ++i)
-                vo->pts[i] = vo->next[i];
-        } else {
-            /* rp: X_cur = R X_prev + t, i.e. T_cur_prev; report T_prev_cur */
-            tvo_pose T_cur_prev;
-            double Rf[9], tf[3]; /* the frame-to-frame pose (the relative scale's geometry) */
-            if (ambiguous)
-                res->state = resolve_ambiguous(vo, rc, m, &rp);
-            else
-                res->state = (rp.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY) ? TVO_VO_ROTATION_ONLY : TVO_VO_OK;
-            if (res->state == TVO_VO_OK && rotation_check_fails(&rp)) {
-                memcpy(rp.R, rp.R_rot, sizeof(rp.R));
-                rp.t[0] = rp.t[1] = rp.t[2] = 0.0;
-                res->state = TVO_VO_ROTATION_ONLY;
-            }
-            memcpy(Rf, rp.R, sizeof(Rf));
-            memcpy(tf, rp.t, sizeof(tf));
-            if (vo->cfg.keyframe && vo->has_kf) {
-                double R_cK[9];
-                if (vo->kf_age >= 1)
-                    kf = keyframe_rotation(vo, &rc, m, &rp, res->state, R_cK, &kpar);
-                if (kf == KF_USED) {
-                    tvo_la_mat3_mul_bt(R_cK, vo->R_pK, rp.R); /* R_cp = R_cK R_pK^T */
-                    if (res->state == TVO_VO_OK && vo->cfg.keyframe_translation) {
-                        /* the 5-point direction belongs to the 5-point rotation: re-fit it to the new one */
-                        double tn[3];
-                        if (translation_given_rotation(vo, rp.R, m, tn))
-                            memcpy(rp.t, tn, sizeof(tn));
-                    }
-                    memcpy(vo->R_pK, R_cK, sizeof(R_cK));
-                    res->keyframe_age = vo->kf_age + 1;
-                } else {
-                    tvo_la_mat3_mul(rp.R, vo->R_pK, R_cK); /* chain: R_cK = R_cp R_pK */
-                    memcpy(vo->R_pK, R_cK, sizeof(R_cK));
-                }
-                vo->kf_age++;
-            }
-            memcpy(T_cur_prev.R, rp.R, sizeof(rp.R));
-            memcpy(T_cur_prev.t, rp.t, sizeof(rp.t));
-            memcpy(vo->R_pred, rp.R, sizeof(rp.R));
-            memcpy(R2v, rp.R, sizeof(rp.R));
-            has_R2v = 1;
-            pred_next = 1;
-            res->T_prev_cur = tvo_pose_inverse(&T_cur_prev);
-            res->relpose_flags = rp.flags;
-            res->inliers = rp.inliers;
-            res->parallax_deg = rp.parallax_deg;
-            if (res->state == TVO_VO_ROTATION_ONLY)
-                res->T_prev_cur.t[0] = res->T_prev_cur.t[1] = res->T_prev_cur.t[2] = 0.0;
-            else
-                memcpy(vo->t_dir, tf, sizeof(vo->t_dir)); /* the twins' prior: frame-to-frame directions */
-            /* carry the inliers (the outliers are bad tracks) */
-            m = compact(vo, m, vo->mask);
-            if (res->state == TVO_VO_OK && vo->has_pose0)
-                res->rel_scale = relative_scale(vo, Rf, tf, m, &res->rel_scale_points);
-            for (int32_t i = 0; i < m; ++i) {
-                vo->pts[i] = vo->next[i];
-                vo->x0[i] = vo->x1[i]; /* frame k-1 becomes k-2 of the next frame */
-                vo->has0[i] = 1;
-            }
-            vo->n = m;
-            if (res->state == TVO_VO_OK) {
-                memcpy(vo->R0, Rf, sizeof(vo->R0));
-                memcpy(vo->t0, tf, sizeof(vo->t0));
-                pose0_next = 1;
-            }
-            if (!tvo_pose_is_finite(&res->T_prev_cur)) { /* cannot happen by contract; never emit it */
-                res->T_prev_cur = tvo_pose_identity();
-                res->state = TVO_VO_LOST;
-                res->rel_scale = TVO_VO_REL_SCALE_NONE;
-                pose0_next = 0;
-                pred_next = 0;
-                has_R2v = 0;
-            }
-        }
+        return;
     }
-    res->stage_ns[TVO_STAGE_POSE] = now_ns(vo) - t1;
-
-    /* 4. the local map: the frame's pose in the world */
-    t1 = now_ns(vo);
-    map_step(vo, res, t_ns, has_R2v ? R2v : NULL);
-    res->stage_ns[TVO_STAGE_MAP] = now_ns(vo) - t1;
-
-    /* 5. re-detect when tracks run low */
-    t1 = now_ns(vo);
-    {
-        const int32_t before = vo->n;
-        if (vo->n < vo->cfg.min_tracks)
-            res->new_corners = redetect(vo, pc);
-        res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
-        t1 = now_ns(vo);
-        map_new_tracks(vo, before);
-        res->stage_ns[TVO_STAGE_MAP] += now_ns(vo) - t1;
+    rc.threshold = vo->cfg.pose_threshold_px / f;
+    st = estimate_pose(vo, &rc, fc->m, &rp);
+    res->pose_status = st;
+    ambiguous = st == TVO_OK && (rp.flags & TVO_RELPOSE_FLAG_AMBIGUOUS);
+    if (st != TVO_OK || ((rp.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE) && !ambiguous)) {
+        /* keep the tracks, but report no motion we could trust */
+        res->state = TVO_VO_LOST;
+        res->relpose_flags = st == TVO_OK ? rp.flags : 0;
+        vo->n = fc->m;
+        for (int32_t i = 0; i < fc->m; ++i)
+            vo->pts[i] = vo->next[i];
+        return;
     }
+    accept_pose(vo, fc, &rc, &rp, res);
+}
 
-done:
+/* 5. Re-detection when tracks run low (the new tracks start waiting for the map's triangulation). */
+static void stage_redetect(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
+{
+    const int32_t before = vo->n;
+    int64_t t1 = now_ns(vo);
+    if (vo->n < vo->cfg.min_tracks)
+        res->new_corners = redetect(vo, fc->pc);
+    res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
+    t1 = now_ns(vo);
+    map_new_tracks(vo, before);
+    res->stage_ns[TVO_STAGE_MAP] += now_ns(vo) - t1;
+}
+
+/* The end of every processed frame: the keyframe rotation's renewal, the state carried to the next
+ * frame, the world pose, and the frame's level 0 kept as the next frame's previous one. */
+static void finish_frame(tvo_vo *vo, const frame_ctx *fc, int64_t t_ns, tvo_vo_result *res)
+{
     if (vo->cfg.keyframe) {
         /* a new keyframe after a frame without a pose, when the keyframe estimate failed, when too few
            tracks seen in K survive, or when K is far (parallax or rotation) from this frame */
-        int renew = !vo->has_kf || kf == KF_FAILED ||
+        int renew = !vo->has_kf || fc->kf == KF_FAILED ||
                     (res->state != TVO_VO_OK && res->state != TVO_VO_ROTATION_ONLY);
         if (!renew) {
             int32_t nk = 0;
             for (int32_t i = 0; i < vo->n; ++i)
                 nk += vo->hask[i];
-            renew = nk < vo->cfg.keyframe_min_tracks || kpar > vo->cfg.keyframe_max_parallax_deg ||
+            renew = nk < vo->cfg.keyframe_min_tracks || fc->kpar > vo->cfg.keyframe_max_parallax_deg ||
                     tvo_la_rot_angle(vo->R_pK) * TVO_VO_DEG_PER_RAD > vo->cfg.keyframe_max_rot_deg;
         }
         if (renew)
             keyframe_set(vo);
     }
-    vo->has_pose0 = pose0_next;
-    vo->has_pred = pred_next;
+    vo->has_pose0 = fc->pose0_next;
+    vo->has_pred = fc->pred_next;
     vo->dt_pred = res->dt_ns;
     if (res->state == TVO_VO_OK)
         vo->t_dir_age = 0;
@@ -1056,9 +1047,75 @@ done:
     vo->t_prev = t_ns;
     /* the frame becomes the previous one: its level 0 moves into our memory (the caller's image may
        change after the call); the old previous level 0 is not needed any more */
-    (void)tvo_pyramid_keep_level0(pc, vo->level0, w);
+    (void)tvo_pyramid_keep_level0(fc->pc, vo->level0, vo->cfg.camera.width);
     vo->cur ^= 1;
     fill_features(res, res->features);
+}
+
+/* The first frame (or the first after a reset): corners only, and the map's reference. */
+static void first_frame(tvo_vo *vo, frame_ctx *fc, int64_t t_ns, tvo_vo_result *res)
+{
+    int64_t t1 = now_ns(vo);
+    vo->n = 0;
+    res->state = TVO_VO_INITIALISING;
+    map_step(vo, res, t_ns, NULL);
+    res->stage_ns[TVO_STAGE_MAP] = now_ns(vo) - t1;
+    t1 = now_ns(vo);
+    res->new_corners = redetect(vo, fc->pc);
+    res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
+    t1 = now_ns(vo);
+    map_new_tracks(vo, 0);
+    res->stage_ns[TVO_STAGE_MAP] += now_ns(vo) - t1;
+}
+
+tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_vo_result *res)
+{
+    frame_ctx fc;
+    tvo_status st;
+    int64_t t0, t1;
+    if (res == NULL)
+        return TVO_ERR_NULL;
+    result_clear(res, TVO_VO_LOST);
+    if (vo == NULL || frame == NULL)
+        return TVO_ERR_NULL;
+    st = tvo_image_check(frame);
+    if (st != TVO_OK)
+        return st;
+    if (frame->width != vo->cfg.camera.width || frame->height != vo->cfg.camera.height)
+        return TVO_ERR_SIZE;
+    if (vo->has_prev && t_ns <= vo->t_prev)
+        return TVO_ERR_ARG;
+    memset(&fc, 0, sizeof(fc));
+    fc.kf = KF_NONE;
+    t0 = now_ns(vo);
+    fc.pc = &vo->pyr[vo->cur];
+    fc.pp = &vo->pyr[vo->cur ^ 1];
+    st = tvo_pyramid_build_borrowed(fc.pc, frame); /* level 0 is the caller's frame until the end of the call */
+    if (st != TVO_OK)
+        return st;
+    t1 = now_ns(vo);
+    res->stage_ns[TVO_STAGE_PYRAMID] = t1 - t0;
+    if (!vo->has_prev) {
+        first_frame(vo, &fc, t_ns, res);
+    } else {
+        /* t_ns > t_prev here, but the difference of two int64 timestamps can exceed INT64_MAX: saturate */
+        const uint64_t dt = (uint64_t)t_ns - (uint64_t)vo->t_prev;
+        res->dt_ns = dt > (uint64_t)INT64_MAX ? INT64_MAX : (int64_t)dt;
+        t1 = now_ns(vo);
+        stage_track(vo, &fc, res);
+        res->stage_ns[TVO_STAGE_TRACK] = now_ns(vo) - t1;
+        t1 = now_ns(vo);
+        stage_undistort(vo, &fc);
+        res->stage_ns[TVO_STAGE_UNDISTORT] = now_ns(vo) - t1;
+        t1 = now_ns(vo);
+        stage_pose(vo, &fc, res);
+        res->stage_ns[TVO_STAGE_POSE] = now_ns(vo) - t1;
+        t1 = now_ns(vo); /* 4. the local map: the frame's pose in the world */
+        map_step(vo, res, t_ns, fc.has_R2v ? fc.R2v : NULL);
+        res->stage_ns[TVO_STAGE_MAP] = now_ns(vo) - t1;
+        stage_redetect(vo, &fc, res);
+    }
+    finish_frame(vo, &fc, t_ns, res);
     res->stage_ns[TVO_STAGE_TOTAL] = now_ns(vo) - t0;
     return TVO_OK;
 }
