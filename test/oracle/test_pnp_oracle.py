@@ -32,7 +32,8 @@ class PnpConfig(ctypes.Structure):
     _fields_ = [("threshold", ctypes.c_double), ("confidence", ctypes.c_double),
                 ("max_iterations", ctypes.c_int32), ("refine_iterations", ctypes.c_int32),
                 ("huber", ctypes.c_double), ("min_inliers", ctypes.c_int32), ("seed", ctypes.c_uint64),
-                ("use_guess", ctypes.c_int32)]
+                ("use_guess", ctypes.c_int32), ("rot_prior", ctypes.c_double * 9),
+                ("rot_prior_weight", ctypes.c_double)]
 
 
 class Pose(ctypes.Structure):
