@@ -415,125 +415,155 @@ static void relpose_config(const tvo_vo_config *cfg, tvo_relpose_config *rc)
     rc->threshold = cfg->pose_threshold_px / focal(cfg);
 }
 
+/* The correspondences reference -> this frame (the tracks first seen in the reference) and their 5-point
+ * pose, in scratch. */
+typedef struct init_pair {
+    tvo_point2d *xa, *xb;      /* [k] normalised positions in the reference and in this frame */
+    uint8_t *mask;             /* [k] inliers of rp */
+    int32_t *idx;              /* [k] the tracks they belong to */
+    int32_t k;
+    tvo_relpose rp;
+} init_pair;
+
+/* 1 when the pair's pose is good enough to start a map on: trustworthy (not low-confidence, ambiguous or
+ * rotation-only, enough inliers and half of the pairs, its rotation near its own rotation-only model)
+ * and with map_init_parallax_deg of median parallax. */
+static int init_pair_pose(tvo_map *m, const tvo_vo_config *cfg, const tvo_map_tracks *tr, void *scratch,
+                          size_t scratch_size, init_pair *ip)
+{
+    const int32_t n = tr->n;
+    const size_t rs_size = tvo_relpose_scratch_size(cfg->max_tracks);
+    tvo_relpose_config rc;
+    tvo_relpose *rp = &ip->rp;
+    void *rs;
+    carve c;
+    tvo_arena_init(&c.a, scratch, scratch_size);
+    ip->xa = (tvo_point2d *)take(&c, (size_t)n * sizeof(tvo_point2d));
+    ip->xb = (tvo_point2d *)take(&c, (size_t)n * sizeof(tvo_point2d));
+    ip->mask = (uint8_t *)take(&c, (size_t)n);
+    ip->idx = (int32_t *)take(&c, (size_t)n * sizeof(int32_t));
+    rs = take(&c, rs_size);
+    ip->k = 0;
+    if (ip->xa == NULL || ip->xb == NULL || ip->mask == NULL || ip->idx == NULL || rs == NULL)
+        return 0;
+    for (int32_t i = 0; i < n; ++i) {
+        if (tr->tri_fr[i] == m->ref_serial && tr->x_ok[i]) {
+            ip->xa[ip->k] = tr->tri_x[i];
+            ip->xb[ip->k] = tr->x[i];
+            ip->idx[ip->k] = i;
+            ++ip->k;
+        }
+    }
+    if (ip->k < TVO_MAP_INIT_MIN_POINTS)
+        return 0;
+    relpose_config(cfg, &rc);
+    if (tvo_relpose_estimate(&rc, ip->xa, ip->xb, ip->k, rp, ip->mask, rs, rs_size) != TVO_OK)
+        return 0;
+    if (rp->flags & (TVO_RELPOSE_FLAG_LOW_CONFIDENCE | TVO_RELPOSE_FLAG_AMBIGUOUS | TVO_RELPOSE_FLAG_ROTATION_ONLY))
+        return 0;
+    if (rp->parallax_deg < cfg->map_init_parallax_deg || rp->inliers < TVO_MAP_INIT_MIN_POINTS ||
+        2 * rp->inliers < ip->k)
+        return 0;
+    {
+        /* the pose's rotation must be near its own rotation-only model, as the VO checks every frame */
+        const double lim = 10.0 * rp->parallax_deg > TVO_MAP_INIT_ROT_CHECK_DEG ? 10.0 * rp->parallax_deg
+                                                                                : TVO_MAP_INIT_ROT_CHECK_DEG;
+        if (tvo_la_rot_dist(rp->R, rp->R_rot) > deg2rad(lim))
+            return 0;
+    }
+    return sqrt(dot3(rp->t, rp->t)) > 0.0;
+}
+
+/* The initial baseline: the distance the two-view chain travelled since the reference (its unit: one
+ * step per frame before the first map, the last map's speed after a loss), so the new map continues the
+ * run's unit. */
+static double init_baseline(const tvo_map *m, const tvo_pose *T_c_w_chain, int64_t t_ns)
+{
+    double cr[3], cc[3], d[3], baseline;
+    centre(&m->ref_T_c_w, cr);
+    centre(T_c_w_chain, cc);
+    d[0] = cc[0] - cr[0];
+    d[1] = cc[1] - cr[1];
+    d[2] = cc[2] - cr[2];
+    baseline = sqrt(dot3(d, d));
+    if (!(baseline > 0.0) || !isfinite(baseline))
+        baseline = m->speed > 0.0 ? m->speed * (double)(t_ns - m->ref_t_ns) * 1e-9 : 1.0;
+    if (!(baseline > 0.0) || !isfinite(baseline))
+        baseline = 1.0;
+    return baseline;
+}
+
+/* The map's first two keyframes (the reference at T0, this frame at T1) and the pair's inliers
+ * triangulated between them; returns the landmarks made (the tracks carry them). */
+static int32_t init_landmarks(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, const init_pair *ip,
+                              const tvo_pose *T0, int64_t t0, const tvo_pose *T1, int64_t t_ns)
+{
+    const double min_cos = tvo_dm_cos(deg2rad(cfg->map_tri_parallax_deg));
+    const double max_err = TVO_MAP_TRI_MAX_ERR_PX / focal(cfg);
+    tvo_map_kf *k0, *k1;
+    int32_t made = 0;
+    tvo_map_clear(m);
+    k0 = kf_push(m, T0, t0);
+    k1 = kf_push(m, T1, t_ns);
+    for (int32_t q = 0; q < ip->k; ++q) {
+        double X[3];
+        int32_t j;
+        if (!ip->mask[q] || !triangulate(&k0->T_c_w, &k1->T_c_w, ip->xa[q], ip->xb[q], min_cos, max_err, X))
+            continue;
+        j = lm_alloc(m);
+        if (j < 0)
+            break;
+        memcpy(m->lm[j].X, X, sizeof(X));
+        (void)kf_add_obs(m, k0, j, ip->xa[q]);
+        (void)kf_add_obs(m, k1, j, ip->xb[q]);
+        tr->lm[ip->idx[q]] = j;
+        ++made;
+    }
+    return made;
+}
+
 /* Try to make the map from the reference frame and this one. 1 when made (two keyframes, landmarks). */
 static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
                     const tvo_pose *T_c_w_chain, void *scratch, size_t scratch_size, tvo_map_frame *out)
 {
-    const int32_t n = tr->n;
-    carve c;
-    tvo_point2d *xa, *xb;
-    uint8_t *mask;
-    int32_t *idx, k = 0, made = 0;
-    void *rs;
-    size_t rs_size = tvo_relpose_scratch_size(cfg->max_tracks);
-    tvo_relpose rp;
-    tvo_relpose_config rc;
+    init_pair ip;
     tvo_pose T_cur_ref, T1;
-    tvo_map_kf *k0, *k1;
+    const tvo_pose T0 = m->ref_T_c_w;
+    const int64_t t0 = m->ref_t_ns;
     double baseline, tn;
-    tvo_arena_init(&c.a, scratch, scratch_size);
-    xa = (tvo_point2d *)take(&c, (size_t)n * sizeof(tvo_point2d));
-    xb = (tvo_point2d *)take(&c, (size_t)n * sizeof(tvo_point2d));
-    mask = (uint8_t *)take(&c, (size_t)n);
-    idx = (int32_t *)take(&c, (size_t)n * sizeof(int32_t));
-    rs = take(&c, rs_size);
-    if (xa == NULL || xb == NULL || mask == NULL || idx == NULL || rs == NULL)
+    int32_t made;
+    if (!init_pair_pose(m, cfg, tr, scratch, scratch_size, &ip))
         return 0;
-    for (int32_t i = 0; i < n; ++i) {
-        if (tr->tri_fr[i] == m->ref_serial && tr->x_ok[i]) {
-            xa[k] = tr->tri_x[i];
-            xb[k] = tr->x[i];
-            idx[k] = i;
-            ++k;
-        }
-    }
-    if (k < TVO_MAP_INIT_MIN_POINTS)
-        return 0;
-    relpose_config(cfg, &rc);
-    if (tvo_relpose_estimate(&rc, xa, xb, k, &rp, mask, rs, rs_size) != TVO_OK)
-        return 0;
-    if (rp.flags & (TVO_RELPOSE_FLAG_LOW_CONFIDENCE | TVO_RELPOSE_FLAG_AMBIGUOUS | TVO_RELPOSE_FLAG_ROTATION_ONLY))
-        return 0;
-    if (rp.parallax_deg < cfg->map_init_parallax_deg || rp.inliers < TVO_MAP_INIT_MIN_POINTS ||
-        2 * rp.inliers < k)
-        return 0;
-    {
-        /* the pose's rotation must be near its own rotation-only model, as the VO checks every frame */
-        const double lim = 10.0 * rp.parallax_deg > TVO_MAP_INIT_ROT_CHECK_DEG ? 10.0 * rp.parallax_deg
-                                                                               : TVO_MAP_INIT_ROT_CHECK_DEG;
-        if (tvo_la_rot_dist(rp.R, rp.R_rot) > deg2rad(lim))
-            return 0;
-    }
-    tn = sqrt(dot3(rp.t, rp.t));
-    if (!(tn > 0.0))
-        return 0;
-    /* the baseline: the distance the two-view chain travelled since the reference (its unit: one step
-       per frame before the first map, the last map's speed after a loss), so the new map continues the
-       run's unit */
-    {
-        double cr[3], cc[3], d[3];
-        centre(&m->ref_T_c_w, cr);
-        centre(T_c_w_chain, cc);
-        d[0] = cc[0] - cr[0];
-        d[1] = cc[1] - cr[1];
-        d[2] = cc[2] - cr[2];
-        baseline = sqrt(dot3(d, d));
-        if (!(baseline > 0.0) || !isfinite(baseline))
-            baseline = m->speed > 0.0 ? m->speed * (double)(t_ns - m->ref_t_ns) * 1e-9 : 1.0;
-        if (!(baseline > 0.0) || !isfinite(baseline))
-            baseline = 1.0;
-    }
-    memcpy(T_cur_ref.R, rp.R, sizeof(rp.R));
+    tn = sqrt(dot3(ip.rp.t, ip.rp.t));
+    baseline = init_baseline(m, T_c_w_chain, t_ns);
+    memcpy(T_cur_ref.R, ip.rp.R, sizeof(ip.rp.R));
     for (int c2 = 0; c2 < 3; ++c2)
-        T_cur_ref.t[c2] = rp.t[c2] / tn * baseline;
-    T1 = tvo_pose_compose(&T_cur_ref, &m->ref_T_c_w);
-    {
-        const tvo_pose T0 = m->ref_T_c_w;
-        const int64_t t0 = m->ref_t_ns;
-        const double min_cos = tvo_dm_cos(deg2rad(cfg->map_tri_parallax_deg));
-        const double max_err = TVO_MAP_TRI_MAX_ERR_PX / focal(cfg);
+        T_cur_ref.t[c2] = ip.rp.t[c2] / tn * baseline;
+    T1 = tvo_pose_compose(&T_cur_ref, &T0);
+    made = init_landmarks(m, cfg, tr, &ip, &T0, t0, &T1, t_ns);
+    if (made < TVO_MAP_INIT_MIN_POINTS) {
+        /* not enough structure yet: back to waiting on the same reference */
+        for (int32_t i = 0; i < tr->n; ++i)
+            tr->lm[i] = -1;
         tvo_map_clear(m);
-        k0 = kf_push(m, &T0, t0);
-        k1 = kf_push(m, &T1, t_ns);
-        for (int32_t q = 0; q < k; ++q) {
-            const int32_t i = idx[q];
-            double X[3];
-            int32_t j;
-            if (!mask[q] || !triangulate(&k0->T_c_w, &k1->T_c_w, xa[q], xb[q], min_cos, max_err, X))
-                continue;
-            j = lm_alloc(m);
-            if (j < 0)
-                break;
-            memcpy(m->lm[j].X, X, sizeof(X));
-            (void)kf_add_obs(m, k0, j, xa[q]);
-            (void)kf_add_obs(m, k1, j, xb[q]);
-            tr->lm[i] = j;
-            ++made;
-        }
-        if (made < TVO_MAP_INIT_MIN_POINTS) {
-            /* not enough structure yet: back to waiting on the same reference */
-            for (int32_t i = 0; i < n; ++i)
-                tr->lm[i] = -1;
-            tvo_map_clear(m);
-            m->has_ref = 1;
-            m->ref_T_c_w = T0;
-            m->ref_t_ns = t0;
-            return 0;
-        }
+        m->has_ref = 1;
+        m->ref_T_c_w = T0;
+        m->ref_t_ns = t0;
+        return 0;
     }
     /* the reference frame is keyframe 0 now; the tracks that were not triangulated keep waiting where
        they were first seen */
     {
         tvo_map_frame_pose *f = &m->ring[m->ref_serial % TVO_MAP_RING];
         f->serial = m->ref_serial;
-        f->kf_id = k0->id;
-        f->T_c_w = k0->T_c_w;
+        f->kf_id = kf_at(m, 0)->id;
+        f->T_c_w = kf_at(m, 0)->T_c_w;
     }
     mark_tracked(m, tr);
     m->active = 1;
     m->kf_points = made;
     m->frames_since_kf = 0;
-    m->cur_kf_id = k1->id;
+    m->cur_kf_id = kf_at(m, 1)->id;
     m->last_T_c_w = T1;
     m->last_t_ns = t_ns;
     m->vel = T_cur_ref; /* the average step over the pair would be better; the next frame replaces it */
@@ -545,7 +575,7 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
     out->points = made;
     out->new_points = made;
     out->T_c_w = T1;
-    for (int32_t i = 0; i < n; ++i)
+    for (int32_t i = 0; i < tr->n; ++i)
         tr->inlier[i] = (uint8_t)(tr->lm[i] >= 0);
     return 1;
 }
@@ -736,132 +766,153 @@ static void kf_remove_obs(tvo_map *m, tvo_map_kf *k, int32_t o)
  * two oldest keyframes are fixed (they hold the gauge and the scale), all of them when the window has
  * two. Observations that end with a large error are removed, and with them the landmarks that are left
  * with fewer than two observations and no track. */
-static void bundle_adjust(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, void *scratch,
-                          size_t scratch_size, tvo_map_frame *out)
-{
-    const int32_t w = m->n_kf, cap_obs = m->window * m->max_tracks;
-    carve c;
-    tvo_pose *poses;
-    uint8_t *fixed;
-    double(*X)[3], *err2;
-    int32_t *lm2pt, *pt2lm, np = 0, no = 0;
-    tvo_ba_obs *obs;
+/* The bundle adjustment's problem over the window, in scratch: the window's poses (the two oldest fixed),
+ * the landmarks with >= 2 observations (lm2pt / pt2lm map between landmark slots and problem points) and
+ * their observations, in keyframe order. */
+typedef struct ba_work {
     tvo_ba_config bc;
     tvo_ba_problem p;
-    tvo_ba_report rep;
+    tvo_pose *poses;
+    uint8_t *fixed;
+    double (*X)[3], *err2;
+    int32_t *lm2pt, *pt2lm;
+    tvo_ba_obs *obs;
     void *bs;
     size_t bs_size;
-    double max_err2;
-    ba_config(cfg, &bc);
-    bs_size = tvo_ba_scratch_size(&bc);
+} ba_work;
+
+/* 1 when the problem was built (enough scratch, >= 3 keyframes, something to adjust). */
+static int ba_build(tvo_map *m, const tvo_vo_config *cfg, void *scratch, size_t scratch_size, ba_work *b)
+{
+    const int32_t w = m->n_kf, cap_obs = m->window * m->max_tracks;
+    int32_t np = 0, no = 0;
+    carve c;
+    ba_config(cfg, &b->bc);
+    b->bs_size = tvo_ba_scratch_size(&b->bc);
     tvo_arena_init(&c.a, scratch, scratch_size);
-    poses = (tvo_pose *)take(&c, (size_t)m->window * sizeof(tvo_pose));
-    fixed = (uint8_t *)take(&c, (size_t)m->window);
-    X = (double(*)[3])take(&c, (size_t)m->max_lm * 3 * sizeof(double));
-    lm2pt = (int32_t *)take(&c, (size_t)m->max_lm * sizeof(int32_t));
-    pt2lm = (int32_t *)take(&c, (size_t)m->max_lm * sizeof(int32_t));
-    obs = (tvo_ba_obs *)take(&c, (size_t)cap_obs * sizeof(tvo_ba_obs));
-    err2 = (double *)take(&c, (size_t)cap_obs * sizeof(double));
-    bs = take(&c, bs_size);
-    if (poses == NULL || fixed == NULL || X == NULL || lm2pt == NULL || pt2lm == NULL || obs == NULL ||
-        err2 == NULL || bs == NULL || w < 3)
-        return;
+    b->poses = (tvo_pose *)take(&c, (size_t)m->window * sizeof(tvo_pose));
+    b->fixed = (uint8_t *)take(&c, (size_t)m->window);
+    b->X = (double(*)[3])take(&c, (size_t)m->max_lm * 3 * sizeof(double));
+    b->lm2pt = (int32_t *)take(&c, (size_t)m->max_lm * sizeof(int32_t));
+    b->pt2lm = (int32_t *)take(&c, (size_t)m->max_lm * sizeof(int32_t));
+    b->obs = (tvo_ba_obs *)take(&c, (size_t)cap_obs * sizeof(tvo_ba_obs));
+    b->err2 = (double *)take(&c, (size_t)cap_obs * sizeof(double));
+    b->bs = take(&c, b->bs_size);
+    if (b->poses == NULL || b->fixed == NULL || b->X == NULL || b->lm2pt == NULL || b->pt2lm == NULL ||
+        b->obs == NULL || b->err2 == NULL || b->bs == NULL || w < 3)
+        return 0;
     for (int32_t j = 0; j < m->max_lm; ++j) {
-        lm2pt[j] = -1;
+        b->lm2pt[j] = -1;
         if (m->lm[j].alive && m->lm[j].n_obs >= 2) {
-            lm2pt[j] = np;
-            pt2lm[np] = j;
-            memcpy(X[np], m->lm[j].X, sizeof(X[np]));
+            b->lm2pt[j] = np;
+            b->pt2lm[np] = j;
+            memcpy(b->X[np], m->lm[j].X, sizeof(b->X[np]));
             ++np;
         }
     }
     for (int32_t i = 0; i < w; ++i) {
         const tvo_map_kf *k = kf_at(m, i);
-        poses[i] = k->T_c_w;
-        fixed[i] = (uint8_t)(i < 2);
+        b->poses[i] = k->T_c_w;
+        b->fixed[i] = (uint8_t)(i < 2);
         for (int32_t o = 0; o < k->n_obs; ++o) {
-            const int32_t pt = lm2pt[k->obs_lm[o]];
+            const int32_t pt = b->lm2pt[k->obs_lm[o]];
             if (pt < 0 || no >= cap_obs)
                 continue;
-            obs[no].pose = i;
-            obs[no].point = pt;
-            obs[no].x = k->obs_x[o].x;
-            obs[no].y = k->obs_x[o].y;
+            b->obs[no].pose = i;
+            b->obs[no].point = pt;
+            b->obs[no].x = k->obs_x[o].x;
+            b->obs[no].y = k->obs_x[o].y;
             ++no;
         }
     }
-    if (np == 0 || no == 0)
-        return;
-    memset(&p, 0, sizeof(p));
-    p.n_poses = w;
-    p.T_c_w = poses;
-    p.pose_fixed = fixed;
-    p.n_points = np;
-    p.X = X;
-    p.point_fixed = NULL;
-    p.n_obs = no;
-    p.obs = obs;
-    memset(&rep, 0, sizeof(rep));
-    if (tvo_ba_solve(&bc, &p, bs, bs_size, &rep) != TVO_OK)
-        return;
-    out->ba_iterations = rep.iterations;
-    out->ba_flags = rep.flags;
-    for (int32_t i = 0; i < w; ++i)
-        if (!tvo_pose_is_finite(&poses[i]))
-            return; /* by contract the solver never writes one; never take it */
-    for (int32_t q = 0; q < np; ++q)
-        if (!(isfinite(X[q][0]) && isfinite(X[q][1]) && isfinite(X[q][2])))
-            return;
-    for (int32_t i = 0; i < w; ++i)
-        kf_at(m, i)->T_c_w = poses[i];
-    for (int32_t q = 0; q < np; ++q)
-        memcpy(m->lm[pt2lm[q]].X, X[q], sizeof(X[q]));
-    /* outliers: the observations that still do not fit */
-    if (tvo_ba_obs_errors(&p, err2) != TVO_OK)
-        return;
-    max_err2 = TVO_MAP_BA_MAX_ERR_PX / focal(cfg);
+    memset(&b->p, 0, sizeof(b->p));
+    b->p.n_poses = w;
+    b->p.T_c_w = b->poses;
+    b->p.pose_fixed = b->fixed;
+    b->p.n_points = np;
+    b->p.X = b->X;
+    b->p.point_fixed = NULL;
+    b->p.n_obs = no;
+    b->p.obs = b->obs;
+    return np > 0 && no > 0;
+}
+
+/* Remove the observations whose error after the adjustment is above TVO_MAP_BA_MAX_ERR_PX, walking them
+ * in the order ba_build made them and each keyframe's list from the back (so the indices left stay
+ * valid). */
+static void ba_drop_outliers(tvo_map *m, const tvo_vo_config *cfg, const ba_work *b)
+{
+    double max_err2 = TVO_MAP_BA_MAX_ERR_PX / focal(cfg);
+    int32_t q = 0;
     max_err2 *= max_err2;
-    {
-        int32_t q = 0;
-        /* walk the observations in the order they were built, removing from the keyframes' lists from
-           the back so the remaining indices stay valid */
-        for (int32_t i = 0; i < w; ++i) {
-            tvo_map_kf *k = kf_at(m, i);
-            int32_t first = q, cnt = 0;
-            for (int32_t o = 0; o < k->n_obs; ++o)
-                if (lm2pt[k->obs_lm[o]] >= 0)
-                    ++cnt;
-            q += cnt;
-            for (int32_t o = k->n_obs - 1, e = q - 1; o >= 0; --o) {
-                if (lm2pt[k->obs_lm[o]] < 0)
-                    continue;
-                if (e >= first && err2[e] > max_err2)
-                    kf_remove_obs(m, k, o);
-                --e;
-            }
+    for (int32_t i = 0; i < m->n_kf; ++i) {
+        tvo_map_kf *k = kf_at(m, i);
+        int32_t first = q, cnt = 0;
+        for (int32_t o = 0; o < k->n_obs; ++o)
+            if (b->lm2pt[k->obs_lm[o]] >= 0)
+                ++cnt;
+        q += cnt;
+        for (int32_t o = k->n_obs - 1, e = q - 1; o >= 0; --o) {
+            if (b->lm2pt[k->obs_lm[o]] < 0)
+                continue;
+            if (e >= first && b->err2[e] > max_err2)
+                kf_remove_obs(m, k, o);
+            --e;
         }
     }
-    /* tracks whose landmark lost its observation in the newest keyframe let go of it */
-    {
-        tvo_map_kf *kn = kf_at(m, w - 1);
-        for (int32_t i = 0; i < tr->n; ++i) {
-            int32_t j = tr->lm[i], seen = 0;
-            if (j < 0)
-                continue;
-            for (int32_t o = 0; o < kn->n_obs && !seen; ++o)
-                seen = kn->obs_lm[o] == j;
-            if (!seen) {
-                tr->lm[i] = -1;
-                tr->inlier[i] = 0;
-                tr->tri_fr[i] = m->serial;
-                tr->tri_x[i] = tr->x[i];
-            }
+}
+
+/* Tracks whose landmark lost its observation in the newest keyframe let go of it (and wait again from
+ * this frame); landmarks left with fewer than two observations and no track are freed. */
+static void release_unobserved(tvo_map *m, tvo_map_tracks *tr)
+{
+    const tvo_map_kf *kn = kf_at(m, m->n_kf - 1);
+    for (int32_t i = 0; i < tr->n; ++i) {
+        int32_t j = tr->lm[i], seen = 0;
+        if (j < 0)
+            continue;
+        for (int32_t o = 0; o < kn->n_obs && !seen; ++o)
+            seen = kn->obs_lm[o] == j;
+        if (!seen) {
+            tr->lm[i] = -1;
+            tr->inlier[i] = 0;
+            tr->tri_fr[i] = m->serial;
+            tr->tri_x[i] = tr->x[i];
         }
     }
     mark_tracked(m, tr);
     for (int32_t j = 0; j < m->max_lm; ++j)
         if (m->lm[j].alive && !m->lm[j].tracked && m->lm[j].n_obs < 2)
             lm_free(m, j);
+}
+
+static void bundle_adjust(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, void *scratch,
+                          size_t scratch_size, tvo_map_frame *out)
+{
+    ba_work b;
+    tvo_ba_report rep;
+    if (!ba_build(m, cfg, scratch, scratch_size, &b))
+        return;
+    memset(&rep, 0, sizeof(rep));
+    if (tvo_ba_solve(&b.bc, &b.p, b.bs, b.bs_size, &rep) != TVO_OK)
+        return;
+    out->ba_iterations = rep.iterations;
+    out->ba_flags = rep.flags;
+    for (int32_t i = 0; i < b.p.n_poses; ++i)
+        if (!tvo_pose_is_finite(&b.poses[i]))
+            return; /* by contract the solver never writes one; never take it */
+    for (int32_t q = 0; q < b.p.n_points; ++q)
+        if (!(isfinite(b.X[q][0]) && isfinite(b.X[q][1]) && isfinite(b.X[q][2])))
+            return;
+    for (int32_t i = 0; i < b.p.n_poses; ++i)
+        kf_at(m, i)->T_c_w = b.poses[i];
+    for (int32_t q = 0; q < b.p.n_points; ++q)
+        memcpy(m->lm[b.pt2lm[q]].X, b.X[q], sizeof(b.X[q]));
+    /* outliers: the observations that still do not fit */
+    if (tvo_ba_obs_errors(&b.p, b.err2) != TVO_OK)
+        return;
+    ba_drop_outliers(m, cfg, &b);
+    release_unobserved(m, tr);
 }
 
 static void add_keyframe(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns, tvo_pose *T,
