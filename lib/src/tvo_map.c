@@ -47,6 +47,17 @@ static double deg2rad(double d)
     return d * (TVO_MAP_PI / 180.0);
 }
 
+/* a - b for timestamps a >= b, saturated at INT64_MAX (two int64 timestamps can be further apart than
+ * that); 0 when a < b */
+static int64_t dt_ns(int64_t a, int64_t b)
+{
+    uint64_t d;
+    if (a < b)
+        return 0;
+    d = (uint64_t)a - (uint64_t)b;
+    return d > (uint64_t)INT64_MAX ? INT64_MAX : (int64_t)d;
+}
+
 /* camera centre of T_c_w: C = -R^T t */
 static void centre(const tvo_pose *T, double C[3])
 {
@@ -318,7 +329,7 @@ static void update_speed(tvo_map *m)
     d[1] = cb[1] - ca[1];
     d[2] = cb[2] - ca[2];
     dist = sqrt(dot3(d, d));
-    dt = (double)(b->t_ns - a->t_ns) * 1e-9;
+    dt = (double)dt_ns(b->t_ns, a->t_ns) * 1e-9;
     if (dt > 0.0 && dist > 0.0 && isfinite(dist / dt))
         m->speed = dist / dt;
 }
@@ -487,7 +498,7 @@ static double init_baseline(const tvo_map *m, const tvo_pose *T_c_w_chain, int64
     d[2] = cc[2] - cr[2];
     baseline = sqrt(dot3(d, d));
     if (!(baseline > 0.0) || !isfinite(baseline))
-        baseline = m->speed > 0.0 ? m->speed * (double)(t_ns - m->ref_t_ns) * 1e-9 : 1.0;
+        baseline = m->speed > 0.0 ? m->speed * (double)dt_ns(t_ns, m->ref_t_ns) * 1e-9 : 1.0;
     if (!(baseline > 0.0) || !isfinite(baseline))
         baseline = 1.0;
     return baseline;
@@ -567,7 +578,7 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
     m->last_T_c_w = T1;
     m->last_t_ns = t_ns;
     m->vel = T_cur_ref; /* the average step over the pair would be better; the next frame replaces it */
-    m->vel_dt_ns = t_ns - m->ref_t_ns;
+    m->vel_dt_ns = dt_ns(t_ns, m->ref_t_ns);
     m->has_vel = 1;
     update_speed(m);
     out->state = TVO_MAP_INITIALISED;
@@ -591,7 +602,7 @@ static tvo_pose predict(const tvo_map *m, int64_t t_ns, const double *R_cur_prev
     if (!m->has_vel)
         step = tvo_pose_identity();
     if (m->has_vel && m->vel_dt_ns > 0 && t_ns > m->last_t_ns)
-        ratio = (double)(t_ns - m->last_t_ns) / (double)m->vel_dt_ns;
+        ratio = (double)dt_ns(t_ns, m->last_t_ns) / (double)m->vel_dt_ns;
     if (!(ratio > 0.0 && ratio < 4.0))
         ratio = 1.0;
     for (int c = 0; c < 3; ++c)
@@ -1023,7 +1034,7 @@ static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
         /* the velocity of this step, for the next prediction */
         const tvo_pose Tw = tvo_pose_inverse(&m->last_T_c_w);
         m->vel = tvo_pose_compose(&T, &Tw);
-        m->vel_dt_ns = t_ns - m->last_t_ns;
+        m->vel_dt_ns = dt_ns(t_ns, m->last_t_ns);
         m->has_vel = 1;
     }
     m->last_T_c_w = T;
