@@ -746,14 +746,13 @@ static int32_t triangulate_new(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tra
         }
         if (!triangulate(T0, &kn->T_c_w, tr->tri_x[i], tr->x[i], min_cos, max_err, X))
             continue; /* not enough parallax yet (or a bad track): wait for the next keyframe */
-        if ((k0 != NULL && k0->n_obs >= m->max_tracks) || kn->n_obs >= m->max_tracks)
+        if (k0->n_obs >= m->max_tracks || kn->n_obs >= m->max_tracks)
             continue;
         j = lm_alloc(m);
         if (j < 0)
             break;
         memcpy(m->lm[j].X, X, sizeof(X));
-        if (k0 != NULL) /* first seen in a keyframe of the window: observed there too */
-            (void)kf_add_obs(m, k0, j, tr->tri_x[i]);
+        (void)kf_add_obs(m, k0, j, tr->tri_x[i]); /* first seen in a keyframe of the window: observed there too */
         (void)kf_add_obs(m, kn, j, tr->x[i]);
         m->lm[j].tracked = 1;
         tr->lm[i] = j;
