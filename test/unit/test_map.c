@@ -7,6 +7,7 @@
 
 #include <math.h>
 
+#include "tinyvo/linalg.h"
 #include "tinyvo/vo.h"
 #include "tvo_room.h"
 
@@ -58,14 +59,6 @@ static void close_vo(fixture *f)
 {
     free(f->mem);
     free(f);
-}
-
-/* C = A B (3x3, row-major) */
-static void mat3_mul(const double A[9], const double B[9], double C[9])
-{
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c)
-            C[3 * r + c] = A[3 * r] * B[c] + A[3 * r + 1] * B[3 + c] + A[3 * r + 2] * B[6 + c];
 }
 
 static double rot_err_deg(const tvo_pose *a, const tvo_pose *b)
@@ -262,7 +255,7 @@ static void test_map_rotation_after_map(void **state)
             double Ry[9];
             T = T_stop;
             tvo_rotvec_to_rot(v, Ry);
-            mat3_mul(Ry, W0.R, T.R);
+            tvo_la_mat3_mul(Ry, W0.R, T.R);
         } else {
             const tvo_pose W0 = walk(walk1 - 1);
             T = walk(k - turn);

@@ -7,6 +7,7 @@
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include "tinyvo/linalg.h"
 #include "tinyvo/pnp.h"
 #include "tinyvo/se3.h"
 
@@ -33,14 +34,6 @@ static double c_err(const tvo_pose *A, const tvo_pose *B)
 static int pose_equal(const tvo_pose *A, const tvo_pose *B)
 {
     return memcmp(A, B, sizeof *A) == 0;
-}
-
-/* C = A B (3x3, row-major) */
-static void mat3_mul(const double A[9], const double B[9], double C[9])
-{
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c)
-            C[3 * r + c] = A[3 * r] * B[c] + A[3 * r + 1] * B[3 + c] + A[3 * r + 2] * B[6 + c];
 }
 
 static double huber_cost(const tvo_pose *T, const pscene *sc, double k)
@@ -613,7 +606,7 @@ static void test_refine_rotation_prior(void **state)
         make_pscene(&sc, 950, 200, 0.0, 0.0);
         tvo_pnp_config_default(&c);
         tvo_rotvec_to_rot(w, Rd);
-        mat3_mul(Rd, sc.T.R, c.rot_prior);
+        tvo_la_mat3_mul(Rd, sc.T.R, c.rot_prior);
         c.rot_prior_weight = 1.0;
         T = perturb(&sc.T, 3, 0.01, 0.05);
         assert_int_equal(tvo_pnp_refine(&c, (const double (*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni, NULL),
