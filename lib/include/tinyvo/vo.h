@@ -33,7 +33,7 @@
  * from an outside source.
  *
  * Cost: the map's work per frame is one PnP refinement on up to max_tracks points (~0.4 M instructions
- * for 200 points, pnp.h); a keyframe adds the triangulation and one bundle adjustment (~10 M
+ * for 200 points, pnp.h); a keyframe adds the triangulation and one bundle adjustment (~14 M
  * instructions for 6 keyframes and 300 landmarks, ba.h).
  *
  * Memory: tvo_vo_required_size(&cfg) bytes, handed to tvo_vo_init(); nothing is allocated afterwards.
