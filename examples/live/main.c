@@ -128,7 +128,7 @@ int main(int argc, char **argv)
     for (i = 1; i < argc; i++) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-        static const char *const with_value[] = {"--device", "--calib", "--calib-cam", "--model", "--size",
+        static const char *const with_value[] = {"--device", "--calib",  "--calib-cam",  "--model", "--size",
                                                  "--fps",    "--frames", "--timeout-ms", "--out"};
         size_t k;
         int known = 0;
@@ -271,7 +271,8 @@ int main(int argc, char **argv)
     st = tvo_v4l2_open(&v4l2, &vcfg);
     if (st != TVO_OK) {
         if (st == TVO_ERR_NOT_FOUND)
-            fprintf(stderr, "tvo_live: no camera at %s (list cameras with `v4l2-ctl --list-devices`)\n", device);
+            fprintf(stderr, "tvo_live: no camera at %s (list cameras with `v4l2-ctl --list-devices`)\n",
+                    device);
         else if (st == TVO_ERR_BUSY)
             fprintf(stderr, "tvo_live: %s is in use by another program\n", device);
         else
@@ -309,7 +310,8 @@ int main(int argc, char **argv)
             goto done;
         }
     }
-    grey = fmt->width > 0 && fmt->height > 0 ? (uint8_t *)malloc((size_t)fmt->width * (size_t)fmt->height) : NULL;
+    grey = fmt->width > 0 && fmt->height > 0 ? (uint8_t *)malloc((size_t)fmt->width * (size_t)fmt->height)
+                                             : NULL;
     if (grey == NULL) {
         fprintf(stderr, "tvo_live: out of memory\n");
         rc = 1;
@@ -331,8 +333,9 @@ int main(int argc, char **argv)
         }
         {
             /* Zero copy when the driver's buffer is already an 8-bit luma image. */
-            tvo_image img = f.zero_copy ? tvo_image_make(f.width, f.height, f.stride, (uint8_t *)(uintptr_t)f.data)
-                                        : tvo_image_make(f.width, f.height, f.width, grey);
+            tvo_image img = f.zero_copy
+                    ? tvo_image_make(f.width, f.height, f.stride, (uint8_t *)(uintptr_t)f.data)
+                    : tvo_image_make(f.width, f.height, f.width, grey);
             if (!f.zero_copy)
                 (void)tvo_v4l2_frame_luma(&f, grey, f.width);
             st = tvo_vo_process(vo, &img, f.timestamp_ns, &res);
@@ -356,13 +359,14 @@ int main(int argc, char **argv)
                traj.T_w_c.t[2], q[1], q[2], q[3], q[0]);
         fflush(stdout);
         if (out != NULL)
-            fprintf(out, "%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", (double)f.timestamp_ns * 1e-9, traj.T_w_c.t[0],
-                    traj.T_w_c.t[1], traj.T_w_c.t[2], q[1], q[2], q[3], q[0]);
+            fprintf(out, "%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", (double)f.timestamp_ns * 1e-9,
+                    traj.T_w_c.t[0], traj.T_w_c.t[1], traj.T_w_c.t[2], q[1], q[2], q[3], q[0]);
     }
     if (!quiet) {
         const tvo_v4l2_stats *s = tvo_v4l2_get_stats(&v4l2);
-        fprintf(stderr, "tvo_live: %ld frames; driver: %llu good, %llu error-flagged, %llu short, %llu dropped\n",
-                n, (unsigned long long)s->frames, (unsigned long long)s->error_buffers,
+        fprintf(stderr,
+                "tvo_live: %ld frames; driver: %llu good, %llu error-flagged, %llu short, %llu dropped\n", n,
+                (unsigned long long)s->frames, (unsigned long long)s->error_buffers,
                 (unsigned long long)s->short_buffers, (unsigned long long)s->sequence_gaps);
     }
 done:

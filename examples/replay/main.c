@@ -34,18 +34,18 @@
 
 enum scale_mode { SCALE_NONE, SCALE_GT, SCALE_MODEL, SCALE_PROPAGATE, SCALE_CONST };
 enum skip_kind { SKIP_MISSING, SKIP_CORRUPT, SKIP_SIZE, SKIP_TIMESTAMP, SKIP_BAD_ROW, SKIP_COUNT };
-static const char *const skip_names[SKIP_COUNT] = { "missing", "corrupt", "wrong_size", "timestamp", "bad_row" };
+static const char *const skip_names[SKIP_COUNT] = {"missing", "corrupt", "wrong_size", "timestamp",
+                                                   "bad_row"};
 enum source_kind { SRC_EUROC, SRC_TUM, SRC_KITTI };
-static const char *const source_names[3] = { "euroc", "tum", "kitti" };
-static const char *const state_names[TVO_VO_STATE_COUNT] = { "ok", "initialising", "rotation_only",
-                                                              "lost" };
-static const char *const feature_names[TVO_FEAT_COUNT] = {
-    "rx", "ry", "rz", "tx", "ty", "tz", "inlier_ratio", "parallax_deg", "tracks_k", "dt", "rot_only"
-};
-static const char *const stage_names[TVO_STAGE_COUNT] = { "pyramid", "track", "undistort",
-                                                           "pose", "detect", "map", "total" };
-static const char *const map_state_names[TVO_MAP_STATE_COUNT] = { "off", "initialising", "initialised",
-                                                                  "tracking", "lost" };
+static const char *const source_names[3] = {"euroc", "tum", "kitti"};
+static const char *const state_names[TVO_VO_STATE_COUNT] = {"ok", "initialising", "rotation_only", "lost"};
+static const char *const feature_names[TVO_FEAT_COUNT] = {"rx",       "ry", "rz",           "tx",
+                                                          "ty",       "tz", "inlier_ratio", "parallax_deg",
+                                                          "tracks_k", "dt", "rot_only"};
+static const char *const stage_names[TVO_STAGE_COUNT] = {"pyramid", "track", "undistort", "pose",
+                                                         "detect",  "map",   "total"};
+static const char *const map_state_names[TVO_MAP_STATE_COUNT] = {"off", "initialising", "initialised",
+                                                                 "tracking", "lost"};
 
 typedef struct options {
     const char *dir, *cam, *out, *model, *stats, *features, *tracks;
@@ -54,7 +54,7 @@ typedef struct options {
     enum scale_mode scale;
     double alpha, step; /* --scale-alpha (< 0: not given), --step */
     int body_frame, strict, quiet, print_memory;
-    int keyframe; /* --keyframe 0|1 (< 0: the library's default) */
+    int keyframe;         /* --keyframe 0|1 (< 0: the library's default) */
     int track_prediction; /* --track-prediction 0|1 (< 0: the library's default) */
     int map;              /* --map 0|1 (< 0: the library's default) */
     long max_frames;
@@ -139,13 +139,13 @@ static int parse_args(int argc, char **argv, options *o)
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-#define NEED_VALUE()                                                              \
-    do {                                                                          \
-        if (v == NULL) {                                                          \
-            fprintf(stderr, "tvo_replay: %s needs a value\n", a);                 \
-            return -1;                                                            \
-        }                                                                         \
-        ++i;                                                                      \
+#define NEED_VALUE()                                              \
+    do {                                                          \
+        if (v == NULL) {                                          \
+            fprintf(stderr, "tvo_replay: %s needs a value\n", a); \
+            return -1;                                            \
+        }                                                         \
+        ++i;                                                      \
     } while (0)
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             usage(stdout);
@@ -198,7 +198,8 @@ static int parse_args(int argc, char **argv, options *o)
             else if (!strcmp(v, "const"))
                 o->scale = SCALE_CONST;
             else {
-                fprintf(stderr, "tvo_replay: --scale must be gt, model, propagate, const or none (got '%s')\n", v);
+                fprintf(stderr,
+                        "tvo_replay: --scale must be gt, model, propagate, const or none (got '%s')\n", v);
                 return -1;
             }
         } else if (!strcmp(a, "--scale-alpha") || !strcmp(a, "--step")) {
@@ -316,8 +317,8 @@ static void write_pose(FILE *f, int64_t t_ns, const tvo_pose *T)
 {
     double q[4];
     tvo_rot_to_quat(T->R, q);
-    fprintf(f, "%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", (double)t_ns * 1e-9, T->t[0], T->t[1],
-            T->t[2], q[1], q[2], q[3], q[0]);
+    fprintf(f, "%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f\n", (double)t_ns * 1e-9, T->t[0], T->t[1], T->t[2],
+            q[1], q[2], q[3], q[0]);
 }
 
 static void *read_file(const char *path, size_t *size)
@@ -344,7 +345,7 @@ static void *read_file(const char *path, size_t *size)
  * scale source sets at keyframes: path lengths of the source (ground-truth steps, the networks' step
  * lengths, or --step per frame) over the VO's path lengths, keyframe interval by keyframe interval. */
 typedef struct map_scale {
-    double s;               /* metres per map unit (1 for --scale none; 0 until a source sets it) */
+    double s; /* metres per map unit (1 for --scale none; 0 until a source sets it) */
     int set;
     double src_sum, vo_sum; /* path lengths over the keyframe intervals used so far */
     double src_int, vo_int; /* path lengths since the last keyframe */
@@ -396,13 +397,14 @@ int main(int argc, char **argv)
     void *vo_mem = NULL, *nn_file = NULL, *nn_mem = NULL;
     tvo_nn *nn = NULL;
     uint8_t *frame = NULL;
-    double *timing[TVO_STAGE_COUNT + 1] = { 0 };
-    long counts_state[TVO_VO_STATE_COUNT] = { 0 }, counts_skip[SKIP_COUNT] = { 0 };
+    double *timing[TVO_STAGE_COUNT + 1] = {0};
+    long counts_state[TVO_VO_STATE_COUNT] = {0}, counts_skip[SKIP_COUNT] = {0};
     long keyframe_frames = 0; /* frames whose rotation is the keyframe rotation */
-    long counts_map[TVO_MAP_STATE_COUNT] = { 0 }, map_keyframes = 0;
+    long counts_map[TVO_MAP_STATE_COUNT] = {0}, map_keyframes = 0;
     map_scale msc;
-    tvo_pose T_w_c_vo_prev = { { 0 }, { 0 } }; /* the VO's world pose of the previous frame (map on) */
-    int vo_reset_pending = 0; /* the VO was reset: its next T_w_c starts again from the identity, in a new unit */
+    tvo_pose T_w_c_vo_prev = {{0}, {0}}; /* the VO's world pose of the previous frame (map on) */
+    int vo_reset_pending =
+            0; /* the VO was reset: its next T_w_c starts again from the identity, in a new unit */
     tvo_vo_track *trk = NULL;
     FILE *tracks = NULL;
     long n_frames, processed = 0, gaps = 0, gt_missing = 0, timed = 0;
@@ -452,10 +454,11 @@ int main(int argc, char **argv)
            first frame */
         char path0[1024];
         int32_t w0 = 0, h0 = 0;
-        if (tvo_euroc_frame_path(seq, 0, path0, sizeof(path0)) == TVO_OK && tvo_png_size(path0, &w0, &h0) == TVO_OK &&
+        if (tvo_euroc_frame_path(seq, 0, path0, sizeof(path0)) == TVO_OK &&
+            tvo_png_size(path0, &w0, &h0) == TVO_OK &&
             (w0 != calib.camera.width || h0 != calib.camera.height)) {
-            fprintf(stderr, "tvo_replay: the calibration %s is for %dx%d but the frames of %s are %dx%d\n", o.calib,
-                    (int)calib.camera.width, (int)calib.camera.height, o.dir, (int)w0, (int)h0);
+            fprintf(stderr, "tvo_replay: the calibration %s is for %dx%d but the frames of %s are %dx%d\n",
+                    o.calib, (int)calib.camera.width, (int)calib.camera.height, o.dir, (int)w0, (int)h0);
             goto cleanup;
         }
         camera = calib.camera;
@@ -464,10 +467,11 @@ int main(int argc, char **argv)
     if ((o.scale == SCALE_GT || o.scale == SCALE_PROPAGATE) && !have_gt) {
         fprintf(stderr, "tvo_replay: --scale %s needs ground truth, and %s has none (%s)\n",
                 o.scale == SCALE_GT ? "gt" : "propagate", o.dir,
-                o.source == SRC_EUROC ? "no mav0/state_groundtruth_estimate0/data.csv"
-                                      : (o.source == SRC_TUM ? "no groundtruth.txt"
-                                                             : "no poses file: --poses FILE, DIR/poses.txt or "
-                                                               "DIR/../../poses/<seq>.txt"));
+                o.source == SRC_EUROC
+                        ? "no mav0/state_groundtruth_estimate0/data.csv"
+                        : (o.source == SRC_TUM ? "no groundtruth.txt"
+                                               : "no poses file: --poses FILE, DIR/poses.txt or "
+                                                 "DIR/../../poses/<seq>.txt"));
         goto cleanup;
     }
     (void)tvo_scale_filter_init(&filt, o.alpha >= 0.0 ? o.alpha : 0.0);
@@ -604,7 +608,8 @@ int main(int argc, char **argv)
         if (t_last != INT64_MIN && t_ns - t_last > period_ns + period_ns / 2) {
             gaps++;
             fprintf(stderr, "%stvo_replay: gap of %.3f s before frame %ld: re-initialising%s\n",
-                    tty ? "\n" : "", (double)(t_ns - t_last) * 1e-9, i, o.strict ? " (--strict: stopping)" : "");
+                    tty ? "\n" : "", (double)(t_ns - t_last) * 1e-9, i,
+                    o.strict ? " (--strict: stopping)" : "");
             if (o.strict)
                 goto cleanup;
             tvo_vo_reset(vo);
@@ -786,7 +791,8 @@ int main(int argc, char **argv)
                     o.source == SRC_EUROC ? o.cam : (o.source == SRC_TUM ? "rgb" : "image_0"));
             fprintf(js, "  \"width\": %d,\n  \"height\": %d,\n  \"vo_memory_bytes\": %zu,\n",
                     (int)cfg.camera.width, (int)cfg.camera.height, vo_size);
-            fprintf(js, "  \"frames\": {\"total\": %ld, \"processed\": %ld, \"skipped\": %ld, \"lost\": %ld},\n",
+            fprintf(js,
+                    "  \"frames\": {\"total\": %ld, \"processed\": %ld, \"skipped\": %ld, \"lost\": %ld},\n",
                     n_frames, processed, skipped, counts_state[TVO_VO_LOST]);
             fprintf(js, "  \"skipped\": {");
             for (int k = 0; k < SKIP_COUNT; ++k)
@@ -796,7 +802,9 @@ int main(int argc, char **argv)
             for (int k = 0; k < TVO_VO_STATE_COUNT; ++k)
                 fprintf(js, "%s\"%s\": %ld", k ? ", " : "", state_names[k], counts_state[k]);
             fprintf(js, "},\n  \"keyframe_rotation_frames\": %ld,\n", keyframe_frames);
-            fprintf(js, "  \"map\": {\"enabled\": %d, \"keyframes\": %ld, \"losses\": %ld, \"scale\": %.9g, \"states\": {",
+            fprintf(js,
+                    "  \"map\": {\"enabled\": %d, \"keyframes\": %ld, \"losses\": %ld, \"scale\": %.9g, "
+                    "\"states\": {",
                     (int)cfg.map, map_keyframes, counts_map[TVO_MAP_LOST], msc.s);
             for (int k = 0; k < TVO_MAP_STATE_COUNT; ++k)
                 fprintf(js, "%s\"%s\": %ld", k ? ", " : "", map_state_names[k], counts_map[k]);

@@ -28,16 +28,18 @@
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: tvo_track_pair A.png B.png [--max N] [--out tracks.csv] [--fb] [--win W] [--levels L] [--quiet]\n"
-               "  --max N      corners to detect in A (1..100000, default 300)\n"
-               "  --out FILE   write the tracks as csv to FILE instead of stdout\n"
-               "  --fb         forward-backward check (points that do not track back within 1 px are lost)\n"
-               "  --win W      LK window side, odd (default 21)\n"
-               "  --levels L   pyramid levels including full resolution (default 4; reduced for small images)\n"
-               "  --quiet      no summary on stderr\n"
-               "  --version    print the version and exit\n"
-               "  --help       this text\n"
-               "Exit codes: 0 done, 1 runtime error, 2 usage error.\n");
+    fprintf(f,
+            "usage: tvo_track_pair A.png B.png [--max N] [--out tracks.csv] [--fb] [--win W] [--levels L] "
+            "[--quiet]\n"
+            "  --max N      corners to detect in A (1..100000, default 300)\n"
+            "  --out FILE   write the tracks as csv to FILE instead of stdout\n"
+            "  --fb         forward-backward check (points that do not track back within 1 px are lost)\n"
+            "  --win W      LK window side, odd (default 21)\n"
+            "  --levels L   pyramid levels including full resolution (default 4; reduced for small images)\n"
+            "  --quiet      no summary on stderr\n"
+            "  --version    print the version and exit\n"
+            "  --help       this text\n"
+            "Exit codes: 0 done, 1 runtime error, 2 usage error.\n");
 }
 
 static int parse_int(const char *s, long lo, long hi, int32_t *out)
@@ -57,10 +59,14 @@ static int parse_int(const char *s, long lo, long hi, int32_t *out)
 static const char *hint(tvo_status st)
 {
     switch (st) {
-    case TVO_ERR_FORMAT: return " (not a PNG, or a corrupt / truncated one)";
-    case TVO_ERR_SIZE: return " (image larger than TVO_MAX_IMAGE_DIM)";
-    case TVO_ERR_NOT_FOUND: return " (no such file)";
-    default: return "";
+    case TVO_ERR_FORMAT:
+        return " (not a PNG, or a corrupt / truncated one)";
+    case TVO_ERR_SIZE:
+        return " (image larger than TVO_MAX_IMAGE_DIM)";
+    case TVO_ERR_NOT_FOUND:
+        return " (no such file)";
+    default:
+        return "";
     }
 }
 
@@ -153,8 +159,8 @@ int main(int argc, char **argv)
         return 1;
     }
     if (wa != wb || ha != hb) {
-        fprintf(stderr, "tvo_track_pair: the images differ in size: %s is %dx%d, %s is %dx%d\n", path_a, (int)wa,
-                (int)ha, path_b, (int)wb, (int)hb);
+        fprintf(stderr, "tvo_track_pair: the images differ in size: %s is %dx%d, %s is %dx%d\n", path_a,
+                (int)wa, (int)ha, path_b, (int)wb, (int)hb);
         return 1;
     }
     tvo_detect_config_default(&dcfg);
@@ -185,8 +191,8 @@ int main(int argc, char **argv)
     status = (uint8_t *)malloc((size_t)max_corners);
     err = (float *)malloc((size_t)max_corners * sizeof *err);
     flow = (float *)malloc((size_t)max_corners * sizeof *flow);
-    if (!img_a || !img_b || !det_scratch || !lk_scratch || !pyr_mem_a || !pyr_mem_b || !corners || !pts_a || !pts_b ||
-        !status || !err || !flow) {
+    if (!img_a || !img_b || !det_scratch || !lk_scratch || !pyr_mem_a || !pyr_mem_b || !corners || !pts_a ||
+        !pts_b || !status || !err || !flow) {
         fprintf(stderr, "tvo_track_pair: out of memory\n");
         goto done;
     }
@@ -251,15 +257,16 @@ int main(int argc, char **argv)
         }
         fprintf(out, "x_a,y_a,x_b,y_b,status,err\n");
     } else {
-        fprintf(out, "# id x_a y_a x_b y_b status err   (%s -> %s, %dx%d)\n", path_a, path_b, (int)wa, (int)ha);
+        fprintf(out, "# id x_a y_a x_b y_b status err   (%s -> %s, %dx%d)\n", path_a, path_b, (int)wa,
+                (int)ha);
     }
     for (i = 0; i < n; ++i) {
         if (out_path != NULL)
-            fprintf(out, "%.3f,%.3f,%.3f,%.3f,%d,%.3f\n", pts_a[i].x, pts_a[i].y, pts_b[i].x, pts_b[i].y, status[i],
-                    err[i]);
-        else
-            fprintf(out, "%d %.3f %.3f %.3f %.3f %d %.3f\n", (int)i, pts_a[i].x, pts_a[i].y, pts_b[i].x, pts_b[i].y,
+            fprintf(out, "%.3f,%.3f,%.3f,%.3f,%d,%.3f\n", pts_a[i].x, pts_a[i].y, pts_b[i].x, pts_b[i].y,
                     status[i], err[i]);
+        else
+            fprintf(out, "%d %.3f %.3f %.3f %.3f %d %.3f\n", (int)i, pts_a[i].x, pts_a[i].y, pts_b[i].x,
+                    pts_b[i].y, status[i], err[i]);
         if (status[i] == TVO_LK_TRACKED) {
             const float dx = pts_b[i].x - pts_a[i].x, dy = pts_b[i].y - pts_a[i].y;
             flow[tracked++] = sqrtf(dx * dx + dy * dy);
@@ -278,8 +285,8 @@ int main(int argc, char **argv)
         fprintf(stderr,
                 "tvo_track_pair: %dx%d, %d corners, %d tracked (%.1f%%), median flow %.2f px; "
                 "detect %.3f ms, pyramids %.3f ms, LK %.3f ms (win %d, %d levels%s)\n",
-                (int)wa, (int)ha, (int)n, (int)tracked, n > 0 ? 100.0 * tracked / n : 0.0, med, t_detect / 1e6,
-                t_pyr / 1e6, t_lk / 1e6, (int)win, (int)levels, fb ? ", fb check" : "");
+                (int)wa, (int)ha, (int)n, (int)tracked, n > 0 ? 100.0 * tracked / n : 0.0, med,
+                t_detect / 1e6, t_pyr / 1e6, t_lk / 1e6, (int)win, (int)levels, fb ? ", fb check" : "");
     }
     rc = 0;
 done:

@@ -6,18 +6,18 @@
 #include <string.h>
 
 /* point states during one linearisation */
-#define PT_FREE 0   /* optimised */
-#define PT_FIXED 1  /* fixed by the caller */
-#define PT_HELD 2   /* free, but held fixed for this step (too few observations, ill-conditioned) */
+#define PT_FREE 0  /* optimised */
+#define PT_FIXED 1 /* fixed by the caller */
+#define PT_HELD 2  /* free, but held fixed for this step (too few observations, ill-conditioned) */
 
-#define ACCEPT_REL 1e-12    /* a step must lower the cost by more than this fraction of it */
+#define ACCEPT_REL 1e-12   /* a step must lower the cost by more than this fraction of it */
 #define CONVERGED_REL 1e-6 /* an accepted step lowering the cost by less than this fraction: converged */
-#define COST_FLOOR 1e-24    /* cost per used observation at or below which the solve is converged */
+#define COST_FLOOR 1e-24   /* cost per used observation at or below which the solve is converged */
 #define LAMBDA_MIN 1e-12
 #define LAMBDA_MAX 1e12
-#define PIVOT_POINT 1e-12   /* 3x3 point block: pivot / diagonal entry */
+#define PIVOT_POINT 1e-12    /* 3x3 point block: pivot / diagonal entry */
 #define PIVOT_SINGULAR 1e-10 /* undamped reduced system: pivot / diagonal entry */
-#define PIVOT_DAMPED 1e-14  /* damped reduced system: pivot / diagonal entry */
+#define PIVOT_DAMPED 1e-14   /* damped reduced system: pivot / diagonal entry */
 
 /* Memory (see "Memory" in ba.h): per observation only its index in the by-point order and its usable
  * flag; the Jacobians, IRLS weights and W blocks are recomputed from the state (the linearisation
@@ -27,25 +27,26 @@ typedef struct ba_ws {
     int32_t *slot;      /* index in the reduced system, -1 when not optimised */
     int32_t *pose_nuse; /* usable observations */
     tvo_pose *pose_bak;
-    double (*Hc)[36];   /* J^T W J of the pose (6x6, row-major) */
-    double (*gc)[6];    /* J^T W r of the pose */
-    int32_t *tpos;      /* [slot]: position in the current point's touched list, -1 when not in it */
-    int32_t *tlist;     /* slots the current point's observations touch, in order of first appearance */
-    double (*Wp)[18];   /* [touched]: sum of the point's W = Jc^T W Jx (6x3) in that free pose */
-    double (*Yp)[18];   /* [touched]: Wp V^-1 (6x3) */
+    double (*Hc)[36]; /* J^T W J of the pose (6x6, row-major) */
+    double (*gc)[6];  /* J^T W r of the pose */
+    int32_t *tpos;    /* [slot]: position in the current point's touched list, -1 when not in it */
+    int32_t *tlist;   /* slots the current point's observations touch, in order of first appearance */
+    double (*Wp)[18]; /* [touched]: sum of the point's W = Jc^T W Jx (6x3) in that free pose */
+    double (*Yp)[18]; /* [touched]: Wp V^-1 (6x3) */
     /* points [max_points] */
     uint8_t *pstate;
     int32_t *pt_nuse;
-    int32_t *pt_start; /* [max_points + 1]: observations of point j are pt_obs[pt_start[j] .. pt_start[j+1]) */
+    int32_t *
+            pt_start; /* [max_points + 1]: observations of point j are pt_obs[pt_start[j] .. pt_start[j+1]) */
     double (*X_bak)[3];
-    double (*V)[6];    /* J^T W J of the point: upper triangle 00 01 02 11 12 22 */
+    double (*V)[6]; /* J^T W J of the point: upper triangle 00 01 02 11 12 22 */
     double (*gx)[3];
     double (*dx)[3];
     /* observations [max_obs] */
     int32_t *pt_obs;
-    uint8_t *ouse;     /* usable (decided at the first linearisation) */
+    uint8_t *ouse; /* usable (decided at the first linearisation) */
     /* reduced system, n = 6 * max_poses */
-    double *S;         /* n x n, row stride n_cur */
+    double *S; /* n x n, row stride n_cur */
     double *b;
     double *dc;
 } ba_ws;
@@ -97,11 +98,11 @@ static size_t carve(const tvo_ba_config *c, uint8_t *base, ba_ws *ws)
     const size_t np = (size_t)c->max_poses, nx = (size_t)c->max_points, no = (size_t)c->max_obs;
     const size_t n = 6u * np;
     size_t off = 0;
-#define TVO_BA_TAKE(field, count)                                                          \
-    do {                                                                                   \
-        if (base != NULL)                                                                  \
-            ws->field = (void *)(base + off);                                              \
-        off += ((count) * sizeof(*ws->field) + 15u) & ~(size_t)15u;                        \
+#define TVO_BA_TAKE(field, count)                                   \
+    do {                                                            \
+        if (base != NULL)                                           \
+            ws->field = (void *)(base + off);                       \
+        off += ((count) * sizeof(*ws->field) + 15u) & ~(size_t)15u; \
     } while (0)
     TVO_BA_TAKE(slot, np);
     TVO_BA_TAKE(pose_nuse, np);
@@ -276,11 +277,11 @@ static void chol_solve(const double *L, int n, const double *b, double *x)
 
 /* One observation linearised at the current state. */
 typedef struct obs_lin {
-    double r0, r1;     /* residual */
-    double w0, w1;     /* IRLS weights */
-    double cost;       /* 1/2 rho of both components */
-    double Jc[2][6];   /* d r / d (omega, v) of the pose */
-    double Jx[2][3];   /* d r / d X */
+    double r0, r1;   /* residual */
+    double w0, w1;   /* IRLS weights */
+    double cost;     /* 1/2 rho of both components */
+    double Jc[2][6]; /* d r / d (omega, v) of the pose */
+    double Jx[2][3]; /* d r / d X */
 } obs_lin;
 
 /* Linearises observation o at the current state; 0 when it is not usable (non-finite x, y or residual,
@@ -334,8 +335,9 @@ BA_INLINE int lin_obs(const tvo_ba_config *c, const tvo_ba_problem *p, const tvo
  * points and the free-pose slots. Returns the cost (over the usable observations); counts to
  * *n_used, *n_skipped_obs, *n_held, *n_free_poses; *pose_starved when a free pose had no usable
  * observation. */
-static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *ws, int first, int32_t *n_used,
-                        int32_t *n_skipped_obs, int32_t *n_held, int32_t *n_free_poses, int *pose_starved)
+static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *ws, int first,
+                        int32_t *n_used, int32_t *n_skipped_obs, int32_t *n_held, int32_t *n_free_poses,
+                        int *pose_starved)
 {
     double cost = 0.0;
     int32_t used = 0, nfree = 0, held = 0;
@@ -480,7 +482,8 @@ static int32_t point_blocks(const tvo_ba_config *c, const tvo_ba_problem *p, ba_
 /* Builds and solves the damped system (lambda; Cholesky pivot bound rel) into ws->dc (poses, by slot)
  * and ws->dx (free points). Returns 0 when a factorisation fails. With solve == 0 only the reduced
  * system's factorisation is attempted (the singularity test). */
-static int build_solve(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *ws, int32_t nfree, double lambda, double rel, int solve)
+static int build_solve(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *ws, int32_t nfree,
+                       double lambda, double rel, int solve)
 {
     const int n = 6 * nfree;
     const double dmp = 1.0 + lambda;
@@ -513,7 +516,8 @@ static int build_solve(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *w
             double *Yk = ws->Yp[m];
             for (int a = 0; a < 6; ++a) {
                 for (int b2 = 0; b2 < 3; ++b2)
-                    Yk[3 * a + b2] = Wk[3 * a] * Vi[b2] + Wk[3 * a + 1] * Vi[3 + b2] + Wk[3 * a + 2] * Vi[6 + b2];
+                    Yk[3 * a + b2] = Wk[3 * a] * Vi[b2] + Wk[3 * a + 1] * Vi[3 + b2] +
+                            Wk[3 * a + 2] * Vi[6 + b2];
                 ws->b[6 * sk + a] += Yk[3 * a] * g[0] + Yk[3 * a + 1] * g[1] + Yk[3 * a + 2] * g[2];
             }
         }
@@ -528,7 +532,8 @@ static int build_solve(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *w
                 for (int a = 0; a < 6; ++a) {
                     double *row = S + (size_t)(6 * sk + a) * (size_t)n + (size_t)(6 * sl);
                     for (int b2 = 0; b2 < 6; ++b2)
-                        row[b2] -= Yk[3 * a] * Wl[3 * b2] + Yk[3 * a + 1] * Wl[3 * b2 + 1] + Yk[3 * a + 2] * Wl[3 * b2 + 2];
+                        row[b2] -= Yk[3 * a] * Wl[3 * b2] + Yk[3 * a + 1] * Wl[3 * b2 + 1] +
+                                Yk[3 * a + 2] * Wl[3 * b2 + 2];
                 }
             }
         }
@@ -584,7 +589,8 @@ static int apply_step(tvo_ba_problem *p, const ba_ws *ws, int32_t nfree)
         tvo_rotvec_to_rot(d, Rd);
         for (int r = 0; r < 3; ++r) {
             for (int col = 0; col < 3; ++col)
-                R[3 * r + col] = Rd[3 * r] * T->R[col] + Rd[3 * r + 1] * T->R[3 + col] + Rd[3 * r + 2] * T->R[6 + col];
+                R[3 * r + col] = Rd[3 * r] * T->R[col] + Rd[3 * r + 1] * T->R[3 + col] +
+                        Rd[3 * r + 2] * T->R[6 + col];
             t[r] = Rd[3 * r] * T->t[0] + Rd[3 * r + 1] * T->t[1] + Rd[3 * r + 2] * T->t[2] + d[3 + r];
         }
         memcpy(T->R, R, sizeof R);

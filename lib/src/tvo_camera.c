@@ -34,7 +34,8 @@ tvo_status tvo_camera_check(const tvo_camera *cam)
     int i;
     if (cam == NULL)
         return TVO_ERR_NULL;
-    if (cam->width < 1 || cam->height < 1 || cam->width > TVO_MAX_IMAGE_DIM || cam->height > TVO_MAX_IMAGE_DIM)
+    if (cam->width < 1 || cam->height < 1 || cam->width > TVO_MAX_IMAGE_DIM ||
+        cam->height > TVO_MAX_IMAGE_DIM)
         return TVO_ERR_SIZE;
     if (!tvo_finite(cam->fx) || !tvo_finite(cam->fy) || !tvo_finite(cam->cx) || !tvo_finite(cam->cy))
         return TVO_ERR_NOT_FINITE;

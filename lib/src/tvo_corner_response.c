@@ -36,8 +36,8 @@ static double cr_scale2(int32_t block_size)
     return s * s;
 }
 
-float tvo_corner_score_at(const tvo_image *img, int32_t x, int32_t y, tvo_score_kind kind,
-                          int32_t block_size, float harris_k)
+float tvo_corner_score_at(const tvo_image *img, int32_t x, int32_t y, tvo_score_kind kind, int32_t block_size,
+                          float harris_k)
 {
     int32_t lo, hi, u, v;
     int32_t a = 0, b = 0, c = 0;
@@ -56,9 +56,9 @@ float tvo_corner_score_at(const tvo_image *img, int32_t x, int32_t y, tvo_score_
         const uint8_t *r2 = r1 + st;
         for (u = x - lo; u <= x + hi; ++u) {
             int32_t gx = ((int32_t)r0[u + 1] - r0[u - 1]) + 2 * ((int32_t)r1[u + 1] - r1[u - 1]) +
-                         ((int32_t)r2[u + 1] - r2[u - 1]);
+                    ((int32_t)r2[u + 1] - r2[u - 1]);
             int32_t gy = ((int32_t)r2[u - 1] + 2 * (int32_t)r2[u] + r2[u + 1]) -
-                         ((int32_t)r0[u - 1] + 2 * (int32_t)r0[u] + r0[u + 1]);
+                    ((int32_t)r0[u - 1] + 2 * (int32_t)r0[u] + r0[u + 1]);
             a += gx * gx;
             b += gx * gy;
             c += gy * gy;
@@ -81,8 +81,8 @@ size_t tvo_corner_response_scratch_size(int32_t width, int32_t block_size)
 }
 
 /* products of the Sobel derivatives of (real) row r into pa, pb, pc (width each) */
-static void cr_products(const tvo_image *img, int32_t r, const int32_t *xm, const int32_t *xp,
-                        int32_t *pa, int32_t *pb, int32_t *pc)
+static void cr_products(const tvo_image *img, int32_t r, const int32_t *xm, const int32_t *xp, int32_t *pa,
+                        int32_t *pb, int32_t *pc)
 {
     int32_t H = img->height, W = img->width, x;
     const uint8_t *r0 = img->data + (size_t)tvo_reflect101(r - 1, H) * (size_t)img->stride;
@@ -91,7 +91,8 @@ static void cr_products(const tvo_image *img, int32_t r, const int32_t *xm, cons
     for (x = 0; x < W; ++x) {
         int32_t l = xm[x], rr = xp[x];
         int32_t gx = ((int32_t)r0[rr] - r0[l]) + 2 * ((int32_t)r1[rr] - r1[l]) + ((int32_t)r2[rr] - r2[l]);
-        int32_t gy = ((int32_t)r2[l] + 2 * (int32_t)r2[x] + r2[rr]) - ((int32_t)r0[l] + 2 * (int32_t)r0[x] + r0[rr]);
+        int32_t gy = ((int32_t)r2[l] + 2 * (int32_t)r2[x] + r2[rr]) -
+                ((int32_t)r0[l] + 2 * (int32_t)r0[x] + r0[rr]);
         pa[x] = gx * gx;
         pb[x] = gx * gy;
         pc[x] = gy * gy;
@@ -132,12 +133,12 @@ tvo_status tvo_corner_response(const tvo_image *img, tvo_score_kind kind, int32_
         size_t mis = (size_t)(p % sizeof(int32_t));
         mem = (int32_t *)(void *)((uint8_t *)scratch + (mis ? sizeof(int32_t) - mis : 0));
     }
-    ring = mem;                                   /* bs slots x 3 rows x W */
-    va = ring + 3u * (size_t)bs * w;              /* column sums, W + bs each (padded for the row pass) */
+    ring = mem;                      /* bs slots x 3 rows x W */
+    va = ring + 3u * (size_t)bs * w; /* column sums, W + bs each (padded for the row pass) */
     vb = va + (w + (size_t)bs);
     vc = vb + (w + (size_t)bs);
-    xm = vc + (w + (size_t)bs);                   /* reflected x-1 */
-    xp = xm + w;                                  /* reflected x+1 */
+    xm = vc + (w + (size_t)bs); /* reflected x-1 */
+    xp = xm + w;                /* reflected x+1 */
     for (x = 0; x < W; ++x) {
         xm[x] = tvo_reflect101(x - 1, W);
         xp[x] = tvo_reflect101(x + 1, W);
@@ -158,7 +159,7 @@ tvo_status tvo_corner_response(const tvo_image *img, tvo_score_kind kind, int32_
         }
     }
     for (y = 0; y < H; ++y) {
-        int32_t tn = y + hi;  /* the row entering the window */
+        int32_t tn = y + hi; /* the row entering the window */
         int32_t *pa = ring + (size_t)((tn + lo) % bs) * 3u * w, *pb = pa + w, *pc = pb + w;
         float *o = out + (size_t)y * (size_t)out_stride;
         int32_t sa, sb, sc;

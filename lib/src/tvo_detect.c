@@ -8,10 +8,11 @@
 #include <math.h>
 #include <string.h>
 
-#define DET_BAND 8              /* rows per FAST band: the band buffer holds (width + 1) / 2 * DET_BAND / 2
+#define DET_BAND \
+    8                          /* rows per FAST band: the band buffer holds (width + 1) / 2 * DET_BAND / 2
                                    corners (7.7 KB at 320 px, 18 KB at 752 px); the result does not depend
                                    on it (non-max reads the rows around each band) */
-#define DET_MIN_GRID_CELL 8.0f  /* smallest cell of the spacing grid, px */
+#define DET_MIN_GRID_CELL 8.0f /* smallest cell of the spacing grid, px */
 #define DET_MAX_CORNERS (1 << 20)
 #define DET_MAX_CANDIDATES 4096
 
@@ -34,7 +35,7 @@ typedef struct det_box {
 typedef struct det_layout {
     int32_t border, inner_w, inner_h, ncells, quota, ncand;
     int32_t band_cap;
-    int32_t gw, gh;   /* spacing grid (0 x 0 when min_distance == 0) */
+    int32_t gw, gh; /* spacing grid (0 x 0 when min_distance == 0) */
     float gcell;
     size_t off_fast, off_band, off_cand, off_ncand, off_nexist, off_cursor, off_grid, off_picks, total;
     int32_t npicks_max;
@@ -130,8 +131,9 @@ static tvo_status det_plan(const tvo_detect_config *cfg, int32_t width, int32_t 
     L->off_band = n;
     n = tvo_size_add(n, det_round((size_t)L->band_cap * sizeof(tvo_corner)));
     L->off_cand = n;
-    n = tvo_size_add(n, det_round(tvo_size_mul(tvo_size_mul((size_t)L->ncells, (size_t)L->ncand),
-                                               sizeof(det_cand))));
+    n = tvo_size_add(n,
+                     det_round(tvo_size_mul(tvo_size_mul((size_t)L->ncells, (size_t)L->ncand),
+                                            sizeof(det_cand))));
     L->off_ncand = n;
     n = tvo_size_add(n, det_round((size_t)L->ncells * sizeof(int32_t)));
     L->off_nexist = n;
@@ -141,8 +143,8 @@ static tvo_status det_plan(const tvo_detect_config *cfg, int32_t width, int32_t 
     L->off_grid = n;
     n = tvo_size_add(n, det_round((size_t)L->gw * (size_t)L->gh * sizeof(det_box)));
     L->off_picks = n;
-    L->npicks_max = (int32_t)((int64_t)L->ncells * L->quota > cfg->max_corners
-                                  ? (int64_t)L->ncells * L->quota : cfg->max_corners);
+    L->npicks_max = (int32_t)((int64_t)L->ncells * L->quota > cfg->max_corners ? (int64_t)L->ncells * L->quota
+                                                                               : cfg->max_corners);
     n = tvo_size_add(n, det_round(tvo_size_mul((size_t)L->npicks_max, sizeof(det_pick))));
     L->total = tvo_size_add(n, 16u); /* alignment slack */
     return TVO_OK;
@@ -223,36 +225,36 @@ static int det_pick_before(const det_pick *a, const det_pick *b)
 
 /* in-place heapsorts (no allocation, unlike qsort on some libcs; deterministic as the orders are total) */
 /* NOLINTBEGIN(bugprone-macro-parentheses): `type` is a type name, which cannot be parenthesised */
-#define DET_HEAPSORT(name, type, before)                                           \
-    static void name(type *v, int32_t n)                                           \
-    {                                                                              \
-        int32_t start, end;                                                        \
-        for (start = n / 2 - 1; start >= 0; --start)                               \
-            name##_sift(v, start, n);                                              \
-        for (end = n - 1; end > 0; --end) {                                        \
-            type t = v[0];                                                         \
-            v[0] = v[end];                                                         \
-            v[end] = t;                                                            \
-            name##_sift(v, 0, end);                                                \
-        }                                                                          \
+#define DET_HEAPSORT(name, type, before)             \
+    static void name(type *v, int32_t n)             \
+    {                                                \
+        int32_t start, end;                          \
+        for (start = n / 2 - 1; start >= 0; --start) \
+            name##_sift(v, start, n);                \
+        for (end = n - 1; end > 0; --end) {          \
+            type t = v[0];                           \
+            v[0] = v[end];                           \
+            v[end] = t;                              \
+            name##_sift(v, 0, end);                  \
+        }                                            \
     }
-#define DET_SIFT(name, type, before)                                               \
-    static void name##_sift(type *v, int32_t i, int32_t n)                         \
-    {                                                                              \
-        for (;;) {                                                                 \
-            int32_t l = 2 * i + 1, r = l + 1, m = i;                               \
-            type t;                                                                \
-            if (l < n && before(&v[m], &v[l]))                                     \
-                m = l;                                                             \
-            if (r < n && before(&v[m], &v[r]))                                     \
-                m = r;                                                             \
-            if (m == i)                                                            \
-                return;                                                            \
-            t = v[i];                                                              \
-            v[i] = v[m];                                                           \
-            v[m] = t;                                                              \
-            i = m;                                                                 \
-        }                                                                          \
+#define DET_SIFT(name, type, before)                       \
+    static void name##_sift(type *v, int32_t i, int32_t n) \
+    {                                                      \
+        for (;;) {                                         \
+            int32_t l = 2 * i + 1, r = l + 1, m = i;       \
+            type t;                                        \
+            if (l < n && before(&v[m], &v[l]))             \
+                m = l;                                     \
+            if (r < n && before(&v[m], &v[r]))             \
+                m = r;                                     \
+            if (m == i)                                    \
+                return;                                    \
+            t = v[i];                                      \
+            v[i] = v[m];                                   \
+            v[m] = t;                                      \
+            i = m;                                         \
+        }                                                  \
     }
 DET_SIFT(det_sort_cands, det_cand, det_cand_before)
 DET_HEAPSORT(det_sort_cands, det_cand, det_cand_before)
@@ -329,10 +331,9 @@ static int det_try_take(det_box *grid, const det_layout *L, float md2, const det
     return 1;
 }
 
-tvo_status tvo_detect(const tvo_detect_config *cfg, const tvo_image *img,
-                      const tvo_point2f *existing, int32_t n_existing,
-                      tvo_corner *out, int32_t capacity, int32_t *count,
-                      void *scratch, size_t scratch_size)
+tvo_status tvo_detect(const tvo_detect_config *cfg, const tvo_image *img, const tvo_point2f *existing,
+                      int32_t n_existing, tvo_corner *out, int32_t capacity, int32_t *count, void *scratch,
+                      size_t scratch_size)
 {
     det_layout L;
     tvo_status st;

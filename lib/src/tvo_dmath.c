@@ -26,23 +26,46 @@
 
 /* atan(j / 8) = hi[j] + lo[j] */
 static const double dm_atan_hi[9] = {
-    0.0,
-    0x1.fd5ba9aac2f6ep-4, 0x1.f5b75f92c80ddp-3, 0x1.6f61941e4def1p-2, 0x1.dac670561bb4fp-2,
-    0x1.1e00babdefeb4p-1, 0x1.4978fa3269ee1p-1, 0x1.700a7c5784634p-1, 0x1.921fb54442d18p-1,
+        0.0,
+        0x1.fd5ba9aac2f6ep-4,
+        0x1.f5b75f92c80ddp-3,
+        0x1.6f61941e4def1p-2,
+        0x1.dac670561bb4fp-2,
+        0x1.1e00babdefeb4p-1,
+        0x1.4978fa3269ee1p-1,
+        0x1.700a7c5784634p-1,
+        0x1.921fb54442d18p-1,
 };
 static const double dm_atan_lo[9] = {
-    0.0,
-    -0x1.cd37686760c17p-59, 0x1.8ab6e3cf7afbdp-57, -0x1.c63aae6f6e918p-56, 0x1.a2b7f222f65e2p-56,
-    -0x1.928df287a668fp-58, 0x1.2419a87f2a458p-56, -0x1.8c34d25aadef6p-56, 0x1.1a62633145c07p-55,
+        0.0,
+        -0x1.cd37686760c17p-59,
+        0x1.8ab6e3cf7afbdp-57,
+        -0x1.c63aae6f6e918p-56,
+        0x1.a2b7f222f65e2p-56,
+        -0x1.928df287a668fp-58,
+        0x1.2419a87f2a458p-56,
+        -0x1.8c34d25aadef6p-56,
+        0x1.1a62633145c07p-55,
 };
 
 /* sin(r) for |r| <= pi/4 (a little more after reduction): Taylor to r^17, truncation < 1e-19 */
 static double dm_sin_k(double r)
 {
     const double z = r * r;
-    const double p = -1.0 / 6.0 + z * (1.0 / 120.0 + z * (-1.0 / 5040.0 + z * (1.0 / 362880.0 +
-                     z * (-1.0 / 39916800.0 + z * (1.0 / 6227020800.0 + z * (-1.0 / 1307674368000.0 +
-                     z * (1.0 / 355687428096000.0)))))));
+    const double p = -1.0 / 6.0 +
+            z *
+                    (1.0 / 120.0 +
+                     z *
+                             (-1.0 / 5040.0 +
+                              z *
+                                      (1.0 / 362880.0 +
+                                       z *
+                                               (-1.0 / 39916800.0 +
+                                                z *
+                                                        (1.0 / 6227020800.0 +
+                                                         z *
+                                                                 (-1.0 / 1307674368000.0 +
+                                                                  z * (1.0 / 355687428096000.0)))))));
     return r + r * z * p;
 }
 
@@ -50,9 +73,20 @@ static double dm_sin_k(double r)
 static double dm_cos_k(double r)
 {
     const double z = r * r;
-    const double p = 1.0 / 24.0 + z * (-1.0 / 720.0 + z * (1.0 / 40320.0 + z * (-1.0 / 3628800.0 +
-                     z * (1.0 / 479001600.0 + z * (-1.0 / 87178291200.0 + z * (1.0 / 20922789888000.0 +
-                     z * (-1.0 / 6402373705728000.0)))))));
+    const double p = 1.0 / 24.0 +
+            z *
+                    (-1.0 / 720.0 +
+                     z *
+                             (1.0 / 40320.0 +
+                              z *
+                                      (-1.0 / 3628800.0 +
+                                       z *
+                                               (1.0 / 479001600.0 +
+                                                z *
+                                                        (-1.0 / 87178291200.0 +
+                                                         z *
+                                                                 (1.0 / 20922789888000.0 +
+                                                                  z * (-1.0 / 6402373705728000.0)))))));
     const double hz = 0.5 * z;
     const double w = 1.0 - hz;
     /* 1 - z/2 + z^2 p, with the rounding error of w = 1 - z/2 added back */
@@ -79,10 +113,14 @@ double tvo_dm_sin(double x)
         return x;
     q = dm_reduce(x, &r);
     switch (q) {
-    case 0: return dm_sin_k(r);
-    case 1: return dm_cos_k(r);
-    case 2: return -dm_sin_k(r);
-    default: return -dm_cos_k(r);
+    case 0:
+        return dm_sin_k(r);
+    case 1:
+        return dm_cos_k(r);
+    case 2:
+        return -dm_sin_k(r);
+    default:
+        return -dm_cos_k(r);
     }
 }
 
@@ -96,10 +134,14 @@ double tvo_dm_cos(double x)
         return 1.0;
     q = dm_reduce(x, &r);
     switch (q) {
-    case 0: return dm_cos_k(r);
-    case 1: return -dm_sin_k(r);
-    case 2: return -dm_cos_k(r);
-    default: return dm_sin_k(r);
+    case 0:
+        return dm_cos_k(r);
+    case 1:
+        return -dm_sin_k(r);
+    case 2:
+        return -dm_cos_k(r);
+    default:
+        return dm_sin_k(r);
     }
 }
 
@@ -124,8 +166,16 @@ static double dm_atan_01(double a, double *lo)
     const double c = (double)j * 0.125;
     const double t = (a - c) / (1.0 + a * c); /* |t| <= 1/16 */
     const double z = t * t;
-    const double p = t + t * z * (-1.0 / 3.0 + z * (1.0 / 5.0 + z * (-1.0 / 7.0 + z * (1.0 / 9.0 +
-                     z * (-1.0 / 11.0 + z * (1.0 / 13.0 + z * (-1.0 / 15.0)))))));
+    const double p = t +
+            t * z *
+                    (-1.0 / 3.0 +
+                     z *
+                             (1.0 / 5.0 +
+                              z *
+                                      (-1.0 / 7.0 +
+                                       z *
+                                               (1.0 / 9.0 +
+                                                z * (-1.0 / 11.0 + z * (1.0 / 13.0 + z * (-1.0 / 15.0)))))));
     *lo = dm_atan_lo[j] + p;
     return dm_atan_hi[j];
 }
@@ -187,8 +237,28 @@ static double dm_log(double u)
     /* log m = 2 atanh(s), s = (m - 1) / (m + 1), |s| <= 0.1716 (m - 1 is exact) */
     s = (m - 1.0) / (m + 1.0);
     z = s * s;
-    p = 1.0 / 3.0 + z * (1.0 / 5.0 + z * (1.0 / 7.0 + z * (1.0 / 9.0 + z * (1.0 / 11.0 + z * (1.0 / 13.0 +
-        z * (1.0 / 15.0 + z * (1.0 / 17.0 + z * (1.0 / 19.0 + z * (1.0 / 21.0 + z * (1.0 / 23.0))))))))));
+    p = 1.0 / 3.0 +
+            z *
+                    (1.0 / 5.0 +
+                     z *
+                             (1.0 / 7.0 +
+                              z *
+                                      (1.0 / 9.0 +
+                                       z *
+                                               (1.0 / 11.0 +
+                                                z *
+                                                        (1.0 / 13.0 +
+                                                         z *
+                                                                 (1.0 / 15.0 +
+                                                                  z *
+                                                                          (1.0 / 17.0 +
+                                                                           z *
+                                                                                   (1.0 / 19.0 +
+                                                                                    z *
+                                                                                            (1.0 / 21.0 +
+                                                                                             z *
+                                                                                                     (1.0 /
+                                                                                                      23.0))))))))));
     return (double)e * DM_LN2_HI + ((double)e * DM_LN2_LO + (2.0 * s + 2.0 * s * z * p));
 }
 

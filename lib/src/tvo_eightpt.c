@@ -35,8 +35,8 @@ static int hartley(const double (*x)[2], int32_t n, double T[9])
 }
 
 /* Row i of the epipolar system on Hartley-normalised points: x2n^T F x1n = 0 in F's 9 entries. */
-static void epi_row(const double (*x1)[2], const double (*x2)[2], int32_t i, const double T1[9], const double T2[9],
-                    double r[9])
+static void epi_row(const double (*x1)[2], const double (*x2)[2], int32_t i, const double T1[9],
+                    const double T2[9], double r[9])
 {
     const double a0 = T1[0] * x1[i][0] + T1[2], a1 = T1[4] * x1[i][1] + T1[5];
     const double b0 = T2[0] * x2[i][0] + T2[2], b1 = T2[4] * x2[i][1] + T2[5];

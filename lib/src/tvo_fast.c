@@ -20,10 +20,9 @@
 #endif
 
 /* circle offsets (dx, dy), clockwise starting at 12 o'clock... as OpenCV's order: (0,3) first. */
-static const int8_t fast_circle[16][2] = {
-    { 0, 3 }, { 1, 3 }, { 2, 2 }, { 3, 1 }, { 3, 0 }, { 3, -1 }, { 2, -2 }, { 1, -3 },
-    { 0, -3 }, { -1, -3 }, { -2, -2 }, { -3, -1 }, { -3, 0 }, { -3, 1 }, { -2, 2 }, { -1, 3 }
-};
+static const int8_t fast_circle[16][2] = {{0, 3},  {1, 3},  {2, 2},  {3, 1},   {3, 0},   {3, -1},
+                                          {2, -2}, {1, -3}, {0, -3}, {-1, -3}, {-2, -2}, {-3, -1},
+                                          {-3, 0}, {-3, 1}, {-2, 2}, {-1, 3}};
 
 static void fast_offsets(int32_t ofs[16], int32_t stride)
 {
@@ -36,8 +35,8 @@ static void fast_offsets(int32_t ofs[16], int32_t stride)
 /* index of the lowest set bit of v != 0 (portable de Bruijn multiply); only the SSE2 screen uses it */
 static int fast_ctz(uint32_t v)
 {
-    static const uint8_t tab[32] = { 0, 1, 28, 2, 29, 14, 24, 3, 30, 22, 20, 15, 25, 17, 4, 8,
-                                     31, 27, 13, 23, 21, 19, 16, 7, 26, 12, 18, 6, 11, 5, 10, 9 };
+    static const uint8_t tab[32] = {0,  1,  28, 2,  29, 14, 24, 3, 30, 22, 20, 15, 25, 17, 4,  8,
+                                    31, 27, 13, 23, 21, 19, 16, 7, 26, 12, 18, 6,  11, 5,  10, 9};
     return tab[(uint32_t)((v & (0u - v)) * 0x077CB531u) >> 27];
 }
 #endif
@@ -45,8 +44,8 @@ static int fast_ctz(uint32_t v)
 /* 1 when the circular 16-bit mask m has a run of at least 9 set bits. */
 static int fast_has_run9(uint32_t m)
 {
-    uint32_t a = m | (m << 16);  /* unrolled circle */
-    uint32_t r2 = a & (a >> 1);  /* runs of 2 start here */
+    uint32_t a = m | (m << 16); /* unrolled circle */
+    uint32_t r2 = a & (a >> 1); /* runs of 2 start here */
     uint32_t r4 = r2 & (r2 >> 2);
     uint32_t r8 = r4 & (r4 >> 4);
     uint32_t r9 = r8 & (a >> 8);
@@ -122,11 +121,11 @@ static int32_t fast_row(const uint8_t *row, int32_t width, const int32_t ofs[16]
             __m128i b8 = _mm_subs_epu8(q8, hi), b12 = _mm_subs_epu8(q12, hi);
             __m128i d0 = _mm_subs_epu8(lo, q0), d4 = _mm_subs_epu8(lo, q4);
             __m128i d8 = _mm_subs_epu8(lo, q8), d12 = _mm_subs_epu8(lo, q12);
-            __m128i m = _mm_max_epu8(
-                _mm_max_epu8(_mm_max_epu8(_mm_min_epu8(b0, b4), _mm_min_epu8(b4, b8)),
-                             _mm_max_epu8(_mm_min_epu8(b8, b12), _mm_min_epu8(b12, b0))),
-                _mm_max_epu8(_mm_max_epu8(_mm_min_epu8(d0, d4), _mm_min_epu8(d4, d8)),
-                             _mm_max_epu8(_mm_min_epu8(d8, d12), _mm_min_epu8(d12, d0))));
+            __m128i m = _mm_max_epu8(_mm_max_epu8(_mm_max_epu8(_mm_min_epu8(b0, b4), _mm_min_epu8(b4, b8)),
+                                                  _mm_max_epu8(_mm_min_epu8(b8, b12), _mm_min_epu8(b12, b0))),
+                                     _mm_max_epu8(_mm_max_epu8(_mm_min_epu8(d0, d4), _mm_min_epu8(d4, d8)),
+                                                  _mm_max_epu8(_mm_min_epu8(d8, d12),
+                                                               _mm_min_epu8(d12, d0))));
             unsigned bits;
             if (_mm_movemask_epi8(_mm_cmpeq_epi8(m, zero)) == 0xFFFF)
                 continue;
@@ -203,8 +202,8 @@ size_t tvo_fast_scratch_size(int32_t width)
     return 3u * w + 3u * w * sizeof(int32_t) + 16u;
 }
 
-static tvo_status fast_check(const tvo_image *img, int32_t threshold, const tvo_corner *out,
-                             int32_t capacity, const int32_t *count)
+static tvo_status fast_check(const tvo_image *img, int32_t threshold, const tvo_corner *out, int32_t capacity,
+                             const int32_t *count)
 {
     tvo_status st;
     if (count == NULL || out == NULL)
@@ -226,8 +225,9 @@ static int fast_emit(int32_t y, const int32_t *pos, int32_t n, const uint8_t *ab
     for (i = 0; i < n; ++i) {
         int32_t x = pos[i];
         int s = cur[x];
-        if (nonmax && !(s > cur[x - 1] && s > cur[x + 1] && s > above[x - 1] && s > above[x] &&
-                        s > above[x + 1] && s > below[x - 1] && s > below[x] && s > below[x + 1]))
+        if (nonmax &&
+            !(s > cur[x - 1] && s > cur[x + 1] && s > above[x - 1] && s > above[x] && s > above[x + 1] &&
+              s > below[x - 1] && s > below[x] && s > below[x + 1]))
             continue;
         if (*count >= capacity)
             return 1;
@@ -239,9 +239,8 @@ static int fast_emit(int32_t y, const int32_t *pos, int32_t n, const uint8_t *ab
     return 0;
 }
 
-tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int nonmax,
-                                 int32_t y_begin, int32_t y_end,
-                                 tvo_corner *out, int32_t capacity, int32_t *count,
+tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int nonmax, int32_t y_begin,
+                                 int32_t y_end, tvo_corner *out, int32_t capacity, int32_t *count,
                                  void *scratch, size_t scratch_size)
 {
     uint8_t ttab[511];
@@ -309,7 +308,7 @@ tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int no
                 return TVO_ERR_NO_MEMORY;
         } else if (r - 1 >= y_begin && r - 1 >= r0) {
             int ps = (r - 1) % 3, pps = (r - 2) % 3;
-            if (r - 2 < r0)  /* never evaluated: no corners there */
+            if (r - 2 < r0) /* never evaluated: no corners there */
                 memset(srow[pps], 0, (size_t)W);
             if (fast_emit(r - 1, plist[ps], npos[ps], srow[pps], srow[ps], srow[slot], 1, out, capacity,
                           count))
@@ -328,12 +327,11 @@ tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int no
     return TVO_OK;
 }
 
-tvo_status tvo_fast9_detect(const tvo_image *img, int32_t threshold, int nonmax,
-                            tvo_corner *out, int32_t capacity, int32_t *count,
-                            void *scratch, size_t scratch_size)
+tvo_status tvo_fast9_detect(const tvo_image *img, int32_t threshold, int nonmax, tvo_corner *out,
+                            int32_t capacity, int32_t *count, void *scratch, size_t scratch_size)
 {
-    return tvo_fast9_detect_rows(img, threshold, nonmax, 0, TVO_MAX_IMAGE_DIM, out, capacity, count,
-                                 scratch, scratch_size);
+    return tvo_fast9_detect_rows(img, threshold, nonmax, 0, TVO_MAX_IMAGE_DIM, out, capacity, count, scratch,
+                                 scratch_size);
 }
 
 int32_t tvo_fast9_score_at(const tvo_image *img, int32_t x, int32_t y)

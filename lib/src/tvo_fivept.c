@@ -112,7 +112,8 @@ void tvo_fivept_constraints(double L[9][4], double M[10][20])
     double EEt[3][3][10], Aq[3][3][10], cof[3][10];
     for (int i = 0; i < 3; ++i) {
         for (int j = i; j < 3; ++j) {
-            mul_ll3(L[3 * i], L[3 * j], L[3 * i + 1], L[3 * j + 1], L[3 * i + 2], L[3 * j + 2], EEt[i][j], NULL);
+            mul_ll3(L[3 * i], L[3 * j], L[3 * i + 1], L[3 * j + 1], L[3 * i + 2], L[3 * j + 2], EEt[i][j],
+                    NULL);
             if (j != i)
                 memcpy(EEt[j][i], EEt[i][j], sizeof EEt[i][j]);
         }

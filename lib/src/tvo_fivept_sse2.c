@@ -144,7 +144,8 @@ void tvo_fivept_constraints(double L[9][4], double M[10][20])
 FP_INLINE void row_update_sse2(double *rr, const double *pr, double f, int k0)
 {
     const __m128d fv = _mm_set1_pd(f);
-#define FP_UPD(k) _mm_storeu_pd(rr + (k), _mm_sub_pd(_mm_loadu_pd(rr + (k)), _mm_mul_pd(fv, _mm_loadu_pd(pr + (k)))))
+#define FP_UPD(k) \
+    _mm_storeu_pd(rr + (k), _mm_sub_pd(_mm_loadu_pd(rr + (k)), _mm_mul_pd(fv, _mm_loadu_pd(pr + (k)))))
     switch (k0) {
     case 0:
         FP_UPD(0);

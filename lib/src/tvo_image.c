@@ -6,7 +6,7 @@
 
 tvo_image tvo_image_make(int32_t width, int32_t height, int32_t stride, uint8_t *data)
 {
-    tvo_image img = { width, height, stride, data };
+    tvo_image img = {width, height, stride, data};
     return img;
 }
 

@@ -67,14 +67,20 @@ void tvo_la_mat3_tvec(const double A[9], const double x[3], double y[3])
 double tvo_la_mat3_det(const double A[9])
 {
     return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
-           A[2] * (A[3] * A[7] - A[4] * A[6]);
+            A[2] * (A[3] * A[7] - A[4] * A[6]);
 }
 
 void tvo_la_skew(const double v[3], double S[9])
 {
-    S[0] = 0.0;   S[1] = -v[2]; S[2] = v[1];
-    S[3] = v[2];  S[4] = 0.0;   S[5] = -v[0];
-    S[6] = -v[1]; S[7] = v[0];  S[8] = 0.0;
+    S[0] = 0.0;
+    S[1] = -v[2];
+    S[2] = v[1];
+    S[3] = v[2];
+    S[4] = 0.0;
+    S[5] = -v[0];
+    S[6] = -v[1];
+    S[7] = v[0];
+    S[8] = 0.0;
 }
 
 void tvo_la_cross(const double a[3], const double b[3], double c[3])
@@ -201,8 +207,12 @@ void tvo_la_svd3(const double A[9], double U[9], double s[3], double V[9])
     }
     memcpy(V, Vs, sizeof Vs);
     if (s[0] <= 1e-300) {
-        u[0][0] = 1.0; u[0][1] = 0.0; u[0][2] = 0.0;
-        u[1][0] = 0.0; u[1][1] = 1.0; u[1][2] = 0.0;
+        u[0][0] = 1.0;
+        u[0][1] = 0.0;
+        u[0][2] = 0.0;
+        u[1][0] = 0.0;
+        u[1][1] = 1.0;
+        u[1][2] = 0.0;
     } else if (s[1] <= 1e-13 * s[0]) {
         any_orthogonal(u[0], u[1]);
     }
@@ -391,11 +401,11 @@ typedef struct sturm_chain {
     double p[11][11]; /* general: p[k][i], coefficient of t^i of the k-th polynomial */
     int deg[11];
     int len;
-    int fast;         /* 1: the recurrence below is valid */
-    double q[10][3];  /* fast: q[k] = {q0, q1, c} for k = 1..deg-1 */
-    double lin[2];    /* fast: p(deg-1) = lin[0] + lin[1] t */
-    double cst;       /* fast: p(deg), a non-zero constant */
-    int n;            /* fast: degree of p */
+    int fast;        /* 1: the recurrence below is valid */
+    double q[10][3]; /* fast: q[k] = {q0, q1, c} for k = 1..deg-1 */
+    double lin[2];   /* fast: p(deg-1) = lin[0] + lin[1] t */
+    double cst;      /* fast: p(deg), a non-zero constant */
+    int n;           /* fast: degree of p */
 } sturm_chain;
 
 LA_INLINE int sign_changes(const double *f, int len)
@@ -471,10 +481,14 @@ LA_INLINE int sturm_build_fast(sturm_chain *s, const double *a, int deg)
     s->n = deg;
     if (deg == 10) {
         /* the same steps with constant k (constant loop bounds), buffers rotating as below */
-        if (!sturm_fast_step(s, buf[0], buf[1], buf[2], 1, 9) || !sturm_fast_step(s, buf[1], buf[2], buf[0], 2, 8) ||
-            !sturm_fast_step(s, buf[2], buf[0], buf[1], 3, 7) || !sturm_fast_step(s, buf[0], buf[1], buf[2], 4, 6) ||
-            !sturm_fast_step(s, buf[1], buf[2], buf[0], 5, 5) || !sturm_fast_step(s, buf[2], buf[0], buf[1], 6, 4) ||
-            !sturm_fast_step(s, buf[0], buf[1], buf[2], 7, 3) || !sturm_fast_step(s, buf[1], buf[2], buf[0], 8, 2) ||
+        if (!sturm_fast_step(s, buf[0], buf[1], buf[2], 1, 9) ||
+            !sturm_fast_step(s, buf[1], buf[2], buf[0], 2, 8) ||
+            !sturm_fast_step(s, buf[2], buf[0], buf[1], 3, 7) ||
+            !sturm_fast_step(s, buf[0], buf[1], buf[2], 4, 6) ||
+            !sturm_fast_step(s, buf[1], buf[2], buf[0], 5, 5) ||
+            !sturm_fast_step(s, buf[2], buf[0], buf[1], 6, 4) ||
+            !sturm_fast_step(s, buf[0], buf[1], buf[2], 7, 3) ||
+            !sturm_fast_step(s, buf[1], buf[2], buf[0], 8, 2) ||
             !sturm_fast_step(s, buf[2], buf[0], buf[1], 9, 1))
             return 0;
         u = buf[0]; /* after 9 steps: u = p(9), v = p(10) */
@@ -600,8 +614,8 @@ LA_INLINE double refine_root(const double *a, int deg, double lo, double hi, dou
             double x2 = x * x, x4 = x2 * x2, x8 = x4 * x4, v[2];
             for (int l = 0; l < 2; ++l)
                 v[l] = ((pd[0][l] + pd[1][l] * x) + (pd[2][l] + pd[3][l] * x) * x2) +
-                       ((pd[4][l] + pd[5][l] * x) + (pd[6][l] + pd[7][l] * x) * x2) * x4 +
-                       ((pd[8][l] + pd[9][l] * x) + pd[10][l] * x2) * x8;
+                        ((pd[4][l] + pd[5][l] * x) + (pd[6][l] + pd[7][l] * x) * x2) * x4 +
+                        ((pd[8][l] + pd[9][l] * x) + pd[10][l] * x2) * x8;
             f = v[0];
             df = v[1];
 #endif
@@ -641,7 +655,10 @@ LA_INLINE int roots_monic(const double *a, int deg, double bound, double *roots)
     sturm_chain s;
     sturm_build(&s, a, deg);
 
-    struct { double lo, hi; int vlo, vhi, depth; } stack[160];
+    struct {
+        double lo, hi;
+        int vlo, vhi, depth;
+    } stack[160];
     int sp = 0, nroots = 0;
     stack[sp].lo = -bound;
     stack[sp].hi = bound;
@@ -760,9 +777,21 @@ double tvo_la_select_kth(double *a, int32_t n, int32_t k)
         const int32_t mid = lo + (hi - lo) / 2;
         double p, t;
         int32_t i = lo, j = hi;
-        if (a[mid] < a[lo]) { t = a[mid]; a[mid] = a[lo]; a[lo] = t; }
-        if (a[hi] < a[lo]) { t = a[hi]; a[hi] = a[lo]; a[lo] = t; }
-        if (a[hi] < a[mid]) { t = a[hi]; a[hi] = a[mid]; a[mid] = t; }
+        if (a[mid] < a[lo]) {
+            t = a[mid];
+            a[mid] = a[lo];
+            a[lo] = t;
+        }
+        if (a[hi] < a[lo]) {
+            t = a[hi];
+            a[hi] = a[lo];
+            a[lo] = t;
+        }
+        if (a[hi] < a[mid]) {
+            t = a[hi];
+            a[hi] = a[mid];
+            a[mid] = t;
+        }
         p = a[mid];
         while (i <= j) {
             while (a[i] < p)
@@ -770,7 +799,9 @@ double tvo_la_select_kth(double *a, int32_t n, int32_t k)
             while (a[j] > p)
                 --j;
             if (i <= j) {
-                t = a[i]; a[i] = a[j]; a[j] = t;
+                t = a[i];
+                a[i] = a[j];
+                a[j] = t;
                 ++i;
                 --j;
             }

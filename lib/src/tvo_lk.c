@@ -18,13 +18,10 @@
 #include "tvo_border.h"
 #include "tvo_lk_impl.h"
 
-
-
 typedef struct lk_level {
     const uint8_t *data;
     int32_t w, h, stride;
 } lk_level;
-
 
 typedef struct lk_params {
     int32_t win;
@@ -206,13 +203,10 @@ static void lk_weights(float a, float b, int32_t w[4])
     w[3] = LK_ONE - w[0] - w[1] - w[2];
 }
 
-
-
-
 /* Previous-image window: grey values and interpolated Scharr derivatives at (ix + a, iy + b) + (x, y)
  * for x, y in 0..win-1, into wk->iwin / ixwin / iywin; the gradient sums into A[3]. */
-static void lk_prev_window(const lk_level *lv, int32_t ix, int32_t iy, const int32_t wt[4],
-                           lk_work *wk, int64_t A[3], int simd)
+static void lk_prev_window(const lk_level *lv, int32_t ix, int32_t iy, const int32_t wt[4], lk_work *wk,
+                           int64_t A[3], int simd)
 {
     const int32_t win = wk->win, g = win + 1, p = win + 3;
     const uint8_t *src;
@@ -237,21 +231,21 @@ static void lk_prev_window(const lk_level *lv, int32_t ix, int32_t iy, const int
         tvo_lk_scharr_simd(src, sstride, wk);
     else
 #endif
-    for (r = 0; r < g; ++r) {
-        const uint8_t *s0 = src + (size_t)r * (size_t)sstride;
-        const uint8_t *s1 = s0 + sstride;
-        const uint8_t *s2 = s1 + sstride;
-        int16_t *t0 = wk->tv0, *t1 = wk->tv1;
-        int16_t *dx = wk->gx + (size_t)r * (size_t)g, *dy = wk->gy + (size_t)r * (size_t)g;
-        for (c = 0; c < p; ++c) {
-            t0[c] = (int16_t)(3 * (s0[c] + s2[c]) + 10 * s1[c]);
-            t1[c] = (int16_t)(s2[c] - s0[c]);
+        for (r = 0; r < g; ++r) {
+            const uint8_t *s0 = src + (size_t)r * (size_t)sstride;
+            const uint8_t *s1 = s0 + sstride;
+            const uint8_t *s2 = s1 + sstride;
+            int16_t *t0 = wk->tv0, *t1 = wk->tv1;
+            int16_t *dx = wk->gx + (size_t)r * (size_t)g, *dy = wk->gy + (size_t)r * (size_t)g;
+            for (c = 0; c < p; ++c) {
+                t0[c] = (int16_t)(3 * (s0[c] + s2[c]) + 10 * s1[c]);
+                t1[c] = (int16_t)(s2[c] - s0[c]);
+            }
+            for (c = 0; c < g; ++c) {
+                dx[c] = (int16_t)(t0[c + 2] - t0[c]);
+                dy[c] = (int16_t)(3 * (t1[c] + t1[c + 2]) + 10 * t1[c + 1]);
+            }
         }
-        for (c = 0; c < g; ++c) {
-            dx[c] = (int16_t)(t0[c + 2] - t0[c]);
-            dy[c] = (int16_t)(3 * (t1[c] + t1[c + 2]) + 10 * t1[c + 1]);
-        }
-    }
     if (!inside) { /* derivatives outside the image are 0 (OpenCV's BORDER_CONSTANT) */
         /* grid columns c_lo..c_hi-1 are inside the image */
         const int32_t c_lo = ix < 0 ? (-ix < g ? -ix : g) : 0;
@@ -286,9 +280,14 @@ static void lk_prev_window(const lk_level *lv, int32_t ix, int32_t iy, const int
         int16_t *iyw = wk->iywin + (size_t)y * (size_t)win;
         int32_t r11 = 0, r12 = 0, r22 = 0;
         for (x = 0; x < win; ++x) {
-            int32_t iv = (s0[x] * w00 + s0[x + 1] * w01 + s1[x] * w10 + s1[x + 1] * w11 + LK_I_ROUND) >> LK_I_SHIFT;
-            int32_t dxv = ((gx0[x] * w00 + gx0[x + 1] * w01 + gx1[x] * w10 + gx1[x + 1] * w11 + LK_D_ROUND) >> LK_W_BITS) - LK_D_BIAS;
-            int32_t dyv = ((gy0[x] * w00 + gy0[x + 1] * w01 + gy1[x] * w10 + gy1[x + 1] * w11 + LK_D_ROUND) >> LK_W_BITS) - LK_D_BIAS;
+            int32_t iv = (s0[x] * w00 + s0[x + 1] * w01 + s1[x] * w10 + s1[x + 1] * w11 + LK_I_ROUND) >>
+                    LK_I_SHIFT;
+            int32_t dxv = ((gx0[x] * w00 + gx0[x + 1] * w01 + gx1[x] * w10 + gx1[x + 1] * w11 + LK_D_ROUND) >>
+                           LK_W_BITS) -
+                    LK_D_BIAS;
+            int32_t dyv = ((gy0[x] * w00 + gy0[x + 1] * w01 + gy1[x] * w10 + gy1[x + 1] * w11 + LK_D_ROUND) >>
+                           LK_W_BITS) -
+                    LK_D_BIAS;
             iw[x] = (int16_t)iv;
             ixw[x] = (int16_t)dxv;
             iyw[x] = (int16_t)dyv;
@@ -321,7 +320,8 @@ static void lk_mismatch(const uint8_t *src, int32_t sstride, const int32_t wt[4]
         const int16_t *iyw = wk->iywin + (size_t)y * (size_t)win;
         int32_t r1 = 0, r2 = 0;
         for (x = 0; x < win; ++x) {
-            int32_t jv = (j0[x] * w00 + j0[x + 1] * w01 + j1[x] * w10 + j1[x + 1] * w11 + LK_I_ROUND) >> LK_I_SHIFT;
+            int32_t jv = (j0[x] * w00 + j0[x + 1] * w01 + j1[x] * w10 + j1[x + 1] * w11 + LK_I_ROUND) >>
+                    LK_I_SHIFT;
             int32_t d = jv - iw[x];
             r1 += d * ixw[x];
             r2 += d * iyw[x];
@@ -333,7 +333,6 @@ static void lk_mismatch(const uint8_t *src, int32_t sstride, const int32_t wt[4]
     *b2 = s2;
 }
 
-
 /* Sum of |J(window) - I| (OpenCV's error before scaling). */
 static int32_t lk_abs_error(const uint8_t *src, int32_t sstride, const int32_t wt[4], const lk_work *wk)
 {
@@ -343,7 +342,9 @@ static int32_t lk_abs_error(const uint8_t *src, int32_t sstride, const int32_t w
         const uint8_t *j0 = src + (size_t)y * (size_t)sstride, *j1 = j0 + sstride;
         const int16_t *iw = wk->iwin + (size_t)y * (size_t)win;
         for (x = 0; x < win; ++x) {
-            int32_t jv = (j0[x] * wt[0] + j0[x + 1] * wt[1] + j1[x] * wt[2] + j1[x + 1] * wt[3] + LK_I_ROUND) >> LK_I_SHIFT;
+            int32_t jv = (j0[x] * wt[0] + j0[x + 1] * wt[1] + j1[x] * wt[2] + j1[x + 1] * wt[3] +
+                          LK_I_ROUND) >>
+                    LK_I_SHIFT;
             int32_t d = jv - iw[x];
             s += d < 0 ? -d : d;
         }
@@ -358,8 +359,7 @@ static int lk_corner_ok(float v, int32_t win, int32_t n)
 }
 
 /* The (win+1)^2 block of lv at (jx, jy): a pointer into the image, or into the gathered patch. */
-static const uint8_t *lk_next_block(const lk_level *lv, int32_t jx, int32_t jy, lk_work *wk,
-                                    int32_t *sstride)
+static const uint8_t *lk_next_block(const lk_level *lv, int32_t jx, int32_t jy, lk_work *wk, int32_t *sstride)
 {
     const int32_t win = wk->win;
     if (jx >= 0 && jy >= 0 && jx + win <= lv->w - 1 && jy + win <= lv->h - 1) {
@@ -531,8 +531,8 @@ static tvo_status lk_check_pyramid(const tvo_pyramid *p, int32_t max_level)
 }
 
 static tvo_status lk_validate(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,
-                              const tvo_point2f *prev_pts, tvo_point2f *next_pts, int32_t n,
-                              void *scratch, size_t scratch_size)
+                              const tvo_point2f *prev_pts, tvo_point2f *next_pts, int32_t n, void *scratch,
+                              size_t scratch_size)
 {
     tvo_status st;
     int32_t l, i;
@@ -605,18 +605,21 @@ tvo_status tvo_lk_track(const tvo_lk_config *cfg, const tvo_pyramid *prev, const
                                 err != NULL ? &e : NULL);
         if (ok && cfg->fb_check) {
             /* the way back starts at the guess's displacement reversed (no displacement without a guess) */
-            float bx = cfg->use_initial_flow ? nx - gx : nx, by = cfg->use_initial_flow ? ny - gy : ny, ddx, ddy;
+            float bx = cfg->use_initial_flow ? nx - gx : nx, by = cfg->use_initial_flow ? ny - gy : ny, ddx,
+                  ddy;
             int back;
             if (cfg->fb_levels > 0) { /* the short way back: from the start point, on the finest levels */
                 bx = x0;
                 by = y0;
                 back = lk_track_point(&prm, next, prev, fb_top, nx, ny, 1, &bx, &by, &wk, NULL);
             } else
-                back = lk_track_point(&prm, next, prev, top, nx, ny, cfg->use_initial_flow != 0, &bx, &by, &wk, NULL);
+                back = lk_track_point(&prm, next, prev, top, nx, ny, cfg->use_initial_flow != 0, &bx, &by,
+                                      &wk, NULL);
             ddx = bx - x0;
             ddy = by - y0;
-            if (!back || !((double)ddx * ddx + (double)ddy * ddy <=
-                           (double)cfg->fb_max_error * (double)cfg->fb_max_error)) {
+            if (!back ||
+                !((double)ddx * ddx + (double)ddy * ddy <=
+                  (double)cfg->fb_max_error * (double)cfg->fb_max_error)) {
                 ok = 0;
                 e = 0.f;
             }

@@ -21,7 +21,7 @@ LK_INLINE int64_t lk_hsum_s64_neon(int64x2_t v)
 /* Lanes 8 - tail .. 7 of the overlapping last strip are new pixels: all ones there. */
 LK_INLINE int16x8_t lk_tail_mask_neon(int32_t tail)
 {
-    static const int16_t lane[8] = { 0, 1, 2, 3, 4, 5, 6, 7 };
+    static const int16_t lane[8] = {0, 1, 2, 3, 4, 5, 6, 7};
     return vreinterpretq_s16_u16(vcgtq_s16(vld1q_s16(lane), vdupq_n_s16((int16_t)(7 - tail))));
 }
 
@@ -133,9 +133,12 @@ static void lk_deriv_strip_neon(const int16_t *gx, const int16_t *gy, int32_t g,
         my = masked ? vandq_s16(dy, mask) : dy;
         vst1q_s16(ixw, dx);
         vst1q_s16(iyw, dy);
-        c11 = vmlal_s16(vmlal_s16(c11, vget_low_s16(mx), vget_low_s16(dx)), vget_high_s16(mx), vget_high_s16(dx));
-        c12 = vmlal_s16(vmlal_s16(c12, vget_low_s16(mx), vget_low_s16(dy)), vget_high_s16(mx), vget_high_s16(dy));
-        c22 = vmlal_s16(vmlal_s16(c22, vget_low_s16(my), vget_low_s16(dy)), vget_high_s16(my), vget_high_s16(dy));
+        c11 = vmlal_s16(vmlal_s16(c11, vget_low_s16(mx), vget_low_s16(dx)), vget_high_s16(mx),
+                        vget_high_s16(dx));
+        c12 = vmlal_s16(vmlal_s16(c12, vget_low_s16(mx), vget_low_s16(dy)), vget_high_s16(mx),
+                        vget_high_s16(dy));
+        c22 = vmlal_s16(vmlal_s16(c22, vget_low_s16(my), vget_low_s16(dy)), vget_high_s16(my),
+                        vget_high_s16(dy));
         ixw += win;
         iyw += win;
     }
@@ -161,8 +164,8 @@ static void lk_prev_interp_neon(const uint8_t *s, int32_t sstride, const int32_t
     }
     if (tail > 0) {
         lk_grey_strip_neon(s + last, sstride, wk->iwin + last, win, w);
-        lk_deriv_strip_neon(wk->gx + last, wk->gy + last, g, wk->ixwin + last, wk->iywin + last, win, w, 1, mask,
-                            acc);
+        lk_deriv_strip_neon(wk->gx + last, wk->gy + last, g, wk->ixwin + last, wk->iywin + last, win, w, 1,
+                            mask, acc);
     }
     A[0] = lk_hsum_s64_neon(acc[0]);
     A[1] = lk_hsum_s64_neon(acc[1]);
@@ -189,13 +192,16 @@ static void lk_mismatch_strip_neon(const uint8_t *j, int32_t sstride, const int1
             int16x8_t d, ix, iy;
             j += sstride;
             lk_u8_row_neon(j, w, &lo, &hi, &top_lo, &top_hi);
-            d = vsubq_s16(vcombine_s16(vrshrn_n_s32(lo, LK_I_SHIFT), vrshrn_n_s32(hi, LK_I_SHIFT)), vld1q_s16(iw));
+            d = vsubq_s16(vcombine_s16(vrshrn_n_s32(lo, LK_I_SHIFT), vrshrn_n_s32(hi, LK_I_SHIFT)),
+                          vld1q_s16(iw));
             if (masked)
                 d = vandq_s16(d, mask);
             ix = vld1q_s16(ixw);
             iy = vld1q_s16(iyw);
-            acc1 = vmlal_s16(vmlal_s16(acc1, vget_low_s16(ix), vget_low_s16(d)), vget_high_s16(ix), vget_high_s16(d));
-            acc2 = vmlal_s16(vmlal_s16(acc2, vget_low_s16(iy), vget_low_s16(d)), vget_high_s16(iy), vget_high_s16(d));
+            acc1 = vmlal_s16(vmlal_s16(acc1, vget_low_s16(ix), vget_low_s16(d)), vget_high_s16(ix),
+                             vget_high_s16(d));
+            acc2 = vmlal_s16(vmlal_s16(acc2, vget_low_s16(iy), vget_low_s16(d)), vget_high_s16(iy),
+                             vget_high_s16(d));
             iw += win;
             ixw += win;
             iyw += win;
@@ -216,11 +222,11 @@ static void lk_mismatch_neon(const uint8_t *src, int32_t sstride, const int32_t 
     int64x2_t s1 = vdupq_n_s64(0), s2 = vdupq_n_s64(0);
     int32_t x;
     for (x = 0; x < full; x += 8)
-        lk_mismatch_strip_neon(src + x, sstride, wk->iwin + x, wk->ixwin + x, wk->iywin + x, win, w, 0, mask, &s1,
-                               &s2);
+        lk_mismatch_strip_neon(src + x, sstride, wk->iwin + x, wk->ixwin + x, wk->iywin + x, win, w, 0, mask,
+                               &s1, &s2);
     if (tail > 0)
-        lk_mismatch_strip_neon(src + last, sstride, wk->iwin + last, wk->ixwin + last, wk->iywin + last, win, w, 1,
-                               mask, &s1, &s2);
+        lk_mismatch_strip_neon(src + last, sstride, wk->iwin + last, wk->ixwin + last, wk->iywin + last, win,
+                               w, 1, mask, &s1, &s2);
     *b1 = lk_hsum_s64_neon(s1);
     *b2 = lk_hsum_s64_neon(s2);
 }
@@ -283,7 +289,8 @@ void tvo_lk_scharr_simd(const uint8_t *src, int32_t sstride, lk_work *wk)
     lk_scharr_grid(src, sstride, wk);
 }
 
-void tvo_lk_prev_interp_simd(const uint8_t *s, int32_t sstride, const int32_t wt[4], lk_work *wk, int64_t A[3])
+void tvo_lk_prev_interp_simd(const uint8_t *s, int32_t sstride, const int32_t wt[4], lk_work *wk,
+                             int64_t A[3])
 {
     lk_prev_interp_neon(s, sstride, wt, wk, A);
 }

@@ -54,18 +54,18 @@ LK_INLINE void lk_scharr_h_sse2(const uint8_t *s, __m128i *hd, __m128i *hs)
 
 /* Vertical passes from three rows' horizontal ones: dx = 3 hd0 + 10 hd1 + 3 hd2, dy = hs2 - hs0. */
 LK_INLINE void lk_scharr_v_sse2(__m128i hd0, __m128i hd1, __m128i hd2, __m128i hs0, __m128i hs2, int16_t *dx,
-                             int16_t *dy)
+                                int16_t *dy)
 {
     const __m128i k3 = _mm_set1_epi16(3), k10 = _mm_set1_epi16(10);
-    _mm_storeu_si128((__m128i *)dx, _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(hd0, hd2), k3),
-                                                  _mm_mullo_epi16(hd1, k10)));
+    _mm_storeu_si128((__m128i *)dx,
+                     _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(hd0, hd2), k3), _mm_mullo_epi16(hd1, k10)));
     _mm_storeu_si128((__m128i *)dy, _mm_sub_epi16(hs2, hs0));
 }
 
 /* One row of a grey strip: top_lo/hi hold the upper source row's products with (w00, w01) plus the
  * rounding term, s is the lower source row; they are replaced by the lower row's. */
 LK_INLINE void lk_grey_row_sse2(__m128i *top_lo, __m128i *top_hi, const uint8_t *s, int16_t *iw, __m128i w01,
-                             __m128i w23)
+                                __m128i w23)
 {
     const __m128i rnd = _mm_set1_epi32(LK_I_ROUND);
     __m128i plo, phi, lo, hi;
@@ -107,7 +107,8 @@ static void lk_grey_strip_sse2(const uint8_t *s, int32_t sstride, int16_t *iw, i
 /* One interpolated row of an int16 grid strip: top_lo/hi hold the upper grid row's products with
  * (w00, w01) plus the rounding term, g1 is the lower grid row; returns the 8 values (descaled by 2^14
  * with floor = the biased shift of the C path) and replaces top by the lower row's products. */
-LK_INLINE __m128i lk_interp_row_s16(__m128i *top_lo, __m128i *top_hi, const int16_t *g1, __m128i w01, __m128i w23)
+LK_INLINE __m128i lk_interp_row_s16(__m128i *top_lo, __m128i *top_hi, const int16_t *g1, __m128i w01,
+                                    __m128i w23)
 {
     const __m128i rnd = _mm_set1_epi32(1 << (LK_W_BITS - 1));
     __m128i a0 = _mm_loadu_si128((const __m128i *)g1), a1 = _mm_loadu_si128((const __m128i *)(g1 + 1));
@@ -125,8 +126,8 @@ typedef struct lk_dv_state {
     __m128i c11, c12, c22;              /* G lane sums */
 } lk_dv_state;
 
-LK_INLINE void lk_deriv_row_sse2(lk_dv_state *st, const int16_t *gx1, const int16_t *gy1, int16_t *ixw, int16_t *iyw,
-                              __m128i w01, __m128i w23, int masked, __m128i mask)
+LK_INLINE void lk_deriv_row_sse2(lk_dv_state *st, const int16_t *gx1, const int16_t *gy1, int16_t *ixw,
+                                 int16_t *iyw, __m128i w01, __m128i w23, int masked, __m128i mask)
 {
     __m128i dx = lk_interp_row_s16(&st->xt_lo, &st->xt_hi, gx1, w01, w23);
     __m128i dy = lk_interp_row_s16(&st->yt_lo, &st->yt_hi, gy1, w01, w23);
@@ -188,12 +189,13 @@ static void lk_prev_interp_sse2(const uint8_t *s, int32_t sstride, const int32_t
     acc[0] = acc[1] = acc[2] = _mm_setzero_si128();
     for (x = 0; x < full; x += 8) {
         lk_grey_strip_sse2(s + x, sstride, wk->iwin + x, win, w01, w23);
-        lk_deriv_strip_sse2(wk->gx + x, wk->gy + x, g, wk->ixwin + x, wk->iywin + x, win, w01, w23, 0, mask, acc);
+        lk_deriv_strip_sse2(wk->gx + x, wk->gy + x, g, wk->ixwin + x, wk->iywin + x, win, w01, w23, 0, mask,
+                            acc);
     }
     if (tail > 0) {
         lk_grey_strip_sse2(s + last, sstride, wk->iwin + last, win, w01, w23);
-        lk_deriv_strip_sse2(wk->gx + last, wk->gy + last, g, wk->ixwin + last, wk->iywin + last, win, w01, w23,
-                            1, mask, acc);
+        lk_deriv_strip_sse2(wk->gx + last, wk->gy + last, g, wk->ixwin + last, wk->iywin + last, win, w01,
+                            w23, 1, mask, acc);
     }
     A[0] = lk_hsum_epi64(acc[0]);
     A[1] = lk_hsum_epi64(acc[1]);
@@ -213,7 +215,7 @@ typedef struct lk_mm_state {
 
 /* One window row of a strip: j is the J row below it (its top J row is in st). */
 LK_INLINE void lk_mismatch_row_sse2(lk_mm_state *st, const uint8_t *j, const int16_t *iw, const int16_t *ixw,
-                                 const int16_t *iyw, __m128i w01, __m128i w23, int masked, __m128i mask)
+                                    const int16_t *iyw, __m128i w01, __m128i w23, int masked, __m128i mask)
 {
     const __m128i z = _mm_setzero_si128(), rnd = _mm_set1_epi32(LK_I_ROUND);
     __m128i b0 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)j), z);
@@ -255,7 +257,8 @@ static void lk_mismatch_strip_sse2(const uint8_t *j, int32_t sstride, const int1
         st.acc1 = st.acc2 = z;
         for (; y + 2 <= end; y += 2) {
             lk_mismatch_row_sse2(&st, j + sstride, iw, ixw, iyw, w01, w23, masked, mask);
-            lk_mismatch_row_sse2(&st, j + 2 * sstride, iw + win, ixw + win, iyw + win, w01, w23, masked, mask);
+            lk_mismatch_row_sse2(&st, j + 2 * sstride, iw + win, ixw + win, iyw + win, w01, w23, masked,
+                                 mask);
             j += 2 * sstride;
             iw += 2 * win;
             ixw += 2 * win;
@@ -356,7 +359,8 @@ void tvo_lk_scharr_simd(const uint8_t *src, int32_t sstride, lk_work *wk)
     lk_scharr_grid(src, sstride, wk);
 }
 
-void tvo_lk_prev_interp_simd(const uint8_t *s, int32_t sstride, const int32_t wt[4], lk_work *wk, int64_t A[3])
+void tvo_lk_prev_interp_simd(const uint8_t *s, int32_t sstride, const int32_t wt[4], lk_work *wk,
+                             int64_t A[3])
 {
     lk_prev_interp_sse2(s, sstride, wt, wk, A);
 }

@@ -342,7 +342,7 @@ static void update_speed(tvo_map *m)
 static int triangulate(const tvo_pose *T1, const tvo_pose *T2, tvo_point2d x1, tvo_point2d x2, double min_cos,
                        double max_err, double X[3])
 {
-    double h1[3] = { x1.x, x1.y, 1.0 }, h2[3] = { x2.x, x2.y, 1.0 }, r1[3], r2[3], c1[3], c2[3], b[3];
+    double h1[3] = {x1.x, x1.y, 1.0}, h2[3] = {x2.x, x2.y, 1.0}, r1[3], r2[3], c1[3], c2[3], b[3];
     double a11, a12, a22, b1, b2, det, s1, s2, n1, n2, cosang, base;
     tvo_la_mat3_tvec(T1->R, h1, r1); /* ray directions in the world */
     tvo_la_mat3_tvec(T2->R, h2, r2);
@@ -375,8 +375,8 @@ static int triangulate(const tvo_pose *T1, const tvo_pose *T2, tvo_point2d x1, t
     for (int c = 0; c < 3; ++c)
         X[c] = 0.5 * ((c1[c] + s1 * r1[c]) + (c2[c] + s2 * r2[c]));
     {
-        const tvo_pose *T[2] = { T1, T2 };
-        const tvo_point2d *x[2] = { &x1, &x2 };
+        const tvo_pose *T[2] = {T1, T2};
+        const tvo_point2d *x[2] = {&x1, &x2};
         for (int v = 0; v < 2; ++v) {
             double p[3], ex, ey;
             tvo_pose_transform_point(T[v], X, p);
@@ -429,9 +429,9 @@ static void relpose_config(const tvo_vo_config *cfg, tvo_relpose_config *rc)
 /* The correspondences reference -> this frame (the tracks first seen in the reference) and their 5-point
  * pose, in scratch. */
 typedef struct init_pair {
-    tvo_point2d *xa, *xb;      /* [k] normalised positions in the reference and in this frame */
-    uint8_t *mask;             /* [k] inliers of rp */
-    int32_t *idx;              /* [k] the tracks they belong to */
+    tvo_point2d *xa, *xb; /* [k] normalised positions in the reference and in this frame */
+    uint8_t *mask;        /* [k] inliers of rp */
+    int32_t *idx;         /* [k] the tracks they belong to */
     int32_t k;
     tvo_relpose rp;
 } init_pair;
@@ -470,7 +470,8 @@ static int init_pair_pose(tvo_map *m, const tvo_vo_config *cfg, const tvo_map_tr
     relpose_config(cfg, &rc);
     if (tvo_relpose_estimate(&rc, ip->xa, ip->xb, ip->k, rp, ip->mask, rs, rs_size) != TVO_OK)
         return 0;
-    if (rp->flags & (TVO_RELPOSE_FLAG_LOW_CONFIDENCE | TVO_RELPOSE_FLAG_AMBIGUOUS | TVO_RELPOSE_FLAG_ROTATION_ONLY))
+    if (rp->flags &
+        (TVO_RELPOSE_FLAG_LOW_CONFIDENCE | TVO_RELPOSE_FLAG_AMBIGUOUS | TVO_RELPOSE_FLAG_ROTATION_ONLY))
         return 0;
     if (rp->parallax_deg < cfg->map_init_parallax_deg || rp->inliers < TVO_MAP_INIT_MIN_POINTS ||
         2 * rp->inliers < ip->k)
@@ -752,7 +753,8 @@ static int32_t triangulate_new(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tra
         if (j < 0)
             break;
         memcpy(m->lm[j].X, X, sizeof(X));
-        (void)kf_add_obs(m, k0, j, tr->tri_x[i]); /* first seen in a keyframe of the window: observed there too */
+        (void)kf_add_obs(m, k0, j,
+                         tr->tri_x[i]); /* first seen in a keyframe of the window: observed there too */
         (void)kf_add_obs(m, kn, j, tr->x[i]);
         m->lm[j].tracked = 1;
         tr->lm[i] = j;
@@ -949,7 +951,8 @@ static void add_keyframe(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
 
 /* ---- the per-frame entry ------------------------------------------------------------------------ */
 
-static void lose(tvo_map *m, tvo_map_tracks *tr, int64_t t_ns, const tvo_pose *T_c_w_prior, tvo_map_frame *out)
+static void lose(tvo_map *m, tvo_map_tracks *tr, int64_t t_ns, const tvo_pose *T_c_w_prior,
+                 tvo_map_frame *out)
 {
     update_speed(m);
     m->losses++;

@@ -30,12 +30,12 @@
 
 /* A keyframe of the window: its pose and the landmark observations made in it. */
 typedef struct tvo_map_kf {
-    int32_t id;           /* increasing keyframe id (never reused) */
+    int32_t id; /* increasing keyframe id (never reused) */
     int64_t t_ns;
-    tvo_pose T_c_w;       /* world -> camera */
+    tvo_pose T_c_w; /* world -> camera */
     int32_t n_obs;
-    int32_t *obs_lm;      /* [max_tracks] landmark index of each observation */
-    tvo_point2d *obs_x;   /* [max_tracks] normalised position */
+    int32_t *obs_lm;    /* [max_tracks] landmark index of each observation */
+    tvo_point2d *obs_x; /* [max_tracks] normalised position */
 } tvo_map_kf;
 
 /* A landmark: a world point, the number of window keyframes that observe it, and whether a live
@@ -52,60 +52,59 @@ typedef struct tvo_map_tracks {
     int32_t n;
     const tvo_point2d *x;
     const uint8_t *x_ok;
-    int32_t *lm;          /* landmark index, or -1 */
-    int32_t *tri_fr;      /* serial of the frame of the track's first observation (to triangulate), or -1 */
-    tvo_point2d *tri_x;   /* normalised position in that frame */
-    uint8_t *inlier;      /* out: 1 when the track's landmark is an inlier of this frame's map pose */
+    int32_t *lm;        /* landmark index, or -1 */
+    int32_t *tri_fr;    /* serial of the frame of the track's first observation (to triangulate), or -1 */
+    tvo_point2d *tri_x; /* normalised position in that frame */
+    uint8_t *inlier;    /* out: 1 when the track's landmark is an inlier of this frame's map pose */
 } tvo_map_tracks;
 
 /* The poses of the last TVO_MAP_RING frames, for triangulating a track from the frame it was first seen
  * in (any frame, not only a keyframe). A track first seen further back waits again from the current frame. */
 #define TVO_MAP_RING 32
 typedef struct tvo_map_frame_pose {
-    int32_t serial;            /* frame serial (-1: empty) */
-    int32_t kf_id;             /* id of the keyframe the frame became, or -1 */
+    int32_t serial; /* frame serial (-1: empty) */
+    int32_t kf_id;  /* id of the keyframe the frame became, or -1 */
     tvo_pose T_c_w;
 } tvo_map_frame_pose;
 
 typedef struct tvo_map {
     int32_t window, max_tracks, max_lm;
-    int32_t n_kf;              /* keyframes in the window, oldest first in kf[] order by age */
-    int32_t kf_head;           /* slot of the oldest keyframe (ring) */
-    tvo_map_kf *kf;            /* [window] */
-    tvo_map_lm *lm;            /* [max_lm] */
-    int32_t n_lm;              /* alive landmarks */
+    int32_t n_kf;    /* keyframes in the window, oldest first in kf[] order by age */
+    int32_t kf_head; /* slot of the oldest keyframe (ring) */
+    tvo_map_kf *kf;  /* [window] */
+    tvo_map_lm *lm;  /* [max_lm] */
+    int32_t n_lm;    /* alive landmarks */
     int32_t next_kf_id;
-    int32_t active;            /* 1 while the map poses frames */
+    int32_t active; /* 1 while the map poses frames */
     tvo_map_frame_pose ring[TVO_MAP_RING];
-    int32_t serial;            /* serial of the frame being processed (increases by one per frame) */
+    int32_t serial; /* serial of the frame being processed (increases by one per frame) */
     /* initialisation: the reference frame (its serial, pose and time); the tracks first seen in it */
     int32_t has_ref;
     int32_t ref_serial;
     tvo_pose ref_T_c_w;
     int64_t ref_t_ns;
-    int32_t ref_frames;        /* frames since the reference */
+    int32_t ref_frames; /* frames since the reference */
     /* motion: the last frame's pose and its velocity (T_cur_prev of the last two posed frames) */
     tvo_pose last_T_c_w;
-    tvo_pose vel;              /* T_cur_prev of the last step, in map units */
+    tvo_pose vel; /* T_cur_prev of the last step, in map units */
     int64_t last_t_ns, vel_dt_ns;
     int32_t has_vel;
-    double speed;              /* map units per second of the last map (> 0 when known) */
-    int32_t kf_points;         /* landmarks the last keyframe saw (for the keyframe decision) */
+    double speed;      /* map units per second of the last map (> 0 when known) */
+    int32_t kf_points; /* landmarks the last keyframe saw (for the keyframe decision) */
     int32_t frames_since_kf;
     int32_t losses;
-    int32_t cur_kf_id;         /* id of the keyframe made in the last processed frame, or -1 */
-    int32_t lm_cursor;         /* where the search for a free landmark slot starts */
+    int32_t cur_kf_id; /* id of the keyframe made in the last processed frame, or -1 */
+    int32_t lm_cursor; /* where the search for a free landmark slot starts */
 } tvo_map;
-
 
 /* What the map did with a frame (filled into the VO result by tvo_vo.c). */
 typedef struct tvo_map_frame {
     tvo_vo_map_state state;
-    int32_t keyframe;          /* 1 when the frame became a keyframe */
-    int32_t points;            /* landmarks used for the pose (inliers) */
-    int32_t new_points;        /* landmarks triangulated in this frame */
+    int32_t keyframe;   /* 1 when the frame became a keyframe */
+    int32_t points;     /* landmarks used for the pose (inliers) */
+    int32_t new_points; /* landmarks triangulated in this frame */
     int32_t ba_iterations, ba_flags;
-    tvo_pose T_c_w;            /* valid when state is TRACKING or INITIALISED */
+    tvo_pose T_c_w; /* valid when state is TRACKING or INITIALISED */
 } tvo_map_frame;
 
 size_t tvo_map_layout_size(const tvo_vo_config *cfg);

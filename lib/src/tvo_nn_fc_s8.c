@@ -15,8 +15,8 @@ static int32_t tvo_dot_s8(const int8_t *a, const int8_t *b, int32_t n)
     return acc;
 }
 
-static void tvo_fc_acc(const int8_t *x, const int8_t *w, const int32_t *bias, int32_t n_in,
-                       int32_t n_out, int32_t *acc)
+static void tvo_fc_acc(const int8_t *x, const int8_t *w, const int32_t *bias, int32_t n_in, int32_t n_out,
+                       int32_t *acc)
 {
     int32_t o = 0;
     for (; o + 4 <= n_out; o += 4) {
@@ -59,8 +59,8 @@ void tvo_nn_fc_s8(const int8_t *x, const int8_t *w, const int32_t *bias, const i
     }
 }
 
-void tvo_nn_fc_s8_f32(const int8_t *x, const int8_t *w, const int32_t *bias, const float *scale,
-                      int32_t n_in, int32_t n_out, float *y)
+void tvo_nn_fc_s8_f32(const int8_t *x, const int8_t *w, const int32_t *bias, const float *scale, int32_t n_in,
+                      int32_t n_out, float *y)
 {
     int32_t o;
     for (o = 0; o < n_out; ++o) {

@@ -10,12 +10,12 @@
 
 typedef struct tvo_nn_layer_rt {
     int32_t n_in, n_out, act, out_kind, out_zp, cols; /* cols: weights stored column-major */
-    int8_t *w;          /* n_out x n_in, row-major */
-    int32_t *bias;      /* bias with the input zero point folded in */
-    int32_t *mult;      /* S8 layers */
-    int32_t *shift;     /* S8 layers */
-    float *scale;       /* F32 layers */
-    int8_t *lut;        /* NULL for TVO_NN_ACT_NONE */
+    int8_t *w;                                        /* n_out x n_in, row-major */
+    int32_t *bias;                                    /* bias with the input zero point folded in */
+    int32_t *mult;                                    /* S8 layers */
+    int32_t *shift;                                   /* S8 layers */
+    float *scale;                                     /* F32 layers */
+    int8_t *lut;                                      /* NULL for TVO_NN_ACT_NONE */
 } tvo_nn_layer_rt;
 
 typedef struct tvo_nn_branch_rt {
@@ -43,7 +43,10 @@ static uint32_t rd_u32(const uint8_t *p)
 {
     return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
 }
-static uint32_t rd_u16(const uint8_t *p) { return (uint32_t)p[0] | ((uint32_t)p[1] << 8); }
+static uint32_t rd_u16(const uint8_t *p)
+{
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8);
+}
 static int32_t rd_i32(const uint8_t *p)
 {
     uint32_t u = rd_u32(p);
@@ -56,16 +59,22 @@ static float rd_f32(const uint8_t *p)
     memcpy(&f, &u, sizeof f);
     return f;
 }
-static int is_finite_f(float f) { return f == f && f - f == 0.0f; }
-static int is_pos_scale(float f) { return is_finite_f(f) && f > 0.0f; }
+static int is_finite_f(float f)
+{
+    return f == f && f - f == 0.0f;
+}
+static int is_pos_scale(float f)
+{
+    return is_finite_f(f) && f > 0.0f;
+}
 
 /* CRC-32, bitwise with a 16-entry table: small and fast enough for a one-off load check. */
 uint32_t tvo_nn_crc32(uint32_t crc, const void *data, size_t size)
 {
-    static const uint32_t tab[16] = {
-        0x00000000u, 0x1DB71064u, 0x3B6E20C8u, 0x26D930ACu, 0x76DC4190u, 0x6B6B51F4u,
-        0x4DB26158u, 0x5005713Cu, 0xEDB88320u, 0xF00F9344u, 0xD6D6A3E8u, 0xCB61B38Cu,
-        0x9B64C2B0u, 0x86D3D2D4u, 0xA00AE278u, 0xBDBDF21Cu};
+    static const uint32_t tab[16] = {0x00000000u, 0x1DB71064u, 0x3B6E20C8u, 0x26D930ACu,
+                                     0x76DC4190u, 0x6B6B51F4u, 0x4DB26158u, 0x5005713Cu,
+                                     0xEDB88320u, 0xF00F9344u, 0xD6D6A3E8u, 0xCB61B38Cu,
+                                     0x9B64C2B0u, 0x86D3D2D4u, 0xA00AE278u, 0xBDBDF21Cu};
     const uint8_t *p = (const uint8_t *)data;
     size_t i;
     if (p == NULL)
@@ -89,11 +98,11 @@ static tvo_status check_span(uint32_t off, uint64_t len, uint32_t align, size_t 
     return TVO_OK;
 }
 
-#define TVO_TRY(expr)                \
-    do {                             \
-        tvo_status s_ = (expr);      \
-        if (s_ != TVO_OK)            \
-            return s_;               \
+#define TVO_TRY(expr)           \
+    do {                        \
+        tvo_status s_ = (expr); \
+        if (s_ != TVO_OK)       \
+            return s_;          \
     } while (0)
 
 static size_t layer_bytes(uint32_t n_in, uint32_t n_out, uint32_t act)
@@ -106,9 +115,9 @@ static size_t layer_bytes(uint32_t n_in, uint32_t n_out, uint32_t act)
 }
 
 /* Checks one layer entry at `e` (index k of n_layers in its branch). prev_* describe its input. */
-static tvo_status check_layer(const uint8_t *f, size_t size, const uint8_t *e, uint32_t k,
-                              uint32_t n_layers, uint32_t prev_n, int32_t prev_zp, size_t *bytes,
-                              uint32_t *macs, uint32_t *max_width, uint32_t *out_n, int32_t *out_zp)
+static tvo_status check_layer(const uint8_t *f, size_t size, const uint8_t *e, uint32_t k, uint32_t n_layers,
+                              uint32_t prev_n, int32_t prev_zp, size_t *bytes, uint32_t *macs,
+                              uint32_t *max_width, uint32_t *out_n, int32_t *out_zp)
 {
     uint32_t n_in = rd_u32(e), n_out = rd_u32(e + 4), act = rd_u32(e + 8), kind = rd_u32(e + 12);
     int32_t in_zp = rd_i32(e + 16), o_zp = rd_i32(e + 20), a_zp = rd_i32(e + 24);
@@ -421,7 +430,8 @@ tvo_status tvo_nn_run_all(const tvo_nn *nn, const float features[TVO_FEAT_COUNT]
             return TVO_ERR_NOT_FINITE;
         }
         if (br->dof == (int32_t)TVO_NN_CODE_LOG_STEP) {
-            v = v < TVO_NN_LOG_STEP_MIN ? TVO_NN_LOG_STEP_MIN : (v > TVO_NN_LOG_STEP_MAX ? TVO_NN_LOG_STEP_MAX : v);
+            v = v < TVO_NN_LOG_STEP_MIN ? TVO_NN_LOG_STEP_MIN
+                                        : (v > TVO_NN_LOG_STEP_MAX ? TVO_NN_LOG_STEP_MAX : v);
             /* tvo_dm_exp: + - * / floor ldexp only, the operations nnfmt.det_exp repeats in the same order,
                so the step is bit-exact with the NumPy reference on every IEEE-754 target */
             v = (float)tvo_dm_exp((double)v);
@@ -431,9 +441,18 @@ tvo_status tvo_nn_run_all(const tvo_nn *nn, const float features[TVO_FEAT_COUNT]
     return TVO_OK;
 }
 
-int32_t tvo_nn_output_mask(const tvo_nn *nn) { return nn != NULL ? nn->mask : 0; }
-uint32_t tvo_nn_macs(const tvo_nn *nn) { return nn != NULL ? nn->macs : 0u; }
-int32_t tvo_nn_branch_count(const tvo_nn *nn) { return nn != NULL ? nn->n_branches : 0; }
+int32_t tvo_nn_output_mask(const tvo_nn *nn)
+{
+    return nn != NULL ? nn->mask : 0;
+}
+uint32_t tvo_nn_macs(const tvo_nn *nn)
+{
+    return nn != NULL ? nn->macs : 0u;
+}
+int32_t tvo_nn_branch_count(const tvo_nn *nn)
+{
+    return nn != NULL ? nn->n_branches : 0;
+}
 
 tvo_nn_act tvo_nn_branch_activation(const tvo_nn *nn, int32_t i)
 {

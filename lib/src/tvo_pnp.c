@@ -9,18 +9,18 @@
 #include <math.h>
 #include <string.h>
 
-#define PNP_MIN_Z 1e-6          /* in front: Z_c above this (metres) */
-#define PNP_MAX_IMG 1e6         /* |x| above this: the point is skipped */
-#define PNP_MAX_WORLD 1e9       /* |X| above this: the point is skipped */
-#define PNP_LO_ROUNDS 3         /* refinement rounds of the best RANSAC hypothesis at most */
-#define PNP_SAMPLE 4            /* 3 points for P3P and one to check it */
-#define PNP_EQ_TOL 1e-6         /* P3P: relative residual of the distance equations to keep a solution */
-#define PNP_GN_STEPS 5          /* P3P: Gauss-Newton polish steps at most */
-#define PNP_REL_GAIN 1e-10       /* LM: an accepted step gaining less than this share of the cost ends it */
-#define PNP_MU0 1e-4            /* LM: initial damping */
+#define PNP_MIN_Z 1e-6     /* in front: Z_c above this (metres) */
+#define PNP_MAX_IMG 1e6    /* |x| above this: the point is skipped */
+#define PNP_MAX_WORLD 1e9  /* |X| above this: the point is skipped */
+#define PNP_LO_ROUNDS 3    /* refinement rounds of the best RANSAC hypothesis at most */
+#define PNP_SAMPLE 4       /* 3 points for P3P and one to check it */
+#define PNP_EQ_TOL 1e-6    /* P3P: relative residual of the distance equations to keep a solution */
+#define PNP_GN_STEPS 5     /* P3P: Gauss-Newton polish steps at most */
+#define PNP_REL_GAIN 1e-10 /* LM: an accepted step gaining less than this share of the cost ends it */
+#define PNP_MU0 1e-4       /* LM: initial damping */
 #define PNP_MU_MIN 1e-12
 #define PNP_MU_MAX 1e8
-#define PNP_TINY 1e-9           /* LM: a step below this (rad; m relative to 1 + |t|) ends it */
+#define PNP_TINY 1e-9 /* LM: a step below this (rad; m relative to 1 + |t|) ends it */
 #define PNP_MAX_POINTS (1 << 28)
 
 /* ---- deterministic generator (relpose's scheme) ---------------------------------------------- */
@@ -115,7 +115,7 @@ static void cross3(const double a[3], const double b[3], double c[3])
 static double qform(const double A[9], const double v[3])
 {
     return A[0] * v[0] * v[0] + A[4] * v[1] * v[1] + A[8] * v[2] * v[2] +
-           2.0 * (A[1] * v[0] * v[1] + A[2] * v[0] * v[2] + A[5] * v[1] * v[2]);
+            2.0 * (A[1] * v[0] * v[1] + A[2] * v[0] * v[2] + A[5] * v[1] * v[2]);
 }
 
 /* u^T A v of a symmetric 3x3 A */
@@ -153,7 +153,7 @@ static double trace_ab(const double A[9], const double B[9])
 static int point_usable(const double X[3], const tvo_point2d *x)
 {
     return fabs(X[0]) <= PNP_MAX_WORLD && fabs(X[1]) <= PNP_MAX_WORLD && fabs(X[2]) <= PNP_MAX_WORLD &&
-           fabs(x->x) <= PNP_MAX_IMG && fabs(x->y) <= PNP_MAX_IMG;
+            fabs(x->x) <= PNP_MAX_IMG && fabs(x->y) <= PNP_MAX_IMG;
 }
 
 /* squared reprojection error of X at T (0 and *front = 0 when behind the camera) */
@@ -185,10 +185,9 @@ static int prior_ok(const double R[9])
 static int config_ok(const tvo_pnp_config *c)
 {
     return c->threshold > 0.0 && c->threshold < DBL_MAX && c->confidence > 0.0 && c->confidence < 1.0 &&
-           c->max_iterations >= 1 && c->refine_iterations >= 1 && c->huber > 0.0 && c->huber < DBL_MAX &&
-           c->min_inliers >= 3 && (c->use_guess == 0 || c->use_guess == 1) && c->rot_prior_weight >= 0.0 &&
-           c->rot_prior_weight < DBL_MAX &&
-           (c->rot_prior_weight == 0.0 || prior_ok(c->rot_prior));
+            c->max_iterations >= 1 && c->refine_iterations >= 1 && c->huber > 0.0 && c->huber < DBL_MAX &&
+            c->min_inliers >= 3 && (c->use_guess == 0 || c->use_guess == 1) && c->rot_prior_weight >= 0.0 &&
+            c->rot_prior_weight < DBL_MAX && (c->rot_prior_weight == 0.0 || prior_ok(c->rot_prior));
 }
 
 /* on error: leave a finite pose as given, replace a non-finite one by the identity */
@@ -551,11 +550,9 @@ int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4])
         return 0; /* coincident rays */
 
     /* l^T D1 l = 0, l^T D2 l = 0 on the solution */
-    const double D1[9] = {q.a23, -q.a23 * q.c12, 0.0,
-                          -q.a23 * q.c12, q.a23 - q.a12, q.a12 * q.c23,
-                          0.0, q.a12 * q.c23, -q.a12};
-    const double D2[9] = {q.a23, 0.0, -q.a23 * q.c13,
-                          0.0, -q.a13, q.a13 * q.c23,
+    const double D1[9] = {q.a23, -q.a23 * q.c12, 0.0,   -q.a23 * q.c12, q.a23 - q.a12, q.a12 * q.c23,
+                          0.0,   q.a12 * q.c23,  -q.a12};
+    const double D2[9] = {q.a23,          0.0,           -q.a23 * q.c13, 0.0, -q.a13, q.a13 * q.c23,
                           -q.a23 * q.c13, q.a13 * q.c23, q.a23 - q.a13};
     const double S[9] = {2.0, -q.c12, -q.c13, -q.c12, 2.0, -q.c23, -q.c13, -q.c23, 2.0};
     double J1[9], J2[9], c[4], roots[3];
@@ -675,8 +672,10 @@ int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4])
                 T.R[3 * r + k] = e1[r] * w1[k] + e2[r] * w2[k] + e3[r] * w3[k];
         for (int r = 0; r < 3; ++r) {
             double pc = (P[0][r] + P[1][r] + P[2][r]) / 3.0;
-            double xc = (T.R[3 * r] * (X[0][0] + X[1][0] + X[2][0]) + T.R[3 * r + 1] * (X[0][1] + X[1][1] + X[2][1]) +
-                         T.R[3 * r + 2] * (X[0][2] + X[1][2] + X[2][2])) / 3.0;
+            double xc = (T.R[3 * r] * (X[0][0] + X[1][0] + X[2][0]) +
+                         T.R[3 * r + 1] * (X[0][1] + X[1][1] + X[2][1]) +
+                         T.R[3 * r + 2] * (X[0][2] + X[1][2] + X[2][2])) /
+                    3.0;
             T.t[r] = pc - xc;
         }
         if (!tvo_pose_is_finite(&T))
@@ -728,7 +727,8 @@ static void se3_left_update(const double d[6], tvo_pose *T)
 /* Robust cost of the selected points at T (a point behind the camera costs rho(1)) and the IRLS normal
  * equations H d = -g of the points in front; returns their count. */
 static int32_t evaluate(const tvo_pose *T, const double (*X)[3], const tvo_point2d *x, const uint8_t *use,
-                        int32_t n, double k, const tvo_pnp_config *cfg, double H[36], double g[6], double *cost)
+                        int32_t n, double k, const tvo_pnp_config *cfg, double H[36], double g[6],
+                        double *cost)
 {
     const double pen = huber_rho(1.0, k), k2 = k * k;
     int32_t used = 0;
@@ -823,8 +823,9 @@ static void refine_core(const tvo_pnp_config *cfg, const double (*X)[3], const t
             A[7 * a] += mu * H[7 * a];
             b[a] = -g[a];
         }
-        if (tvo_la_solve(A, b, 6, d) != TVO_OK || !(isfinite(d[0]) && isfinite(d[1]) && isfinite(d[2]) &&
-                                                  isfinite(d[3]) && isfinite(d[4]) && isfinite(d[5]))) {
+        if (tvo_la_solve(A, b, 6, d) != TVO_OK ||
+            !(isfinite(d[0]) && isfinite(d[1]) && isfinite(d[2]) && isfinite(d[3]) && isfinite(d[4]) &&
+              isfinite(d[5]))) {
             mu *= 10.0;
             if (mu > PNP_MU_MAX)
                 return;
@@ -1019,7 +1020,7 @@ tvo_status tvo_pnp_ransac(const tvo_pnp_config *cfg, const double (*X)[3], const
             xs[j][0] = x[i].x;
             xs[j][1] = x[i].y;
         }
-        int ns = tvo_p3p((const double (*)[3])Xs, (const double (*)[2])xs, sol);
+        int ns = tvo_p3p((const double(*)[3])Xs, (const double(*)[2])xs, sol);
         if (ns == 0)
             continue;
         any = 1;

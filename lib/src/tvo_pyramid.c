@@ -55,8 +55,8 @@ size_t tvo_pyramid_required_size_borrowed(int32_t width, int32_t height, int32_t
     return pyr_required(width, height, levels, 0);
 }
 
-static tvo_status pyr_init(tvo_pyramid *p, int32_t width, int32_t height, int32_t levels, void *mem, size_t mem_size,
-                           int own0)
+static tvo_status pyr_init(tvo_pyramid *p, int32_t width, int32_t height, int32_t levels, void *mem,
+                           size_t mem_size, int own0)
 {
     int32_t w[TVO_MAX_PYR_LEVELS], h[TVO_MAX_PYR_LEVELS], l;
     tvo_arena arena;
@@ -112,8 +112,8 @@ static uint8_t pyr_down_border(const uint16_t *tmp, int32_t w, int32_t x)
 {
     int32_t c = 2 * x;
     uint32_t s = (uint32_t)tmp[tvo_reflect101(c - 2, w)] + tmp[tvo_reflect101(c + 2, w)] +
-                 4u * ((uint32_t)tmp[tvo_reflect101(c - 1, w)] + tmp[tvo_reflect101(c + 1, w)]) +
-                 6u * tmp[tvo_reflect101(c, w)];
+            4u * ((uint32_t)tmp[tvo_reflect101(c - 1, w)] + tmp[tvo_reflect101(c + 1, w)]) +
+            6u * tmp[tvo_reflect101(c, w)];
     return (uint8_t)((s + 128u) >> 8);
 }
 
@@ -143,8 +143,8 @@ static void pyr_down_row(const uint8_t *s0, const uint8_t *s1, const uint8_t *s2
         out[x] = pyr_down_border(tmp, w, x);
 }
 
-static void pyr_down_raw(const uint8_t *src, int32_t w, int32_t h, int32_t sstride, uint8_t *dst,
-                         int32_t dw, int32_t dh, int32_t dstride, uint16_t *tmp)
+static void pyr_down_raw(const uint8_t *src, int32_t w, int32_t h, int32_t sstride, uint8_t *dst, int32_t dw,
+                         int32_t dh, int32_t dstride, uint16_t *tmp)
 {
     int32_t y;
     for (y = 0; y < dh; ++y) {

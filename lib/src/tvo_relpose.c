@@ -23,45 +23,45 @@
  * these changes the results (test_relpose's digests). */
 #define RP_PI 3.14159265358979323846
 #define RP_DEG_PER_RAD (180.0 / RP_PI)
-#define RP_MAX_COORD 1e6      /* |coordinate| above this: TVO_ERR_RANGE */
-#define RP_MIN_SAMPLE 5       /* the 5-point sample: fewer epipolar inliers is no epipolar model */
-#define RP_MIN_SEP2 1e-6      /* sample points closer than this * thr2 (squared) are degenerate */
+#define RP_MAX_COORD 1e6 /* |coordinate| above this: TVO_ERR_RANGE */
+#define RP_MIN_SAMPLE 5  /* the 5-point sample: fewer epipolar inliers is no epipolar model */
+#define RP_MIN_SEP2 1e-6 /* sample points closer than this * thr2 (squared) are degenerate */
 /* scoring (MSAC on the Sampson error; ORB-SLAM style homography / epipolar scores) */
-#define RP_CHI2_1DOF 3.841    /* 95 % chi-square gates, 1 and 2 degrees of freedom */
+#define RP_CHI2_1DOF 3.841 /* 95 % chi-square gates, 1 and 2 degrees of freedom */
 #define RP_CHI2_2DOF 5.991
-#define RP_BAIL_STEP 20       /* points between two bail-out tests (msac_cost, homography_score) */
-#define RP_BAIL_Z 3.0         /* bail-out margin in standard deviations */
-#define RP_PRE_N 10           /* msac_cost pre-test: points visited ... */
-#define RP_PRE_EPS 0.55       /* ... and the best model's inlier ratio from which it applies */
+#define RP_BAIL_STEP 20 /* points between two bail-out tests (msac_cost, homography_score) */
+#define RP_BAIL_Z 3.0   /* bail-out margin in standard deviations */
+#define RP_PRE_N 10     /* msac_cost pre-test: points visited ... */
+#define RP_PRE_EPS 0.55 /* ... and the best model's inlier ratio from which it applies */
 /* local optimisation of new best hypotheses (lo_refine) */
-#define RP_LO_ROUNDS_5PT 2    /* rounds at most for 5-point hypotheses ... */
-#define RP_LO_ROUNDS_8PT 8    /* ... and for 8-point ones, which start further off */
-#define RP_LO_FIRST2 4.0      /* first round selects within 2 thresholds (squared factor) */
-#define RP_LO_MIN_POINTS 6    /* fewer selected points: no refinement */
+#define RP_LO_ROUNDS_5PT 2 /* rounds at most for 5-point hypotheses ... */
+#define RP_LO_ROUNDS_8PT 8 /* ... and for 8-point ones, which start further off */
+#define RP_LO_FIRST2 4.0   /* first round selects within 2 thresholds (squared factor) */
+#define RP_LO_MIN_POINTS 6 /* fewer selected points: no refinement */
 /* final refinement (polish, refine_pose) */
-#define RP_POLISH_BAND2 9.0   /* points within 3 thresholds (squared factor) are refined ... */
+#define RP_POLISH_BAND2 9.0 /* points within 3 thresholds (squared factor) are refined ... */
 #define RP_POLISH_K2 (2.5 * 2.5 * 1.4826 * 1.4826) /* ... with a Cauchy scale^2 of this * median r^2 */
-#define RP_LM_LAMBDA0 1e-4    /* initial Levenberg-Marquardt damping */
+#define RP_LM_LAMBDA0 1e-4                         /* initial Levenberg-Marquardt damping */
 #define RP_LM_LAMBDA_MIN 1e-10
-#define RP_LM_CLOSE 1e-3      /* relative cost change below which the first rejection ends LM */
-#define RP_LM_DONE 1e-5       /* relative cost change below which LM has converged */
-#define RP_LM_STEP_MIN 1e-10  /* step norm (rad / tangent) below which LM has converged */
+#define RP_LM_CLOSE 1e-3     /* relative cost change below which the first rejection ends LM */
+#define RP_LM_DONE 1e-5      /* relative cost change below which LM has converged */
+#define RP_LM_STEP_MIN 1e-10 /* step norm (rad / tangent) below which LM has converged */
 /* rotation-only model */
-#define RP_ROT_MAX_ITERS 64   /* 2-point rotation RANSAC iterations at most */
-#define RP_WIDE2 4.0          /* rotation inliers, plane cheirality counts: within 2 thresholds */
-#define RP_ROT_SHARE 0.8      /* share of the epipolar inliers the rotation model must explain */
-#define RP_MIN_ROT_INLIERS 3  /* fewer rotation inliers: LOW_CONFIDENCE */
+#define RP_ROT_MAX_ITERS 64  /* 2-point rotation RANSAC iterations at most */
+#define RP_WIDE2 4.0         /* rotation inliers, plane cheirality counts: within 2 thresholds */
+#define RP_ROT_SHARE 0.8     /* share of the epipolar inliers the rotation model must explain */
+#define RP_MIN_ROT_INLIERS 3 /* fewer rotation inliers: LOW_CONFIDENCE */
 /* homography model selection */
 #define RP_H_SEED_SALT 0x486F6DULL /* the homography RANSAC's generator: cfg->seed ^ this */
-#define RP_H_SHARE 0.5        /* a plane must hold this share of the epipolar inliers to matter */
-#define RP_H_RATIO 0.40       /* ORB-SLAM2's homography / (homography + epipolar) score ratio */
-#define RP_H_MIN_ITERS 16     /* homography samples at least */
-#define RP_H_SAMPLE_TRIES 32  /* draws to move a sample index onto an epipolar inlier */
-#define RP_H_MIN_INLIERS 8    /* a plane with fewer inliers is not decomposed */
-#define RP_MIN_GOOD 5         /* a plane pose needs this many points in front of both cameras */
-#define RP_TWIN_SHARE 0.85    /* twins whose good counts are within this ratio: AMBIGUOUS */
-#define RP_DIFFER_ROT_DEG 0.5 /* two poses differ by more than this rotation ... */
-#define RP_DIFFER_T_DEG 2.0   /* ... or this angle between their translations */
+#define RP_H_SHARE 0.5             /* a plane must hold this share of the epipolar inliers to matter */
+#define RP_H_RATIO 0.40            /* ORB-SLAM2's homography / (homography + epipolar) score ratio */
+#define RP_H_MIN_ITERS 16          /* homography samples at least */
+#define RP_H_SAMPLE_TRIES 32       /* draws to move a sample index onto an epipolar inlier */
+#define RP_H_MIN_INLIERS 8         /* a plane with fewer inliers is not decomposed */
+#define RP_MIN_GOOD 5              /* a plane pose needs this many points in front of both cameras */
+#define RP_TWIN_SHARE 0.85         /* twins whose good counts are within this ratio: AMBIGUOUS */
+#define RP_DIFFER_ROT_DEG 0.5      /* two poses differ by more than this rotation ... */
+#define RP_DIFFER_T_DEG 2.0        /* ... or this angle between their translations */
 /* lm_pass's cost product (exact powers of two, so it neither overflows nor depends on the target) */
 #define RP_PROD_EXP 512     /* the product of the cost factors is multiplied by 2^-512 ... */
 #define RP_PROD_MAX 0x1p512 /* ... whenever it exceeds 2^512 (each factor is at most 2^100) */
@@ -216,7 +216,8 @@ static inline void sampson2_2(const double E[9], const tvo_point2d *p1a, const t
     __m128d et0 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(E0, b0), _mm_mul_pd(E3, b1)), _mm_set1_pd(E[6]));
     __m128d et1 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(E1, b0), _mm_mul_pd(E4, b1)), _mm_set1_pd(E[7]));
     __m128d e = _mm_add_pd(_mm_add_pd(_mm_mul_pd(b0, ex0), _mm_mul_pd(b1, ex1)), ex2);
-    __m128d d = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(ex0, ex0), _mm_mul_pd(ex1, ex1)), _mm_mul_pd(et0, et0)),
+    __m128d d = _mm_add_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(ex0, ex0), _mm_mul_pd(ex1, ex1)),
+                                      _mm_mul_pd(et0, et0)),
                            _mm_mul_pd(et1, et1));
     __m128d ok = _mm_cmpgt_pd(d, _mm_set1_pd(1e-300));
     __m128d v = _mm_div_pd(_mm_mul_pd(e, e), d);
@@ -239,8 +240,8 @@ static void essential_from_pose(const double R[9], const double t[3], double E[9
  * stride spreads any prefix of the visit over the whole input, which the bail-out test needs. */
 static int32_t visit_stride(int32_t n)
 {
-    static const int32_t primes[] = {97, 89, 83, 79, 73, 71, 67, 61, 59, 53, 47, 43, 41, 37, 31, 29, 23, 19, 17,
-                                     13, 11, 7, 5, 3, 2};
+    static const int32_t primes[] = {97, 89, 83, 79, 73, 71, 67, 61, 59, 53, 47, 43, 41,
+                                     37, 31, 29, 23, 19, 17, 13, 11, 7,  5,  3,  2};
     for (size_t k = 0; k < sizeof primes / sizeof primes[0]; ++k)
         if (primes[k] < n && n % primes[k] != 0)
             return primes[k];
@@ -409,8 +410,8 @@ static void essential_uv(const double E[9], double U[9], double V[9])
 }
 
 /* The four (R, t) of E; picks the one with most points in front of both cameras among mask. */
-static int32_t decompose_essential(const double E[9], const tvo_point2d *x1, const tvo_point2d *x2,
-                                   int32_t n, const uint8_t *mask, double R[9], double t[3])
+static int32_t decompose_essential(const double E[9], const tvo_point2d *x1, const tvo_point2d *x2, int32_t n,
+                                   const uint8_t *mask, double R[9], double t[3])
 {
     double U[9], V[9];
     essential_uv(E, U, V);
@@ -468,9 +469,9 @@ static void tangent_basis(const double t[3], double b1[3], double b2[3])
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-static inline void lm_point(const double R[9], const double t[3], const double b1[3], const double b2[3],
-                            double a0, double a1, double q0, double q1, double c2, int want_cost,
-                            double *prod, int32_t *scaled, double acc[20])
+static inline void
+lm_point(const double R[9], const double t[3], const double b1[3], const double b2[3], double a0, double a1,
+         double q0, double q1, double c2, int want_cost, double *prod, int32_t *scaled, double acc[20])
 {
     /* written out (the linalg helpers live in another translation unit and would not be
      * inlined): u = R f1, c = u x f2, e = t . c, f2t = f2 x t, de/dw = u x f2t,
@@ -517,9 +518,10 @@ static inline void lm_point(const double R[9], const double t[3], const double b
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-static inline void lm_pair_accumulate(__m128d e, __m128d d, __m128d J[5], __m128d c0, __m128d c1, __m128d cc2,
-                                      const double b1[3], const double b2[3], double c2, int want_cost,
-                                      double *prod, int32_t *scaled, double acc[20])
+static inline void
+lm_pair_accumulate(__m128d e, __m128d d, __m128d J[5], __m128d c0, __m128d c1, __m128d cc2,
+                   const double b1[3], const double b2[3], double c2, int want_cost, double *prod,
+                   int32_t *scaled, double acc[20])
 {
     const __m128d B10 = _mm_set1_pd(b1[0]), B11 = _mm_set1_pd(b1[1]), B12 = _mm_set1_pd(b1[2]);
     const __m128d B20 = _mm_set1_pd(b2[0]), B21 = _mm_set1_pd(b2[1]), B22 = _mm_set1_pd(b2[2]);
@@ -697,8 +699,8 @@ static int solve_damped(const double H[25], const double g[5], double lambda, do
 /* Levenberg-Marquardt on the robust Sampson cost over the masked points. One pass per iteration:
  * the pass at a trial pose gives both its cost (accept / reject) and, when accepted, the normal
  * equations of the next step. */
-static void refine_pose(double R[9], double t[3], const tvo_point2d *x1, const tvo_point2d *x2,
-                        int32_t n, const uint8_t *mask, int iters, double c2)
+static void refine_pose(double R[9], double t[3], const tvo_point2d *x1, const tvo_point2d *x2, int32_t n,
+                        const uint8_t *mask, int iters, double c2)
 {
     double H[25], g[5], b1[3], b2[3];
     tangent_basis(t, b1, b2);
@@ -848,8 +850,9 @@ static int32_t rotation_ransac(const tvo_relpose_config *cfg, const tvo_point2d 
  * inliers (threshold thr2 on the chord between bearings) and refits converges to the rotation
  * model's consensus set without a separate RANSAC. With real parallax the rotation explains few
  * points and the parallax test below rejects it anyway. */
-static int32_t rotation_from_inliers(const double E[9], const tvo_point2d *x1, const tvo_point2d *x2, int32_t n,
-                                     double thr2, const uint8_t *mask_e, double R[9], uint8_t *mask)
+static int32_t rotation_from_inliers(const double E[9], const tvo_point2d *x1, const tvo_point2d *x2,
+                                     int32_t n, double thr2, const uint8_t *mask_e, double R[9],
+                                     uint8_t *mask)
 {
     /* seeds: the least-squares rotation of the epipolar inliers (biased by the few outliers that
      * happen to lie on their epipolar lines), and the two rotations of E's decompositions (one of
@@ -908,8 +911,22 @@ static int homography_4pt(const tvo_point2d *x1, const tvo_point2d *x2, const in
     for (int k = 0; k < 4; ++k) {
         double a0 = x1[idx[k]].x, a1 = x1[idx[k]].y, u = x2[idx[k]].x, v = x2[idx[k]].y;
         double *r0 = &A[16 * k], *r1 = &A[16 * k + 8];
-        r0[0] = a0; r0[1] = a1; r0[2] = 1; r0[3] = 0;  r0[4] = 0;  r0[5] = 0; r0[6] = -u * a0; r0[7] = -u * a1;
-        r1[0] = 0;  r1[1] = 0;  r1[2] = 0; r1[3] = a0; r1[4] = a1; r1[5] = 1; r1[6] = -v * a0; r1[7] = -v * a1;
+        r0[0] = a0;
+        r0[1] = a1;
+        r0[2] = 1;
+        r0[3] = 0;
+        r0[4] = 0;
+        r0[5] = 0;
+        r0[6] = -u * a0;
+        r0[7] = -u * a1;
+        r1[0] = 0;
+        r1[1] = 0;
+        r1[2] = 0;
+        r1[3] = a0;
+        r1[4] = a1;
+        r1[5] = 1;
+        r1[6] = -v * a0;
+        r1[7] = -v * a1;
         b[2 * k] = u;
         b[2 * k + 1] = v;
     }
@@ -1026,12 +1043,18 @@ static int homography_dlt(const tvo_point2d *x1, const tvo_point2d *x2, int32_t 
     int32_t m = 0;
     for (int32_t i = 0; i < n; ++i)
         if (mask[i]) {
-            c1x += x1[i].x; c1y += x1[i].y; c2x += x2[i].x; c2y += x2[i].y;
+            c1x += x1[i].x;
+            c1y += x1[i].y;
+            c2x += x2[i].x;
+            c2y += x2[i].y;
             ++m;
         }
     if (m < 4)
         return 0;
-    c1x /= m; c1y /= m; c2x /= m; c2y /= m;
+    c1x /= m;
+    c1y /= m;
+    c2x /= m;
+    c2y /= m;
     for (int32_t i = 0; i < n; ++i)
         if (mask[i]) {
             s1 += tvo_dm_hypot(x1[i].x - c1x, x1[i].y - c1y);
@@ -1133,7 +1156,6 @@ static int decompose_homography(const double H[9], double Rs[16][9], double ts[1
     return nc;
 }
 
-
 /* R equal to Rb entry by entry (as values: the pairs decompose_homography emits share one R) */
 static int same_rotation(const double Ra[9], const double Rb[9])
 {
@@ -1171,7 +1193,8 @@ static int32_t good_count(const double R[9], const double t[3], const tvo_point2
 static int poses_differ(const double Ra[9], const double ta[3], const double Rb[9], const double tb[3])
 {
     double c = dot3(ta, tb);
-    return tvo_la_rot_dist(Ra, Rb) > RP_DIFFER_ROT_DEG * RP_PI / 180.0 || c < tvo_dm_cos(RP_DIFFER_T_DEG * RP_PI / 180.0);
+    return tvo_la_rot_dist(Ra, Rb) > RP_DIFFER_ROT_DEG * RP_PI / 180.0 ||
+            c < tvo_dm_cos(RP_DIFFER_T_DEG * RP_PI / 180.0);
 }
 
 /* ---- public API ----------------------------------------------------------------------------- */
@@ -1344,8 +1367,10 @@ static int32_t essential_ransac(const tvo_relpose_config *cfg, const tvo_point2d
             b[k][0] = x2[idx[k]].x;
             b[k][1] = x2[idx[k]].y;
             for (int j = 0; j < k; ++j) {
-                double d1 = (a[k][0] - a[j][0]) * (a[k][0] - a[j][0]) + (a[k][1] - a[j][1]) * (a[k][1] - a[j][1]);
-                double d2 = (b[k][0] - b[j][0]) * (b[k][0] - b[j][0]) + (b[k][1] - b[j][1]) * (b[k][1] - b[j][1]);
+                double d1 = (a[k][0] - a[j][0]) * (a[k][0] - a[j][0]) +
+                        (a[k][1] - a[j][1]) * (a[k][1] - a[j][1]);
+                double d2 = (b[k][0] - b[j][0]) * (b[k][0] - b[j][0]) +
+                        (b[k][1] - b[j][1]) * (b[k][1] - b[j][1]);
                 if (d1 < min_sep2 || d2 < min_sep2)
                     degenerate = 1;
             }
@@ -1355,9 +1380,9 @@ static int32_t essential_ransac(const tvo_relpose_config *cfg, const tvo_point2d
         double Es[10][9];
         int ns;
         if (s == 5)
-            ns = tvo_essential_5pt((const double (*)[2])a, (const double (*)[2])b, Es);
+            ns = tvo_essential_5pt((const double(*)[2])a, (const double(*)[2])b, Es);
         else
-            ns = tvo_essential_8pt((const double (*)[2])a, (const double (*)[2])b, 8, Es[0]);
+            ns = tvo_essential_8pt((const double(*)[2])a, (const double(*)[2])b, 8, Es[0]);
         for (int m = 0; m < ns; ++m) {
             int32_t inl = 0;
             double c = msac_cost(Es[m], x1, x2, n, stride, thr2, best_cost, eps, &inl);
@@ -1367,7 +1392,8 @@ static int32_t essential_ransac(const tvo_relpose_config *cfg, const tvo_point2d
             best_inl = inl;
             memcpy(Ebest, Es[m], 9 * sizeof(double));
             double Elo[9];
-            if (best_inl >= 2 * s && lo_refine(Ebest, x1, x2, n, thr2, s == 8 ? RP_LO_ROUNDS_8PT : RP_LO_ROUNDS_5PT, mask, Elo)) {
+            if (best_inl >= 2 * s &&
+                lo_refine(Ebest, x1, x2, n, thr2, s == 8 ? RP_LO_ROUNDS_8PT : RP_LO_ROUNDS_5PT, mask, Elo)) {
                 int32_t inl2 = 0;
                 double c2 = msac_cost(Elo, x1, x2, n, stride, thr2, best_cost, 0.0, &inl2);
                 if (c2 < best_cost) {
@@ -1461,8 +1487,8 @@ typedef struct rp_choice {
 } rp_choice;
 
 /* Stage 0: the input checks of relpose.h in their order, then the scratch arrays */
-static tvo_status prepare(const tvo_relpose_config *cfg, const tvo_point2d *x1, const tvo_point2d *x2, int32_t n,
-                          void *scratch, size_t scratch_size, rp_work *w)
+static tvo_status prepare(const tvo_relpose_config *cfg, const tvo_point2d *x1, const tvo_point2d *x2,
+                          int32_t n, void *scratch, size_t scratch_size, rp_work *w)
 {
     tvo_status st = check_config(cfg);
     if (st != TVO_OK)
@@ -1501,7 +1527,8 @@ static tvo_status prepare(const tvo_relpose_config *cfg, const tvo_point2d *x1, 
  * else its own 2-point RANSAC) in Rrot with its inliers in mask_r; the rotation-compensated parallax
  * (median angle between Rrot f1 and f2 over the epipolar inliers, degrees) and R_rot go to out.
  * Returns the rotation model's inlier count. */
-static int32_t rotation_stage(const rp_work *w, const double E[9], int32_t e_inl, double Rrot[9], tvo_relpose *out)
+static int32_t rotation_stage(const rp_work *w, const double E[9], int32_t e_inl, double Rrot[9],
+                              tvo_relpose *out)
 {
     const int seeded = e_inl >= RP_MIN_SAMPLE;
     const double wide2 = RP_WIDE2 * w->thr2;
@@ -1552,7 +1579,8 @@ static void rotation_result(const rp_work *w, const double Rrot[9], int32_t r_in
     out->flags = TVO_RELPOSE_FLAG_ROTATION_ONLY;
     if (parallax < min_par)
         out->flags |= TVO_RELPOSE_FLAG_LOW_PARALLAX;
-    if (r_inl < w->cfg->min_inliers || r_inl < RP_MIN_ROT_INLIERS || (e_inl < RP_MIN_SAMPLE && parallax >= min_par))
+    if (r_inl < w->cfg->min_inliers || r_inl < RP_MIN_ROT_INLIERS ||
+        (e_inl < RP_MIN_SAMPLE && parallax >= min_par))
         out->flags |= TVO_RELPOSE_FLAG_LOW_CONFIDENCE;
     if (inlier_mask != NULL)
         memcpy(inlier_mask, w->mask_r, (size_t)w->n);
@@ -1679,7 +1707,8 @@ typedef struct rp_cand {
     int32_t inl, good;
 } rp_cand;
 
-static void polish_candidate(const rp_work *w, const double R[9], const double t[3], uint8_t *mask, rp_cand *c)
+static void polish_candidate(const rp_work *w, const double R[9], const double t[3], uint8_t *mask,
+                             rp_cand *c)
 {
     memcpy(c->R, R, sizeof c->R);
     memcpy(c->t, t, sizeof c->t);
@@ -1691,8 +1720,8 @@ static void polish_candidate(const rp_work *w, const double R[9], const double t
  * both explain the data about equally well (RP_TWIN_SHARE of each other's and of the epipolar pose's
  * good count) the choice is ambiguous and the twins go to ch. Returns in h the better of the two,
  * its inliers in mask_c. */
-static void plane_pose(const rp_work *w, rp_choice *ch, double Rs[16][9], double ts[16][3], const int32_t gk[16],
-                       int kb, int kb2, rp_cand *h)
+static void plane_pose(const rp_work *w, rp_choice *ch, double Rs[16][9], double ts[16][3],
+                       const int32_t gk[16], int kb, int kb2, rp_cand *h)
 {
     polish_candidate(w, Rs[kb], ts[kb], w->mask_c, h);
     if (kb2 < 0 || gk[kb2] < RP_MIN_GOOD)
@@ -1770,7 +1799,8 @@ static void pose_result(const rp_work *w, const rp_choice *ch, tvo_relpose *out,
         int k = poses_differ(ch->Rtw[0], ch->ttw[0], ch->R, ch->t) ? 0 : 1;
         double na = sqrt(dot3(ch->ttw[k], ch->ttw[k]));
         out->flags |= TVO_RELPOSE_FLAG_LOW_CONFIDENCE;
-        if (na > 0.0 && pose_finite(ch->Rtw[k], ch->ttw[k]) && poses_differ(ch->Rtw[k], ch->ttw[k], ch->R, ch->t)) {
+        if (na > 0.0 && pose_finite(ch->Rtw[k], ch->ttw[k]) &&
+            poses_differ(ch->Rtw[k], ch->ttw[k], ch->R, ch->t)) {
             out->flags |= TVO_RELPOSE_FLAG_AMBIGUOUS;
             memcpy(out->R_alt, ch->Rtw[k], sizeof out->R_alt);
             for (int j = 0; j < 3; ++j)
@@ -1782,8 +1812,8 @@ static void pose_result(const rp_work *w, const rp_choice *ch, tvo_relpose *out,
 }
 
 tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_point2d *x1,
-                                const tvo_point2d *x2, int32_t n, tvo_relpose *out,
-                                uint8_t *inlier_mask, void *scratch, size_t scratch_size)
+                                const tvo_point2d *x2, int32_t n, tvo_relpose *out, uint8_t *inlier_mask,
+                                void *scratch, size_t scratch_size)
 {
     if (out == NULL)
         return TVO_ERR_NULL;

@@ -129,7 +129,8 @@ void tvo_pose_to_matrix(const tvo_pose *T, double M[16])
 
 void tvo_quat_to_rot(const double q_wxyz[4], double R[9])
 {
-    double n = sqrt(q_wxyz[0] * q_wxyz[0] + q_wxyz[1] * q_wxyz[1] + q_wxyz[2] * q_wxyz[2] + q_wxyz[3] * q_wxyz[3]);
+    double n = sqrt(q_wxyz[0] * q_wxyz[0] + q_wxyz[1] * q_wxyz[1] + q_wxyz[2] * q_wxyz[2] +
+                    q_wxyz[3] * q_wxyz[3]);
     double w, x, y, z;
     if (!isfinite(n) || !(n > 1e-150) || !tvo_all_finite(q_wxyz, 4)) {
         tvo_set_identity(R);
@@ -306,7 +307,8 @@ double tvo_rot_orthogonality_error(const double R[9])
 
 static double tvo_det3(const double *M)
 {
-    return M[0] * (M[4] * M[8] - M[5] * M[7]) - M[1] * (M[3] * M[8] - M[5] * M[6]) + M[2] * (M[3] * M[7] - M[4] * M[6]);
+    return M[0] * (M[4] * M[8] - M[5] * M[7]) - M[1] * (M[3] * M[8] - M[5] * M[6]) +
+            M[2] * (M[3] * M[7] - M[4] * M[6]);
 }
 
 void tvo_rot_orthonormalize(double R[9])
@@ -355,7 +357,8 @@ int tvo_pose_is_finite(const tvo_pose *T)
     return tvo_all_finite(T->R, 9) && tvo_all_finite(T->t, 3);
 }
 
-tvo_pose tvo_pose_body_to_camera_relative(const tvo_pose *T_w_bk, const tvo_pose *T_w_bk1, const tvo_pose *T_b_s)
+tvo_pose tvo_pose_body_to_camera_relative(const tvo_pose *T_w_bk, const tvo_pose *T_w_bk1,
+                                          const tvo_pose *T_b_s)
 {
     const tvo_pose T_w_ck = tvo_pose_compose(T_w_bk, T_b_s);
     const tvo_pose T_w_ck1 = tvo_pose_compose(T_w_bk1, T_b_s);

@@ -13,38 +13,38 @@
 
 struct tvo_vo {
     tvo_vo_config cfg;
-    tvo_pyramid pyr[2];       /* level 0 borrowed: the current frame's is the caller's image, the previous
+    tvo_pyramid pyr[2]; /* level 0 borrowed: the current frame's is the caller's image, the previous
                                  frame's is the copy in level0 (made at the end of each frame) */
-    uint8_t *level0;          /* [width x height] */
-    int32_t cur;              /* index of the pyramid that receives the next frame */
-    int32_t has_prev;         /* a previous frame with tracks exists */
+    uint8_t *level0;    /* [width x height] */
+    int32_t cur;        /* index of the pyramid that receives the next frame */
+    int32_t has_prev;   /* a previous frame with tracks exists */
     int64_t t_prev;
-    double t_dir[3];          /* unit translation (X_cur = R X_prev + t) of the last frame that had one */
-    int32_t t_dir_age;        /* frames since then; > TVO_VO_PRIOR_FRAMES: no motion prior */
-    int32_t n;                /* tracks in pts (positions in the previous frame) */
-    tvo_point2f *pts;         /* [max_tracks] */
-    tvo_point2f *next;        /* [max_tracks] */
-    uint8_t *st;              /* [max_tracks] */
-    tvo_point2d *x1, *x2;     /* [max_tracks] normalised prev / cur */
-    uint8_t *ok1, *ok2, *mask;/* [max_tracks] */
-    tvo_corner *corners;      /* [max_tracks] */
+    double t_dir[3];           /* unit translation (X_cur = R X_prev + t) of the last frame that had one */
+    int32_t t_dir_age;         /* frames since then; > TVO_VO_PRIOR_FRAMES: no motion prior */
+    int32_t n;                 /* tracks in pts (positions in the previous frame) */
+    tvo_point2f *pts;          /* [max_tracks] */
+    tvo_point2f *next;         /* [max_tracks] */
+    uint8_t *st;               /* [max_tracks] */
+    tvo_point2d *x1, *x2;      /* [max_tracks] normalised prev / cur */
+    uint8_t *ok1, *ok2, *mask; /* [max_tracks] */
+    tvo_corner *corners;       /* [max_tracks] */
     /* relative scale: each track's normalised position two frames back (frame k-2 while frame k is
        processed; valid where has0[i]) and the previous frame's pose (X_(k-1) = R0 X_(k-2) + t0, |t0| = 1;
        valid while has_pose0) */
-    tvo_point2d *x0;          /* [max_tracks] */
-    uint8_t *has0;            /* [max_tracks] */
+    tvo_point2d *x0; /* [max_tracks] */
+    uint8_t *has0;   /* [max_tracks] */
     double R0[9], t0[3];
     int32_t has_pose0;
     /* keyframe rotation (cfg.keyframe): each track's normalised position in the keyframe K (valid where
        hask[i]), the K -> cur correspondences of one frame (kx1, kx2, kmask), and the rotation of the
        previous frame relative to K (X_prev = R_pK X_K; valid while has_kf) */
-    tvo_point2d *xk;          /* [max_tracks] */
-    uint8_t *hask;            /* [max_tracks] */
-    tvo_point2d *kx1, *kx2;   /* [max_tracks] */
-    uint8_t *kmask;           /* [max_tracks] */
+    tvo_point2d *xk;        /* [max_tracks] */
+    uint8_t *hask;          /* [max_tracks] */
+    tvo_point2d *kx1, *kx2; /* [max_tracks] */
+    uint8_t *kmask;         /* [max_tracks] */
     double R_pK[9];
     int32_t has_kf;
-    int32_t kf_age;           /* frames from K to the previous frame */
+    int32_t kf_age; /* frames from K to the previous frame */
     /* track prediction (cfg.track_prediction): the last frame's rotation (X_prev = R_pred X_prevprev),
        its frame interval, valid while has_pred; r2_max: the squared normalised radius (x 1.21) of the
        farthest image corner, beyond which a predicted point is not distorted back */
@@ -54,14 +54,14 @@ struct tvo_vo {
     double r2_max;
     /* track identity (tvo_vo_tracks) and the local map's per-track state (tvo_map.h): landmark, the
        keyframe and position a track waits in for its triangulation, its map inlier flag */
-    uint32_t *id;             /* [max_tracks] */
-    int32_t *age;             /* [max_tracks] */
-    int32_t *lm, *tri_fr;     /* [max_tracks] */
-    tvo_point2d *tri_x;       /* [max_tracks] */
-    uint8_t *minl;            /* [max_tracks] */
+    uint32_t *id;         /* [max_tracks] */
+    int32_t *age;         /* [max_tracks] */
+    int32_t *lm, *tri_fr; /* [max_tracks] */
+    tvo_point2d *tri_x;   /* [max_tracks] */
+    uint8_t *minl;        /* [max_tracks] */
     uint32_t next_id;
     tvo_map map;
-    tvo_pose T_c_w;           /* the last frame's pose in the VO's world (world -> camera) */
+    tvo_pose T_c_w; /* the last frame's pose in the VO's world (world -> camera) */
     void *scratch;
     size_t scratch_size;
 };
@@ -211,16 +211,16 @@ static size_t layout_size(const tvo_vo_config *cfg)
     s = tvo_size_add(s, tvo_size_mul(2, tvo_arena_round(pyr)));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul((size_t)cfg->camera.width, (size_t)cfg->camera.height)));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2f))) * 2);
-    s = tvo_size_add(s, tvo_arena_round(n) * 4);                        /* st ok1 ok2 mask */
+    s = tvo_size_add(s, tvo_arena_round(n) * 4); /* st ok1 ok2 mask */
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))) * 2);
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_corner))));
-    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))));   /* x0 */
-    s = tvo_size_add(s, tvo_arena_round(n));                                       /* has0 */
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))));     /* x0 */
+    s = tvo_size_add(s, tvo_arena_round(n));                                        /* has0 */
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))) * 3); /* xk kx1 kx2 */
-    s = tvo_size_add(s, tvo_arena_round(n) * 2);                                   /* hask kmask */
-    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(int32_t))) * 4);   /* id age lm tri_fr */
-    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))));   /* tri_x */
-    s = tvo_size_add(s, tvo_arena_round(n));                                       /* minl */
+    s = tvo_size_add(s, tvo_arena_round(n) * 2);                                    /* hask kmask */
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(int32_t))) * 4);     /* id age lm tri_fr */
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))));     /* tri_x */
+    s = tvo_size_add(s, tvo_arena_round(n));                                        /* minl */
     if (cfg->map)
         s = tvo_size_add(s, tvo_map_layout_size(cfg));
     s = tvo_size_add(s, tvo_arena_round(scratch_need(cfg)));
@@ -325,9 +325,9 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
     vo->scratch_size = scratch_need(cfg);
     vo->scratch = tvo_arena_alloc(&a, vo->scratch_size);
     if (vo->pts == NULL || vo->next == NULL || vo->st == NULL || vo->ok1 == NULL || vo->ok2 == NULL ||
-        vo->mask == NULL || vo->x1 == NULL || vo->x2 == NULL || vo->corners == NULL ||
-        vo->x0 == NULL || vo->has0 == NULL || vo->xk == NULL || vo->kx1 == NULL || vo->kx2 == NULL ||
-        vo->hask == NULL || vo->kmask == NULL || vo->scratch == NULL)
+        vo->mask == NULL || vo->x1 == NULL || vo->x2 == NULL || vo->corners == NULL || vo->x0 == NULL ||
+        vo->has0 == NULL || vo->xk == NULL || vo->kx1 == NULL || vo->kx2 == NULL || vo->hask == NULL ||
+        vo->kmask == NULL || vo->scratch == NULL)
         return TVO_ERR_NO_MEMORY;
     *out = vo;
     return TVO_OK;
@@ -512,9 +512,15 @@ static double relative_scale(tvo_vo *vo, const double R[9], const double t[3], i
         double xa[3], xb[3], xc[3], da, db;
         if (!vo->has0[i])
             continue;
-        xa[0] = vo->x0[i].x; xa[1] = vo->x0[i].y; xa[2] = 1.0;
-        xb[0] = vo->x1[i].x; xb[1] = vo->x1[i].y; xb[2] = 1.0;
-        xc[0] = vo->x2[i].x; xc[1] = vo->x2[i].y; xc[2] = 1.0;
+        xa[0] = vo->x0[i].x;
+        xa[1] = vo->x0[i].y;
+        xa[2] = 1.0;
+        xb[0] = vo->x1[i].x;
+        xb[1] = vo->x1[i].y;
+        xb[2] = 1.0;
+        xc[0] = vo->x2[i].x;
+        xc[1] = vo->x2[i].y;
+        xc[2] = 1.0;
         da = depth_in_b(vo->R0, vo->t0, xa, xb, sin2_min); /* frame k-1 from (k-2, k-1) */
         if (da <= 0.0)
             continue;
@@ -546,8 +552,7 @@ enum { KF_NONE = 0, KF_USED = 1, KF_FAILED = 2 };
 static void keyframe_set(tvo_vo *vo)
 {
     vo->has_kf = 0;
-    if (vo->n <= 0 ||
-        tvo_camera_undistort(&vo->cfg.camera, vo->pts, vo->xk, vo->hask, vo->n) != TVO_OK)
+    if (vo->n <= 0 || tvo_camera_undistort(&vo->cfg.camera, vo->pts, vo->xk, vo->hask, vo->n) != TVO_OK)
         return;
     memset(vo->R_pK, 0, sizeof(vo->R_pK));
     vo->R_pK[0] = vo->R_pK[4] = vo->R_pK[8] = 1.0;
@@ -581,7 +586,8 @@ static int keyframe_rotation(tvo_vo *vo, const tvo_relpose_config *rc, int32_t m
     }
     if (k < vo->cfg.min_pose_tracks)
         return KF_FAILED;
-    if (tvo_relpose_estimate(rc, vo->kx1, vo->kx2, k, &kp, vo->kmask, vo->scratch, vo->scratch_size) != TVO_OK)
+    if (tvo_relpose_estimate(rc, vo->kx1, vo->kx2, k, &kp, vo->kmask, vo->scratch, vo->scratch_size) !=
+        TVO_OK)
         return KF_FAILED;
     *kpar = kp.parallax_deg;
     if ((kp.flags & (TVO_RELPOSE_FLAG_LOW_CONFIDENCE | TVO_RELPOSE_FLAG_AMBIGUOUS)) ||
@@ -613,14 +619,18 @@ static int keyframe_rotation(tvo_vo *vo, const tvo_relpose_config *rc, int32_t m
  * denominators, iterated 3 times, did not do better on the EuRoC renders.) 1 when t was written. */
 static int translation_given_rotation(const tvo_vo *vo, const double R[9], int32_t m, double t[3])
 {
-    double A[9] = { 0 }, w[3], V[9], u[3], un[3], nrm;
+    double A[9] = {0}, w[3], V[9], u[3], un[3], nrm;
     int32_t k = 0, front = 0, back = 0;
     for (int32_t i = 0; i < m; ++i) {
         double x1[3], x2[3], Rx[3], a[3];
         if (!vo->mask[i])
             continue;
-        x1[0] = vo->x1[i].x; x1[1] = vo->x1[i].y; x1[2] = 1.0;
-        x2[0] = vo->x2[i].x; x2[1] = vo->x2[i].y; x2[2] = 1.0;
+        x1[0] = vo->x1[i].x;
+        x1[1] = vo->x1[i].y;
+        x1[2] = 1.0;
+        x2[0] = vo->x2[i].x;
+        x2[1] = vo->x2[i].y;
+        x2[2] = 1.0;
         tvo_la_mat3_vec(R, x1, Rx);
         tvo_la_cross(Rx, x2, a);
         for (int r = 0; r < 3; ++r)
@@ -631,7 +641,9 @@ static int translation_given_rotation(const tvo_vo *vo, const double R[9], int32
     /* w[1] > 0: the null direction is unique */
     if (k < 5 || tvo_la_sym_eig(A, 3, w, V) != TVO_OK || !(w[1] > 0.0) || !isfinite(w[2]))
         return 0;
-    u[0] = V[0]; u[1] = V[3]; u[2] = V[6];
+    u[0] = V[0];
+    u[1] = V[3];
+    u[2] = V[6];
     nrm = sqrt(dot3(u, u));
     if (!(nrm > 0.0) || !isfinite(nrm))
         return 0;
@@ -643,8 +655,12 @@ static int translation_given_rotation(const tvo_vo *vo, const double R[9], int32
         double x1[3], x2[3];
         if (!vo->mask[i])
             continue;
-        x1[0] = vo->x1[i].x; x1[1] = vo->x1[i].y; x1[2] = 1.0;
-        x2[0] = vo->x2[i].x; x2[1] = vo->x2[i].y; x2[2] = 1.0;
+        x1[0] = vo->x1[i].x;
+        x1[1] = vo->x1[i].y;
+        x1[2] = 1.0;
+        x2[0] = vo->x2[i].x;
+        x2[1] = vo->x2[i].y;
+        x2[2] = 1.0;
         front += depth_in_b(R, u, x1, x2, 0.0) > 0.0;
         back += depth_in_b(R, un, x1, x2, 0.0) > 0.0;
     }
@@ -798,14 +814,14 @@ static void map_new_tracks(tvo_vo *vo, int32_t first)
 
 /* What one frame's stages hand to each other (tvo_vo_process). */
 typedef struct frame_ctx {
-    tvo_pyramid *pc, *pp;      /* this frame's pyramid, the previous frame's */
-    int32_t m;                 /* correspondences (tracks with both ends) */
-    int32_t pose0_next;        /* this frame's pose is a unit translation for the next rel_scale */
-    int32_t pred_next;         /* this frame's rotation predicts the next frame's tracks */
-    int predicted;             /* LK started from predicted positions (x1 / ok1 then hold pts') */
-    int kf;                    /* what the keyframe rotation did this frame */
-    double kpar;               /* its parallax */
-    double R2v[9];             /* this frame's two-view rotation (X_cur = R X_prev), valid when has_R2v */
+    tvo_pyramid *pc, *pp; /* this frame's pyramid, the previous frame's */
+    int32_t m;            /* correspondences (tracks with both ends) */
+    int32_t pose0_next;   /* this frame's pose is a unit translation for the next rel_scale */
+    int32_t pred_next;    /* this frame's rotation predicts the next frame's tracks */
+    int predicted;        /* LK started from predicted positions (x1 / ok1 then hold pts') */
+    int kf;               /* what the keyframe rotation did this frame */
+    double kpar;          /* its parallax */
+    double R2v[9];        /* this frame's two-view rotation (X_cur = R X_prev), valid when has_R2v */
     int has_R2v;
 } frame_ctx;
 
@@ -1015,7 +1031,7 @@ static void finish_frame(tvo_vo *vo, const frame_ctx *fc, int64_t t_ns, tvo_vo_r
         /* a new keyframe after a frame without a pose, when the keyframe estimate failed, when too few
            tracks seen in K survive, or when K is far (parallax or rotation) from this frame */
         int renew = !vo->has_kf || fc->kf == KF_FAILED ||
-                    (res->state != TVO_VO_OK && res->state != TVO_VO_ROTATION_ONLY);
+                (res->state != TVO_VO_OK && res->state != TVO_VO_ROTATION_ONLY);
         if (!renew) {
             int32_t nk = 0;
             for (int32_t i = 0; i < vo->n; ++i)
@@ -1090,7 +1106,8 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
     t0 = now_ns(vo);
     fc.pc = &vo->pyr[vo->cur];
     fc.pp = &vo->pyr[vo->cur ^ 1];
-    st = tvo_pyramid_build_borrowed(fc.pc, frame); /* level 0 is the caller's frame until the end of the call */
+    st = tvo_pyramid_build_borrowed(fc.pc,
+                                    frame); /* level 0 is the caller's frame until the end of the call */
     if (st != TVO_OK)
         return st;
     t1 = now_ns(vo);
@@ -1151,7 +1168,7 @@ tvo_status tvo_vo_refine(const tvo_nn *nn, const tvo_vo_result *res, tvo_pose *s
         return st;
     mask = tvo_nn_output_mask(nn);
     if ((mask & 0x38) == 0x38) {
-        const double v[3] = { y[TVO_NN_RX], y[TVO_NN_RY], y[TVO_NN_RZ] };
+        const double v[3] = {y[TVO_NN_RX], y[TVO_NN_RY], y[TVO_NN_RZ]};
         tvo_rotvec_to_rot(v, step->R);
     }
     if ((mask & 0x7) == 0x7) {

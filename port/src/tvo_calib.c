@@ -26,19 +26,26 @@ static void tvo_calib_err(char *err, size_t err_size, const char *fmt, ...)
 const char *tvo_calib_format_name(tvo_calib_format format)
 {
     switch (format) {
-    case TVO_CALIB_AUTO: return "auto";
-    case TVO_CALIB_EUROC: return "euroc";
-    case TVO_CALIB_KALIBR_CAMCHAIN: return "kalibr-camchain";
-    case TVO_CALIB_KALIBR: return "kalibr";
-    case TVO_CALIB_OPENCV: return "opencv";
-    case TVO_CALIB_ROS: return "ros";
-    default: return "unknown";
+    case TVO_CALIB_AUTO:
+        return "auto";
+    case TVO_CALIB_EUROC:
+        return "euroc";
+    case TVO_CALIB_KALIBR_CAMCHAIN:
+        return "kalibr-camchain";
+    case TVO_CALIB_KALIBR:
+        return "kalibr";
+    case TVO_CALIB_OPENCV:
+        return "opencv";
+    case TVO_CALIB_ROS:
+        return "ros";
+    default:
+        return "unknown";
     }
 }
 
 /* The value of node i for a message: at most 40 bytes. */
-#define TVO_SHOWN(doc, i) (int)(strlen(tvo_yaml_value(doc, i)) > 40 ? 40 : strlen(tvo_yaml_value(doc, i))), \
-                          tvo_yaml_value(doc, i)
+#define TVO_SHOWN(doc, i) \
+    (int)(strlen(tvo_yaml_value(doc, i)) > 40 ? 40 : strlen(tvo_yaml_value(doc, i))), tvo_yaml_value(doc, i)
 
 /* Distortion model names -> the core's model; -1 for a name the core cannot represent. */
 static int tvo_calib_dist_name(const char *s)
@@ -74,7 +81,8 @@ static tvo_status tvo_calib_set_dist(tvo_camera *cam, int model, const double *v
         for (i = 5; i < n; ++i)
             if (v[i] != 0.0) {
                 tvo_calib_err(err, err_size,
-                              "line %d: %s: the %s model (%d coefficients) with non-zero k4.. is not supported "
+                              "line %d: %s: the %s model (%d coefficients) with non-zero k4.. is not "
+                              "supported "
                               "(only k1 k2 p1 p2 k3)",
                               line, key, n == 8 ? "rational" : (n == 12 ? "thin-prism" : "tilted"), n);
                 return TVO_ERR_UNSUPPORTED;
@@ -92,7 +100,8 @@ static tvo_status tvo_calib_set_dist(tvo_camera *cam, int model, const double *v
     if (model == TVO_DIST_NONE) {
         for (i = 0; i < n; ++i)
             if (v[i] != 0.0) {
-                tvo_calib_err(err, err_size, "line %d: distortion_model none with non-zero coefficients", line);
+                tvo_calib_err(err, err_size, "line %d: distortion_model none with non-zero coefficients",
+                              line);
                 return TVO_ERR_FORMAT;
             }
         n = 0;
@@ -116,12 +125,14 @@ static tvo_status tvo_calib_rigid(const double *v, int line, const char *key, tv
     }
     if (!(fabs(v[3]) <= TVO_CALIB_MAX_COORD && fabs(v[7]) <= TVO_CALIB_MAX_COORD &&
           fabs(v[11]) <= TVO_CALIB_MAX_COORD)) {
-        tvo_calib_err(err, err_size, "line %d: %s: translation beyond +-%g m", line, key, TVO_CALIB_MAX_COORD);
+        tvo_calib_err(err, err_size, "line %d: %s: translation beyond +-%g m", line, key,
+                      TVO_CALIB_MAX_COORD);
         return TVO_ERR_FORMAT;
     }
     *T = tvo_pose_from_matrix(v);
-    d = T->R[0] * (T->R[4] * T->R[8] - T->R[5] * T->R[7]) - T->R[1] * (T->R[3] * T->R[8] - T->R[5] * T->R[6]) +
-        T->R[2] * (T->R[3] * T->R[7] - T->R[4] * T->R[6]);
+    d = T->R[0] * (T->R[4] * T->R[8] - T->R[5] * T->R[7]) -
+            T->R[1] * (T->R[3] * T->R[8] - T->R[5] * T->R[6]) +
+            T->R[2] * (T->R[3] * T->R[7] - T->R[4] * T->R[6]);
     if (!(tvo_rot_orthogonality_error(T->R) < 1e-3) || !(d > 0.0)) {
         tvo_calib_err(err, err_size, "line %d: %s: the rotation block is not a rotation", line, key);
         return TVO_ERR_FORMAT;
@@ -150,8 +161,8 @@ static tvo_status tvo_calib_asl_block(const tvo_yaml_doc *y, int parent, tvo_cal
 
     en = tvo_yaml_find(y, parent, "camera_model", 0);
     if (en >= 0 && !tvo_yaml_is(y, en, "pinhole")) {
-        tvo_calib_err(err, err_size, "line %d: camera_model '%.*s'%s not supported (only pinhole)", y->node[en].line,
-                      TVO_SHOWN(y, en), tvo_calib_model_what(tvo_yaml_value(y, en)));
+        tvo_calib_err(err, err_size, "line %d: camera_model '%.*s'%s not supported (only pinhole)",
+                      y->node[en].line, TVO_SHOWN(y, en), tvo_calib_model_what(tvo_yaml_value(y, en)));
         return TVO_ERR_UNSUPPORTED;
     }
     en = tvo_yaml_find(y, parent, "intrinsics", 0);
@@ -193,11 +204,13 @@ static tvo_status tvo_calib_asl_block(const tvo_yaml_doc *y, int parent, tvo_cal
         const int dc1 = tvo_yaml_find(y, parent, "distortion_coefficients", 0);
         const int dc2 = tvo_yaml_find(y, parent, "distortion_coeffs", 0);
         const int dc = dc1 >= 0 ? dc1 : dc2;
-        const char *key = (dc2 >= 0 && dc1 < 0) || (dc1 < 0 && fmt != TVO_CALIB_EUROC) ? "distortion_coeffs"
-                                                                                     : "distortion_coefficients";
+        const char *key = (dc2 >= 0 && dc1 < 0) || (dc1 < 0 && fmt != TVO_CALIB_EUROC)
+                ? "distortion_coeffs"
+                : "distortion_coefficients";
         int model;
         if (dc1 >= 0 && dc2 >= 0) {
-            tvo_calib_err(err, err_size, "line %d: both distortion_coefficients and distortion_coeffs", y->node[dc2].line);
+            tvo_calib_err(err, err_size, "line %d: both distortion_coefficients and distortion_coeffs",
+                          y->node[dc2].line);
             return TVO_ERR_FORMAT;
         }
         n = 0;
@@ -211,12 +224,14 @@ static tvo_status tvo_calib_asl_block(const tvo_yaml_doc *y, int parent, tvo_cal
         } else {
             model = tvo_calib_dist_name(tvo_yaml_value(y, dm));
             if (model < 0) {
-                tvo_calib_err(err, err_size, "line %d: distortion_model '%.*s' not supported (radtan, equidistant or none)",
+                tvo_calib_err(err, err_size,
+                              "line %d: distortion_model '%.*s' not supported (radtan, equidistant or none)",
                               y->node[dm].line, TVO_SHOWN(y, dm));
                 return TVO_ERR_UNSUPPORTED;
             }
         }
-        st = tvo_calib_set_dist(cam, model, v, n, dc >= 0 ? y->node[dc].line : (dm >= 0 ? y->node[dm].line : 0), key,
+        st = tvo_calib_set_dist(cam, model, v, n,
+                                dc >= 0 ? y->node[dc].line : (dm >= 0 ? y->node[dm].line : 0), key,
                                 "radial-tangential", err, err_size);
         if (st != TVO_OK)
             return st;
@@ -261,8 +276,8 @@ static tvo_status tvo_calib_asl_block(const tvo_yaml_doc *y, int parent, tvo_cal
             if (st != TVO_OK)
                 return st;
             if (n != 16) {
-                tvo_calib_err(err, err_size, "line %d: %s%s: expected 16 numbers, got %d", y->node[data].line, key,
-                              data != src ? " data" : "", n);
+                tvo_calib_err(err, err_size, "line %d: %s%s: expected 16 numbers, got %d", y->node[data].line,
+                              key, data != src ? " data" : "", n);
                 return TVO_ERR_FORMAT;
             }
             if (src == tbs) {
@@ -307,8 +322,8 @@ static tvo_status tvo_calib_matrix(const tvo_yaml_doc *y, int m, double *v, int 
     if ((rows >= 0 && (!tvo_yaml_scalar_double(y, rows, &r) || r != floor(r) || r < 0)) ||
         (cols >= 0 && (!tvo_yaml_scalar_double(y, cols, &c) || c != floor(c) || c < 0)) ||
         (rows >= 0 && cols >= 0 && r * c != (double)*n)) {
-        tvo_calib_err(err, err_size, "line %d: %s: rows x cols does not match the %d data values", y->node[m].line,
-                      tvo_yaml_key(y, m), *n);
+        tvo_calib_err(err, err_size, "line %d: %s: rows x cols does not match the %d data values",
+                      y->node[m].line, tvo_yaml_key(y, m), *n);
         return TVO_ERR_FORMAT;
     }
     return TVO_OK;
@@ -329,8 +344,8 @@ static tvo_status tvo_calib_opencv(const tvo_yaml_doc *y, int km, tvo_calib *c, 
             return TVO_ERR_FORMAT;
         }
         if (!tvo_yaml_scalar_double(y, d, &dv) || !tvo_calib_dim(dv)) {
-            tvo_calib_err(err, err_size, "line %d: %s: expected an integer in 1..%d", y->node[d].line, dims[i],
-                          TVO_MAX_IMAGE_DIM);
+            tvo_calib_err(err, err_size, "line %d: %s: expected an integer in 1..%d", y->node[d].line,
+                          dims[i], TVO_MAX_IMAGE_DIM);
             return TVO_ERR_FORMAT;
         }
         if (i == 0)
@@ -342,15 +357,18 @@ static tvo_status tvo_calib_opencv(const tvo_yaml_doc *y, int km, tvo_calib *c, 
     if (st != TVO_OK)
         return st;
     if (n != 9) {
-        tvo_calib_err(err, err_size, "line %d: camera_matrix: expected 9 numbers (3x3), got %d", y->node[km].line, n);
+        tvo_calib_err(err, err_size, "line %d: camera_matrix: expected 9 numbers (3x3), got %d",
+                      y->node[km].line, n);
         return TVO_ERR_FORMAT;
     }
     if (K[3] != 0.0 || K[6] != 0.0 || K[7] != 0.0 || K[8] != 1.0) {
-        tvo_calib_err(err, err_size, "line %d: camera_matrix: expected [fx 0 cx; 0 fy cy; 0 0 1]", y->node[km].line);
+        tvo_calib_err(err, err_size, "line %d: camera_matrix: expected [fx 0 cx; 0 fy cy; 0 0 1]",
+                      y->node[km].line);
         return TVO_ERR_FORMAT;
     }
     if (K[1] != 0.0) {
-        tvo_calib_err(err, err_size, "line %d: camera_matrix: a skew of %g is not supported (the core's pinhole has none)",
+        tvo_calib_err(err, err_size,
+                      "line %d: camera_matrix: a skew of %g is not supported (the core's pinhole has none)",
                       y->node[km].line, K[1]);
         return TVO_ERR_UNSUPPORTED;
     }
@@ -376,14 +394,16 @@ static tvo_status tvo_calib_opencv(const tvo_yaml_doc *y, int km, tvo_calib *c, 
             if (!strcmp(s, "rational_polynomial")) {
                 model = TVO_DIST_RADTAN;
                 if (n != 8) {
-                    tvo_calib_err(err, err_size, "line %d: rational_polynomial needs 8 distortion_coefficients, got %d",
+                    tvo_calib_err(err, err_size,
+                                  "line %d: rational_polynomial needs 8 distortion_coefficients, got %d",
                                   line, n);
                     return TVO_ERR_FORMAT;
                 }
                 for (i = 5; i < 8; ++i)
                     if (v[i] != 0.0) {
                         tvo_calib_err(err, err_size,
-                                      "line %d: distortion_model 'rational_polynomial' with non-zero k4 k5 k6 is not "
+                                      "line %d: distortion_model 'rational_polynomial' with non-zero k4 k5 "
+                                      "k6 is not "
                                       "supported (only k1 k2 p1 p2 k3)",
                                       y->node[dm].line);
                         return TVO_ERR_UNSUPPORTED;
@@ -406,11 +426,13 @@ static tvo_status tvo_calib_opencv(const tvo_yaml_doc *y, int km, tvo_calib *c, 
             model = n > 0 ? TVO_DIST_RADTAN : TVO_DIST_NONE;
         }
         if (model == TVO_DIST_RADTAN && n != 4 && n != 5 && n != 8 && n != 12 && n != 14) {
-            tvo_calib_err(err, err_size, "line %d: distortion_coefficients: expected 4, 5, 8, 12 or 14 numbers, got %d",
+            tvo_calib_err(err, err_size,
+                          "line %d: distortion_coefficients: expected 4, 5, 8, 12 or 14 numbers, got %d",
                           line, n);
             return TVO_ERR_FORMAT;
         }
-        st = tvo_calib_set_dist(cam, model, v, n, line, "distortion_coefficients", "plumb_bob", err, err_size);
+        st = tvo_calib_set_dist(cam, model, v, n, line, "distortion_coefficients", "plumb_bob", err,
+                                err_size);
         if (st != TVO_OK)
             return st;
     }
@@ -434,7 +456,7 @@ static int tvo_calib_is_cam_name(const char *s)
 static int tvo_calib_is_cam_entry(const tvo_yaml_doc *y, int i)
 {
     return y->node[i].parent == -1 && tvo_calib_is_cam_name(tvo_yaml_key(y, i)) && y->node[i].nchild > 0 &&
-           (tvo_yaml_find(y, i, "intrinsics", 0) >= 0 || tvo_yaml_find(y, i, "camera_model", 0) >= 0);
+            (tvo_yaml_find(y, i, "intrinsics", 0) >= 0 || tvo_yaml_find(y, i, "camera_model", 0) >= 0);
 }
 
 static tvo_status tvo_calib_camchain(const tvo_yaml_doc *y, const char *camera, tvo_calib *c, char *err,
@@ -450,12 +472,14 @@ static tvo_status tvo_calib_camchain(const tvo_yaml_doc *y, const char *camera, 
         names[0] = '\0';
         for (i = 0; i < y->count; ++i)
             if (tvo_calib_is_cam_entry(y, i)) {
-                int w = snprintf(names + used, sizeof names - used, "%s%s", used ? ", " : "", tvo_yaml_key(y, i));
+                int w = snprintf(names + used, sizeof names - used, "%s%s", used ? ", " : "",
+                                 tvo_yaml_key(y, i));
                 if (w < 0 || (size_t)w >= sizeof names - used)
                     break;
                 used += (size_t)w;
             }
-        tvo_calib_err(err, err_size, "no camera '%s' in the camchain (it has %s)", camera, names[0] ? names : "none");
+        tvo_calib_err(err, err_size, "no camera '%s' in the camchain (it has %s)", camera,
+                      names[0] ? names : "none");
         return TVO_ERR_NOT_FOUND;
     }
     snprintf(c->camera_name, sizeof c->camera_name, "%s", camera);
@@ -497,28 +521,33 @@ tvo_status tvo_calib_parse(const char *text, size_t len, tvo_calib_format format
             chain = tvo_calib_is_cam_entry(&y, i);
         if (km >= 0) {
             format = (y.node[km].tagged || (len >= 6 && memcmp(text, "%YAML:", 6) == 0)) ? TVO_CALIB_OPENCV
-                                                                                          : TVO_CALIB_ROS;
+                                                                                         : TVO_CALIB_ROS;
         } else if (chain) {
             format = TVO_CALIB_KALIBR_CAMCHAIN;
         } else if (tvo_yaml_find(&y, -1, "intrinsics", 0) >= 0) {
-            format = (tvo_yaml_find(&y, -1, "T_BS", 0) >= 0 || tvo_yaml_find(&y, -1, "distortion_coefficients", 0) >= 0 ||
+            format = (tvo_yaml_find(&y, -1, "T_BS", 0) >= 0 ||
+                      tvo_yaml_find(&y, -1, "distortion_coefficients", 0) >= 0 ||
                       tvo_yaml_find(&y, -1, "sensor_type", 0) >= 0)
-                         ? TVO_CALIB_EUROC
-                         : TVO_CALIB_KALIBR;
-        } else if (tvo_yaml_find(&y, -1, "model_type", 0) >= 0 && tvo_yaml_find(&y, -1, "projection_parameters", 0) >= 0) {
-            tvo_calib_err(err, err_size, "a camodocal (VINS) camera file is not one of the formats read "
+                    ? TVO_CALIB_EUROC
+                    : TVO_CALIB_KALIBR;
+        } else if (tvo_yaml_find(&y, -1, "model_type", 0) >= 0 &&
+                   tvo_yaml_find(&y, -1, "projection_parameters", 0) >= 0) {
+            tvo_calib_err(err, err_size,
+                          "a camodocal (VINS) camera file is not one of the formats read "
                           "(EuRoC, Kalibr, OpenCV, ROS camera_info)");
             st = TVO_ERR_UNSUPPORTED;
             goto done;
         } else {
-            tvo_calib_err(err, err_size, "not a calibration file tinyvo reads: no 'intrinsics', 'camera_matrix' "
+            tvo_calib_err(err, err_size,
+                          "not a calibration file tinyvo reads: no 'intrinsics', 'camera_matrix' "
                           "or 'cam0' key (EuRoC, Kalibr, OpenCV, ROS camera_info)");
             st = TVO_ERR_FORMAT;
             goto done;
         }
     }
     if (camera != NULL && format != TVO_CALIB_KALIBR_CAMCHAIN) {
-        tvo_calib_err(err, err_size, "a camera name ('%s') applies to Kalibr camchains; this is a %s file with one camera",
+        tvo_calib_err(err, err_size,
+                      "a camera name ('%s') applies to Kalibr camchains; this is a %s file with one camera",
                       camera, tvo_calib_format_name(format));
         st = TVO_ERR_ARG;
         goto done;
@@ -545,7 +574,8 @@ tvo_status tvo_calib_parse(const char *text, size_t len, tvo_calib_format format
         goto done;
     st = tvo_camera_check(&c.camera);
     if (st != TVO_OK) {
-        tvo_calib_err(err, err_size, "invalid camera (%s): need fu, fv > 0 and finite values", tvo_status_str(st));
+        tvo_calib_err(err, err_size, "invalid camera (%s): need fu, fv > 0 and finite values",
+                      tvo_status_str(st));
         st = TVO_ERR_FORMAT;
         goto done;
     }
@@ -590,7 +620,8 @@ tvo_status tvo_calib_load(const char *path, const char *camera, tvo_calib *out, 
     fclose(f);
     if (n > TVO_CALIB_MAX_FILE) {
         free(buf);
-        tvo_calib_err(err, err_size, "%s: larger than %zu bytes: not a calibration file", path, TVO_CALIB_MAX_FILE);
+        tvo_calib_err(err, err_size, "%s: larger than %zu bytes: not a calibration file", path,
+                      TVO_CALIB_MAX_FILE);
         return TVO_ERR_FORMAT;
     }
     st = tvo_calib_parse(buf, n, TVO_CALIB_AUTO, camera, out, err, err_size);

@@ -22,7 +22,7 @@ typedef struct tvo_bad_row {
 } tvo_bad_row;
 
 struct tvo_euroc {
-    char base[TVO_EUROC_PATH]; /* the mav0 folder (TUM, KITTI: the sequence folder) */
+    char base[TVO_EUROC_PATH];           /* the mav0 folder (TUM, KITTI: the sequence folder) */
     char frame_dir[TVO_EUROC_PATH + 80]; /* frames are frame_dir/<file> */
     char cam[64];
     tvo_camera camera;
@@ -32,8 +32,8 @@ struct tvo_euroc {
     int32_t nframes;
     tvo_euroc_gt_row *gt;
     int32_t ngt;
-    tvo_bad_row *bad;  /* the first TVO_EUROC_MAX_BAD_ROWS skipped rows */
-    int32_t nbad;      /* all skipped rows */
+    tvo_bad_row *bad; /* the first TVO_EUROC_MAX_BAD_ROWS skipped rows */
+    int32_t nbad;     /* all skipped rows */
 };
 
 /* ---- small helpers ------------------------------------------------------------------------------ */
@@ -289,7 +289,8 @@ static int tvo_frame_row(const char *b, const char *e, int line, int tum, tvo_eu
     fe = e;
     tvo_trim(&tb, &te);
     tvo_trim(&fb, &fe);
-    if (tum ? !tvo_parse_seconds(tb, te, &t) : (!tvo_parse_time(tb, te, &t) || memchr(tb, '.', (size_t)(te - tb)) != NULL)) {
+    if (tum ? !tvo_parse_seconds(tb, te, &t)
+            : (!tvo_parse_time(tb, te, &t) || memchr(tb, '.', (size_t)(te - tb)) != NULL)) {
         tvo_set_err(err, err_size, "line %d: bad timestamp '%.*s' (%s expected)", line,
                     (int)((te - tb) > 40 ? 40 : (te - tb)), tb, tum ? "seconds" : "integer nanoseconds");
         return 0;
@@ -313,8 +314,9 @@ static int tvo_frame_row(const char *b, const char *e, int line, int tum, tvo_eu
             tvo_set_err(err, err_size, "line %d: bad file name (empty, absolute, extra field or '..')", line);
             return 0;
         }
-    } else if (fb == fe || memchr(fb, ',', (size_t)(fe - fb)) != NULL || memchr(fb, '/', (size_t)(fe - fb)) != NULL ||
-               memchr(fb, '\\', (size_t)(fe - fb)) != NULL || tvo_span_eq(fb, fe, ".") || tvo_span_eq(fb, fe, "..")) {
+    } else if (fb == fe || memchr(fb, ',', (size_t)(fe - fb)) != NULL ||
+               memchr(fb, '/', (size_t)(fe - fb)) != NULL || memchr(fb, '\\', (size_t)(fe - fb)) != NULL ||
+               tvo_span_eq(fb, fe, ".") || tvo_span_eq(fb, fe, "..")) {
         tvo_set_err(err, err_size, "line %d: bad file name (empty, extra field, or a path)", line);
         return 0;
     }
@@ -420,19 +422,21 @@ static tvo_status tvo_parse_gt(const char *text, size_t len, tvo_euroc_gt_row *r
             return TVO_ERR_FORMAT;
         }
         if (nf < 8) {
-            tvo_set_err(err, err_size, "line %d: %d fields, need at least 8 (t px py pz qw qx qy qz)", it.line, nf);
+            tvo_set_err(err, err_size, "line %d: %d fields, need at least 8 (t px py pz qw qx qy qz)",
+                        it.line, nf);
             return TVO_ERR_FORMAT;
         }
         if (tum ? !tvo_parse_seconds(fb[0], fe[0], &r.t_ns) : !tvo_parse_time(fb[0], fe[0], &r.t_ns)) {
             tvo_set_err(err, err_size, "line %d: bad timestamp '%.*s' (%s expected)", it.line,
-                        (int)((fe[0] - fb[0]) > 40 ? 40 : (fe[0] - fb[0])), fb[0], tum ? "seconds" : "nanoseconds");
+                        (int)((fe[0] - fb[0]) > 40 ? 40 : (fe[0] - fb[0])), fb[0],
+                        tum ? "seconds" : "nanoseconds");
             return TVO_ERR_FORMAT;
         }
         for (i = 1; i < 8; ++i) {
             double v;
             if (!tvo_parse_double(fb[i], fe[i], &v)) {
-                tvo_set_err(err, err_size, "line %d: bad number in column %d (%s): '%.*s'", it.line, i + 1, names[i],
-                            (int)((fe[i] - fb[i]) > 40 ? 40 : (fe[i] - fb[i])), fb[i]);
+                tvo_set_err(err, err_size, "line %d: bad number in column %d (%s): '%.*s'", it.line, i + 1,
+                            names[i], (int)((fe[i] - fb[i]) > 40 ? 40 : (fe[i] - fb[i])), fb[i]);
                 return TVO_ERR_FORMAT;
             }
             if (i < 4 && !(fabs(v) <= TVO_EUROC_MAX_COORD)) {
@@ -551,8 +555,8 @@ static int tvo_file_exists(const char *path)
 }
 
 /* Parse a ground-truth file into a new malloc'ed array. */
-static tvo_status tvo_load_gt_kind(const char *path, int tum, tvo_euroc_gt_row **rows, int32_t *count, char *err,
-                                   size_t err_size)
+static tvo_status tvo_load_gt_kind(const char *path, int tum, tvo_euroc_gt_row **rows, int32_t *count,
+                                   char *err, size_t err_size)
 {
     char *text = NULL;
     size_t len = 0;
@@ -587,7 +591,8 @@ static tvo_status tvo_load_gt_kind(const char *path, int tum, tvo_euroc_gt_row *
     return TVO_OK;
 }
 
-static tvo_status tvo_load_gt(const char *path, tvo_euroc_gt_row **rows, int32_t *count, char *err, size_t err_size)
+static tvo_status tvo_load_gt(const char *path, tvo_euroc_gt_row **rows, int32_t *count, char *err,
+                              size_t err_size)
 {
     return tvo_load_gt_kind(path, 0, rows, count, err, err_size);
 }
@@ -609,7 +614,8 @@ static void tvo_add_bad_row(tvo_euroc *s, const char *path, int line, const char
 /* The frame list at path (EuRoC data.csv, or TUM rgb.txt with tum) into s->frames. Without lenient
  * the first malformed row fails the call ("<path>: line N: what"); with it, malformed rows are
  * recorded and skipped. A list without any frame fails. */
-static tvo_status tvo_load_frames(tvo_euroc *s, const char *path, int tum, int lenient, char *err, size_t err_size)
+static tvo_status tvo_load_frames(tvo_euroc *s, const char *path, int tum, int lenient, char *err,
+                                  size_t err_size)
 {
     char *text = NULL;
     size_t len = 0, lines = 1, k;
@@ -690,8 +696,8 @@ tvo_status tvo_euroc_open_ex(tvo_euroc **out, const char *dir, const char *cam, 
     *out = NULL;
     if (cam == NULL)
         cam = "cam0";
-    if (cam[0] == '\0' || strlen(cam) >= sizeof s->cam || strchr(cam, '/') != NULL || strcmp(cam, "..") == 0 ||
-        strcmp(cam, ".") == 0) {
+    if (cam[0] == '\0' || strlen(cam) >= sizeof s->cam || strchr(cam, '/') != NULL ||
+        strcmp(cam, "..") == 0 || strcmp(cam, ".") == 0) {
         tvo_set_err(err, err_size, "bad camera name '%s'", cam);
         return TVO_ERR_ARG;
     }
@@ -935,7 +941,8 @@ tvo_status tvo_euroc_groundtruth(const tvo_euroc *seq, int64_t t_ns, int64_t tol
     return TVO_OK;
 }
 
-tvo_status tvo_euroc_groundtruth_interp(const tvo_euroc *seq, int64_t t_ns, int64_t max_gap_ns, tvo_pose *T_w_b)
+tvo_status tvo_euroc_groundtruth_interp(const tvo_euroc *seq, int64_t t_ns, int64_t max_gap_ns,
+                                        tvo_pose *T_w_b)
 {
     const tvo_euroc_gt_row *a, *b;
     double q[4], qb[4], p[3], s, dot, wa, wb;
@@ -1028,8 +1035,8 @@ static tvo_status tvo_check_first_frame(const tvo_euroc *s, const tvo_camera *ca
         return st;
     }
     if (cam != NULL && (cam->width != *w || cam->height != *h)) {
-        tvo_set_err(err, err_size, "the calibration is for %dx%d but the frames are %dx%d (%s)", (int)cam->width,
-                    (int)cam->height, (int)*w, (int)*h, path);
+        tvo_set_err(err, err_size, "the calibration is for %dx%d but the frames are %dx%d (%s)",
+                    (int)cam->width, (int)cam->height, (int)*w, (int)*h, path);
         return TVO_ERR_MISMATCH;
     }
     return TVO_OK;
@@ -1053,7 +1060,7 @@ static tvo_status tvo_seq_begin(tvo_euroc **out, const char *dir, tvo_euroc **s,
     *s = tvo_seq_new(err, err_size);
     if (*s == NULL)
         return TVO_ERR_NO_MEMORY;
-    snprintf((*s)->base, sizeof (*s)->base, "%s", dir);
+    snprintf((*s)->base, sizeof(*s)->base, "%s", dir);
     while (n > 1 && (*s)->base[n - 1] == '/')
         (*s)->base[--n] = '\0';
     return TVO_OK;
@@ -1118,8 +1125,10 @@ tvo_status tvo_tum_open(tvo_euroc **out, const char *dir, const tvo_camera *came
     if (camera != NULL) {
         s->camera = *camera;
     } else if (tvo_tum_camera(s->base, &s->camera) != TVO_OK) {
-        tvo_set_err(err, err_size, "%s: a TUM RGB-D folder carries no calibration and its name names no "
-                    "freiburg1/2/3 camera: give one", s->base);
+        tvo_set_err(err, err_size,
+                    "%s: a TUM RGB-D folder carries no calibration and its name names no "
+                    "freiburg1/2/3 camera: give one",
+                    s->base);
         st = TVO_ERR_NOT_FOUND;
         goto fail;
     }
@@ -1185,8 +1194,8 @@ tvo_status tvo_kitti_parse_calib(const char *text, size_t len, double P0[12], ch
             }
         if (!(P[0] > 0.0) || !(P[5] > 0.0) || P[1] != 0.0 || P[4] != 0.0 || P[8] != 0.0 || P[9] != 0.0 ||
             P[10] != 1.0 || P[11] != 0.0 || P[3] != 0.0 || P[7] != 0.0) {
-            tvo_set_err(err, err_size, "line %d: P0: expected [fx 0 cx 0; 0 fy cy 0; 0 0 1 0] with fx, fy > 0",
-                        it.line);
+            tvo_set_err(err, err_size,
+                        "line %d: P0: expected [fx 0 cx 0; 0 fy cy 0; 0 0 1 0] with fx, fy > 0", it.line);
             return TVO_ERR_FORMAT;
         }
         memcpy(P0, P, sizeof P);
@@ -1196,8 +1205,8 @@ tvo_status tvo_kitti_parse_calib(const char *text, size_t len, double P0[12], ch
     return TVO_ERR_FORMAT;
 }
 
-tvo_status tvo_kitti_parse_poses(const char *text, size_t len, tvo_pose *poses, int32_t capacity, int32_t *count,
-                                 char *err, size_t err_size)
+tvo_status tvo_kitti_parse_poses(const char *text, size_t len, tvo_pose *poses, int32_t capacity,
+                                 int32_t *count, char *err, size_t err_size)
 {
     tvo_lines it;
     const char *b, *e;
@@ -1219,7 +1228,8 @@ tvo_status tvo_kitti_parse_poses(const char *text, size_t len, tvo_pose *poses, 
         }
         nf = tvo_split_fields(b, e, fb, fe, 13);
         if (nf != 12) {
-            tvo_set_err(err, err_size, "line %d: expected 12 numbers (a 3x4 pose), got %d", it.line, nf < 0 ? 0 : nf);
+            tvo_set_err(err, err_size, "line %d: expected 12 numbers (a 3x4 pose), got %d", it.line,
+                        nf < 0 ? 0 : nf);
             return TVO_ERR_FORMAT;
         }
         for (i = 0; i < 12; ++i)
@@ -1237,8 +1247,9 @@ tvo_status tvo_kitti_parse_poses(const char *text, size_t len, tvo_pose *poses, 
         }
         T = tvo_pose_from_matrix(v);
         {
-            double d = T.R[0] * (T.R[4] * T.R[8] - T.R[5] * T.R[7]) - T.R[1] * (T.R[3] * T.R[8] - T.R[5] * T.R[6]) +
-                       T.R[2] * (T.R[3] * T.R[7] - T.R[4] * T.R[6]);
+            double d = T.R[0] * (T.R[4] * T.R[8] - T.R[5] * T.R[7]) -
+                    T.R[1] * (T.R[3] * T.R[8] - T.R[5] * T.R[6]) +
+                    T.R[2] * (T.R[3] * T.R[7] - T.R[4] * T.R[6]);
             if (!(tvo_rot_orthogonality_error(T.R) < 1e-3) || !(d > 0.0)) {
                 tvo_set_err(err, err_size, "line %d: the rotation block is not a rotation", it.line);
                 return TVO_ERR_FORMAT;
@@ -1298,9 +1309,11 @@ static tvo_status tvo_kitti_load_times(tvo_euroc *s, const char *path, int lenie
         tvo_trim(&b, &e);
         if (b == e)
             continue;
-        if (memchr(b, '\0', (size_t)(e - b)) != NULL || !tvo_parse_double(b, e, &t) || !(t >= 0.0) || !(t < 9e9)) {
+        if (memchr(b, '\0', (size_t)(e - b)) != NULL || !tvo_parse_double(b, e, &t) || !(t >= 0.0) ||
+            !(t < 9e9)) {
             tvo_set_err(msg, sizeof msg, "line %d: bad time '%.*s' (seconds expected)", it.line,
-                        (int)((e - b) > 40 ? 40 : (e - b)), memchr(b, '\0', (size_t)(e - b)) != NULL ? "" : b);
+                        (int)((e - b) > 40 ? 40 : (e - b)),
+                        memchr(b, '\0', (size_t)(e - b)) != NULL ? "" : b);
             if (!lenient) {
                 tvo_set_err(err, err_size, "%s: %s", path, msg);
                 free(text);
@@ -1349,7 +1362,8 @@ tvo_status tvo_kitti_open(tvo_euroc **out, const char *dir, const char *poses, u
         st = TVO_ERR_NOT_FOUND;
         goto fail;
     }
-    st = tvo_kitti_load_times(s, path, (flags & TVO_EUROC_SKIP_BAD_ROWS) != 0, &index, &nlines, err, err_size);
+    st = tvo_kitti_load_times(s, path, (flags & TVO_EUROC_SKIP_BAD_ROWS) != 0, &index, &nlines, err,
+                              err_size);
     if (st != TVO_OK)
         goto fail;
 
@@ -1390,7 +1404,8 @@ tvo_status tvo_kitti_open(tvo_euroc **out, const char *dir, const char *poses, u
     } else {
         snprintf(path, sizeof path, "%s/poses.txt", s->base);
         if (!tvo_file_exists(path))
-            snprintf(path, sizeof path, "%s/../../poses/%s.txt", s->base, tvo_last_component(s->base, name, sizeof name));
+            snprintf(path, sizeof path, "%s/../../poses/%s.txt", s->base,
+                     tvo_last_component(s->base, name, sizeof name));
         if (!tvo_file_exists(path))
             path[0] = '\0';
     }
@@ -1418,7 +1433,8 @@ tvo_status tvo_kitti_open(tvo_euroc **out, const char *dir, const char *poses, u
             tvo_euroc_gt_row *r = &s->gt[i];
             const tvo_pose *p = &T[index[i]];
             if (i > 0 && s->frames[i].t_ns <= s->frames[i - 1].t_ns) {
-                tvo_set_err(err, err_size, "%s/times.txt: times not increasing at frame %d", s->base, (int)index[i]);
+                tvo_set_err(err, err_size, "%s/times.txt: times not increasing at frame %d", s->base,
+                            (int)index[i]);
                 st = TVO_ERR_FORMAT;
                 goto fail;
             }

@@ -103,8 +103,8 @@ static uint32_t tvo_luma(uint32_t r, uint32_t g, uint32_t b)
     return (4899u * r + 9617u * g + 1868u * b + 8192u) >> 14;
 }
 
-tvo_status tvo_png_decode_gray8(const void *png, size_t png_size, uint8_t *buf, size_t capacity, int32_t *width,
-                                int32_t *height)
+tvo_status tvo_png_decode_gray8(const void *png, size_t png_size, uint8_t *buf, size_t capacity,
+                                int32_t *width, int32_t *height)
 {
     spng_ctx *ctx;
     struct spng_ihdr ihdr;
@@ -127,7 +127,8 @@ tvo_status tvo_png_decode_gray8(const void *png, size_t png_size, uint8_t *buf, 
         spng_ctx_free(ctx);
         return tvo_png_status_of_spng(r);
     }
-    if (ihdr.width < 1 || ihdr.height < 1 || ihdr.width > TVO_MAX_IMAGE_DIM || ihdr.height > TVO_MAX_IMAGE_DIM) {
+    if (ihdr.width < 1 || ihdr.height < 1 || ihdr.width > TVO_MAX_IMAGE_DIM ||
+        ihdr.height > TVO_MAX_IMAGE_DIM) {
         spng_ctx_free(ctx);
         return TVO_ERR_SIZE;
     }
@@ -183,7 +184,8 @@ tvo_status tvo_png_decode_gray8(const void *png, size_t png_size, uint8_t *buf, 
     return st;
 }
 
-tvo_status tvo_png_read_gray8(const char *path, uint8_t *buf, size_t capacity, int32_t *width, int32_t *height)
+tvo_status tvo_png_read_gray8(const char *path, uint8_t *buf, size_t capacity, int32_t *width,
+                              int32_t *height)
 {
     uint8_t *data = NULL;
     size_t size = 0;
@@ -228,14 +230,16 @@ tvo_status tvo_png_size(const char *path, int32_t *width, int32_t *height)
     fclose(f);
     if (r != 0)
         return tvo_png_status_of_spng(r);
-    if (ihdr.width < 1 || ihdr.height < 1 || ihdr.width > TVO_MAX_IMAGE_DIM || ihdr.height > TVO_MAX_IMAGE_DIM)
+    if (ihdr.width < 1 || ihdr.height < 1 || ihdr.width > TVO_MAX_IMAGE_DIM ||
+        ihdr.height > TVO_MAX_IMAGE_DIM)
         return TVO_ERR_SIZE;
     *width = (int32_t)ihdr.width;
     *height = (int32_t)ihdr.height;
     return TVO_OK;
 }
 
-tvo_status tvo_png_write_gray8(const char *path, const uint8_t *img, int32_t width, int32_t height, int32_t stride)
+tvo_status tvo_png_write_gray8(const char *path, const uint8_t *img, int32_t width, int32_t height,
+                               int32_t stride)
 {
     FILE *f;
     spng_ctx *ctx;

@@ -337,7 +337,8 @@ static int tvo_yaml_add_key(tvo_yaml_doc *d, int parent, const char *kb, const c
     }
     for (k = 0; k < d->count; ++k) {
         const char *o = d->arena + d->node[k].kbeg;
-        if (d->node[k].parent == parent && strlen(o) == (size_t)(ke - kb) && memcmp(o, kb, (size_t)(ke - kb)) == 0) {
+        if (d->node[k].parent == parent && strlen(o) == (size_t)(ke - kb) &&
+            memcmp(o, kb, (size_t)(ke - kb)) == 0) {
             tvo_yaml_err(err, err_size, "line %d: duplicate key '%.*s'", line, (int)(ke - kb), kb);
             *st = TVO_ERR_FORMAT;
             return -1;
@@ -449,13 +450,13 @@ tvo_status tvo_yaml_load(tvo_yaml_doc *d, const char *text, size_t len, char *er
     tvo_yaml_lines it;
     const char *b, *e;
     int stack[TVO_YAML_MAX_DEPTH], child_indent[TVO_YAML_MAX_DEPTH];
-    int top = 0;            /* entries on stack */
-    int top_indent = -1;    /* column of the top-level keys */
-    int flow = -1;          /* node whose flow value continues on the next line */
-    int flow_item = 0;      /* ... as an item of a block sequence (the sequence stays open) */
+    int top = 0;         /* entries on stack */
+    int top_indent = -1; /* column of the top-level keys */
+    int flow = -1;       /* node whose flow value continues on the next line */
+    int flow_item = 0;   /* ... as an item of a block sequence (the sequence stays open) */
     int flow_depth = 0;
     char flow_quote = 0;
-    int seq = -1;           /* node whose block sequence is open ("[" written) */
+    int seq = -1; /* node whose block sequence is open ("[" written) */
     tvo_status st = TVO_OK;
     memset(d, 0, sizeof *d);
     if (text == NULL)
@@ -534,8 +535,10 @@ tvo_status tvo_yaml_load(tvo_yaml_doc *d, const char *text, size_t len, char *er
             }
             if (ib == ie || *ib == '{' || (*ib == '-' && (ib + 1 == ie || tvo_yaml_blank(ib[1]))) ||
                 (*ib != '[' && *ib != '"' && *ib != '\'' && tvo_yaml_colon(ib, ie) != NULL)) {
-                tvo_yaml_err(err, err_size, "line %d: only scalars and flow sequences are supported as "
-                             "sequence items", it.line);
+                tvo_yaml_err(err, err_size,
+                             "line %d: only scalars and flow sequences are supported as "
+                             "sequence items",
+                             it.line);
                 return TVO_ERR_FORMAT;
             }
             if (seq != node) {
@@ -629,7 +632,8 @@ tvo_status tvo_yaml_load(tvo_yaml_doc *d, const char *text, size_t len, char *er
         }
         if (vb == ve) { /* a mapping or a block sequence may follow */
             if (top == TVO_YAML_MAX_DEPTH) {
-                tvo_yaml_err(err, err_size, "line %d: nesting deeper than %d levels", it.line, TVO_YAML_MAX_DEPTH);
+                tvo_yaml_err(err, err_size, "line %d: nesting deeper than %d levels", it.line,
+                             TVO_YAML_MAX_DEPTH);
                 return TVO_ERR_FORMAT;
             }
             stack[top++] = node;

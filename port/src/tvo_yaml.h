@@ -20,15 +20,15 @@
 #include "tinyvo/status.h"
 
 typedef struct tvo_yaml_node {
-    int parent;     /* index of the parent node, -1 at top level */
-    size_t kbeg;    /* key text in tvo_yaml_doc.arena, NUL-terminated */
-    size_t vbeg;    /* value text in the arena, NUL-terminated (empty for a mapping) */
+    int parent;  /* index of the parent node, -1 at top level */
+    size_t kbeg; /* key text in tvo_yaml_doc.arena, NUL-terminated */
+    size_t vbeg; /* value text in the arena, NUL-terminated (empty for a mapping) */
     size_t vlen;
-    int line;       /* 1-based line of the key */
-    int indent;     /* column of the key */
-    int nchild;     /* child keys (mapping) */
-    int nitems;     /* block-sequence items */
-    int tagged;     /* the key's line carried a tag ("!!opencv-matrix", ...) instead of a value */
+    int line;   /* 1-based line of the key */
+    int indent; /* column of the key */
+    int nchild; /* child keys (mapping) */
+    int nitems; /* block-sequence items */
+    int tagged; /* the key's line carried a tag ("!!opencv-matrix", ...) instead of a value */
 } tvo_yaml_node;
 
 typedef struct tvo_yaml_doc {

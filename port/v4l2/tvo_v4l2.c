@@ -65,9 +65,8 @@ static int libc_poll(void *ctx, int fd, short events, int timeout_ms, short *rev
     return r;
 }
 
-static const tvo_v4l2_sys tvo_v4l2_libc_table = {
-    NULL, libc_open, libc_close, libc_ioctl, libc_mmap, libc_munmap, libc_poll
-};
+static const tvo_v4l2_sys tvo_v4l2_libc_table = {NULL,      libc_open,   libc_close, libc_ioctl,
+                                                 libc_mmap, libc_munmap, libc_poll};
 
 const tvo_v4l2_sys *tvo_v4l2_sys_libc(void)
 {
@@ -205,9 +204,8 @@ static tvo_status check_caps(tvo_v4l2 *cam, const char *dev)
 }
 
 /* Preference order: luma-first formats (zero copy), then packed YUYV. */
-static const uint32_t tvo_v4l2_wanted[4] = {
-    TVO_V4L2_PIX_GREY, TVO_V4L2_PIX_NV12, TVO_V4L2_PIX_YU12, TVO_V4L2_PIX_YUYV
-};
+static const uint32_t tvo_v4l2_wanted[4] = {TVO_V4L2_PIX_GREY, TVO_V4L2_PIX_NV12, TVO_V4L2_PIX_YU12,
+                                            TVO_V4L2_PIX_YUYV};
 
 static tvo_status set_format(tvo_v4l2 *cam, const tvo_v4l2_config *cfg)
 {
@@ -387,8 +385,7 @@ static tvo_status setup_buffers(tvo_v4l2 *cam, const tvo_v4l2_config *cfg)
     cam->format.buffers_granted = rb.count > 0x7fffffffu ? 0x7fffffff : (int32_t)rb.count;
     if (rb.count < 2) {
         char buf[96];
-        snprintf(buf, sizeof buf, "driver granted %u buffer(s), at least 2 are needed",
-                 (unsigned)rb.count);
+        snprintf(buf, sizeof buf, "driver granted %u buffer(s), at least 2 are needed", (unsigned)rb.count);
         set_msg(cam, buf, 0);
         return TVO_ERR_UNSUPPORTED;
     }
@@ -506,8 +503,8 @@ tvo_status tvo_v4l2_open(tvo_v4l2 *cam, const tvo_v4l2_config *cfg)
         return TVO_ERR_SIZE;
     }
     if (cfg->fps < 0 || cfg->fps > 10000 || cfg->buffer_count < 2 ||
-        cfg->buffer_count > TVO_V4L2_MAX_BUFFERS || cfg->timeout_ms < 1 ||
-        cfg->timeout_ms > 600000 || cfg->max_retries > 1000000 || cfg->device[0] == '\0') {
+        cfg->buffer_count > TVO_V4L2_MAX_BUFFERS || cfg->timeout_ms < 1 || cfg->timeout_ms > 600000 ||
+        cfg->max_retries > 1000000 || cfg->device[0] == '\0') {
         set_msg(cam, "configuration value out of range", 0);
         return TVO_ERR_ARG;
     }
@@ -571,9 +568,9 @@ tvo_status tvo_v4l2_open(tvo_v4l2 *cam, const tvo_v4l2_config *cfg)
         char f[5];
         char buf[150];
         fourcc_str(cam->format.pixelformat, f);
-        snprintf(buf, sizeof buf, "%s: %dx%d %s, %d/%d fps, %u buffers", cfg->device,
-                 (int)cam->format.width, (int)cam->format.height, f, (int)cam->format.fps_num,
-                 (int)cam->format.fps_den, (unsigned)cam->format.buffer_count);
+        snprintf(buf, sizeof buf, "%s: %dx%d %s, %d/%d fps, %u buffers", cfg->device, (int)cam->format.width,
+                 (int)cam->format.height, f, (int)cam->format.fps_num, (int)cam->format.fps_den,
+                 (unsigned)cam->format.buffer_count);
         set_msg(cam, buf, 0);
     }
     return TVO_OK;
@@ -705,7 +702,7 @@ tvo_status tvo_v4l2_dequeue(tvo_v4l2 *cam, tvo_v4l2_frame *frame)
         if ((b.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC &&
             (b.timestamp.tv_sec != 0 || b.timestamp.tv_usec != 0)) {
             frame->timestamp_ns = (int64_t)b.timestamp.tv_sec * 1000000000 +
-                                  (int64_t)b.timestamp.tv_usec * 1000;
+                    (int64_t)b.timestamp.tv_usec * 1000;
             frame->timestamp_from_driver = 1;
         } else {
             frame->timestamp_ns = now_ns();

@@ -169,7 +169,8 @@ int main(int argc, char **argv)
             sum += T[i].t[a];
     for (int j = 0; j < n_pt; ++j)
         sum += X[j][0] + X[j][1] + X[j][2];
-    printf("bench_ba: %d poses (2 fixed), %d points, %d observations, scratch %zu bytes\n", n_pose, n_pt, n_obs, size);
+    printf("bench_ba: %d poses (2 fixed), %d points, %d observations, scratch %zu bytes\n", n_pose, n_pt,
+           n_obs, size);
     printf("report: iterations %d accepted %d flags %d points_skipped %d obs_skipped %d cost %.6g -> %.6g\n",
            rep.iterations, rep.accepted, rep.flags, rep.points_skipped, rep.obs_skipped, rep.cost_initial,
            rep.cost_final);

@@ -150,8 +150,8 @@ int main(int argc, char **argv)
                 printf(" %s", names[k]);
         printf(", MACs per frame %u, model memory %zu bytes, file %ld bytes\n", (unsigned)tvo_nn_macs(m->nn),
                m->need, m->size);
-        printf("  per frame (all branches), %d frames: median %.2f us, p90 %.2f us, min %.2f us (%s)\n", frames,
-               m->t[frames / 2], m->t[frames * 9 / 10], m->t[0], m->errors == 0 ? "ok" : "errors");
+        printf("  per frame (all branches), %d frames: median %.2f us, p90 %.2f us, min %.2f us (%s)\n",
+               frames, m->t[frames / 2], m->t[frames * 9 / 10], m->t[0], m->errors == 0 ? "ok" : "errors");
         printf("  %.2f GMAC/s at the median (checksum of the provided outputs %.9g)",
                (double)tvo_nn_macs(m->nn) / m->t[frames / 2] * 1e-3, m->sink);
         if (j > 0)

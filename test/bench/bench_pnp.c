@@ -49,7 +49,7 @@ int main(int argc, char **argv)
         }
         tvo_pose T[4];
         for (int k = 0; k < 1000; ++k)
-            isum += tvo_p3p((const double (*)[3])X, (const double (*)[2])x, T);
+            isum += tvo_p3p((const double(*)[3])X, (const double(*)[2])x, T);
         printf("p3p: 1000 calls, %ld solutions in all\n", isum);
         return 0;
     }
@@ -64,24 +64,27 @@ int main(int argc, char **argv)
         int32_t ni = 0;
         tvo_status st;
         if (ransac)
-            st = tvo_pnp_ransac(NULL, (const double (*)[3])g_sc.X, g_sc.x, g_sc.n, &T, NULL, &ni, g_scratch,
+            st = tvo_pnp_ransac(NULL, (const double(*)[3])g_sc.X, g_sc.x, g_sc.n, &T, NULL, &ni, g_scratch,
                                 sizeof g_scratch);
         else
-            st = tvo_pnp_refine(NULL, (const double (*)[3])g_sc.X, g_sc.x, NULL, g_sc.n, &T, NULL, &ni, NULL);
+            st = tvo_pnp_refine(NULL, (const double(*)[3])g_sc.X, g_sc.x, NULL, g_sc.n, &T, NULL, &ni, NULL);
         ++calls;
         if (st != TVO_OK) {
             ++fails;
             continue;
         }
         tvo_pose Ti = tvo_pose_inverse(&T), Tg = tvo_pose_inverse(&g_sc.T);
-        double dc = sqrt((Ti.t[0] - Tg.t[0]) * (Ti.t[0] - Tg.t[0]) + (Ti.t[1] - Tg.t[1]) * (Ti.t[1] - Tg.t[1]) +
+        double dc = sqrt((Ti.t[0] - Tg.t[0]) * (Ti.t[0] - Tg.t[0]) +
+                         (Ti.t[1] - Tg.t[1]) * (Ti.t[1] - Tg.t[1]) +
                          (Ti.t[2] - Tg.t[2]) * (Ti.t[2] - Tg.t[2]));
         rsum += tvo_rot_distance(T.R, g_sc.T.R) * 180.0 / 3.14159265358979;
         csum += dc;
         isum += ni;
     }
     int ok = calls - fails;
-    printf("%s: %d calls, %d failed; mean inliers %.1f, mean rotation error %.4f deg, mean centre error %.4f m\n",
-           mode, calls, fails, ok > 0 ? (double)isum / ok : 0.0, ok > 0 ? rsum / ok : 0.0, ok > 0 ? csum / ok : 0.0);
+    printf("%s: %d calls, %d failed; mean inliers %.1f, mean rotation error %.4f deg, mean centre error %.4f "
+           "m\n",
+           mode, calls, fails, ok > 0 ? (double)isum / ok : 0.0, ok > 0 ? rsum / ok : 0.0,
+           ok > 0 ? csum / ok : 0.0);
     return fails == 0 ? 0 : 1;
 }

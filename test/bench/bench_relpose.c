@@ -50,7 +50,7 @@ static int callgrind_mode(void)
     scene_arrays(&sc, 5, a, b);
     int sink = 0;
     for (int k = 0; k < 1000; ++k)
-        sink += tvo_essential_5pt((const double (*)[2])a, (const double (*)[2])b, E);
+        sink += tvo_essential_5pt((const double(*)[2])a, (const double(*)[2])b, E);
     long iters = 0;
     for (int k = 0; k < 20; ++k) {
         tvo_relpose_config cfg;
@@ -85,13 +85,12 @@ int main(int argc, char **argv)
     for (int r = 0; r < 20; ++r) {
         double t0 = now_s();
         for (int k = 0; k < 1000; ++k)
-            sink += tvo_essential_5pt((const double (*)[2])a, (const double (*)[2])b, E);
+            sink += tvo_essential_5pt((const double(*)[2])a, (const double(*)[2])b, E);
         rep[r] = (now_s() - t0) / 1000.0;
     }
     qsort(rep, 20, sizeof(double), cmp_double);
-    printf("5-point minimal solve: median %.2f us, best %.2f us of 20 x 1000 calls (%d solutions)\n", rep[10] * 1e6,
-           rep[0] * 1e6,
-           tvo_essential_5pt((const double (*)[2])a, (const double (*)[2])b, E));
+    printf("5-point minimal solve: median %.2f us, best %.2f us of 20 x 1000 calls (%d solutions)\n",
+           rep[10] * 1e6, rep[0] * 1e6, tvo_essential_5pt((const double(*)[2])a, (const double(*)[2])b, E));
     /* 2 + 3. RANSAC time and accuracy */
     static const char *const mode_name[4] = {"5pt + H model", "5pt, no H model", "8pt + H model",
                                              "5pt RANSAC + pose only (no H model, no LM polish)"};
@@ -123,8 +122,8 @@ int main(int argc, char **argv)
         qsort(tm, (size_t)trials, sizeof(double), cmp_double);
         printf("%s, 300 pts, 30%% outliers, 0.5 px: median %.3f ms (p90 %.3f), mean RANSAC iters %.1f (%d at "
                "max_iters) | median rot %.4f deg, t %.4f deg, success %d/%d (%.2f%%)\n",
-               mode_name[mode], tm[trials / 2] * 1e3, tm[trials * 9 / 10] * 1e3, (double)iters / trials, capped,
-               re[trials / 2], te[trials / 2], success, trials, 100.0 * success / trials);
+               mode_name[mode], tm[trials / 2] * 1e3, tm[trials * 9 / 10] * 1e3, (double)iters / trials,
+               capped, re[trials / 2], te[trials / 2], success, trials, 100.0 * success / trials);
     }
     /* noise-free and pure rotation */
     double worst_nf = 0.0, worst_rot = 0.0;

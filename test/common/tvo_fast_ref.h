@@ -17,10 +17,9 @@
 #include "tinyvo/corners.h"
 #include "tinyvo/image.h"
 
-static const int8_t tvo_ref_circle[16][2] = {
-    { 0, 3 }, { 1, 3 }, { 2, 2 }, { 3, 1 }, { 3, 0 }, { 3, -1 }, { 2, -2 }, { 1, -3 },
-    { 0, -3 }, { -1, -3 }, { -2, -2 }, { -3, -1 }, { -3, 0 }, { -3, 1 }, { -2, 2 }, { -1, 3 }
-};
+static const int8_t tvo_ref_circle[16][2] = {{0, 3},  {1, 3},  {2, 2},  {3, 1},   {3, 0},   {3, -1},
+                                             {2, -2}, {1, -3}, {0, -3}, {-1, -3}, {-2, -2}, {-3, -1},
+                                             {-3, 0}, {-3, 1}, {-2, 2}, {-1, 3}};
 
 /* Score of (x, y) when it is a corner at `threshold`, -1 otherwise (also outside the detection area). */
 static inline int tvo_ref_fast_score(const tvo_image *img, int32_t threshold, int32_t x, int32_t y)

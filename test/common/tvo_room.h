@@ -48,10 +48,10 @@ static double tvo_room_texture(double u, double v, uint32_t wall)
 static void tvo_room_render(const tvo_pose *T_w_c, int w, int h, double focal, uint8_t *img)
 {
     /* room: x in [-3, 3], y in [-1.5, 1.5], z in [-2, 6] (metres) */
-    static const double lo[3] = { -3.0, -1.5, -2.0 }, hi[3] = { 3.0, 1.5, 6.0 };
+    static const double lo[3] = {-3.0, -1.5, -2.0}, hi[3] = {3.0, 1.5, 6.0};
     for (int y = 0; y < h; ++y) {
         for (int x = 0; x < w; ++x) {
-            const double dc[3] = { (x - (w - 1) / 2.0) / focal, (y - (h - 1) / 2.0) / focal, 1.0 };
+            const double dc[3] = {(x - (w - 1) / 2.0) / focal, (y - (h - 1) / 2.0) / focal, 1.0};
             double d[3], best = 1e30, u = 0, v = 0;
             uint32_t wall = 0;
             for (int i = 0; i < 3; ++i)

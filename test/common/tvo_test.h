@@ -48,10 +48,10 @@ static inline uint8_t *tvo_test_read_nn_file(const char *name, size_t pad, size_
 }
 
 /* Skip the current test with a message saying why. */
-#define TVO_SKIP(msg)                                                             \
-    do {                                                                          \
-        fprintf(stderr, "SKIP %s: %s\n", __func__, (msg));                        \
-        skip();                                                                   \
+#define TVO_SKIP(msg)                                      \
+    do {                                                   \
+        fprintf(stderr, "SKIP %s: %s\n", __func__, (msg)); \
+        skip();                                            \
     } while (0)
 
 #include "tvo_rand.h"

@@ -107,8 +107,8 @@ int main(int argc, char **argv)
             printf("  frame %d: state %d, %d tracked, %d inliers, %d new, %d tracks\n", k, (int)res.state,
                    (int)res.tracked, (int)res.inliers, (int)res.new_corners, (int)res.tracks);
     }
-    printf("vo: 8 frames, last: state %d, %d tracked, %d inliers, %d tracks\n", (int)res.state, (int)res.tracked,
-           (int)res.inliers, (int)res.tracks);
+    printf("vo: 8 frames, last: state %d, %d tracked, %d inliers, %d tracks\n", (int)res.state,
+           (int)res.tracked, (int)res.inliers, (int)res.tracks);
     free(mem);
     if (res.tracked < 50 || res.state == TVO_VO_LOST || res.state == TVO_VO_INITIALISING) {
         fprintf(stderr, "tvo_external: last frame: state %d, %d tracks\n", (int)res.state, (int)res.tracked);

@@ -42,7 +42,8 @@ static void write_file(const char *path, const void *data, size_t size)
 static void cleanup(void)
 {
     static const char *const tum[] = {"rgb.txt", "groundtruth.txt", "rgb/a.png", "rgb"};
-    static const char *const kitti[] = {"times.txt", "poses.txt", "calib.txt", "image_0/000000.png", "image_0"};
+    static const char *const kitti[] = {"times.txt", "poses.txt", "calib.txt", "image_0/000000.png",
+                                        "image_0"};
     char p[200];
     for (size_t i = 0; i < sizeof tum / sizeof tum[0]; ++i) {
         snprintf(p, sizeof p, "%s/%s", g_tum, tum[i]);
@@ -199,7 +200,8 @@ static void check_seq(const tvo_euroc *seq, int tum)
     TVO_FUZZ_CHECK(tvo_euroc_rate_hz(seq) >= 0.0 && isfinite(tvo_euroc_rate_hz(seq)));
     TVO_FUZZ_CHECK(tvo_camera_check(tvo_euroc_camera(seq)) == TVO_OK);
     if (tvo_euroc_has_groundtruth(seq)) {
-        const int64_t ts[4] = {0, tvo_euroc_frame_time(seq, 0), tvo_euroc_frame_time(seq, n - 1) + 1, INT64_MAX};
+        const int64_t ts[4] = {0, tvo_euroc_frame_time(seq, 0), tvo_euroc_frame_time(seq, n - 1) + 1,
+                               INT64_MAX};
         for (int k = 0; k < 4; ++k) {
             tvo_pose T;
             tvo_status st = tvo_euroc_groundtruth_interp(seq, ts[k], INT64_MAX, &T);

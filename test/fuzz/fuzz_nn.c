@@ -24,7 +24,7 @@ static void put_u32(uint8_t *p, uint32_t v)
 
 static void run_model(const tvo_nn *nn)
 {
-    static const float typical[TVO_FEAT_COUNT] = {0.01f, -0.02f, 0.005f, 0.1f, -0.2f, 0.97f,
+    static const float typical[TVO_FEAT_COUNT] = {0.01f, -0.02f, 0.005f, 0.1f,  -0.2f, 0.97f,
                                                   0.8f,  0.5f,   0.3f,   0.05f, 0.0f};
     float feats[4][TVO_FEAT_COUNT];
     const int32_t mask = tvo_nn_output_mask(nn);

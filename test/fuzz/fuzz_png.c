@@ -47,13 +47,14 @@ static int fix_chunk_crcs(uint8_t *p, size_t n)
     size_t off = 8;
     int changed = 0;
     while (off + 12 <= n) {
-        const uint32_t len = (uint32_t)p[off] << 24 | (uint32_t)p[off + 1] << 16 | (uint32_t)p[off + 2] << 8 | p[off + 3];
+        const uint32_t len = (uint32_t)p[off] << 24 | (uint32_t)p[off + 1] << 16 | (uint32_t)p[off + 2] << 8 |
+                p[off + 3];
         uint32_t crc, old;
         if (len > n - off - 12)
             break;
         crc = crc32_png(p + off + 4, (size_t)len + 4);
         old = (uint32_t)p[off + 8 + len] << 24 | (uint32_t)p[off + 9 + len] << 16 |
-              (uint32_t)p[off + 10 + len] << 8 | p[off + 11 + len];
+                (uint32_t)p[off + 10 + len] << 8 | p[off + 11 + len];
         if (crc != old) {
             p[off + 8 + len] = (uint8_t)(crc >> 24);
             p[off + 9 + len] = (uint8_t)(crc >> 16);

@@ -221,7 +221,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             t = (int64_t)((uint64_t)t + 50000000u);
             break;
         case 1:
-            t = (int64_t)((uint64_t)t + 1000u * (uint64_t)(tvo_fuzz_u8(&rd) | (uint32_t)tvo_fuzz_u8(&rd) << 8));
+            t = (int64_t)((uint64_t)t +
+                          1000u * (uint64_t)(tvo_fuzz_u8(&rd) | (uint32_t)tvo_fuzz_u8(&rd) << 8));
             break;
         case 2: {
             uint64_t u = tvo_fuzz_u32(&rd);
@@ -253,8 +254,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             TVO_FUZZ_CHECK(st == TVO_OK);
             check_result(&cfg, &res);
             if (verbose)
-                fprintf(stderr, "fuzz_vo: %dx%d frame %d t=%lld state %d tracked %d inliers %d tracks %d\n", sc.w,
-                        sc.h, f, (long long)t, (int)res.state, res.tracked, res.inliers, res.tracks);
+                fprintf(stderr, "fuzz_vo: %dx%d frame %d t=%lld state %d tracked %d inliers %d tracks %d\n",
+                        sc.w, sc.h, f, (long long)t, (int)res.state, res.tracked, res.inliers, res.tracks);
             has_prev = 1;
             t_prev = t;
             st = tvo_traj_step(&traj, &res.T_prev_cur, res.state == TVO_VO_OK ? 1.0 : 0.0);

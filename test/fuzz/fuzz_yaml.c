@@ -63,8 +63,8 @@ static void check_calib(const char *text, size_t size, tvo_calib_format format, 
     tvo_calib c, c2;
     char err[256], small[6];
     tvo_status st = tvo_calib_parse(text, size, format, camera, &c, err, sizeof err), st2;
-    TVO_FUZZ_CHECK(st == TVO_OK || st == TVO_ERR_FORMAT || st == TVO_ERR_UNSUPPORTED || st == TVO_ERR_NOT_FOUND ||
-                   st == TVO_ERR_ARG);
+    TVO_FUZZ_CHECK(st == TVO_OK || st == TVO_ERR_FORMAT || st == TVO_ERR_UNSUPPORTED ||
+                   st == TVO_ERR_NOT_FOUND || st == TVO_ERR_ARG);
     TVO_FUZZ_CHECK(memchr(err, '\0', sizeof err) != NULL);
     st2 = tvo_calib_parse(text, size, format, camera, &c2, small, sizeof small);
     TVO_FUZZ_CHECK(st2 == st && memchr(small, '\0', sizeof small) != NULL);

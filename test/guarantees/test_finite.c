@@ -82,8 +82,8 @@ static void step(runner *r, int64_t t_ns, tvo_status expect_or_ok)
         r->errors++;
     }
     if (!tvo_g_result_ok(&res))
-        fail_msg("%dx%d t=%lld: non-finite or invalid result (state %d)", (int)r->w, (int)r->h, (long long)t_ns,
-                 (int)res.state);
+        fail_msg("%dx%d t=%lld: non-finite or invalid result (state %d)", (int)r->w, (int)r->h,
+                 (long long)t_ns, (int)res.state);
     if (res.state == TVO_VO_ROTATION_ONLY)
         assert_true(res.T_prev_cur.t[0] == 0.0 && res.T_prev_cur.t[1] == 0.0 && res.T_prev_cur.t[2] == 0.0);
     r->states[res.state]++;
@@ -103,15 +103,27 @@ static void fill(runner *r, int kind, uint64_t *rng, int k)
 {
     const size_t n = (size_t)r->w * (size_t)r->h;
     switch (kind) {
-    case 0: for (size_t i = 0; i < n; ++i) r->img[i] = (uint8_t)(tvo_test_rand(rng) >> 56); break; /* noise */
-    case 1: memset(r->img, 0, n); break;                                                         /* black */
-    case 2: memset(r->img, 255, n); break;                                                       /* saturated */
-    case 3: memset(r->img, 77, n); break;                                                        /* constant */
-    case 4: memset(r->img, (k & 1) ? 255 : 0, n); break;                                         /* alternating */
-    case 5:                                                                                      /* checker, flips */
+    case 0:
+        for (size_t i = 0; i < n; ++i)
+            r->img[i] = (uint8_t)(tvo_test_rand(rng) >> 56);
+        break; /* noise */
+    case 1:
+        memset(r->img, 0, n);
+        break; /* black */
+    case 2:
+        memset(r->img, 255, n);
+        break; /* saturated */
+    case 3:
+        memset(r->img, 77, n);
+        break; /* constant */
+    case 4:
+        memset(r->img, (k & 1) ? 255 : 0, n);
+        break; /* alternating */
+    case 5:    /* checker, flips */
         for (int32_t y = 0; y < r->h; ++y)
             for (int32_t x = 0; x < r->w; ++x)
-                r->img[(size_t)y * (size_t)r->w + (size_t)x] = (uint8_t)((((x >> 2) ^ (y >> 2) ^ k) & 1) * 255);
+                r->img[(size_t)y * (size_t)r->w + (size_t)x] = (uint8_t)((((x >> 2) ^ (y >> 2) ^ k) & 1) *
+                                                                         255);
         break;
     case 6: /* sparse salt and pepper on black */
         memset(r->img, 0, n);
@@ -119,7 +131,7 @@ static void fill(runner *r, int kind, uint64_t *rng, int k)
             r->img[tvo_test_rand(rng) % n] = 255;
         break;
     default: { /* the corridor, moving */
-        const double c[3] = { 0.0, 0.0, 0.05 * k };
+        const double c[3] = {0.0, 0.0, 0.05 * k};
         tvo_g_render(r->img, r->w, r->h, 0.8 * (r->w > r->h ? r->w : r->h), 0.01 * k, c);
     }
     }
@@ -201,7 +213,7 @@ static void test_timestamps(void **state)
     runner r;
     uint64_t rng = 99;
     static const int64_t ts[] = {
-        INT64_MIN, INT64_MIN + 1, -1, 0, 1, 2, 1000000000LL, INT64_MAX / 2, INT64_MAX - 1, INT64_MAX,
+            INT64_MIN, INT64_MIN + 1, -1, 0, 1, 2, 1000000000LL, INT64_MAX / 2, INT64_MAX - 1, INT64_MAX,
     };
     (void)state;
     assert_true(runner_open(&r, 160, 120));
@@ -230,11 +242,11 @@ static void test_timestamps(void **state)
 static void test_traj_extreme_scales(void **state)
 {
     static const double scales[] = {
-        0.0, -0.0, 1e-320 /* denormal */, DBL_MIN, 1e-9, 1.0, -1.0, 1e9, 1e150, 1e300, DBL_MAX, -DBL_MAX,
+            0.0, -0.0, 1e-320 /* denormal */, DBL_MIN, 1e-9, 1.0, -1.0, 1e9, 1e150, 1e300, DBL_MAX, -DBL_MAX,
     };
     tvo_traj traj;
     tvo_pose stp = tvo_pose_identity();
-    const double rv[3] = { 0.3, -0.2, 0.1 };
+    const double rv[3] = {0.3, -0.2, 0.1};
     (void)state;
     tvo_rotvec_to_rot(rv, stp.R);
     stp.t[0] = 0.6;
@@ -271,8 +283,8 @@ static void test_refine_bad_features(void **state)
     tvo_vo_result res;
     tvo_pose step_out;
     float out[6];
-    static const float bad[] = { NAN, INFINITY, -INFINITY };
-    static const float huge[] = { FLT_MAX, -FLT_MAX, 1e30f, -1e30f, 1e-45f };
+    static const float bad[] = {NAN, INFINITY, -INFINITY};
+    static const float huge[] = {FLT_MAX, -FLT_MAX, 1e30f, -1e30f, 1e-45f};
     (void)state;
     assert_true(tvo_g_load_model(&m, "paper.tvonn"));
     memset(&res, 0, sizeof res);
@@ -302,10 +314,10 @@ static void test_refine_bad_features(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_small_sizes),   cmocka_unit_test(test_usual_sizes),
-        cmocka_unit_test(test_extreme_aspect), cmocka_unit_test(test_tiny_sizes),
-        cmocka_unit_test(test_timestamps),    cmocka_unit_test(test_traj_extreme_scales),
-        cmocka_unit_test(test_refine_bad_features),
+            cmocka_unit_test(test_small_sizes),         cmocka_unit_test(test_usual_sizes),
+            cmocka_unit_test(test_extreme_aspect),      cmocka_unit_test(test_tiny_sizes),
+            cmocka_unit_test(test_timestamps),          cmocka_unit_test(test_traj_extreme_scales),
+            cmocka_unit_test(test_refine_bad_features),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

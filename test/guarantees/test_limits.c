@@ -80,7 +80,10 @@ static void test_nn_file_limits(void **state)
     size_t need = 0;
     (void)state;
     assert_non_null(f);
-    f[0] = 'T'; f[1] = 'V'; f[2] = 'N'; f[3] = 'N';
+    f[0] = 'T';
+    f[1] = 'V';
+    f[2] = 'N';
+    f[3] = 'N';
     f[4] = (uint8_t)TVO_NN_VERSION_MAJOR;
     f[8] = (uint8_t)(big & 0xffu);
     f[9] = (uint8_t)((big >> 8) & 0xffu);
@@ -94,9 +97,9 @@ static void test_nn_file_limits(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_image_view_limits),
-        cmocka_unit_test(test_vo_config_limits),
-        cmocka_unit_test(test_nn_file_limits),
+            cmocka_unit_test(test_image_view_limits),
+            cmocka_unit_test(test_vo_config_limits),
+            cmocka_unit_test(test_nn_file_limits),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -152,7 +152,7 @@ static void test_synthetic_sequence(void **state)
     vo_box b;
     tvo_traj traj;
     uint64_t rng = 12345;
-    int states[TVO_VO_STATE_COUNT] = { 0 };
+    int states[TVO_VO_STATE_COUNT] = {0};
     long total = 0;
     (void)state;
     assert_non_null(frames);
@@ -187,20 +187,21 @@ static void run_euroc(const char *name, int max_frames)
     tvo_g_model m;
     vo_box b;
     tvo_traj traj;
-    int states[TVO_VO_STATE_COUNT] = { 0 };
+    int states[TVO_VO_STATE_COUNT] = {0};
     if (!tvo_g_frames_load(&f, name, max_frames))
         return;
     assert_true(tvo_g_load_model(&m, "paper.tvonn"));
     vo_open(&b, f.cam);
     tvo_traj_init(&traj, NULL);
     for (int32_t i = 0; i < f.n; ++i) {
-        const long c = counted_frame(&b, &m, &traj, f.pix + (size_t)i * f.fsz, f.cam->width, f.cam->height, f.t[i],
-                                     0, states);
+        const long c = counted_frame(&b, &m, &traj, f.pix + (size_t)i * f.fsz, f.cam->width, f.cam->height,
+                                     f.t[i], 0, states);
         if (c != 0)
             fail_msg("%ld allocator calls during %s frame %d", c, name, (int)i);
     }
-    fprintf(stderr, "%s: %d frames, states ok %d rot-only %d lost %d init %d, no allocator call\n", name, (int)f.n,
-            states[TVO_VO_OK], states[TVO_VO_ROTATION_ONLY], states[TVO_VO_LOST], states[TVO_VO_INITIALISING]);
+    fprintf(stderr, "%s: %d frames, states ok %d rot-only %d lost %d init %d, no allocator call\n", name,
+            (int)f.n, states[TVO_VO_OK], states[TVO_VO_ROTATION_ONLY], states[TVO_VO_LOST],
+            states[TVO_VO_INITIALISING]);
     free(b.mem);
     tvo_g_free_model(&m);
     tvo_g_frames_free(&f);
@@ -221,10 +222,10 @@ static void test_euroc_head(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_counter_sees_allocations),
-        cmocka_unit_test(test_synthetic_sequence),
-        cmocka_unit_test(test_euroc_keyframes),
-        cmocka_unit_test(test_euroc_head),
+            cmocka_unit_test(test_counter_sees_allocations),
+            cmocka_unit_test(test_synthetic_sequence),
+            cmocka_unit_test(test_euroc_keyframes),
+            cmocka_unit_test(test_euroc_head),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

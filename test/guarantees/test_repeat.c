@@ -22,8 +22,8 @@ typedef struct outcome {
 } outcome;
 
 /* Runs n frames through a VO laid out at mem + offset (block filled with `fill` first). */
-static void run(const tvo_camera *cam, const uint8_t *frames, const int64_t *t, int n, int fill, size_t offset,
-                const tvo_g_model *m, outcome *out, int reset_and_repeat)
+static void run(const tvo_camera *cam, const uint8_t *frames, const int64_t *t, int n, int fill,
+                size_t offset, const tvo_g_model *m, outcome *out, int reset_and_repeat)
 {
     tvo_vo_config cfg;
     size_t need;
@@ -71,7 +71,8 @@ static void check_repeatable(const tvo_camera *cam, const uint8_t *frames, const
                              const char *name)
 {
     tvo_g_model m;
-    outcome *a = calloc((size_t)n, sizeof *a), *b = calloc((size_t)n, sizeof *b), *c = calloc((size_t)n, sizeof *c);
+    outcome *a = calloc((size_t)n, sizeof *a), *b = calloc((size_t)n, sizeof *b),
+            *c = calloc((size_t)n, sizeof *c);
     int ok = 0;
     assert_true(a != NULL && b != NULL && c != NULL);
     assert_true(tvo_g_load_model(&m, "paper.tvonn"));
@@ -122,8 +123,8 @@ static void test_euroc_keyframes(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_synthetic),
-        cmocka_unit_test(test_euroc_keyframes),
+            cmocka_unit_test(test_synthetic),
+            cmocka_unit_test(test_euroc_keyframes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -125,7 +125,8 @@ static size_t measure(const tvo_camera *cam, const uint8_t *frames, const int64_
     base = painted_run(idle_thread, NULL);
     used = painted_run(work_thread, &j);
     assert_int_equal(j.failures, 0);
-    fprintf(stderr, "%s (%dx%d, %d frames, %d OK): stack high-water %zu bytes (thread baseline %zu), bound %d\n",
+    fprintf(stderr,
+            "%s (%dx%d, %d frames, %d OK): stack high-water %zu bytes (thread baseline %zu), bound %d\n",
             name, (int)cam->width, (int)cam->height, n, j.ok_states, used - base, base, TVO_STACK_BOUND);
     if (used - base > (size_t)TVO_STACK_BOUND)
         fail_msg("%s: per-frame path used %zu bytes of stack, bound %d", name, used - base, TVO_STACK_BOUND);
@@ -191,10 +192,10 @@ static void test_euroc_keyframes(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_synthetic_320),
-        cmocka_unit_test(test_synthetic_752),
-        cmocka_unit_test(test_widest),
-        cmocka_unit_test(test_euroc_keyframes),
+            cmocka_unit_test(test_synthetic_320),
+            cmocka_unit_test(test_synthetic_752),
+            cmocka_unit_test(test_widest),
+            cmocka_unit_test(test_euroc_keyframes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -38,7 +38,8 @@ static inline double tvo_g_texture(double u, double v, uint32_t seed)
     for (int o = 0; o < 2; ++o) {
         const double x = u * freq, y = v * freq, fx = floor(x), fy = floor(y), a = x - fx, b = y - fy;
         const int32_t ix = (int32_t)fx, iy = (int32_t)fy;
-        const double h00 = tvo_g_hash(ix, iy, seed + (uint32_t)o), h10 = tvo_g_hash(ix + 1, iy, seed + (uint32_t)o);
+        const double h00 = tvo_g_hash(ix, iy, seed + (uint32_t)o),
+                     h10 = tvo_g_hash(ix + 1, iy, seed + (uint32_t)o);
         const double h01 = tvo_g_hash(ix, iy + 1, seed + (uint32_t)o),
                      h11 = tvo_g_hash(ix + 1, iy + 1, seed + (uint32_t)o);
         s += amp * ((h00 * (1 - a) + h10 * a) * (1 - b) + (h01 * (1 - a) + h11 * a) * b);
@@ -49,25 +50,48 @@ static inline double tvo_g_texture(double u, double v, uint32_t seed)
 }
 
 /* Corridor |x| <= 1.5, |y| <= 1, z <= 12 seen from camera pose (R = yaw about y, position c). */
-static inline void tvo_g_render(uint8_t *img, int32_t w, int32_t h, double focal, double yaw, const double c[3])
+static inline void tvo_g_render(uint8_t *img, int32_t w, int32_t h, double focal, double yaw,
+                                const double c[3])
 {
     const double cy_ = cos(yaw), sy_ = sin(yaw);
     for (int32_t y = 0; y < h; ++y)
         for (int32_t x = 0; x < w; ++x) {
             const double dcx = (x - 0.5 * (w - 1)) / focal, dcy = (y - 0.5 * (h - 1)) / focal;
-            const double d[3] = { cy_ * dcx + sy_, dcy, -sy_ * dcx + cy_ }; /* R_w_c * (dcx, dcy, 1) */
+            const double d[3] = {cy_ * dcx + sy_, dcy, -sy_ * dcx + cy_}; /* R_w_c * (dcx, dcy, 1) */
             double t = 1e30, u = 0.0, v = 0.0;
             uint32_t wall = 0;
-            if (d[0] > 1e-9 && (1.5 - c[0]) / d[0] < t) { t = (1.5 - c[0]) / d[0]; wall = 1; }
-            if (d[0] < -1e-9 && (-1.5 - c[0]) / d[0] < t) { t = (-1.5 - c[0]) / d[0]; wall = 2; }
-            if (d[1] > 1e-9 && (1.0 - c[1]) / d[1] < t) { t = (1.0 - c[1]) / d[1]; wall = 3; }
-            if (d[1] < -1e-9 && (-1.0 - c[1]) / d[1] < t) { t = (-1.0 - c[1]) / d[1]; wall = 4; }
-            if (d[2] > 1e-9 && (12.0 - c[2]) / d[2] < t) { t = (12.0 - c[2]) / d[2]; wall = 5; }
+            if (d[0] > 1e-9 && (1.5 - c[0]) / d[0] < t) {
+                t = (1.5 - c[0]) / d[0];
+                wall = 1;
+            }
+            if (d[0] < -1e-9 && (-1.5 - c[0]) / d[0] < t) {
+                t = (-1.5 - c[0]) / d[0];
+                wall = 2;
+            }
+            if (d[1] > 1e-9 && (1.0 - c[1]) / d[1] < t) {
+                t = (1.0 - c[1]) / d[1];
+                wall = 3;
+            }
+            if (d[1] < -1e-9 && (-1.0 - c[1]) / d[1] < t) {
+                t = (-1.0 - c[1]) / d[1];
+                wall = 4;
+            }
+            if (d[2] > 1e-9 && (12.0 - c[2]) / d[2] < t) {
+                t = (12.0 - c[2]) / d[2];
+                wall = 5;
+            }
             {
-                const double p[3] = { c[0] + t * d[0], c[1] + t * d[1], c[2] + t * d[2] };
-                if (wall == 1 || wall == 2) { u = p[2]; v = p[1]; }
-                else if (wall == 3 || wall == 4) { u = p[0]; v = p[2]; }
-                else { u = p[0]; v = p[1]; }
+                const double p[3] = {c[0] + t * d[0], c[1] + t * d[1], c[2] + t * d[2]};
+                if (wall == 1 || wall == 2) {
+                    u = p[2];
+                    v = p[1];
+                } else if (wall == 3 || wall == 4) {
+                    u = p[0];
+                    v = p[2];
+                } else {
+                    u = p[0];
+                    v = p[1];
+                }
             }
             img[(size_t)y * (size_t)w + (size_t)x] = (uint8_t)(30.0 + 200.0 * tvo_g_texture(u, v, wall * 7u));
         }
@@ -95,8 +119,8 @@ enum { TVO_G_SCENE = 0, TVO_G_NOISE, TVO_G_BLACK, TVO_G_WHITE, TVO_G_GREY, TVO_G
 static inline int tvo_g_seq_kind(int k)
 {
     static const int kinds[TVO_G_SEQ_FRAMES] = {
-        0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, /* 0..19 motion, 14..19 rotation */
-        1, 0, 2, 2, 0, 3, 0, 5, 5, 0, 1, 1, 4, 0, 0, 0, 0, 0, 0, 0,
+            0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, /* 0..19 motion, 14..19 rotation */
+            1, 0, 2, 2, 0, 3, 0, 5, 5, 0, 1, 1, 4, 0, 0, 0, 0, 0, 0, 0,
     };
     return kinds[k];
 }
@@ -110,9 +134,15 @@ static inline void tvo_g_seq_frame(int k, uint8_t *img, int32_t w, int32_t h, do
         for (size_t i = 0; i < n; ++i)
             img[i] = (uint8_t)(tvo_test_rand(rng) >> 56);
         return;
-    case TVO_G_BLACK: memset(img, 0, n); return;
-    case TVO_G_WHITE: memset(img, 255, n); return;
-    case TVO_G_GREY: memset(img, 128, n); return;
+    case TVO_G_BLACK:
+        memset(img, 0, n);
+        return;
+    case TVO_G_WHITE:
+        memset(img, 255, n);
+        return;
+    case TVO_G_GREY:
+        memset(img, 128, n);
+        return;
     case TVO_G_CHECKER:
         for (int32_t y = 0; y < h; ++y)
             for (int32_t x = 0; x < w; ++x)
@@ -121,7 +151,7 @@ static inline void tvo_g_seq_frame(int k, uint8_t *img, int32_t w, int32_t h, do
     default: {
         /* forward 4 cm a frame with a slow yaw; frames 14..19 rotate in place (rotation-only) */
         const int km = k < 14 ? k : 14;
-        const double c[3] = { 0.02 * sin(0.3 * k), 0.0, 0.04 * km };
+        const double c[3] = {0.02 * sin(0.3 * k), 0.0, 0.04 * km};
         const double yaw = 0.004 * k;
         tvo_g_render(img, w, h, focal, yaw, c);
     }

@@ -88,12 +88,13 @@ static void mcu_config(tvo_vo_config *cfg, const tvo_camera *cam)
     cfg->keyframe_min_tracks = 40;
     cfg->detect.max_corners = cfg->max_tracks; /* the scratch is sized for this many (vo.h) */
     cfg->lk.max_level = 2;
-    cfg->map_window = 5;           /* the local map: 5 keyframes, 160 landmarks */
+    cfg->map_window = 5; /* the local map: 5 keyframes, 160 landmarks */
     cfg->map_max_landmarks = 160;
 }
 
 /* A pinhole camera without distortion. */
-static tvo_status mcu_camera(tvo_camera *cam, int32_t w, int32_t h, double fx, double fy, double cx, double cy)
+static tvo_status mcu_camera(tvo_camera *cam, int32_t w, int32_t h, double fx, double fy, double cx,
+                             double cy)
 {
     memset(cam, 0, sizeof(*cam));
     cam->width = w;
@@ -152,7 +153,8 @@ int main(int argc, char **argv)
         (void)mcu_camera(&vga, 640, 480, 500.0, 500.0, 320.0, 240.0);
         mcu_config(&big, &vga);
         st = tvo_vo_init(&vo, &big, g_mem, sizeof g_mem);
-        printf("mcu: vga_init %s required %lu\n", tvo_status_str(st), (unsigned long)tvo_vo_required_size(&big));
+        printf("mcu: vga_init %s required %lu\n", tvo_status_str(st),
+               (unsigned long)tvo_vo_required_size(&big));
         if (tvo_vo_required_size(&big) > sizeof g_mem && (st != TVO_ERR_NO_MEMORY || vo != NULL))
             return fail("a VGA camera in the QVGA block is not refused at init", st);
     }
@@ -211,7 +213,8 @@ int main(int argc, char **argv)
         memset(out, 0, sizeof out);
         (void)tvo_nn_run_all(nn, res.features, out);
         {
-            const int32_t state = (int32_t)res.state; /* the enum's size is the ABI's (1 byte on arm-none-eabi) */
+            const int32_t state =
+                    (int32_t)res.state; /* the enum's size is the ABI's (1 byte on arm-none-eabi) */
             digest(&state, sizeof state);
         }
         digest(&res.tracked, sizeof res.tracked);
@@ -225,8 +228,8 @@ int main(int argc, char **argv)
         digest(out, sizeof out);
         {
             /* the local map: the world pose (the trajectory written below) and what the map did */
-            const int32_t mi[5] = { (int32_t)res.map_state, res.keyframe, res.map_points, res.map_landmarks,
-                                    res.map_losses };
+            const int32_t mi[5] = {(int32_t)res.map_state, res.keyframe, res.map_points, res.map_landmarks,
+                                   res.map_losses};
             digest(mi, sizeof mi);
             digest(res.T_w_c.R, sizeof res.T_w_c.R);
             digest(res.T_w_c.t, sizeof res.T_w_c.t);

@@ -49,6 +49,20 @@ void tvo_mcu_fault(void)
 
 /* Initial stack pointer, reset, then NMI .. SysTick: every other exception is a failure. */
 __attribute__((section(".vectors"), used)) static void (*const tvo_mcu_vectors[16])(void) = {
-    (void (*)(void))(uintptr_t)__stack_top, tvo_mcu_reset, tvo_mcu_fault, tvo_mcu_fault, tvo_mcu_fault,
-    tvo_mcu_fault, tvo_mcu_fault, 0, 0, 0, 0, tvo_mcu_fault, tvo_mcu_fault, 0, tvo_mcu_fault, tvo_mcu_fault,
+        (void (*)(void))(uintptr_t)__stack_top,
+        tvo_mcu_reset,
+        tvo_mcu_fault,
+        tvo_mcu_fault,
+        tvo_mcu_fault,
+        tvo_mcu_fault,
+        tvo_mcu_fault,
+        0,
+        0,
+        0,
+        0,
+        tvo_mcu_fault,
+        tvo_mcu_fault,
+        0,
+        tvo_mcu_fault,
+        tvo_mcu_fault,
 };

@@ -95,11 +95,22 @@ static void assert_inverse(const tvo_pose *a, const tvo_pose *b, double tol)
 static void test_kalibr_camchain_equi(void **state)
 {
     /* values as written in the file: T_cam_imu rows and the camera */
-    static const double T_cam_imu[16] = {
-        -0.9995184472361309, 0.021876089843145007, -0.022007051775495362, 0.04246317973602691,
-        0.025341655517008066, 0.9847584328334349, -0.1720715823693607, 0.0005184030993907625,
-        0.017907376422356798, -0.17254641594832693, -0.984838596021224, -0.015973750407470507,
-        0.0, 0.0, 0.0, 1.0};
+    static const double T_cam_imu[16] = {-0.9995184472361309,
+                                         0.021876089843145007,
+                                         -0.022007051775495362,
+                                         0.04246317973602691,
+                                         0.025341655517008066,
+                                         0.9847584328334349,
+                                         -0.1720715823693607,
+                                         0.0005184030993907625,
+                                         0.017907376422356798,
+                                         -0.17254641594832693,
+                                         -0.984838596021224,
+                                         -0.015973750407470507,
+                                         0.0,
+                                         0.0,
+                                         0.0,
+                                         1.0};
     tvo_calib c;
     char err[256], path[4096];
     tvo_pose T;
@@ -141,12 +152,14 @@ static void test_kalibr_camchain_radtan_and_omni(void **state)
     assert_int_equal(parse(text, NULL, &c, err, sizeof err), TVO_OK);
     assert_int_equal(c.format, TVO_CALIB_KALIBR_CAMCHAIN);
     assert_int_equal(c.camera.model, TVO_DIST_RADTAN);
-    assert_true(c.camera.fx == 461.629 && c.camera.fy == 460.152 && c.camera.cx == 362.680 && c.camera.cy == 246.049);
+    assert_true(c.camera.fx == 461.629 && c.camera.fy == 460.152 && c.camera.cx == 362.680 &&
+                c.camera.cy == 246.049);
     assert_true(c.camera.k[0] == -0.27695497 && c.camera.k[3] == 0.00011556 && c.camera.k[4] == 0.0);
     assert_int_equal(c.camera.width, 752);
     assert_true(c.has_T_BS);
     /* inv(T_cam_imu): the camera centre in the IMU frame is -R^T t */
-    assert_near(c.T_BS.t[0], -(0.01779318 * 0.07008565 + -0.9998017 * -0.01771023 + 0.00893160 * 0.00399246), 1e-5);
+    assert_near(c.T_BS.t[0], -(0.01779318 * 0.07008565 + -0.9998017 * -0.01771023 + 0.00893160 * 0.00399246),
+                1e-5);
     /* cam1 is an omnidirectional camera: refused by name */
     assert_int_equal(parse(text, "cam1", &c, err, sizeof err), TVO_ERR_UNSUPPORTED);
     assert_non_null(strstr(err, "camera_model 'omni'"));
@@ -188,14 +201,16 @@ static void test_kalibr_flat_and_other_models(void **state)
     /* the failure: Kalibr's distortion_coeffs key read as no coefficients */
     assert_int_equal(c.camera.model, TVO_DIST_RADTAN);
     p = flat;
-    expect_refused(edit(p, "camera_model: pinhole", "camera_model: ds"), NULL, TVO_ERR_UNSUPPORTED, "double sphere");
-    expect_refused(edit(p, "camera_model: pinhole", "camera_model: eucm"), NULL, TVO_ERR_UNSUPPORTED, "'eucm'");
+    expect_refused(edit(p, "camera_model: pinhole", "camera_model: ds"), NULL, TVO_ERR_UNSUPPORTED,
+                   "double sphere");
+    expect_refused(edit(p, "camera_model: pinhole", "camera_model: eucm"), NULL, TVO_ERR_UNSUPPORTED,
+                   "'eucm'");
     expect_refused(edit(p, "distortion_model: radtan", "distortion_model: fov"), NULL, TVO_ERR_UNSUPPORTED,
                    "distortion_model 'fov' not supported");
     expect_refused(edit(p, "0.00011556]", "0.00011556, 0.1, 0.2]"), NULL, TVO_ERR_FORMAT,
                    "needs 4 or 5 distortion_coeffs, got 6");
-    expect_refused(edit(p, "distortion_coeffs", "distortion_coefficients: [0,0,0,0]\ndistortion_coeffs"), NULL,
-                   TVO_ERR_FORMAT, "both distortion_coefficients and distortion_coeffs");
+    expect_refused(edit(p, "distortion_coeffs", "distortion_coefficients: [0,0,0,0]\ndistortion_coeffs"),
+                   NULL, TVO_ERR_FORMAT, "both distortion_coefficients and distortion_coeffs");
     expect_refused(edit(p, "[0.0, 0.0, 0.0, 1.0]", "[0.0, 0.0, 0.5, 1.0]"), NULL, TVO_ERR_FORMAT,
                    "T_cam_imu: last row");
     free(flat);
@@ -214,7 +229,8 @@ static void test_ros_camera_info(void **state)
     assert_int_equal(c.camera.model, TVO_DIST_RADTAN);
     assert_int_equal(c.camera.width, 752);
     assert_int_equal(c.camera.height, 480);
-    assert_true(c.camera.fx == 458.654 && c.camera.fy == 457.296 && c.camera.cx == 367.215 && c.camera.cy == 248.375);
+    assert_true(c.camera.fx == 458.654 && c.camera.fy == 457.296 && c.camera.cx == 367.215 &&
+                c.camera.cy == 248.375);
     assert_true(c.camera.k[0] == -0.28340811 && c.camera.k[3] == 1.76187114e-05 && c.camera.k[4] == 0.0);
     assert_false(c.has_T_BS);
     /* the same camera as EuRoC's own sensor.yaml, a file written by other people in another format */
@@ -232,8 +248,9 @@ static void test_ros_camera_info(void **state)
     /* rational_polynomial: accepted when k4..k6 are zero (the same camera), refused otherwise */
     {
         char *r = edit(text, "plumb_bob", "rational_polynomial");
-        char *r8 = edit(r, "cols: 5\n  data:  [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05, 0.0]",
-                        "cols: 8\n  data:  [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05, 0.0, 0, 0, 0]");
+        char *r8 =
+                edit(r, "cols: 5\n  data:  [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05, 0.0]",
+                     "cols: 8\n  data:  [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05, 0.0, 0, 0, 0]");
         tvo_calib c8;
         assert_int_equal(parse(r8, NULL, &c8, err, sizeof err), TVO_OK);
         assert_memory_equal(&c8.camera, &c.camera, sizeof c.camera);
@@ -242,17 +259,20 @@ static void test_ros_camera_info(void **state)
         expect_refused(r, NULL, TVO_ERR_FORMAT, "rational_polynomial needs 8");
         free(r8);
     }
-    expect_refused(edit(text, "plumb_bob", "fisheye_fov"), NULL, TVO_ERR_UNSUPPORTED, "'fisheye_fov' not supported");
+    expect_refused(edit(text, "plumb_bob", "fisheye_fov"), NULL, TVO_ERR_UNSUPPORTED,
+                   "'fisheye_fov' not supported");
     expect_refused(edit(text, "cols: 5", "cols: 4"), NULL, TVO_ERR_FORMAT, "rows x cols");
     expect_refused(edit(text, "[458.654, 0.0,", "[458.654, 0.3,"), NULL, TVO_ERR_UNSUPPORTED, "skew");
     expect_refused(edit(text, "image_width: 752\n", ""), NULL, TVO_ERR_FORMAT, "missing key 'image_width'");
-    expect_refused(edit(text, "camera_name: cam0", "camera_name: cam0\ncamera_name: cam1"), NULL, TVO_ERR_FORMAT,
-                   "duplicate key 'camera_name'");
+    expect_refused(edit(text, "camera_name: cam0", "camera_name: cam0\ncamera_name: cam1"), NULL,
+                   TVO_ERR_FORMAT, "duplicate key 'camera_name'");
     /* the flow-mapping spelling of the same matrix */
     {
-        char *fm = edit(text, "camera_matrix:\n  rows: 3\n  cols: 3\n  data: [458.654, 0.0, 367.215, 0.0, 457.296, "
-                              "248.375, 0.0, 0.0, 1.0]",
-                        "camera_matrix: {rows: 3, cols: 3,\n  data: [458.654, 0.0, 367.215, 0.0, 457.296, 248.375, "
+        char *fm = edit(text,
+                        "camera_matrix:\n  rows: 3\n  cols: 3\n  data: [458.654, 0.0, 367.215, 0.0, 457.296, "
+                        "248.375, 0.0, 0.0, 1.0]",
+                        "camera_matrix: {rows: 3, cols: 3,\n  data: [458.654, 0.0, 367.215, 0.0, 457.296, "
+                        "248.375, "
                         "0.0, 0.0, 1.0]}");
         tvo_calib c2;
         assert_int_equal(parse(fm, NULL, &c2, err, sizeof err), TVO_OK);
@@ -267,7 +287,8 @@ static void test_ros_camera_info(void **state)
     assert_int_equal(c.camera.model, TVO_DIST_EQUIDISTANT);
     assert_true(c.camera.fx == 395.872620767 && c.camera.cy == 214.319312646);
     assert_true(c.camera.k[0] == -0.00453674705911 && c.camera.k[3] == -0.0155084020782);
-    expect_refused(edit(text, "cols: 4\n  data: [-0.00453674705911,", "cols: 5\n  data: [0.1, -0.00453674705911,"),
+    expect_refused(edit(text, "cols: 4\n  data: [-0.00453674705911,",
+                        "cols: 5\n  data: [0.1, -0.00453674705911,"),
                    NULL, TVO_ERR_FORMAT, "equidistant needs 4");
     free(text);
 }
@@ -305,8 +326,8 @@ static void test_opencv_filestorage(void **state)
         free(a);
         free(b);
     }
-    expect_refused(edit(text, "   data: [ 5.3591573396163199e+02, 0.,", "   data: [ 5.3591573396163199e+02,"), NULL,
-                   TVO_ERR_FORMAT, "rows x cols");
+    expect_refused(edit(text, "   data: [ 5.3591573396163199e+02, 0.,", "   data: [ 5.3591573396163199e+02,"),
+                   NULL, TVO_ERR_FORMAT, "rows x cols");
     expect_refused(edit(text, "2.3839153080878486e-01 ]", "2.3839153080878486e-01"), NULL, TVO_ERR_FORMAT,
                    "never closed");
     free(text);
@@ -335,7 +356,8 @@ static void test_euroc_sensor_yaml(void **state)
     assert_true(c.has_T_BS);
     assert_near(c.T_BS.t[2], 0.02575617, 1e-12);
     /* the EuRoC reader's parser gives the same */
-    assert_int_equal(tvo_euroc_parse_sensor_yaml(text, strlen(text), &cam, &T, &rate, err, sizeof err), TVO_OK);
+    assert_int_equal(tvo_euroc_parse_sensor_yaml(text, strlen(text), &cam, &T, &rate, err, sizeof err),
+                     TVO_OK);
     assert_memory_equal(&cam, &c.camera, sizeof cam);
     assert_true(rate == 20.0);
     free(text);
@@ -355,16 +377,18 @@ static void test_not_a_calibration(void **state)
     tvo_calib c;
     char err[256], path[4096];
     (void)state;
-    assert_int_equal(parse("rostopic: /imu0\nupdate_rate: 200.0\n", NULL, &c, err, sizeof err), TVO_ERR_FORMAT);
+    assert_int_equal(parse("rostopic: /imu0\nupdate_rate: 200.0\n", NULL, &c, err, sizeof err),
+                     TVO_ERR_FORMAT);
     assert_non_null(strstr(err, "not a calibration file"));
-    assert_int_equal(parse("%YAML:1.0\nmodel_type: PINHOLE\nprojection_parameters:\n   fx: 4.6e+02\n", NULL, &c,
-                           err, sizeof err),
+    assert_int_equal(parse("%YAML:1.0\nmodel_type: PINHOLE\nprojection_parameters:\n   fx: 4.6e+02\n", NULL,
+                           &c, err, sizeof err),
                      TVO_ERR_UNSUPPORTED);
     assert_non_null(strstr(err, "camodocal"));
     assert_int_equal(parse("", NULL, &c, err, sizeof err), TVO_ERR_FORMAT);
     assert_int_equal(parse("a: |\n  text\n", NULL, &c, err, sizeof err), TVO_ERR_FORMAT);
     assert_non_null(strstr(err, "line 1: block scalars"));
-    assert_int_equal(parse("cam0:\n  intrinsics: [1, 2, 3, 4]\n  - 5\n", NULL, &c, err, sizeof err), TVO_ERR_FORMAT);
+    assert_int_equal(parse("cam0:\n  intrinsics: [1, 2, 3, 4]\n  - 5\n", NULL, &c, err, sizeof err),
+                     TVO_ERR_FORMAT);
     assert_non_null(strstr(err, "line 3: sequence item inside a mapping"));
     assert_int_equal(tvo_calib_parse(NULL, 5, TVO_CALIB_AUTO, NULL, &c, err, sizeof err), TVO_ERR_NULL);
     assert_int_equal(tvo_calib_parse("", 0, TVO_CALIB_AUTO, NULL, NULL, err, sizeof err), TVO_ERR_NULL);
@@ -372,7 +396,8 @@ static void test_not_a_calibration(void **state)
     /* a forced format that does not match */
     {
         char *t = read_calib("ros_equidistant.yaml", NULL);
-        assert_int_equal(tvo_calib_parse(t, strlen(t), TVO_CALIB_EUROC, NULL, &c, err, sizeof err), TVO_ERR_FORMAT);
+        assert_int_equal(tvo_calib_parse(t, strlen(t), TVO_CALIB_EUROC, NULL, &c, err, sizeof err),
+                         TVO_ERR_FORMAT);
         assert_non_null(strstr(err, "missing key 'intrinsics'"));
         free(t);
     }
@@ -387,9 +412,13 @@ static void test_not_a_calibration(void **state)
  * message on failure, a usable camera on success. */
 static void test_truncated_and_mutated(void **state)
 {
-    static const char *const files[] = {"kalibr_camchain_imucam_equi.yaml", "kalibr_camchain_equi.yaml",
-                                        "kalibr_wiki_camchain_radtan_omni.yaml", "ros_plumb_bob_euroc_cam0.yaml",
-                                        "ros_equidistant.yaml", "opencv_left_intrinsics.yml", "opencv_charuco.yml",
+    static const char *const files[] = {"kalibr_camchain_imucam_equi.yaml",
+                                        "kalibr_camchain_equi.yaml",
+                                        "kalibr_wiki_camchain_radtan_omni.yaml",
+                                        "ros_plumb_bob_euroc_cam0.yaml",
+                                        "ros_equidistant.yaml",
+                                        "opencv_left_intrinsics.yml",
+                                        "opencv_charuco.yml",
                                         "euroc_kimera_d455_left.yaml"};
     uint64_t rng = 12345;
     size_t f;
@@ -438,14 +467,14 @@ static void test_truncated_and_mutated(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_kalibr_camchain_equi),
-        cmocka_unit_test(test_kalibr_camchain_radtan_and_omni),
-        cmocka_unit_test(test_kalibr_flat_and_other_models),
-        cmocka_unit_test(test_ros_camera_info),
-        cmocka_unit_test(test_opencv_filestorage),
-        cmocka_unit_test(test_euroc_sensor_yaml),
-        cmocka_unit_test(test_not_a_calibration),
-        cmocka_unit_test(test_truncated_and_mutated),
+            cmocka_unit_test(test_kalibr_camchain_equi),
+            cmocka_unit_test(test_kalibr_camchain_radtan_and_omni),
+            cmocka_unit_test(test_kalibr_flat_and_other_models),
+            cmocka_unit_test(test_ros_camera_info),
+            cmocka_unit_test(test_opencv_filestorage),
+            cmocka_unit_test(test_euroc_sensor_yaml),
+            cmocka_unit_test(test_not_a_calibration),
+            cmocka_unit_test(test_truncated_and_mutated),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

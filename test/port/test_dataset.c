@@ -117,8 +117,8 @@ static void build_kitti(const tvo_euroc *src, const char *rel)
         assert_int_equal(symlink(img, p), 0);
         fprintf(times, "%.9e\n", (double)(t - t0) * 1e-9);
         assert_int_equal(tvo_euroc_groundtruth(src, t, 1000, &T), TVO_OK);
-        fprintf(poses, "%.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e\n", T.R[0], T.R[1], T.R[2],
-                T.t[0], T.R[3], T.R[4], T.R[5], T.t[1], T.R[6], T.R[7], T.R[8], T.t[2]);
+        fprintf(poses, "%.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e\n", T.R[0], T.R[1],
+                T.R[2], T.t[0], T.R[3], T.R[4], T.R[5], T.t[1], T.R[6], T.R[7], T.R[8], T.t[2]);
     }
     fclose(times);
     fclose(poses);
@@ -127,9 +127,11 @@ static void build_kitti(const tvo_euroc *src, const char *rel)
         char text[1200];
         snprintf(text, sizeof text,
                  "P0: %.12e 0.000000000000e+00 %.12e 0.000000000000e+00 0.000000000000e+00 %.12e %.12e "
-                 "0.000000000000e+00 0.000000000000e+00 0.000000000000e+00 1.000000000000e+00 0.000000000000e+00\n"
+                 "0.000000000000e+00 0.000000000000e+00 0.000000000000e+00 1.000000000000e+00 "
+                 "0.000000000000e+00\n"
                  "P1: %.12e 0.000000000000e+00 %.12e -3.798145000000e+02 0.000000000000e+00 %.12e %.12e "
-                 "0.000000000000e+00 0.000000000000e+00 0.000000000000e+00 1.000000000000e+00 0.000000000000e+00\n",
+                 "0.000000000000e+00 0.000000000000e+00 0.000000000000e+00 1.000000000000e+00 "
+                 "0.000000000000e+00\n",
                  cam->fx, cam->cx, cam->fy, cam->cy, cam->fx, cam->cx, cam->fy, cam->cy);
         write_text(buf, text);
     }
@@ -158,7 +160,8 @@ static void test_kitti_layout(void **state)
     assert_true(tvo_euroc_has_groundtruth(seq));
     assert_int_equal(tvo_euroc_groundtruth_count(seq), tvo_euroc_frame_count(src));
     for (i = 0; i < tvo_euroc_frame_count(seq); ++i) {
-        const int64_t dt = tvo_euroc_frame_time(seq, i) - (tvo_euroc_frame_time(src, i) - tvo_euroc_frame_time(src, 0));
+        const int64_t dt = tvo_euroc_frame_time(seq, i) -
+                (tvo_euroc_frame_time(src, i) - tvo_euroc_frame_time(src, 0));
         tvo_pose A, B;
         int k;
         assert_true(dt >= -1 && dt <= 1); /* %.9e keeps the ns */
@@ -271,28 +274,33 @@ static void test_kitti_parsers(void **state)
     tvo_pose T[2];
     int32_t n = 0;
     char err[200];
-    static const char calib[] = "P0: 7.188560000000e+02 0.000000000000e+00 6.071928000000e+02 0.000000000000e+00 "
-                                "0.000000000000e+00 7.188560000000e+02 1.852157000000e+02 0.000000000000e+00 "
-                                "0.000000000000e+00 0.000000000000e+00 1.000000000000e+00 0.000000000000e+00\n";
+    static const char calib[] =
+            "P0: 7.188560000000e+02 0.000000000000e+00 6.071928000000e+02 0.000000000000e+00 "
+            "0.000000000000e+00 7.188560000000e+02 1.852157000000e+02 0.000000000000e+00 "
+            "0.000000000000e+00 0.000000000000e+00 1.000000000000e+00 0.000000000000e+00\n";
     (void)state;
     assert_int_equal(tvo_kitti_parse_calib(calib, strlen(calib), P, err, sizeof err), TVO_OK);
     assert_true(P[0] == 718.856 && P[2] == 607.1928 && P[6] == 185.2157);
     assert_int_equal(tvo_kitti_parse_calib("P1: 1 2\n", 8, P, err, sizeof err), TVO_ERR_FORMAT);
     assert_non_null(strstr(err, "no 'P0:' line"));
-    assert_int_equal(tvo_kitti_parse_calib("P0: 1 0 2 0 0 1 3 0 0 0 1\n", 26, P, err, sizeof err), TVO_ERR_FORMAT);
+    assert_int_equal(tvo_kitti_parse_calib("P0: 1 0 2 0 0 1 3 0 0 0 1\n", 26, P, err, sizeof err),
+                     TVO_ERR_FORMAT);
     assert_non_null(strstr(err, "expected 12 numbers, got 11"));
-    assert_int_equal(tvo_kitti_parse_calib("P0: 1 0 2 5 0 1 3 0 0 0 1 0\n", 28, P, err, sizeof err), TVO_ERR_FORMAT);
+    assert_int_equal(tvo_kitti_parse_calib("P0: 1 0 2 5 0 1 3 0 0 0 1 0\n", 28, P, err, sizeof err),
+                     TVO_ERR_FORMAT);
     {
         static const char two[] = "1 0 0 0 0 1 0 0 0 0 1 0\n\n0 -1 0 1 1 0 0 2 0 0 1 3\n";
         assert_int_equal(tvo_kitti_parse_poses(two, strlen(two), T, 2, &n, err, sizeof err), TVO_OK);
     }
     assert_int_equal(n, 2);
     assert_true(T[1].t[2] == 3.0 && T[1].R[1] == -1.0);
-    assert_int_equal(tvo_kitti_parse_poses("1 0 0 0 0 2 0 0 0 0 1 0\n", 24, T, 2, &n, err, sizeof err), TVO_ERR_FORMAT);
+    assert_int_equal(tvo_kitti_parse_poses("1 0 0 0 0 2 0 0 0 0 1 0\n", 24, T, 2, &n, err, sizeof err),
+                     TVO_ERR_FORMAT);
     assert_non_null(strstr(err, "line 1: the rotation block is not a rotation"));
-    assert_int_equal(tvo_kitti_parse_poses("1 0 0 0 0 1 0 nan 0 0 1 0\n", 26, T, 2, &n, err, sizeof err), TVO_ERR_FORMAT);
-    assert_int_equal(tvo_kitti_parse_poses("1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 0\n", 48, T, 1, &n, err,
-                                           sizeof err),
+    assert_int_equal(tvo_kitti_parse_poses("1 0 0 0 0 1 0 nan 0 0 1 0\n", 26, T, 2, &n, err, sizeof err),
+                     TVO_ERR_FORMAT);
+    assert_int_equal(tvo_kitti_parse_poses("1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 0\n", 48, T, 1, &n,
+                                           err, sizeof err),
                      TVO_ERR_NO_MEMORY);
     assert_int_equal(n, 2);
 }
@@ -316,7 +324,8 @@ static void test_tum_parsers(void **state)
     assert_true(rows[0].t_ns == 1305031098665900000LL && rows[1].t_ns == 1305031098675800000LL);
     assert_true(rows[0].p[2] == 1.6380);
     /* x y z w in the file, w x y z in the row (normalised: the file's norm is 0.99995) */
-    assert_true(fabs(rows[0].q_wxyz[0] - -0.3986 / 0.99995) < 1e-3 && fabs(rows[0].q_wxyz[1] - 0.6132) < 1e-3);
+    assert_true(fabs(rows[0].q_wxyz[0] - -0.3986 / 0.99995) < 1e-3 &&
+                fabs(rows[0].q_wxyz[1] - 0.6132) < 1e-3);
     {
         const double qn = sqrt(rows[0].q_wxyz[0] * rows[0].q_wxyz[0] + rows[0].q_wxyz[1] * rows[0].q_wxyz[1] +
                                rows[0].q_wxyz[2] * rows[0].q_wxyz[2] + rows[0].q_wxyz[3] * rows[0].q_wxyz[3]);
@@ -324,14 +333,18 @@ static void test_tum_parsers(void **state)
     }
     /* EuRoC's order read as TUM is caught by the quaternion norm only when it is not a unit vector;
      * a reordered unit quaternion is still unit: the parsers cannot tell, the file kind must be right */
-    assert_int_equal(tvo_tum_parse_groundtruth("1.5 0 0 0 0 0 0\n", 16, rows, 2, &n, err, sizeof err), TVO_ERR_FORMAT);
+    assert_int_equal(tvo_tum_parse_groundtruth("1.5 0 0 0 0 0 0\n", 16, rows, 2, &n, err, sizeof err),
+                     TVO_ERR_FORMAT);
     assert_non_null(strstr(err, "7 fields, need at least 8"));
-    assert_int_equal(tvo_tum_parse_groundtruth("1.5 0 0 0 0 0 0 2\n", 18, rows, 2, &n, err, sizeof err), TVO_ERR_FORMAT);
+    assert_int_equal(tvo_tum_parse_groundtruth("1.5 0 0 0 0 0 0 2\n", 18, rows, 2, &n, err, sizeof err),
+                     TVO_ERR_FORMAT);
     assert_non_null(strstr(err, "quaternion norm"));
-    assert_int_equal(tvo_tum_parse_groundtruth("2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", 32, rows, 2, &n, err, sizeof err),
+    assert_int_equal(tvo_tum_parse_groundtruth("2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", 32, rows, 2, &n, err,
+                                               sizeof err),
                      TVO_ERR_FORMAT);
     assert_non_null(strstr(err, "not increasing"));
-    assert_int_equal(tvo_tum_parse_groundtruth("1305031098.6659e3 0 0 0 0 0 0 1\n", 32, rows, 2, &n, err, sizeof err),
+    assert_int_equal(tvo_tum_parse_groundtruth("1305031098.6659e3 0 0 0 0 0 0 1\n", 32, rows, 2, &n, err,
+                                               sizeof err),
                      TVO_ERR_FORMAT);
     assert_non_null(strstr(err, "seconds expected"));
     /* the published cameras by folder name */
@@ -362,12 +375,15 @@ static void test_tum_layout(void **state)
     assert_non_null(rgb);
     assert_non_null(gt);
     fputs("# color images\n# file: 'rgbd_dataset_freiburg1_xyz.bag'\n# timestamp filename\n", rgb);
-    fputs("# ground truth trajectory\n# file: 'rgbd_dataset_freiburg1_xyz.bag'\n# timestamp tx ty tz qx qy qz qw\n", gt);
+    fputs("# ground truth trajectory\n# file: 'rgbd_dataset_freiburg1_xyz.bag'\n# timestamp tx ty tz qx qy "
+          "qz qw\n",
+          gt);
     for (i = 0; i < 10; ++i) {
         const int64_t t = tvo_euroc_frame_time(src, i) - 1000000000000000000LL + 1305031102000000000LL;
         tvo_euroc_gt_row r;
         char stamp[64];
-        snprintf(stamp, sizeof stamp, "%lld.%06lld", (long long)(t / 1000000000), (long long)(t % 1000000000 / 1000));
+        snprintf(stamp, sizeof stamp, "%lld.%06lld", (long long)(t / 1000000000),
+                 (long long)(t % 1000000000 / 1000));
         assert_int_equal(tvo_euroc_frame_path(src, i, img, sizeof img), TVO_OK);
         snprintf(buf, sizeof buf, "tum/rgb/%s.png", stamp);
         path_of(p, sizeof p, buf);
@@ -376,8 +392,8 @@ static void test_tum_layout(void **state)
         if (i == 4)
             fputs("1305031102.9 rgb/../../etc/passwd\n", rgb); /* a malformed row */
         assert_int_equal(tvo_euroc_groundtruth_row(src, i, &r), TVO_OK);
-        fprintf(gt, "%s %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", stamp, r.p[0], r.p[1], r.p[2], r.q_wxyz[1], r.q_wxyz[2],
-                r.q_wxyz[3], r.q_wxyz[0]);
+        fprintf(gt, "%s %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", stamp, r.p[0], r.p[1], r.p[2], r.q_wxyz[1],
+                r.q_wxyz[2], r.q_wxyz[3], r.q_wxyz[0]);
     }
     fclose(rgb);
     fclose(gt);
@@ -394,8 +410,9 @@ static void test_tum_layout(void **state)
     assert_non_null(strstr(tvo_euroc_bad_row(seq, 0), "rgb.txt:9:"));
     assert_true(tvo_euroc_has_groundtruth(seq));
     assert_int_equal(tvo_euroc_groundtruth_count(seq), 10);
-    assert_true(tvo_euroc_frame_time(seq, 0) == tvo_euroc_frame_time(src, 0) - 1000000000000000000LL +
-                                                    1305031102000000000LL - (tvo_euroc_frame_time(src, 0) % 1000));
+    assert_true(tvo_euroc_frame_time(seq, 0) ==
+                tvo_euroc_frame_time(src, 0) - 1000000000000000000LL + 1305031102000000000LL -
+                        (tvo_euroc_frame_time(src, 0) % 1000));
     for (i = 0; i < 10; ++i) {
         tvo_pose A, B;
         assert_int_equal(tvo_euroc_groundtruth(seq, tvo_euroc_frame_time(seq, i), 0, &A), TVO_OK);
@@ -436,11 +453,13 @@ static void test_euroc_bad_rows(void **state)
     mkdir_rel("eu");
     mkdir_rel("eu/cam0");
     mkdir_rel("eu/cam0/data");
-    write_text("eu/cam0/sensor.yaml", "intrinsics: [2, 2, 1, 0.5]\nresolution: [2, 2]\n"
-                                      "T_BS:\n  data: [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]\n");
+    write_text("eu/cam0/sensor.yaml",
+               "intrinsics: [2, 2, 1, 0.5]\nresolution: [2, 2]\n"
+               "T_BS:\n  data: [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]\n");
     path_of(p, sizeof p, "eu/cam0/data/a.png");
     assert_int_equal(tvo_png_write_gray8(p, px, 2, 2, 2), TVO_OK);
-    write_text("eu/cam0/data.csv", "#timestamp [ns],filename\n100,a.png\n15x,a.png\n300,a.png\n400\n500,a.png\n");
+    write_text("eu/cam0/data.csv",
+               "#timestamp [ns],filename\n100,a.png\n15x,a.png\n300,a.png\n400\n500,a.png\n");
     path_of(p, sizeof p, "eu");
     assert_int_equal(tvo_euroc_open(&seq, p, "cam0", err, sizeof err), TVO_ERR_FORMAT);
     assert_non_null(strstr(err, "cam0/data.csv: line 3: bad timestamp '15x'"));
@@ -455,7 +474,8 @@ static void test_euroc_bad_rows(void **state)
     tvo_euroc_close(seq);
     /* every row bad: still an error */
     write_text("eu/cam0/data.csv", "x,a.png\n");
-    assert_int_equal(tvo_euroc_open_ex(&seq, p, "cam0", TVO_EUROC_SKIP_BAD_ROWS, err, sizeof err), TVO_ERR_FORMAT);
+    assert_int_equal(tvo_euroc_open_ex(&seq, p, "cam0", TVO_EUROC_SKIP_BAD_ROWS, err, sizeof err),
+                     TVO_ERR_FORMAT);
     assert_non_null(strstr(err, "no frames"));
     assert_int_equal(tvo_euroc_bad_row_count(NULL), 0);
 }
@@ -463,11 +483,11 @@ static void test_euroc_bad_rows(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_kitti_parsers),
-        cmocka_unit_test(test_tum_parsers),
-        cmocka_unit_test_setup_teardown(test_kitti_layout, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_tum_layout, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_euroc_bad_rows, setup, teardown),
+            cmocka_unit_test(test_kitti_parsers),
+            cmocka_unit_test(test_tum_parsers),
+            cmocka_unit_test_setup_teardown(test_kitti_layout, setup, teardown),
+            cmocka_unit_test_setup_teardown(test_tum_layout, setup, teardown),
+            cmocka_unit_test_setup_teardown(test_euroc_bad_rows, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -12,33 +12,33 @@
 #include "tinyvo/port/png.h"
 
 static const char YAML_OK[] =
-    "%YAML:1.0\n"
-    "# General sensor definitions.\n"
-    "sensor_type: camera\n"
-    "comment: VI-Sensor cam0 (MT9M034)\n"
-    "\n"
-    "# Sensor extrinsics wrt. the body-frame.\n"
-    "T_BS:\n"
-    "  cols: 4\n"
-    "  rows: 4\n"
-    "  data: [0.0148655429818, -0.999880929698, 0.00414029679422, -0.0216401454975,\n"
-    "         0.999557249008, 0.0149672133247, 0.025715529948, -0.064676986768,\n"
-    "        -0.0257744366974, 0.00375618835797, 0.999660727178, 0.00981073058949,\n"
-    "         0.0, 0.0, 0.0, 1.0]\n"
-    "\n"
-    "# Camera specific definitions.\n"
-    "rate_hz: 20\n"
-    "resolution: [752, 480]\n"
-    "camera_model: pinhole\n"
-    "intrinsics: [458.654, 457.296, 367.215, 248.375] #fu, fv, cu, cv\n"
-    "distortion_model: radial-tangential\n"
-    "distortion_coefficients: [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05]\n";
+        "%YAML:1.0\n"
+        "# General sensor definitions.\n"
+        "sensor_type: camera\n"
+        "comment: VI-Sensor cam0 (MT9M034)\n"
+        "\n"
+        "# Sensor extrinsics wrt. the body-frame.\n"
+        "T_BS:\n"
+        "  cols: 4\n"
+        "  rows: 4\n"
+        "  data: [0.0148655429818, -0.999880929698, 0.00414029679422, -0.0216401454975,\n"
+        "         0.999557249008, 0.0149672133247, 0.025715529948, -0.064676986768,\n"
+        "        -0.0257744366974, 0.00375618835797, 0.999660727178, 0.00981073058949,\n"
+        "         0.0, 0.0, 0.0, 1.0]\n"
+        "\n"
+        "# Camera specific definitions.\n"
+        "rate_hz: 20\n"
+        "resolution: [752, 480]\n"
+        "camera_model: pinhole\n"
+        "intrinsics: [458.654, 457.296, 367.215, 248.375] #fu, fv, cu, cv\n"
+        "distortion_model: radial-tangential\n"
+        "distortion_coefficients: [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05]\n";
 
-static const char GT_OK[] =
-    "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z [], v_x, v_y, v_z\n"
-    "1000,0.0,0.0,0.0,1.0,0.0,0.0,0.0,0.1,0.2,0.3\n"
-    "2000,1.0,2.0,3.0,0.0,0.0,0.0,1.0,0.1,0.2,0.3\n"
-    "3000,2.0,2.0,2.0,0.0,0.0,0.0,1.0,0.1,0.2,0.3\n";
+static const char GT_OK[] = "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], "
+                            "q_RS_y [], q_RS_z [], v_x, v_y, v_z\n"
+                            "1000,0.0,0.0,0.0,1.0,0.0,0.0,0.0,0.1,0.2,0.3\n"
+                            "2000,1.0,2.0,3.0,0.0,0.0,0.0,1.0,0.1,0.2,0.3\n"
+                            "3000,2.0,2.0,2.0,0.0,0.0,0.0,1.0,0.1,0.2,0.3\n";
 
 /* Replace the first occurrence of `from` in YAML_OK by `to`. */
 static char *yaml_with(const char *from, const char *to)
@@ -79,7 +79,8 @@ static void test_yaml_ok(void **state)
     double rate = 0;
     char err[256];
     (void)state;
-    assert_int_equal(tvo_euroc_parse_sensor_yaml(YAML_OK, strlen(YAML_OK), &cam, &T, &rate, err, sizeof err), TVO_OK);
+    assert_int_equal(tvo_euroc_parse_sensor_yaml(YAML_OK, strlen(YAML_OK), &cam, &T, &rate, err, sizeof err),
+                     TVO_OK);
     assert_string_equal(err, "");
     assert_int_equal(cam.width, 752);
     assert_int_equal(cam.height, 480);
@@ -90,11 +91,13 @@ static void test_yaml_ok(void **state)
     assert_true(fabs(T.R[1] - -0.999880929698) < 1e-9 && fabs(T.t[1] - -0.064676986768) < 1e-15);
     assert_true(tvo_rot_orthogonality_error(T.R) < 1e-14);
     /* NULL T_BS / rate are fine; NULL cam is not */
-    assert_int_equal(tvo_euroc_parse_sensor_yaml(YAML_OK, strlen(YAML_OK), &cam, NULL, NULL, NULL, 0), TVO_OK);
+    assert_int_equal(tvo_euroc_parse_sensor_yaml(YAML_OK, strlen(YAML_OK), &cam, NULL, NULL, NULL, 0),
+                     TVO_OK);
     assert_int_equal(tvo_euroc_parse_sensor_yaml(YAML_OK, strlen(YAML_OK), NULL, NULL, NULL, err, sizeof err),
                      TVO_ERR_NULL);
     /* 5 coefficients; CRLF line ends; quoted model; equidistant */
-    assert_int_equal(parse_yaml(yaml_with("1.76187114e-05]", "1.76187114e-05, 0.0123]"), &cam, err, sizeof err),
+    assert_int_equal(parse_yaml(yaml_with("1.76187114e-05]", "1.76187114e-05, 0.0123]"), &cam, err,
+                                sizeof err),
                      TVO_OK);
     assert_true(cam.k[4] == 0.0123);
     {
@@ -111,19 +114,22 @@ static void test_yaml_ok(void **state)
     }
     assert_int_equal(parse_yaml(yaml_with("radial-tangential", "\"radtan\""), &cam, err, sizeof err), TVO_OK);
     assert_int_equal(cam.model, TVO_DIST_RADTAN);
-    assert_int_equal(parse_yaml(yaml_with("radial-tangential", "equidistant"), &cam, err, sizeof err), TVO_OK);
+    assert_int_equal(parse_yaml(yaml_with("radial-tangential", "equidistant"), &cam, err, sizeof err),
+                     TVO_OK);
     assert_int_equal(cam.model, TVO_DIST_EQUIDISTANT);
     assert_true(cam.k[0] == -0.28340811 && cam.k[4] == 0.0);
     /* no rate: 0 */
-    assert_int_equal(tvo_euroc_parse_sensor_yaml(yaml_with("rate_hz: 20\n", ""), strlen(yaml_with("rate_hz: 20\n", "")),
-                                                 &cam, &T, &rate, err, sizeof err),
+    assert_int_equal(tvo_euroc_parse_sensor_yaml(yaml_with("rate_hz: 20\n", ""),
+                                                 strlen(yaml_with("rate_hz: 20\n", "")), &cam, &T, &rate, err,
+                                                 sizeof err),
                      TVO_OK);
     assert_true(rate == 0.0);
     /* no distortion at all */
     {
-        char *y = yaml_with("distortion_model: radial-tangential\n"
-                            "distortion_coefficients: [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05]\n",
-                            "");
+        char *y =
+                yaml_with("distortion_model: radial-tangential\n"
+                          "distortion_coefficients: [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05]\n",
+                          "");
         assert_int_equal(parse_yaml(y, &cam, err, sizeof err), TVO_OK);
         assert_int_equal(cam.model, TVO_DIST_NONE);
     }
@@ -136,7 +142,8 @@ static void test_yaml_malformed(void **state)
                       TVO_ERR_FORMAT, "missing key 'intrinsics'");
     expect_yaml_error(yaml_with("[458.654, 457.296, 367.215, 248.375]", "[458.654, 457.296, 367.215]"),
                       TVO_ERR_FORMAT, "line 19: intrinsics: expected 4 numbers");
-    expect_yaml_error(yaml_with("458.654", "4x8.654"), TVO_ERR_FORMAT, "line 19: intrinsics: bad number '4x8.654'");
+    expect_yaml_error(yaml_with("458.654", "4x8.654"), TVO_ERR_FORMAT,
+                      "line 19: intrinsics: bad number '4x8.654'");
     expect_yaml_error(yaml_with("458.654", "nan"), TVO_ERR_FORMAT, "bad number");
     expect_yaml_error(yaml_with("458.654", "1e999"), TVO_ERR_FORMAT, "bad number");
     expect_yaml_error(yaml_with("458.654", "-458.654"), TVO_ERR_FORMAT, "invalid camera");
@@ -145,34 +152,39 @@ static void test_yaml_malformed(void **state)
     expect_yaml_error(yaml_with("[752, 480]", "[752]"), TVO_ERR_FORMAT, "resolution");
     expect_yaml_error(yaml_with("[752, 480]", "[0, 480]"), TVO_ERR_FORMAT, "resolution");
     expect_yaml_error(yaml_with("resolution: [752, 480]\n", ""), TVO_ERR_FORMAT, "missing key 'resolution'");
-    expect_yaml_error(yaml_with(", 1.76187114e-05]", "]"), TVO_ERR_FORMAT, "4 or 5 distortion_coefficients, got 3");
+    expect_yaml_error(yaml_with(", 1.76187114e-05]", "]"), TVO_ERR_FORMAT,
+                      "4 or 5 distortion_coefficients, got 3");
     expect_yaml_error(yaml_with("1.76187114e-05]", "1.76187114e-05, 0.1, 0.2]"), TVO_ERR_FORMAT, "got 6");
-    expect_yaml_error(yaml_with("radial-tangential\ndistortion_coefficients: [-0.28340811, 0.07395907, 0.00019359, "
-                                "1.76187114e-05]",
-                                "equidistant\ndistortion_coefficients: [-0.28340811, 0.07395907, 0.00019359]"),
-                      TVO_ERR_FORMAT, "equidistant needs 4");
-    expect_yaml_error(yaml_with("radial-tangential", "omnidirectional"), TVO_ERR_UNSUPPORTED, "line 20: distortion_model");
-    expect_yaml_error(yaml_with("camera_model: pinhole", "camera_model: omni"), TVO_ERR_UNSUPPORTED, "camera_model 'omni'");
+    expect_yaml_error(
+            yaml_with("radial-tangential\ndistortion_coefficients: [-0.28340811, 0.07395907, 0.00019359, "
+                      "1.76187114e-05]",
+                      "equidistant\ndistortion_coefficients: [-0.28340811, 0.07395907, 0.00019359]"),
+            TVO_ERR_FORMAT, "equidistant needs 4");
+    expect_yaml_error(yaml_with("radial-tangential", "omnidirectional"), TVO_ERR_UNSUPPORTED,
+                      "line 20: distortion_model");
+    expect_yaml_error(yaml_with("camera_model: pinhole", "camera_model: omni"), TVO_ERR_UNSUPPORTED,
+                      "camera_model 'omni'");
     expect_yaml_error(yaml_with("rate_hz: 20", "rate_hz: fast"), TVO_ERR_FORMAT, "line 16: rate_hz");
     expect_yaml_error(yaml_with("rate_hz: 20", "rate_hz: -20"), TVO_ERR_FORMAT, "rate_hz");
     /* T_BS */
     expect_yaml_error(yaml_with("T_BS:", "T_XX:"), TVO_ERR_FORMAT, "missing key 'T_BS'");
     expect_yaml_error(yaml_with("         0.0, 0.0, 0.0, 1.0]", "         0.0, 0.0, 0.0]"), TVO_ERR_FORMAT,
                       "line 10: T_BS data: expected 16 numbers, got 15");
-    expect_yaml_error(yaml_with("         0.0, 0.0, 0.0, 1.0]", "         0.0, 0.0, 0.0, 2.0]"), TVO_ERR_FORMAT,
-                      "last row");
+    expect_yaml_error(yaml_with("         0.0, 0.0, 0.0, 1.0]", "         0.0, 0.0, 0.0, 2.0]"),
+                      TVO_ERR_FORMAT, "last row");
     expect_yaml_error(yaml_with("0.0148655429818, -0.999880929698", "0.5148655429818, -0.999880929698"),
                       TVO_ERR_FORMAT, "not a rotation");
     expect_yaml_error(yaml_with("  rows: 4", "  rows: 3"), TVO_ERR_FORMAT, "line 9: T_BS rows must be 4");
-    expect_yaml_error(yaml_with("         0.0, 0.0, 0.0, 1.0]", "         0.0, 0.0, 0.0, 1.0\n"), TVO_ERR_FORMAT,
-                      "line 10: '[' of 'data' never closed");
+    expect_yaml_error(yaml_with("         0.0, 0.0, 0.0, 1.0]", "         0.0, 0.0, 0.0, 1.0\n"),
+                      TVO_ERR_FORMAT, "line 10: '[' of 'data' never closed");
     expect_yaml_error(yaml_with("         0.0, 0.0, 0.0, 1.0]", "         0.0, 0.0, 0.0, 1.0] extra"),
                       TVO_ERR_FORMAT, "line 13: text after ']'");
     /* syntax */
     expect_yaml_error(yaml_with("sensor_type: camera", "sensor_type camera"), TVO_ERR_FORMAT,
                       "line 3: expected 'key: value'");
     expect_yaml_error(yaml_with("  cols: 4", "\tcols: 4"), TVO_ERR_FORMAT, "line 8: tab");
-    expect_yaml_error(yaml_with("rate_hz: 20", "rate_hz: 20\nrate_hz: 30"), TVO_ERR_FORMAT, "duplicate key 'rate_hz'");
+    expect_yaml_error(yaml_with("rate_hz: 20", "rate_hz: 20\nrate_hz: 30"), TVO_ERR_FORMAT,
+                      "duplicate key 'rate_hz'");
     expect_yaml_error(yaml_with("sensor_type: camera\n", "sensor_type: camera\n  x: 1\n"), TVO_ERR_FORMAT,
                       "line 4: indented key outside a mapping");
     expect_yaml_error("", TVO_ERR_FORMAT, "missing key");
@@ -180,7 +192,8 @@ static void test_yaml_malformed(void **state)
         tvo_camera cam;
         char err[64];
         char withnul[] = "intrinsics: [1, 2, 3, 4]\nresolution: [10,\0 10]\n";
-        assert_int_equal(tvo_euroc_parse_sensor_yaml(withnul, sizeof withnul - 1, &cam, NULL, NULL, err, sizeof err),
+        assert_int_equal(tvo_euroc_parse_sensor_yaml(withnul, sizeof withnul - 1, &cam, NULL, NULL, err,
+                                                     sizeof err),
                          TVO_ERR_FORMAT);
         /* tiny err buffers are fine, NULL err too */
         assert_int_equal(parse_yaml("", &cam, err, 4), TVO_ERR_FORMAT);
@@ -239,19 +252,21 @@ static void test_frames_csv(void **state)
     assert_true(fr[0].t_ns == 1403715273262142976LL);
     assert_string_equal(fr[1].file, "1403715273312143104.png");
     assert_string_equal(fr[2].file, "a b.png");
-    assert_int_equal(tvo_euroc_parse_frames_csv(ok, strlen(ok), fr, 2, &n, err, sizeof err), TVO_ERR_NO_MEMORY);
+    assert_int_equal(tvo_euroc_parse_frames_csv(ok, strlen(ok), fr, 2, &n, err, sizeof err),
+                     TVO_ERR_NO_MEMORY);
     assert_int_equal(n, 3);
     assert_int_equal(tvo_euroc_parse_frames_csv("", 0, fr, 4, &n, err, sizeof err), TVO_OK);
     assert_int_equal(n, 0);
     assert_int_equal(tvo_euroc_parse_frames_csv(ok, strlen(ok), fr, 4, NULL, err, sizeof err), TVO_ERR_NULL);
     assert_int_equal(tvo_euroc_parse_frames_csv(ok, strlen(ok), fr, -1, &n, err, sizeof err), TVO_ERR_ARG);
-#define BAD_CSV(text, part)                                                                                   \
-    do {                                                                                                       \
-        err[0] = '\0';                                                                                         \
-        assert_int_equal(tvo_euroc_parse_frames_csv(text, strlen(text), fr, 4, &n, err, sizeof err), TVO_ERR_FORMAT); \
-        if (strstr(err, part) == NULL)                                                                         \
-            fprintf(stderr, "message '%s' lacks '%s'\n", err, part);                                           \
-        assert_non_null(strstr(err, part));                                                                    \
+#define BAD_CSV(text, part)                                                                          \
+    do {                                                                                             \
+        err[0] = '\0';                                                                               \
+        assert_int_equal(tvo_euroc_parse_frames_csv(text, strlen(text), fr, 4, &n, err, sizeof err), \
+                         TVO_ERR_FORMAT);                                                            \
+        if (strstr(err, part) == NULL)                                                               \
+            fprintf(stderr, "message '%s' lacks '%s'\n", err, part);                                 \
+        assert_non_null(strstr(err, part));                                                          \
     } while (0)
     BAD_CSV("#h\n1403715273262142976\n", "line 2: expected 'timestamp,filename'");
     BAD_CSV("1,a.png\n1403715273262142976,\n", "line 2: bad file name");
@@ -261,10 +276,11 @@ static void test_frames_csv(void **state)
     BAD_CSV("99999999999999999999,x.png\n", "bad timestamp");
     BAD_CSV(",x.png\n", "bad timestamp");
     BAD_CSV("1,../x.png\n", "bad file name");
-    {   /* a NUL byte inside a row (strlen would stop at it: explicit length) */
+    { /* a NUL byte inside a row (strlen would stop at it: explicit length) */
         static const char nul[] = "1,a.png\n2,b\0.png\n";
         err[0] = '\0';
-        assert_int_equal(tvo_euroc_parse_frames_csv(nul, sizeof nul - 1, fr, 4, &n, err, sizeof err), TVO_ERR_FORMAT);
+        assert_int_equal(tvo_euroc_parse_frames_csv(nul, sizeof nul - 1, fr, 4, &n, err, sizeof err),
+                         TVO_ERR_FORMAT);
         assert_non_null(strstr(err, "line 2: NUL byte"));
         assert_int_equal(n, 0);
     }
@@ -313,20 +329,22 @@ static void test_groundtruth_parse(void **state)
         assert_true(rows[1].q_wxyz[3] == 1.0);
         assert_true(rows[2].q_wxyz[2] == 1.0);
     }
-    assert_int_equal(tvo_euroc_parse_groundtruth(GT_OK, strlen(GT_OK), rows, 2, &n, err, sizeof err), TVO_ERR_NO_MEMORY);
+    assert_int_equal(tvo_euroc_parse_groundtruth(GT_OK, strlen(GT_OK), rows, 2, &n, err, sizeof err),
+                     TVO_ERR_NO_MEMORY);
     assert_int_equal(n, 3);
     assert_int_equal(tvo_euroc_parse_groundtruth(GT_OK, strlen(GT_OK), NULL, 0, &n, err, sizeof err), TVO_OK);
     assert_int_equal(n, 3);
-#define BAD_GT(text, part)                                                                                     \
-    do {                                                                                                        \
-        err[0] = '\0';                                                                                          \
-        assert_int_equal(tvo_euroc_parse_groundtruth(text, strlen(text), rows, 4, &n, err, sizeof err), TVO_ERR_FORMAT); \
-        if (strstr(err, part) == NULL)                                                                          \
-            fprintf(stderr, "message '%s' lacks '%s'\n", err, part);                                            \
-        assert_non_null(strstr(err, part));                                                                     \
+#define BAD_GT(text, part)                                                                              \
+    do {                                                                                                \
+        err[0] = '\0';                                                                                  \
+        assert_int_equal(tvo_euroc_parse_groundtruth(text, strlen(text), rows, 4, &n, err, sizeof err), \
+                         TVO_ERR_FORMAT);                                                               \
+        if (strstr(err, part) == NULL)                                                                  \
+            fprintf(stderr, "message '%s' lacks '%s'\n", err, part);                                    \
+        assert_non_null(strstr(err, part));                                                             \
     } while (0)
     BAD_GT("#h\n1000,0,0,0,1,0,0\n", "line 2: 7 fields, need at least 8");
-    BAD_GT("1000,0,0,0,1,0,0,0\n2000,0,0\n", "line 2: 3 fields");      /* truncated csv */
+    BAD_GT("1000,0,0,0,1,0,0,0\n2000,0,0\n", "line 2: 3 fields"); /* truncated csv */
     BAD_GT("1000,0,0,x,1,0,0,0\n", "line 1: bad number in column 4 (p_z): 'x'");
     BAD_GT("1000,0,0,0,1,0,0,nan\n", "column 8 (q_z)");
     BAD_GT("1000,0,0,0,1,0,0,0x1\n", "column 8");
@@ -339,7 +357,8 @@ static void test_groundtruth_parse(void **state)
     {
         static const char nul[] = "#h\n1000,0,0,0,1,0,0,0\0\n";
         err[0] = '\0';
-        assert_int_equal(tvo_euroc_parse_groundtruth(nul, sizeof nul - 1, rows, 4, &n, err, sizeof err), TVO_ERR_FORMAT);
+        assert_int_equal(tvo_euroc_parse_groundtruth(nul, sizeof nul - 1, rows, 4, &n, err, sizeof err),
+                         TVO_ERR_FORMAT);
         assert_non_null(strstr(err, "line 2: NUL byte"));
         assert_int_equal(n, 0);
     }
@@ -453,7 +472,8 @@ static void test_real_head(void **state)
             tvo_pose T1i = tvo_pose_inverse(&T1);
             T10 = tvo_pose_compose(&T1i, &T0); /* T_cam1_cam0 */
         }
-        assert_true(fabs(sqrt(T10.t[0] * T10.t[0] + T10.t[1] * T10.t[1] + T10.t[2] * T10.t[2]) - 0.110) < 0.002);
+        assert_true(fabs(sqrt(T10.t[0] * T10.t[0] + T10.t[1] * T10.t[1] + T10.t[2] * T10.t[2]) - 0.110) <
+                    0.002);
         assert_true(tvo_rot_angle(T10.R) < 0.05);
         tvo_euroc_close(seq);
         tvo_euroc_close(s1);
@@ -504,11 +524,13 @@ static void test_real_keyframes_and_txt(void **state)
         {
             tvo_euroc_gt_row r1;
             assert_int_equal(tvo_euroc_groundtruth_row(seq, 1, &r1), TVO_OK);
-            assert_int_equal(tvo_euroc_groundtruth_interp(seq, (row.t_ns + r1.t_ns) / 2, 100000000, &Ti), TVO_OK);
+            assert_int_equal(tvo_euroc_groundtruth_interp(seq, (row.t_ns + r1.t_ns) / 2, 100000000, &Ti),
+                             TVO_OK);
             assert_true(fabs(Ti.t[0] - 0.5 * (row.p[0] + r1.p[0])) < 1e-6);
             assert_int_equal(tvo_euroc_groundtruth_interp(seq, row.t_ns, 0, &T), TVO_OK);
             assert_true(T.t[0] == row.p[0]);
-            assert_int_equal(tvo_euroc_groundtruth_interp(seq, (row.t_ns + r1.t_ns) / 2, 1000, &Ti), TVO_ERR_RANGE);
+            assert_int_equal(tvo_euroc_groundtruth_interp(seq, (row.t_ns + r1.t_ns) / 2, 1000, &Ti),
+                             TVO_ERR_RANGE);
             assert_int_equal(tvo_euroc_groundtruth_interp(seq, row.t_ns - 1, 100000000, &Ti), TVO_ERR_RANGE);
         }
         /* a failing load keeps the previous ground truth */
@@ -577,12 +599,14 @@ static void test_fake_folder(void **state)
     assert_non_null(strstr(err, "data.csv"));
     mkdir_rel("seq/mav0/cam0");
     mkdir_rel("seq/mav0/cam0/data");
-    write_text("seq/mav0/cam0/data.csv", "#timestamp [ns],filename\n100,a.png\n200,b.png\n300,c.png\n400,d.png\n");
+    write_text("seq/mav0/cam0/data.csv",
+               "#timestamp [ns],filename\n100,a.png\n200,b.png\n300,c.png\n400,d.png\n");
     /* data.csv but no sensor.yaml */
     assert_int_equal(tvo_euroc_open(&seq, p, "cam0", err, sizeof err), TVO_ERR_NOT_FOUND);
     assert_non_null(strstr(err, "sensor.yaml"));
     /* a sensor.yaml without intrinsics */
-    write_text("seq/mav0/cam0/sensor.yaml", "T_BS:\n  data: [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]\nresolution: [8, 6]\n");
+    write_text("seq/mav0/cam0/sensor.yaml",
+               "T_BS:\n  data: [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]\nresolution: [8, 6]\n");
     assert_int_equal(tvo_euroc_open(&seq, p, "cam0", err, sizeof err), TVO_ERR_FORMAT);
     assert_null(seq);
     assert_non_null(strstr(err, "sensor.yaml: missing key 'intrinsics'"));
@@ -642,11 +666,13 @@ static void test_fake_folder(void **state)
     seq = NULL;
     /* a malformed ground-truth csv in the folder makes open fail with its line */
     mkdir_rel("seq/mav0/state_groundtruth_estimate0");
-    write_text("seq/mav0/state_groundtruth_estimate0/data.csv", "#t,...\n100,0,0,0,1,0,0,0\n200,0,0,0,1,0,zero,0\n");
+    write_text("seq/mav0/state_groundtruth_estimate0/data.csv",
+               "#t,...\n100,0,0,0,1,0,0,0\n200,0,0,0,1,0,zero,0\n");
     snprintf(p, sizeof p, "%s/seq", g_dir);
     assert_int_equal(tvo_euroc_open(&seq, p, "cam0", err, sizeof err), TVO_ERR_FORMAT);
     assert_non_null(strstr(err, "state_groundtruth_estimate0/data.csv: line 3: bad number in column 7"));
-    write_text("seq/mav0/state_groundtruth_estimate0/data.csv", "#t,...\n100,0,0,0,1,0,0,0\n200,0,0,0,1,0,0,0\n");
+    write_text("seq/mav0/state_groundtruth_estimate0/data.csv",
+               "#t,...\n100,0,0,0,1,0,0,0\n200,0,0,0,1,0,0,0\n");
     assert_int_equal(tvo_euroc_open(&seq, p, "cam0", err, sizeof err), TVO_OK);
     assert_true(tvo_euroc_has_groundtruth(seq));
     tvo_euroc_close(seq);
@@ -676,14 +702,14 @@ static void test_fake_folder(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_yaml_ok),
-        cmocka_unit_test(test_yaml_malformed),
-        cmocka_unit_test(test_yaml_truncated_and_fuzzed),
-        cmocka_unit_test(test_frames_csv),
-        cmocka_unit_test(test_groundtruth_parse),
-        cmocka_unit_test(test_real_head),
-        cmocka_unit_test(test_real_keyframes_and_txt),
-        cmocka_unit_test(test_fake_folder),
+            cmocka_unit_test(test_yaml_ok),
+            cmocka_unit_test(test_yaml_malformed),
+            cmocka_unit_test(test_yaml_truncated_and_fuzzed),
+            cmocka_unit_test(test_frames_csv),
+            cmocka_unit_test(test_groundtruth_parse),
+            cmocka_unit_test(test_real_head),
+            cmocka_unit_test(test_real_keyframes_and_txt),
+            cmocka_unit_test(test_fake_folder),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

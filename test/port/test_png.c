@@ -60,8 +60,8 @@ static void chunk(bytes *b, const char *type, const uint8_t *data, size_t n)
 }
 
 /* rows: height rows of rowbytes raw (unfiltered) bytes each. */
-static bytes make_png(uint32_t w, uint32_t h, int color_type, int bit_depth, const uint8_t *rows, size_t rowbytes,
-                      const uint8_t *plte, size_t plte_n)
+static bytes make_png(uint32_t w, uint32_t h, int color_type, int bit_depth, const uint8_t *rows,
+                      size_t rowbytes, const uint8_t *plte, size_t plte_n)
 {
     static const uint8_t sig[8] = {137, 80, 78, 71, 13, 10, 26, 10};
     bytes out = {NULL, 0, 0}, z = {NULL, 0, 0}, raw = {NULL, 0, 0};
@@ -198,7 +198,8 @@ static void test_gray_low_bit_depths(void **state)
 {
     /* 1-bit: 10 px per row -> 2 bytes; pattern 1010110011 */
     const uint8_t rows1[2 * 2] = {0xAC, 0xC0, 0x53, 0x00};
-    const uint8_t expect1[20] = {255, 0, 255, 0, 255, 255, 0, 0, 255, 255, 0, 255, 0, 255, 0, 0, 255, 255, 0, 0};
+    const uint8_t expect1[20] = {255, 0,   255, 0,   255, 255, 0,   0,   255, 255,
+                                 0,   255, 0,   255, 0,   0,   255, 255, 0,   0};
     /* 4-bit: values 0..15 scale by 17 */
     const uint8_t rows4[2] = {0x0F, 0x7A};
     const uint8_t expect4[4] = {0, 255, 119, 170};
@@ -473,15 +474,15 @@ static void test_real_euroc_frame(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_gray8),
-        cmocka_unit_test(test_gray_low_bit_depths),
-        cmocka_unit_test(test_gray16),
-        cmocka_unit_test(test_rgb_rgba_palette),
-        cmocka_unit_test(test_corrupt),
-        cmocka_unit_test(test_sizes),
-        cmocka_unit_test(test_args_and_missing),
-        cmocka_unit_test(test_write_roundtrip),
-        cmocka_unit_test(test_real_euroc_frame),
+            cmocka_unit_test(test_gray8),
+            cmocka_unit_test(test_gray_low_bit_depths),
+            cmocka_unit_test(test_gray16),
+            cmocka_unit_test(test_rgb_rgba_palette),
+            cmocka_unit_test(test_corrupt),
+            cmocka_unit_test(test_sizes),
+            cmocka_unit_test(test_args_and_missing),
+            cmocka_unit_test(test_write_roundtrip),
+            cmocka_unit_test(test_real_euroc_frame),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

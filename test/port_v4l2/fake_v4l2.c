@@ -210,7 +210,7 @@ static int dqbuf(fake_dev *d, struct v4l2_buffer *b)
     b->length = d->sizeimage;
     b->bytesused = step == FAKE_FRAME_SHORT ? d->sizeimage / 2u : d->sizeimage;
     b->flags = V4L2_BUF_FLAG_DONE | V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC |
-               (step == FAKE_FRAME_ERROR ? V4L2_BUF_FLAG_ERROR : 0u);
+            (step == FAKE_FRAME_ERROR ? V4L2_BUF_FLAG_ERROR : 0u);
     b->field = V4L2_FIELD_NONE;
     b->sequence = d->seq;
     d->last_ts_ns = d->t0_ns + (int64_t)d->seq * 33333000LL; /* whole microseconds */
@@ -283,8 +283,7 @@ static int f_ioctl(void *ctx, int fd, unsigned long req, void *arg)
             return fail(ENOTTY);
         }
         if (req == VIDIOC_S_PARM && p->parm.capture.timeperframe.numerator == 1 &&
-            p->parm.capture.timeperframe.denominator > 0 &&
-            p->parm.capture.timeperframe.denominator < fps) {
+            p->parm.capture.timeperframe.denominator > 0 && p->parm.capture.timeperframe.denominator < fps) {
             fps = p->parm.capture.timeperframe.denominator;
         }
         memset(&p->parm, 0, sizeof p->parm);
@@ -469,7 +468,8 @@ static int f_poll(void *ctx, int fd, short events, int timeout_ms, short *revent
             return 1;
         }
         if ((step == FAKE_FRAME || step == FAKE_FRAME_ERROR || step == FAKE_FRAME_SHORT ||
-             step == FAKE_DROP) && d->qcount == 0) {
+             step == FAKE_DROP) &&
+            d->qcount == 0) {
             return 0; /* no buffer queued: nothing can complete */
         }
         *revents = POLLIN;

@@ -22,32 +22,32 @@
 #define FAKE_MAX_STEPS 128
 
 typedef enum fake_step {
-    FAKE_FRAME = 1,       /* a good frame */
-    FAKE_FRAME_ERROR,     /* a frame flagged V4L2_BUF_FLAG_ERROR */
-    FAKE_FRAME_SHORT,     /* a frame with half the bytes */
-    FAKE_DROP,            /* the driver drops a frame (sequence number jumps) */
-    FAKE_POLL_EINTR,      /* poll fails with EINTR */
-    FAKE_POLL_TIMEOUT,    /* poll times out once */
-    FAKE_DQ_EINTR,        /* poll ok, DQBUF fails with EINTR */
-    FAKE_DQ_EAGAIN,       /* poll ok, DQBUF fails with EAGAIN */
-    FAKE_UNPLUG_HUP,      /* device removed: poll reports POLLERR|POLLHUP, ioctls ENODEV */
-    FAKE_UNPLUG_DQ        /* device removed between poll and DQBUF: DQBUF fails with ENODEV */
+    FAKE_FRAME = 1,    /* a good frame */
+    FAKE_FRAME_ERROR,  /* a frame flagged V4L2_BUF_FLAG_ERROR */
+    FAKE_FRAME_SHORT,  /* a frame with half the bytes */
+    FAKE_DROP,         /* the driver drops a frame (sequence number jumps) */
+    FAKE_POLL_EINTR,   /* poll fails with EINTR */
+    FAKE_POLL_TIMEOUT, /* poll times out once */
+    FAKE_DQ_EINTR,     /* poll ok, DQBUF fails with EINTR */
+    FAKE_DQ_EAGAIN,    /* poll ok, DQBUF fails with EAGAIN */
+    FAKE_UNPLUG_HUP,   /* device removed: poll reports POLLERR|POLLHUP, ioctls ENODEV */
+    FAKE_UNPLUG_DQ     /* device removed between poll and DQBUF: DQBUF fails with ENODEV */
 } fake_step;
 
 typedef struct fake_dev {
     /* ---- behaviour (set by the test before open) */
-    int open_errno;            /* open fails with this errno (0 = opens) */
-    uint32_t caps;             /* device_caps reported by QUERYCAP */
-    uint32_t formats[8];       /* formats listed by ENUM_FMT */
+    int open_errno;      /* open fails with this errno (0 = opens) */
+    uint32_t caps;       /* device_caps reported by QUERYCAP */
+    uint32_t formats[8]; /* formats listed by ENUM_FMT */
     int nformats;
-    int sfmt_errno;            /* S_FMT fails with this errno (0 = works) */
-    int reqbufs_errno;         /* REQBUFS (count > 0) fails with this errno */
-    uint32_t max_buffers;      /* REQBUFS grants min(asked, max_buffers) */
-    uint32_t min_buffers;      /* ... and at least this many (drivers may grant more) */
-    int width, height;         /* the only size the sensor has */
-    int fps;                   /* the highest rate it can do */
-    int compat;                /* behave like libcamera's v4l2-compat layer */
-    int eintr_per_call;        /* every call fails with EINTR this many times before working */
+    int sfmt_errno;       /* S_FMT fails with this errno (0 = works) */
+    int reqbufs_errno;    /* REQBUFS (count > 0) fails with this errno */
+    uint32_t max_buffers; /* REQBUFS grants min(asked, max_buffers) */
+    uint32_t min_buffers; /* ... and at least this many (drivers may grant more) */
+    int width, height;    /* the only size the sensor has */
+    int fps;              /* the highest rate it can do */
+    int compat;           /* behave like libcamera's v4l2-compat layer */
+    int eintr_per_call;   /* every call fails with EINTR this many times before working */
     fake_step script[FAKE_MAX_STEPS];
     int nscript;
     /* ---- state */
@@ -65,7 +65,7 @@ typedef struct fake_dev {
     int64_t t0_ns;
     /* ---- counters */
     int opens, closes, mmaps, munmaps, streamons, streamoffs, reqbufs_zero, dqbufs, polls;
-    int64_t last_ts_ns;        /* timestamp of the last frame handed out */
+    int64_t last_ts_ns; /* timestamp of the last frame handed out */
     uint32_t last_seq;
 } fake_dev;
 

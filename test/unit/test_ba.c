@@ -90,7 +90,8 @@ static scene *make_scene(int32_t n_pt, double noise_px, double outlier_frac, uin
             o->x = x + noise_px / FOCAL * nrand(&rng);
             o->y = y + noise_px / FOCAL * nrand(&rng);
             if (outlier_frac > 0.0 && 0.5 * (urand(&orng) + 1.0) < outlier_frac) {
-                const double a = 3.14159265358979 * urand(&orng), m = (15.0 + 12.5 * (urand(&orng) + 1.0)) / FOCAL;
+                const double a = 3.14159265358979 * urand(&orng),
+                             m = (15.0 + 12.5 * (urand(&orng) + 1.0)) / FOCAL;
                 o->x += m * cos(a);
                 o->y += m * sin(a);
                 s->outlier[s->n_obs] = 1;
@@ -124,7 +125,8 @@ static void perturb(scene *s, double rot, double trans, double pt, uint64_t seed
         tvo_rotvec_to_rot(rv, Rd);
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 3; ++c)
-                R[3 * r + c] = Rd[3 * r] * s->T[i].R[c] + Rd[3 * r + 1] * s->T[i].R[3 + c] + Rd[3 * r + 2] * s->T[i].R[6 + c];
+                R[3 * r + c] = Rd[3 * r] * s->T[i].R[c] + Rd[3 * r + 1] * s->T[i].R[3 + c] +
+                        Rd[3 * r + 2] * s->T[i].R[6 + c];
         memcpy(s->T[i].R, R, sizeof R);
         for (int a = 0; a < 3; ++a)
             s->T[i].t[a] += trans * urand(&rng);
@@ -213,7 +215,8 @@ static tvo_status solve(scene *s, int32_t iters, tvo_ba_report *rep)
 
 static void print_rep(const char *name, const tvo_ba_report *r)
 {
-    fprintf(stderr, "%s: iterations %d accepted %d flags %d points_skipped %d obs_skipped %d cost %.6g -> %.6g\n",
+    fprintf(stderr,
+            "%s: iterations %d accepted %d flags %d points_skipped %d obs_skipped %d cost %.6g -> %.6g\n",
             name, r->iterations, r->accepted, r->flags, r->points_skipped, r->obs_skipped, r->cost_initial,
             r->cost_final);
 }
@@ -257,8 +260,8 @@ static void test_noise_half_pixel(void **state)
     print_rep("0.5 px", &rep);
     pose_errors(s, &er, &et);
     rms = rms_px(s);
-    fprintf(stderr, "0.5 px: rms %.3f -> %.3f px, rot %.3g -> %.3g rad, trans %.3g -> %.3g m\n", rms0, rms, er0, er,
-            et0, et);
+    fprintf(stderr, "0.5 px: rms %.3f -> %.3f px, rot %.3g -> %.3g rad, trans %.3g -> %.3g m\n", rms0, rms,
+            er0, er, et0, et);
     /* the fit absorbs the parameters' share: 1200 * 2 residuals, 4 * 6 + 200 * 3 unknowns */
     assert_true(rms > 0.5 * 0.8 && rms < 0.5 * 1.05);
     assert_true(er < 0.2 * er0 && et < 0.2 * et0);
@@ -291,8 +294,11 @@ static void test_outliers_huber(void **state)
     free(outlier_run(0.10, 1000.0, &er_ls, &et_ls, &rep));
     s = outlier_run(0.10, 0.0, &er, &et, &rep);
     print_rep("10 % outliers", &rep);
-    fprintf(stderr, "10 %% outliers: rot %.3g rad trans %.3g m (without outliers %.3g, %.3g; least squares %.3g, %.3g), "
-            "inlier rms %.3f px\n", er, et, er_clean, et_clean, er_ls, et_ls, rms_px(s));
+    fprintf(stderr,
+            "10 %% outliers: rot %.3g rad trans %.3g m (without outliers %.3g, %.3g; least squares %.3g, "
+            "%.3g), "
+            "inlier rms %.3f px\n",
+            er, et, er_clean, et_clean, er_ls, et_ls, rms_px(s));
     /* with outliers the IRLS iteration ends in a slow crawl (the cost still falls by ~1e-5 of it per step at
      * the default cap of 10, far below anything the poses show): ITER_CAP is expected, nothing else */
     assert_int_equal(rep.flags & (TVO_BA_FLAG_COST_ROSE | TVO_BA_FLAG_SINGULAR), 0);
@@ -439,7 +445,8 @@ static void test_behind_and_nonfinite_skipped(void **state)
         const tvo_pose *T = &s->T[5];
         const double Pc[3] = {0.0, 0.0, -0.5};
         for (int a = 0; a < 3; ++a)
-            s->X[5][a] = T->R[a] * (Pc[0] - T->t[0]) + T->R[3 + a] * (Pc[1] - T->t[1]) + T->R[6 + a] * (Pc[2] - T->t[2]);
+            s->X[5][a] = T->R[a] * (Pc[0] - T->t[0]) + T->R[3 + a] * (Pc[1] - T->t[1]) +
+                    T->R[6 + a] * (Pc[2] - T->t[2]);
     }
     assert_int_equal(solve(s, 30, &rep), TVO_OK);
     print_rep("skipped obs", &rep);
@@ -593,7 +600,8 @@ static void test_hostile_inputs_finite(void **state)
                 X[j][a] = sc * urand(&rng);
             if (j % 7 == 0) /* at camera 0's centre */
                 for (int a = 0; a < 3; ++a)
-                    X[j][a] = -(T[0].R[a] * T[0].t[0] + T[0].R[3 + a] * T[0].t[1] + T[0].R[6 + a] * T[0].t[2]);
+                    X[j][a] = -(T[0].R[a] * T[0].t[0] + T[0].R[3 + a] * T[0].t[1] +
+                                T[0].R[6 + a] * T[0].t[2]);
             xf[j] = (uint8_t)(tvo_test_rand(&rng) % 5 == 0);
         }
         for (int k = 0; k < NO; ++k) {
@@ -915,8 +923,8 @@ static void test_stack(void **state)
     base = painted_run(idle_thread, NULL);
     used = painted_run(solve_thread, &j);
     assert_int_equal(j.st, TVO_OK);
-    fprintf(stderr, "tvo_ba_solve: stack high-water %zu bytes (thread baseline %zu), bound %d\n", used - base, base,
-            BA_STACK_BOUND);
+    fprintf(stderr, "tvo_ba_solve: stack high-water %zu bytes (thread baseline %zu), bound %d\n", used - base,
+            base, BA_STACK_BOUND);
     assert_true(used - base < (size_t)BA_STACK_BOUND);
     free(j.mem);
     free(j.s);
@@ -925,21 +933,21 @@ static void test_stack(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_noise_free_converges),
-        cmocka_unit_test(test_noise_half_pixel),
-        cmocka_unit_test(test_outliers_huber),
-        cmocka_unit_test(test_points_at_infinity),
-        cmocka_unit_test(test_singular_window),
-        cmocka_unit_test(test_already_optimal),
-        cmocka_unit_test(test_behind_and_nonfinite_skipped),
-        cmocka_unit_test(test_rejected_step_restores),
-        cmocka_unit_test(test_fixed_points_and_points_only),
-        cmocka_unit_test(test_hostile_inputs_finite),
-        cmocka_unit_test(test_statuses),
-        cmocka_unit_test(test_unaligned_scratch_deterministic),
-        cmocka_unit_test(test_duplicated_observations),
-        cmocka_unit_test(test_scratch_budget),
-        cmocka_unit_test(test_stack),
+            cmocka_unit_test(test_noise_free_converges),
+            cmocka_unit_test(test_noise_half_pixel),
+            cmocka_unit_test(test_outliers_huber),
+            cmocka_unit_test(test_points_at_infinity),
+            cmocka_unit_test(test_singular_window),
+            cmocka_unit_test(test_already_optimal),
+            cmocka_unit_test(test_behind_and_nonfinite_skipped),
+            cmocka_unit_test(test_rejected_step_restores),
+            cmocka_unit_test(test_fixed_points_and_points_only),
+            cmocka_unit_test(test_hostile_inputs_finite),
+            cmocka_unit_test(test_statuses),
+            cmocka_unit_test(test_unaligned_scratch_deterministic),
+            cmocka_unit_test(test_duplicated_observations),
+            cmocka_unit_test(test_scratch_budget),
+            cmocka_unit_test(test_stack),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -256,10 +256,10 @@ static void test_no_convergence(void **state)
     c.model = TVO_DIST_RADTAN;
     c.k[0] = -0.5;
     assert_int_equal(tvo_camera_undistort(&c, px, xn, ok, 2), TVO_OK);
-    assert_int_equal(ok[0], 1);                  /* r_d = 0.5 < 0.544: solvable */
+    assert_int_equal(ok[0], 1); /* r_d = 0.5 < 0.544: solvable */
     assert_true(fabs(xn[0].x * (1 - 0.5 * xn[0].x * xn[0].x) - 0.5) < 1e-12);
-    assert_true(xn[0].x < sqrt(2.0 / 3.0));      /* on the invertible branch */
-    assert_int_equal(ok[1], 0);                  /* r_d = 0.6: no solution */
+    assert_true(xn[0].x < sqrt(2.0 / 3.0)); /* on the invertible branch */
+    assert_int_equal(ok[1], 0);             /* r_d = 0.6: no solution */
     assert_int_equal(tvo_camera_undistort(&c, px, xn, NULL, 2), TVO_ERR_NO_CONVERGENCE);
     /* fisheye without distortion: theta_d = theta; a distorted radius of 2 rad > pi/2 is behind */
     c.model = TVO_DIST_EQUIDISTANT;
@@ -284,14 +284,10 @@ static void test_none_model(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_check),
-        cmocka_unit_test(test_known_values),
-        cmocka_unit_test(test_roundtrip),
-        cmocka_unit_test(test_arrays),
-        cmocka_unit_test(test_bad_input),
-        cmocka_unit_test(test_no_convergence),
-        cmocka_unit_test(test_none_model),
-        cmocka_unit_test(test_fisheye_beyond_90),
+            cmocka_unit_test(test_check),      cmocka_unit_test(test_known_values),
+            cmocka_unit_test(test_roundtrip),  cmocka_unit_test(test_arrays),
+            cmocka_unit_test(test_bad_input),  cmocka_unit_test(test_no_convergence),
+            cmocka_unit_test(test_none_model), cmocka_unit_test(test_fisheye_beyond_90),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

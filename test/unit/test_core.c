@@ -59,9 +59,9 @@ static void test_arena(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_status_strings),
-        cmocka_unit_test(test_image_check),
-        cmocka_unit_test(test_arena),
+            cmocka_unit_test(test_status_strings),
+            cmocka_unit_test(test_image_check),
+            cmocka_unit_test(test_arena),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

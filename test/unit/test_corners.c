@@ -76,8 +76,10 @@ static void img_blocks(test_img *t, uint64_t seed)
     for (i = 0; i < w * h / 300; ++i) {
         int32_t x0 = (int32_t)(tvo_test_rand(&seed) % (uint64_t)w);
         int32_t y0 = (int32_t)(tvo_test_rand(&seed) % (uint64_t)h);
-        int32_t bw = 4 + (int32_t)(tvo_test_rand(&seed) % 12u), bh = 4 + (int32_t)(tvo_test_rand(&seed) % 12u);
-        uint8_t v = (uint8_t)(tvo_test_rand(&seed) % 2u ? 230 - tvo_test_rand(&seed) % 40u : 20 + tvo_test_rand(&seed) % 40u);
+        int32_t bw = 4 + (int32_t)(tvo_test_rand(&seed) % 12u),
+                bh = 4 + (int32_t)(tvo_test_rand(&seed) % 12u);
+        uint8_t v = (uint8_t)(tvo_test_rand(&seed) % 2u ? 230 - tvo_test_rand(&seed) % 40u
+                                                        : 20 + tvo_test_rand(&seed) % 40u);
         for (y = y0; y < y0 + bh && y < h; ++y)
             for (x = x0; x < x0 + bw && x < w; ++x)
                 px(t, x, y, v);
@@ -86,7 +88,8 @@ static void img_blocks(test_img *t, uint64_t seed)
     for (y = 0; y < h; ++y)
         for (x = 0; x < w; ++x)
             t->buf[(size_t)y * (size_t)t->img.stride + (size_t)x] =
-                (uint8_t)(t->buf[(size_t)y * (size_t)t->img.stride + (size_t)x] + tvo_test_rand(&seed) % 9u);
+                    (uint8_t)(t->buf[(size_t)y * (size_t)t->img.stride + (size_t)x] +
+                              tvo_test_rand(&seed) % 9u);
 }
 
 static tvo_status run_fast(const tvo_image *img, int32_t thr, int nonmax, tvo_corner *out, int32_t cap,
@@ -121,7 +124,7 @@ static void test_fast_square_corners(void **state)
     test_img t = img_new(64, 64, 64, 40);
     tvo_corner out[64];
     int32_t n = 0, i, x, y, k;
-    const int32_t cx[4] = { 20, 39, 20, 39 }, cy[4] = { 20, 20, 39, 39 };
+    const int32_t cx[4] = {20, 39, 20, 39}, cy[4] = {20, 20, 39, 39};
     (void)state;
     for (y = 20; y < 40; ++y)
         for (x = 20; x < 40; ++x)
@@ -155,8 +158,8 @@ static void test_fast_square_corners(void **state)
 static void test_fast_matches_reference(void **state)
 {
     /* odd sizes, stride > width, raw noise (saturating values) and smooth noise, thresholds 0..255 */
-    const int32_t sizes[][3] = { { 7, 7, 7 }, { 8, 9, 11 }, { 33, 20, 40 }, { 100, 61, 100 }, { 171, 45, 180 } };
-    const int32_t thr[] = { 0, 1, 7, 20, 60, 254, 255 };
+    const int32_t sizes[][3] = {{7, 7, 7}, {8, 9, 11}, {33, 20, 40}, {100, 61, 100}, {171, 45, 180}};
+    const int32_t thr[] = {0, 1, 7, 20, 60, 254, 255};
     size_t si, ti;
     int nonmax, smooth;
     (void)state;
@@ -218,7 +221,8 @@ static void test_fast_rows_and_capacity(void **state)
     assert_int_equal(np, 0);
     /* score_at agrees with the detector */
     for (i = 0; i < nall; ++i)
-        assert_int_equal(tvo_fast9_score_at(&t.img, (int32_t)all[i].x, (int32_t)all[i].y), (int32_t)all[i].score);
+        assert_int_equal(tvo_fast9_score_at(&t.img, (int32_t)all[i].x, (int32_t)all[i].y),
+                         (int32_t)all[i].score);
     assert_int_equal(tvo_fast9_score_at(&t.img, 2, 10), -1);
     assert_int_equal(tvo_fast9_score_at(&t.img, 10, 87), -1);
     free(s);
@@ -271,7 +275,7 @@ static void test_fast_bad_input(void **state)
 static void test_response_dense_vs_point(void **state)
 {
     test_img t = img_new(57, 43, 60, 0);
-    const int32_t blocks[] = { 1, 2, 3, 5, 7, 31 };
+    const int32_t blocks[] = {1, 2, 3, 5, 7, 31};
     size_t bi;
     int kind;
     (void)state;
@@ -285,7 +289,8 @@ static void test_response_dense_vs_point(void **state)
             assert_non_null(s);
             assert_non_null(out);
             assert_int_equal(tvo_corner_response(&t.img, (tvo_score_kind)kind, bs, 0.04f, out, stride,
-                                                 (uint8_t *)s + 3, ss), TVO_OK);
+                                                 (uint8_t *)s + 3, ss),
+                             TVO_OK);
             for (y = 0; y < 43; ++y)
                 for (x = 0; x < 57; ++x) {
                     float v = tvo_corner_score_at(&t.img, x, y, (tvo_score_kind)kind, bs, 0.04f);
@@ -313,7 +318,7 @@ static void test_response_known_structures(void **state)
     for (y = 20; y < 40; ++y)
         for (x = 20; x < 40; ++x)
             px(&t, x, y, 220);
-    for (y = 0; y < 12; ++y)      /* a vertical edge at x = 30 in the top rows */
+    for (y = 0; y < 12; ++y) /* a vertical edge at x = 30 in the top rows */
         for (x = 30; x < 40; ++x)
             px(&t, x, y, 220);
     sc = tvo_corner_score_at(&t.img, 20, 20, TVO_SCORE_SHI_TOMASI, 3, 0.04f);
@@ -343,13 +348,16 @@ static void test_response_bad_input(void **state)
     assert_int_equal(tvo_corner_response_scratch_size(16, TVO_CORNER_MAX_BLOCK + 1), 0);
     assert_int_equal(tvo_corner_response(NULL, TVO_SCORE_HARRIS, 3, 0.04f, out, 16, s, ss), TVO_ERR_NULL);
     assert_int_equal(tvo_corner_response(&t.img, TVO_SCORE_HARRIS, 3, 0.04f, NULL, 16, s, ss), TVO_ERR_NULL);
-    assert_int_equal(tvo_corner_response(&t.img, TVO_SCORE_HARRIS, 3, 0.04f, out, 16, NULL, ss), TVO_ERR_NULL);
-    assert_int_equal(tvo_corner_response(&bad_stride, TVO_SCORE_HARRIS, 3, 0.04f, out, 16, s, ss), TVO_ERR_SIZE);
+    assert_int_equal(tvo_corner_response(&t.img, TVO_SCORE_HARRIS, 3, 0.04f, out, 16, NULL, ss),
+                     TVO_ERR_NULL);
+    assert_int_equal(tvo_corner_response(&bad_stride, TVO_SCORE_HARRIS, 3, 0.04f, out, 16, s, ss),
+                     TVO_ERR_SIZE);
     assert_int_equal(tvo_corner_response(&t.img, TVO_SCORE_FAST, 3, 0.04f, out, 16, s, ss), TVO_ERR_ARG);
     assert_int_equal(tvo_corner_response(&t.img, (tvo_score_kind)7, 3, 0.04f, out, 16, s, ss), TVO_ERR_ARG);
     assert_int_equal(tvo_corner_response(&t.img, TVO_SCORE_HARRIS, 0, 0.04f, out, 16, s, ss), TVO_ERR_ARG);
     assert_int_equal(tvo_corner_response(&t.img, TVO_SCORE_HARRIS, 32, 0.04f, out, 16, s, ss), TVO_ERR_ARG);
-    assert_int_equal(tvo_corner_response(&t.img, TVO_SCORE_HARRIS, 3, NAN, out, 16, s, ss), TVO_ERR_NOT_FINITE);
+    assert_int_equal(tvo_corner_response(&t.img, TVO_SCORE_HARRIS, 3, NAN, out, 16, s, ss),
+                     TVO_ERR_NOT_FINITE);
     assert_int_equal(tvo_corner_response(&t.img, TVO_SCORE_HARRIS, 3, 0.04f, out, 15, s, ss), TVO_ERR_SIZE);
     assert_int_equal(tvo_corner_response(&t.img, TVO_SCORE_HARRIS, 3, 0.04f, out, 16, s, ss - 1),
                      TVO_ERR_NO_MEMORY);
@@ -401,7 +409,7 @@ static void check_spacing(const tvo_corner *c, int32_t n, float md)
 
 static void test_detect_spreads(void **state)
 {
-    const int32_t sizes[][2] = { { 752, 480 }, { 640, 480 }, { 1280, 384 }, { 97, 61 } };
+    const int32_t sizes[][2] = {{752, 480}, {640, 480}, {1280, 384}, {97, 61}};
     size_t si;
     (void)state;
     for (si = 0; si < sizeof sizes / sizeof sizes[0]; ++si) {
@@ -409,7 +417,7 @@ static void test_detect_spreads(void **state)
         test_img t = img_new(w, h, w + 3, 0);
         tvo_detect_config cfg;
         det_run *r = (det_run *)malloc(sizeof(det_run)), *r2 = (det_run *)malloc(sizeof(det_run));
-        int32_t per_cell[48] = { 0 };
+        int32_t per_cell[48] = {0};
         assert_non_null(r);
         assert_non_null(r2);
         img_blocks(&t, 7u + si);
@@ -442,7 +450,8 @@ static void test_detect_spreads(void **state)
         for (i = 0; i < r->n; ++i) {
             int32_t j;
             for (j = i + 1; j < r->n; ++j)
-                if (cell_of(&cfg, w, h, r->out[i].x, r->out[i].y) == cell_of(&cfg, w, h, r->out[j].x, r->out[j].y))
+                if (cell_of(&cfg, w, h, r->out[i].x, r->out[i].y) ==
+                    cell_of(&cfg, w, h, r->out[j].x, r->out[j].y))
                     assert_true(r->out[i].score >= r->out[j].score);
         }
         free(r);
@@ -457,7 +466,7 @@ static void test_detect_empty_cells(void **state)
     test_img t = img_new(400, 300, 400, 0);
     tvo_detect_config cfg;
     det_run *r = (det_run *)malloc(sizeof(det_run));
-    int32_t i, x, y, per_cell[48] = { 0 };
+    int32_t i, x, y, per_cell[48] = {0};
     (void)state;
     assert_non_null(r);
     img_blocks(&t, 3u);
@@ -492,7 +501,7 @@ static void test_detect_existing(void **state)
     assert_non_null(r0);
     img_blocks(&t, 11u);
     tvo_detect_config_default(&cfg);
-    cfg.max_corners = 96;   /* 2 per cell */
+    cfg.max_corners = 96; /* 2 per cell */
     assert_int_equal(run_detect(&cfg, &t.img, NULL, 0, r0, 2048), TVO_OK);
     assert_true(r0->n > 60);
     /* the corners just found, given back as existing points: none of them (nor anything within
@@ -508,10 +517,10 @@ static void test_detect_existing(void **state)
             ex[nex].y = 12.0f + 10.0f * (float)y;
             ++nex;
         }
-    ex[nex].x = -50.0f;  /* outside: ignored */
+    ex[nex].x = -50.0f; /* outside: ignored */
     ex[nex].y = 10.0f;
     ++nex;
-    cfg.max_corners = 4 * 48;  /* 4 per cell: about 2 new ones where 2 exist, none in cell 0 */
+    cfg.max_corners = 4 * 48; /* 4 per cell: about 2 new ones where 2 exist, none in cell 0 */
     assert_int_equal(run_detect(&cfg, &t.img, ex, nex, r, 2048), TVO_OK);
     assert_true(r->n > 40);
     for (i = 0; i < r->n; ++i) {
@@ -534,7 +543,7 @@ static void test_detect_bad_input(void **state)
     test_img t = img_new(64, 48, 64, 0);
     tvo_detect_config cfg, bad;
     tvo_corner out[8];
-    tvo_point2f ex[1] = { { 1.0f, 1.0f } };
+    tvo_point2f ex[1] = {{1.0f, 1.0f}};
     int32_t n = 3;
     uint8_t *s;
     size_t ss;
@@ -562,13 +571,13 @@ static void test_detect_bad_input(void **state)
         assert_int_equal(tvo_detect(&cfg, &z, NULL, 0, out, 8, &n, s, ss), TVO_ERR_SIZE);
     }
     /* bad config values, one at a time */
-#define BAD_CFG(field, value, expect)                                                          \
-    do {                                                                                       \
-        bad = cfg;                                                                             \
-        bad.field = value;                                                                     \
-        assert_int_equal(tvo_detect_config_check(&bad), expect);                               \
-        assert_int_equal(tvo_detect_scratch_size(&bad, 64, 48), 0);                            \
-        assert_int_equal(tvo_detect(&bad, &t.img, NULL, 0, out, 8, &n, s, ss), expect);        \
+#define BAD_CFG(field, value, expect)                                                   \
+    do {                                                                                \
+        bad = cfg;                                                                      \
+        bad.field = value;                                                              \
+        assert_int_equal(tvo_detect_config_check(&bad), expect);                        \
+        assert_int_equal(tvo_detect_scratch_size(&bad, 64, 48), 0);                     \
+        assert_int_equal(tvo_detect(&bad, &t.img, NULL, 0, out, 8, &n, s, ss), expect); \
     } while (0)
     BAD_CFG(fast_threshold, -1, TVO_ERR_ARG);
     BAD_CFG(fast_threshold, 256, TVO_ERR_ARG);
@@ -630,7 +639,8 @@ static void test_detect_scores_and_options(void **state)
     assert_true(r->n > 0 && r->n <= 30);
     for (i = 0; i < r->n; ++i) {
         assert_true(r->out[i].score >= 20.0f);
-        assert_true(r->out[i].score == (float)tvo_fast9_score_at(&t.img, (int32_t)r->out[i].x, (int32_t)r->out[i].y));
+        assert_true(r->out[i].score ==
+                    (float)tvo_fast9_score_at(&t.img, (int32_t)r->out[i].x, (int32_t)r->out[i].y));
     }
     cfg.score = TVO_SCORE_HARRIS;
     cfg.block_size = 7;
@@ -638,8 +648,9 @@ static void test_detect_scores_and_options(void **state)
     assert_int_equal(run_detect(&cfg, &t.img, NULL, 0, r, 2048), TVO_OK);
     assert_true(r->n > 0);
     for (i = 0; i < r->n; ++i)
-        assert_true(r->out[i].score == tvo_corner_score_at(&t.img, (int32_t)r->out[i].x, (int32_t)r->out[i].y,
-                                                           TVO_SCORE_HARRIS, 7, cfg.harris_k));
+        assert_true(r->out[i].score ==
+                    tvo_corner_score_at(&t.img, (int32_t)r->out[i].x, (int32_t)r->out[i].y, TVO_SCORE_HARRIS,
+                                        7, cfg.harris_k));
     free(r);
     img_free(&t);
 }
@@ -647,18 +658,12 @@ static void test_detect_scores_and_options(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_fast_square_corners),
-        cmocka_unit_test(test_fast_matches_reference),
-        cmocka_unit_test(test_fast_rows_and_capacity),
-        cmocka_unit_test(test_fast_bad_input),
-        cmocka_unit_test(test_response_dense_vs_point),
-        cmocka_unit_test(test_response_known_structures),
-        cmocka_unit_test(test_response_bad_input),
-        cmocka_unit_test(test_detect_spreads),
-        cmocka_unit_test(test_detect_empty_cells),
-        cmocka_unit_test(test_detect_existing),
-        cmocka_unit_test(test_detect_bad_input),
-        cmocka_unit_test(test_detect_scores_and_options),
+            cmocka_unit_test(test_fast_square_corners),     cmocka_unit_test(test_fast_matches_reference),
+            cmocka_unit_test(test_fast_rows_and_capacity),  cmocka_unit_test(test_fast_bad_input),
+            cmocka_unit_test(test_response_dense_vs_point), cmocka_unit_test(test_response_known_structures),
+            cmocka_unit_test(test_response_bad_input),      cmocka_unit_test(test_detect_spreads),
+            cmocka_unit_test(test_detect_empty_cells),      cmocka_unit_test(test_detect_existing),
+            cmocka_unit_test(test_detect_bad_input),        cmocka_unit_test(test_detect_scores_and_options),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -31,14 +31,14 @@
 #include "tvo_room.h"
 
 /* ==== EXPECTED DIGESTS: the one block to update when an intended algorithm change moves a digest ==== */
-#define EXPECT_INPUT     0x6d857fe5cc926e22ULL
-#define EXPECT_CORNERS   0x70955b5fe38f147bULL
-#define EXPECT_TRACKS    0x3c025d200a047acbULL
+#define EXPECT_INPUT 0x6d857fe5cc926e22ULL
+#define EXPECT_CORNERS 0x70955b5fe38f147bULL
+#define EXPECT_TRACKS 0x3c025d200a047acbULL
 #define EXPECT_UNDISTORT 0x766733049b5c9f1cULL
-#define EXPECT_RELPOSE   0x738ab310f9910f06ULL
-#define EXPECT_NN        0x7780412f62c17499ULL
-#define EXPECT_VO        0xca2d97807cbf5eabULL
-#define EXPECT_MAP       0x1da76a01ce1a642aULL
+#define EXPECT_RELPOSE 0x738ab310f9910f06ULL
+#define EXPECT_NN 0x7780412f62c17499ULL
+#define EXPECT_VO 0xca2d97807cbf5eabULL
+#define EXPECT_MAP 0x1da76a01ce1a642aULL
 /* ==== end of EXPECTED DIGESTS ==== */
 
 #define W 320
@@ -127,7 +127,8 @@ static int check_digest(const char *stage, const char *macro, uint64_t got, uint
     fprintf(stderr,
             "determinism: stage '%s' digest 0x%016llxULL differs from the checked-in 0x%016llxULL.\n"
             "  If an intended algorithm change moved it, set %s to 0x%016llxULL in the EXPECTED DIGESTS\n"
-            "  block of test/unit/test_determinism.c and run tools/run-cross.sh (aarch64 + armhf must agree).\n"
+            "  block of test/unit/test_determinism.c and run tools/run-cross.sh (aarch64 + armhf must "
+            "agree).\n"
             "  If nothing in that stage changed, this target computes differently: see docs/ports.md.\n",
             stage, (unsigned long long)got, (unsigned long long)expected, macro, (unsigned long long)got);
     return 0;
@@ -142,7 +143,7 @@ static tvo_pose seq_pose(int k)
 {
     tvo_pose T;
     const double tri = (double)((k % 8) < 4 ? (k % 8) : 8 - (k % 8)) / 4.0 - 0.5; /* -0.5 .. 0.5 */
-    double q[4] = { 1.0, 0.004 * tri, 0.0035 * k, 0.003 * tri }; /* w x y z, half-angles in rad */
+    double q[4] = {1.0, 0.004 * tri, 0.0035 * k, 0.003 * tri}; /* w x y z, half-angles in rad */
     const double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     double w, x, y, z;
     for (int i = 0; i < 4; ++i)
@@ -177,7 +178,6 @@ typedef struct seq {
     tracked_pairs pairs; /* filled by the tracks stage */
     int pairs_done;
 } seq;
-
 
 static tvo_status detect_default(const uint8_t *pixels, tvo_score_kind kind, tvo_corner *out, int32_t cap,
                                  int32_t *count)
@@ -342,7 +342,8 @@ static void test_undistort(void **state)
     digest d;
     cams[0] = pinhole();
     cams[0].model = TVO_DIST_RADTAN;
-    cams[0].k[0] = -0.28340811, cams[0].k[1] = 0.07395907, cams[0].k[2] = 0.00019359, cams[0].k[3] = 1.76187114e-05;
+    cams[0].k[0] = -0.28340811, cams[0].k[1] = 0.07395907, cams[0].k[2] = 0.00019359,
+    cams[0].k[3] = 1.76187114e-05;
     cams[1] = pinhole();
     cams[1].model = TVO_DIST_EQUIDISTANT;
     cams[1].k[0] = -0.013, cams[1].k[1] = 0.021, cams[1].k[2] = -0.017, cams[1].k[3] = 0.0045;
@@ -410,8 +411,10 @@ static void test_relpose(void **state)
         tvo_status st;
         const int32_t n = tp->n[k];
         for (int i = 0; i < n; ++i) {
-            assert_int_equal(tvo_camera_undistort_point(&cam, tp->p1[k][i].x, tp->p1[k][i].y, &x1[i]), TVO_OK);
-            assert_int_equal(tvo_camera_undistort_point(&cam, tp->p2[k][i].x, tp->p2[k][i].y, &x2[i]), TVO_OK);
+            assert_int_equal(tvo_camera_undistort_point(&cam, tp->p1[k][i].x, tp->p1[k][i].y, &x1[i]),
+                             TVO_OK);
+            assert_int_equal(tvo_camera_undistort_point(&cam, tp->p2[k][i].x, tp->p2[k][i].y, &x2[i]),
+                             TVO_OK);
         }
         st = tvo_relpose_estimate(&cfg, x1, x2, n, &rp, mask, scratch, need);
         dg_i32(&d, st);
@@ -467,7 +470,7 @@ static void test_nn(void **state)
         /* features in and beyond their usual ranges (exercises saturation), as exact binary fractions */
         for (int i = 0; i < TVO_FEAT_COUNT; ++i) {
             const int32_t r = (int32_t)(tvo_test_rand(&rs) >> 44) - (1 << 19); /* [-2^19, 2^19) */
-            f[i] = (float)r / (float)(1 << 17);                            /* [-4, 4) */
+            f[i] = (float)r / (float)(1 << 17);                                /* [-4, 4) */
         }
         assert_int_equal(tvo_nn_run(nn, f, out), TVO_OK);
         for (int i = 0; i < 6; ++i) {
@@ -555,7 +558,8 @@ static void test_vo(void **state)
     assert_true(ok_frames >= (FRAMES - 1) * 7 / 10);
     {
         const tvo_pose *g = &s->gt[FRAMES - 1];
-        const double dx = traj.T_w_c.t[0] - g->t[0], dy = traj.T_w_c.t[1] - g->t[1], dz = traj.T_w_c.t[2] - g->t[2];
+        const double dx = traj.T_w_c.t[0] - g->t[0], dy = traj.T_w_c.t[1] - g->t[1],
+                     dz = traj.T_w_c.t[2] - g->t[2];
         assert_true(sqrt(dx * dx + dy * dy + dz * dz) < 0.15);
     }
     /* ...and the map tracks most of the frames */
@@ -568,9 +572,9 @@ static void test_vo(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_input),   cmocka_unit_test(test_corners), cmocka_unit_test(test_tracks),
-        cmocka_unit_test(test_undistort), cmocka_unit_test(test_relpose), cmocka_unit_test(test_nn),
-        cmocka_unit_test(test_vo),
+            cmocka_unit_test(test_input),     cmocka_unit_test(test_corners), cmocka_unit_test(test_tracks),
+            cmocka_unit_test(test_undistort), cmocka_unit_test(test_relpose), cmocka_unit_test(test_nn),
+            cmocka_unit_test(test_vo),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }

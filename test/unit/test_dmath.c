@@ -21,7 +21,8 @@ static double uniform(uint64_t *s, double lo, double hi)
 
 #define MAX_ULPS 4.0
 
-static void check1(const char *name, double (*f)(double), double (*ref)(double), double lo, double hi, int logscale)
+static void check1(const char *name, double (*f)(double), double (*ref)(double), double lo, double hi,
+                   int logscale)
 {
     uint64_t s = 12345;
     double worst = 0.0;
@@ -41,9 +42,18 @@ static void check1(const char *name, double (*f)(double), double (*ref)(double),
     assert_true(worst <= MAX_ULPS);
 }
 
-static double log1p_small(double x) { return log1p(x); }
-static double exp_ref(double x) { return exp(x); }
-static double log_ref(double x) { return log(x); }
+static double log1p_small(double x)
+{
+    return log1p(x);
+}
+static double exp_ref(double x)
+{
+    return exp(x);
+}
+static double log_ref(double x)
+{
+    return log(x);
+}
 
 static void test_accuracy(void **state)
 {
@@ -55,7 +65,7 @@ static void test_accuracy(void **state)
     check1("atan", tvo_dm_atan, atan, -12.0, 12.0, 1);
     check1("log1p", tvo_dm_log1p, log1p_small, -0.999999, 50.0, 0);
     check1("log1p", tvo_dm_log1p, log1p_small, -15.0, 300.0, 1); /* negative side: x in (-1, 0) only */
-    check1("log", tvo_dm_log, log_ref, -300.0, 300.0, 1);         /* negative x: NaN from both, skipped */
+    check1("log", tvo_dm_log, log_ref, -300.0, 300.0, 1);        /* negative x: NaN from both, skipped */
     check1("log", tvo_dm_log, log_ref, 0.5, 2.0, 0);
     check1("exp", tvo_dm_exp, exp_ref, -708.0, 709.0, 0);
     check1("exp", tvo_dm_exp, exp_ref, -1.0, 1.0, 0);
@@ -97,16 +107,32 @@ static void test_special_values(void **state)
     assert_true(tvo_dm_log(INFINITY) == INFINITY && tvo_dm_log(1.0) == 0.0);
     assert_true(fabs(tvo_dm_log(4.9e-324) - log(4.9e-324)) <= 1e-13); /* smallest subnormal */
     assert_true(tvo_dm_exp(0.0) == 1.0 && isnan(tvo_dm_exp(NAN)) && tvo_dm_exp(-INFINITY) == 0.0);
-    assert_true(tvo_dm_exp(710.0) == INFINITY && tvo_dm_exp(INFINITY) == INFINITY && tvo_dm_exp(-746.0) == 0.0);
+    assert_true(tvo_dm_exp(710.0) == INFINITY && tvo_dm_exp(INFINITY) == INFINITY &&
+                tvo_dm_exp(-746.0) == 0.0);
     assert_true(tvo_dm_exp(-740.0) > 0.0 && fabs(tvo_dm_exp(-740.0) - exp(-740.0)) <= 4.9e-324);
     assert_true(fabs(tvo_dm_atan(INFINITY) - pi / 2) < 1e-15 && fabs(tvo_dm_atan(-1e300) + pi / 2) < 1e-15);
     /* atan2's quadrants, zeros and infinities as C99 */
     {
-        const double c[][2] = { { 0.0, 1.0 }, { -0.0, 1.0 }, { 0.0, -1.0 }, { -0.0, -1.0 }, { 0.0, 0.0 },
-                                { -0.0, 0.0 }, { 0.0, -0.0 }, { -0.0, -0.0 }, { 1.0, 0.0 }, { -1.0, -0.0 },
-                                { INFINITY, INFINITY }, { INFINITY, -INFINITY }, { -INFINITY, INFINITY },
-                                { -INFINITY, -INFINITY }, { 1.0, INFINITY }, { 1.0, -INFINITY },
-                                { -1.0, -INFINITY }, { INFINITY, 1.0 }, { -2.0, -3.0 }, { 2.0, -3.0 } };
+        const double c[][2] = {{0.0, 1.0},
+                               {-0.0, 1.0},
+                               {0.0, -1.0},
+                               {-0.0, -1.0},
+                               {0.0, 0.0},
+                               {-0.0, 0.0},
+                               {0.0, -0.0},
+                               {-0.0, -0.0},
+                               {1.0, 0.0},
+                               {-1.0, -0.0},
+                               {INFINITY, INFINITY},
+                               {INFINITY, -INFINITY},
+                               {-INFINITY, INFINITY},
+                               {-INFINITY, -INFINITY},
+                               {1.0, INFINITY},
+                               {1.0, -INFINITY},
+                               {-1.0, -INFINITY},
+                               {INFINITY, 1.0},
+                               {-2.0, -3.0},
+                               {2.0, -3.0}};
         for (size_t i = 0; i < sizeof(c) / sizeof(c[0]); ++i) {
             const double got = tvo_dm_atan2(c[i][0], c[i][1]), want = atan2(c[i][0], c[i][1]);
             assert_true(signbit(got) == signbit(want));
@@ -122,8 +148,8 @@ static void test_special_values(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_accuracy),
-        cmocka_unit_test(test_special_values),
+            cmocka_unit_test(test_accuracy),
+            cmocka_unit_test(test_special_values),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -13,9 +13,9 @@
 /* Smooth texture: sum of plane waves, content translated by (dx, dy). */
 static void render(uint8_t *img, int w, int h, double dx, double dy)
 {
-    static const double fx[NWAVES] = { 0.21, -0.13, 0.37, 0.05, -0.29, 0.11 };
-    static const double fy[NWAVES] = { 0.07, 0.31, -0.17, -0.41, 0.23, 0.19 };
-    static const double ph[NWAVES] = { 0.3, 1.1, 2.0, 4.2, 5.1, 0.7 };
+    static const double fx[NWAVES] = {0.21, -0.13, 0.37, 0.05, -0.29, 0.11};
+    static const double fy[NWAVES] = {0.07, 0.31, -0.17, -0.41, 0.23, 0.19};
+    static const double ph[NWAVES] = {0.3, 1.1, 2.0, 4.2, 5.1, 0.7};
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             double v = 128.0;
@@ -55,7 +55,7 @@ static void grid_points(tvo_point2f *p, int *n)
     int k = 0;
     for (int y = 30; y <= H - 30; y += 15)
         for (int x = 30; x <= W - 30; x += 15)
-            p[k++] = (tvo_point2f){ (float)x + 0.3f, (float)y + 0.6f };
+            p[k++] = (tvo_point2f){(float)x + 0.3f, (float)y + 0.6f};
     *n = k;
 }
 
@@ -123,7 +123,7 @@ static void test_initial_flow(void **state)
     grid_points(p0, &n);
     F.cfg.use_initial_flow = 1;
     for (int i = 0; i < n; ++i)
-        p1[i] = (tvo_point2f){ p0[i].x + 9.0f, p0[i].y - 4.0f }; /* ... fine with one */
+        p1[i] = (tvo_point2f){p0[i].x + 9.0f, p0[i].y - 4.0f}; /* ... fine with one */
     assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, NULL, n, F.scratch, sizeof(F.scratch)),
                      TVO_OK);
     for (int i = 0; i < n; ++i) {
@@ -138,7 +138,7 @@ static void test_initial_flow(void **state)
  * consistent pair (that is a limit of the check, stated in lk.h). A good guess passes too. */
 static void test_fb_check_and_periodic_guess(void **state)
 {
-    tvo_point2f p0[2] = { { 80.0f, 60.0f }, { 80.0f, 60.0f } }, p1[2];
+    tvo_point2f p0[2] = {{80.0f, 60.0f}, {80.0f, 60.0f}}, p1[2];
     uint8_t st[2];
     float err[2];
     tvo_image ia = tvo_image_make(W, H, W, F.a), ib = tvo_image_make(W, H, W, F.b);
@@ -160,8 +160,8 @@ static void test_fb_check_and_periodic_guess(void **state)
     for (int check = 0; check < 2; ++check) {
         F.cfg.fb_check = check;
         F.cfg.fb_max_error = 1.0f;
-        p1[0] = (tvo_point2f){ 80.0f + 10.5f, 60.0f };
-        p1[1] = (tvo_point2f){ 80.0f + 2.5f, 60.0f };
+        p1[0] = (tvo_point2f){80.0f + 10.5f, 60.0f};
+        p1[1] = (tvo_point2f){80.0f + 2.5f, 60.0f};
         assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, err, 2, F.scratch, sizeof(F.scratch)),
                          TVO_OK);
         assert_int_equal(st[0], TVO_LK_TRACKED);
@@ -177,7 +177,7 @@ static void test_fb_check_and_periodic_guess(void **state)
  * images (an occluding patch pasted into the second one) is tracked forward but rejected by the check. */
 static void test_fb_check_with_guess(void **state)
 {
-    tvo_point2f p0[64], p1[64], q0[2] = { { 60.3f, 45.6f }, { 100.3f, 75.6f } }, q1[2];
+    tvo_point2f p0[64], p1[64], q0[2] = {{60.3f, 45.6f}, {100.3f, 75.6f}}, q1[2];
     uint8_t st[64];
     int n, lost_plain = 0;
     (void)state;
@@ -187,7 +187,7 @@ static void test_fb_check_with_guess(void **state)
     F.cfg.fb_check = 1;
     F.cfg.fb_max_error = 0.5f;
     for (int i = 0; i < n; ++i)
-        p1[i] = (tvo_point2f){ p0[i].x + 9.0f, p0[i].y - 4.0f };
+        p1[i] = (tvo_point2f){p0[i].x + 9.0f, p0[i].y - 4.0f};
     assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, NULL, n, F.scratch, sizeof(F.scratch)),
                      TVO_OK);
     for (int i = 0; i < n; ++i) {
@@ -213,8 +213,9 @@ static void test_fb_check_with_guess(void **state)
     for (int check = 1; check >= 0; --check) { /* without the check the occluded point is accepted */
         F.cfg.fb_check = check;
         for (int i = 0; i < 2; ++i)
-            q1[i] = (tvo_point2f){ q0[i].x + 9.0f, q0[i].y - 4.0f };
-        assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, q0, q1, st, NULL, 2, F.scratch, sizeof(F.scratch)),
+            q1[i] = (tvo_point2f){q0[i].x + 9.0f, q0[i].y - 4.0f};
+        assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, q0, q1, st, NULL, 2, F.scratch,
+                                      sizeof(F.scratch)),
                          TVO_OK);
         assert_int_equal(st[0], check ? TVO_LK_LOST : TVO_LK_TRACKED);
         assert_int_equal(st[1], TVO_LK_TRACKED);
@@ -226,7 +227,7 @@ static void test_fb_check_with_guess(void **state)
  * positions are those of the full check (the way back only decides the status). */
 static void test_fb_levels(void **state)
 {
-    tvo_point2f p0[64], full[64], shrt[64], q0[2] = { { 60.3f, 45.6f }, { 100.3f, 75.6f } }, q1[2];
+    tvo_point2f p0[64], full[64], shrt[64], q0[2] = {{60.3f, 45.6f}, {100.3f, 75.6f}}, q1[2];
     uint8_t st_full[64], st_short[64], st[2];
     int n;
     (void)state;
@@ -234,10 +235,12 @@ static void test_fb_levels(void **state)
     grid_points(p0, &n);
     F.cfg.fb_check = 1;
     F.cfg.fb_max_error = 0.5f;
-    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, full, st_full, NULL, n, F.scratch, sizeof(F.scratch)),
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, full, st_full, NULL, n, F.scratch,
+                                  sizeof(F.scratch)),
                      TVO_OK);
     F.cfg.fb_levels = 1;
-    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, shrt, st_short, NULL, n, F.scratch, sizeof(F.scratch)),
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, shrt, st_short, NULL, n, F.scratch,
+                                  sizeof(F.scratch)),
                      TVO_OK);
     for (int i = 0; i < n; ++i) {
         assert_int_equal(st_full[i], TVO_LK_TRACKED);
@@ -253,21 +256,23 @@ static void test_fb_levels(void **state)
     }
     for (int lv = 0; lv <= 2; ++lv) {
         F.cfg.fb_levels = lv;
-        assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, q0, q1, st, NULL, 2, F.scratch, sizeof(F.scratch)),
+        assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, q0, q1, st, NULL, 2, F.scratch,
+                                      sizeof(F.scratch)),
                          TVO_OK);
         assert_int_equal(st[0], TVO_LK_LOST);
         assert_int_equal(st[1], TVO_LK_TRACKED);
     }
     F.cfg.fb_check = 0; /* the forward track alone accepts the occluded point */
-    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, q0, q1, st, NULL, 2, F.scratch, sizeof(F.scratch)), TVO_OK);
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, q0, q1, st, NULL, 2, F.scratch, sizeof(F.scratch)),
+                     TVO_OK);
     assert_int_equal(st[0], TVO_LK_TRACKED);
 }
 
 static void test_points_outside_and_at_borders(void **state)
 {
-    tvo_point2f p0[12] = { { -100.0f, 10.0f }, { 1e30f, 5.0f }, { 5.0f, -1e30f }, { W + 50.0f, H / 2.0f },
-                           { 0.0f, 0.0f },      { W - 1.0f, H - 1.0f }, { 0.5f, H / 2.0f }, { W / 2.0f, 0.2f },
-                           { -3.0f, -3.0f },    { W + 2.0f, H + 2.0f }, { 3e9f, 3e9f }, { -2e9f, 7.0f } };
+    tvo_point2f p0[12] = {{-100.0f, 10.0f}, {1e30f, 5.0f},        {5.0f, -1e30f},   {W + 50.0f, H / 2.0f},
+                          {0.0f, 0.0f},     {W - 1.0f, H - 1.0f}, {0.5f, H / 2.0f}, {W / 2.0f, 0.2f},
+                          {-3.0f, -3.0f},   {W + 2.0f, H + 2.0f}, {3e9f, 3e9f},     {-2e9f, 7.0f}};
     tvo_point2f p1[12];
     uint8_t st[12];
     float err[12];
@@ -326,7 +331,7 @@ static void test_small_image_skips_small_levels(void **state)
     static uint8_t a[64 * 48], b[64 * 48], ma[1 << 13], mb[1 << 13];
     tvo_pyramid pa, pb;
     tvo_lk_config cfg;
-    tvo_point2f p0[1] = { { 32.0f, 24.0f } }, p1[1];
+    tvo_point2f p0[1] = {{32.0f, 24.0f}}, p1[1];
     uint8_t st[1];
     tvo_image ia = tvo_image_make(64, 48, 64, a), ib = tvo_image_make(64, 48, 64, b);
     (void)state;
@@ -345,7 +350,7 @@ static void test_small_image_skips_small_levels(void **state)
 
 static void test_bad_inputs(void **state)
 {
-    tvo_point2f p0[3] = { { 50.0f, 50.0f }, { 60.0f, 60.0f }, { 70.0f, 70.0f } }, p1[3];
+    tvo_point2f p0[3] = {{50.0f, 50.0f}, {60.0f, 60.0f}, {70.0f, 70.0f}}, p1[3];
     uint8_t st[3];
     float err[3];
     tvo_lk_config c;
@@ -432,7 +437,8 @@ static void test_bad_inputs(void **state)
     other.width[2] = 7;
     assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &other, p0, p1, st, err, 3, s, ss), TVO_ERR_SIZE);
     /* scratch too small */
-    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, err, 3, s, tvo_lk_scratch_size(&F.cfg) - 1),
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, err, 3, s,
+                                  tvo_lk_scratch_size(&F.cfg) - 1),
                      TVO_ERR_NO_MEMORY);
     /* NaN / infinite points */
     p0[1].x = NAN;
@@ -448,7 +454,7 @@ static void test_bad_inputs(void **state)
     c.use_initial_flow = 1;
     p1[0] = p0[0];
     p1[1] = p0[1];
-    p1[2] = (tvo_point2f){ NAN, 1.0f };
+    p1[2] = (tvo_point2f){NAN, 1.0f};
     assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, st, err, 3, s, ss), TVO_ERR_NOT_FINITE);
     /* NaN guesses are fine when the guess is not used */
     assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, p1, st, err, 3, s, ss), TVO_OK);
@@ -456,7 +462,7 @@ static void test_bad_inputs(void **state)
 
 static void test_scratch_alignment_any(void **state)
 {
-    tvo_point2f p0[1] = { { 80.0f, 60.0f } }, p1[1], q1[1];
+    tvo_point2f p0[1] = {{80.0f, 60.0f}}, p1[1], q1[1];
     uint8_t st[1];
     size_t need;
     (void)state;
@@ -490,7 +496,8 @@ static void expect_simd_kernel(const tvo_lk_config *c)
 /* Tracks the n points p0 (n <= 300) with c's SIMD kernels (checking they are the ones compiled in)
  * and with the portable ones, both starting from guess when c.use_initial_flow (else guess may be
  * NULL), and asserts bit-identical positions, statuses and errors. */
-static void expect_simd_matches_portable(tvo_lk_config c, const tvo_point2f *p0, const tvo_point2f *guess, int n)
+static void expect_simd_matches_portable(tvo_lk_config c, const tvo_point2f *p0, const tvo_point2f *guess,
+                                         int n)
 {
     static tvo_point2f p1[300], q1[300];
     static uint8_t s1[300], s2[300];
@@ -504,9 +511,11 @@ static void expect_simd_matches_portable(tvo_lk_config c, const tvo_point2f *p0,
     }
     c.force_portable = 0;
     expect_simd_kernel(&c);
-    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, s1, e1, n, big_scratch, sizeof(big_scratch)), TVO_OK);
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, p1, s1, e1, n, big_scratch, sizeof(big_scratch)),
+                     TVO_OK);
     c.force_portable = 1;
-    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, q1, s2, e2, n, big_scratch, sizeof(big_scratch)), TVO_OK);
+    assert_int_equal(tvo_lk_track(&c, &F.pa, &F.pb, p0, q1, s2, e2, n, big_scratch, sizeof(big_scratch)),
+                     TVO_OK);
     assert_memory_equal(p1, q1, sizeof(p1[0]) * (size_t)n);
     assert_memory_equal(s1, s2, sizeof(s1[0]) * (size_t)n);
     assert_memory_equal(e1, e2, sizeof(e1[0]) * (size_t)n);
@@ -537,7 +546,7 @@ static void test_kernel_name(void **state)
 static void test_portable_and_simd_identical(void **state)
 {
     static tvo_point2f p0[300];
-    static const int wins[] = { 3, 7, 9, 11, 13, 15, 17, 21, 23, 31, 63 };
+    static const int wins[] = {3, 7, 9, 11, 13, 15, 17, 21, 23, 31, 63};
     uint64_t seed = 777;
     (void)state;
     build(3, 2.7, -1.9);
@@ -582,7 +591,7 @@ static void extreme_images(int variant, uint64_t *seed)
 static void test_portable_and_simd_identical_extreme(void **state)
 {
     static tvo_point2f p0[200];
-    static const int wins[] = { 21, 33, 47, 63 };
+    static const int wins[] = {21, 33, 47, 63};
     tvo_image ia = tvo_image_make(W, H, W, F.a), ib = tvo_image_make(W, H, W, F.b);
     uint64_t seed = 4242;
     (void)state;
@@ -621,8 +630,8 @@ static int lk_test_round(float v)
 
 static int lk_test_w11(float a, float b)
 {
-    return (1 << 14) - lk_test_round((1.f - a) * (1.f - b) * 16384.f) - lk_test_round(a * (1.f - b) * 16384.f) -
-           lk_test_round((1.f - a) * b * 16384.f);
+    return (1 << 14) - lk_test_round((1.f - a) * (1.f - b) * 16384.f) -
+            lk_test_round(a * (1.f - b) * 16384.f) - lk_test_round((1.f - a) * b * 16384.f);
 }
 
 /* Windows whose bilinear weight w11 is -1 (fractional offsets found by a search over multiples of
@@ -631,10 +640,9 @@ static int lk_test_w11(float a, float b)
  * (the guess, use_initial_flow) sample with these weights; the portable and SIMD results must agree. */
 static void test_portable_and_simd_identical_negative_weight(void **state)
 {
-    static const int frac[][2] = { { 3819, 9 },  { 46187, 13 }, { 3980, 93 },
-                                   { 1869, 107 }, { 27, 11867 }, { 9, 20046 } };
+    static const int frac[][2] = {{3819, 9}, {46187, 13}, {3980, 93}, {1869, 107}, {27, 11867}, {9, 20046}};
     enum { NF = sizeof(frac) / sizeof(frac[0]), NP = NF * 4 };
-    static const int wins[] = { 9, 15, 21, 31 };
+    static const int wins[] = {9, 15, 21, 31};
     tvo_point2f p0[NP], guess[NP];
     (void)state;
     build(1, 1.5, -0.75);
@@ -652,7 +660,7 @@ static void test_portable_and_simd_identical_negative_weight(void **state)
         c.use_initial_flow = 1; /* guess = the point moved by whole pixels: same fractions */
         c.max_iters = 3;
         for (int k = 0; k < NP; ++k)
-            guess[k] = (tvo_point2f){ p0[k].x + 2.f, p0[k].y - 1.f };
+            guess[k] = (tvo_point2f){p0[k].x + 2.f, p0[k].y - 1.f};
         expect_simd_matches_portable(c, p0, guess, NP);
     }
 }
@@ -660,21 +668,21 @@ static void test_portable_and_simd_identical_negative_weight(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_known_shifts),
-        cmocka_unit_test(test_identical_images_zero_motion),
-        cmocka_unit_test(test_initial_flow),
-        cmocka_unit_test(test_fb_check_and_periodic_guess),
-        cmocka_unit_test(test_fb_check_with_guess),
-        cmocka_unit_test(test_fb_levels),
-        cmocka_unit_test(test_points_outside_and_at_borders),
-        cmocka_unit_test(test_random_points_everywhere),
-        cmocka_unit_test(test_small_image_skips_small_levels),
-        cmocka_unit_test(test_bad_inputs),
-        cmocka_unit_test(test_scratch_alignment_any),
-        cmocka_unit_test(test_portable_and_simd_identical),
-        cmocka_unit_test(test_portable_and_simd_identical_extreme),
-        cmocka_unit_test(test_portable_and_simd_identical_negative_weight),
-        cmocka_unit_test(test_kernel_name),
+            cmocka_unit_test(test_known_shifts),
+            cmocka_unit_test(test_identical_images_zero_motion),
+            cmocka_unit_test(test_initial_flow),
+            cmocka_unit_test(test_fb_check_and_periodic_guess),
+            cmocka_unit_test(test_fb_check_with_guess),
+            cmocka_unit_test(test_fb_levels),
+            cmocka_unit_test(test_points_outside_and_at_borders),
+            cmocka_unit_test(test_random_points_everywhere),
+            cmocka_unit_test(test_small_image_skips_small_levels),
+            cmocka_unit_test(test_bad_inputs),
+            cmocka_unit_test(test_scratch_alignment_any),
+            cmocka_unit_test(test_portable_and_simd_identical),
+            cmocka_unit_test(test_portable_and_simd_identical_extreme),
+            cmocka_unit_test(test_portable_and_simd_identical_negative_weight),
+            cmocka_unit_test(test_kernel_name),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

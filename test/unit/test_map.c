@@ -74,7 +74,7 @@ static tvo_pose walk(int k)
 {
     tvo_pose T = tvo_pose_identity();
     const double s = 0.025 * k;
-    const double v[3] = { 0.01 * sin(0.05 * k), 0.25 * sin(0.02 * k), 0.0 };
+    const double v[3] = {0.01 * sin(0.05 * k), 0.25 * sin(0.02 * k), 0.0};
     tvo_rotvec_to_rot(v, T.R);
     T.t[0] = 0.6 * sin(0.4 * s);
     T.t[1] = 0.05 * sin(0.7 * s);
@@ -89,11 +89,13 @@ static tvo_status step(fixture *f, const tvo_pose *T, int k, tvo_vo_result *res)
     tvo_room_render(T, W, H, FOCAL, f->img);
     st = tvo_vo_process(f->vo, &img, 1000000000LL + k * DT_NS, res);
     if (getenv("TVO_MAP_TEST_VERBOSE"))
-        fprintf(stderr, "  frame %d: state %d map %d kf %d points %d new %d landmarks %d tracks %d losses %d "
-                "rot err %.3f t %.3f %.3f %.3f gt %.3f %.3f %.3f\n", k, (int)res->state, (int)res->map_state,
-                (int)res->keyframe, (int)res->map_points, (int)res->map_new_points, (int)res->map_landmarks,
-                (int)res->tracks, (int)res->map_losses, rot_err_deg(&res->T_w_c, T), res->T_w_c.t[0], res->T_w_c.t[1], res->T_w_c.t[2],
-                T->t[0], T->t[1], T->t[2]);
+        fprintf(stderr,
+                "  frame %d: state %d map %d kf %d points %d new %d landmarks %d tracks %d losses %d "
+                "rot err %.3f t %.3f %.3f %.3f gt %.3f %.3f %.3f\n",
+                k, (int)res->state, (int)res->map_state, (int)res->keyframe, (int)res->map_points,
+                (int)res->map_new_points, (int)res->map_landmarks, (int)res->tracks, (int)res->map_losses,
+                rot_err_deg(&res->T_w_c, T), res->T_w_c.t[0], res->T_w_c.t[1], res->T_w_c.t[2], T->t[0],
+                T->t[1], T->t[2]);
     return st;
 }
 
@@ -161,9 +163,10 @@ static void test_map_consistent_scale(void **state)
         }
     }
     err2 = sqrt(err2 / (LONG_RUN - init_frame));
-    fprintf(stderr, "map walk: init at frame %d, %d keyframes, path %.2f m, ATE %.4f m (%.2f %%), scale %.4f "
-            "first third %.4f last third %.4f, max rotation error %.3f deg\n", init_frame, keyframes, path, err2,
-            100.0 * err2 / path, s, s1, s3, max_rot);
+    fprintf(stderr,
+            "map walk: init at frame %d, %d keyframes, path %.2f m, ATE %.4f m (%.2f %%), scale %.4f "
+            "first third %.4f last third %.4f, max rotation error %.3f deg\n",
+            init_frame, keyframes, path, err2, 100.0 * err2 / path, s, s1, s3, max_rot);
     assert_true(err2 < 0.02 * path);
     assert_true(fabs(s1 / s3 - 1.0) < 0.03);
     assert_true(max_rot < 2.0);
@@ -213,7 +216,7 @@ static void test_map_pure_rotation(void **state)
     for (int k = 0; k < 200; ++k) {
         tvo_vo_result res;
         tvo_pose T = tvo_pose_identity();
-        const double v[3] = { 0.15 * sin(0.03 * k), 0.5 * sin(0.02 * k), 0.0 };
+        const double v[3] = {0.15 * sin(0.03 * k), 0.5 * sin(0.02 * k), 0.0};
         tvo_rotvec_to_rot(v, T.R);
         assert_int_equal(step(f, &T, k, &res), TVO_OK);
         assert_true(tvo_pose_is_finite(&res.T_w_c));
@@ -251,7 +254,7 @@ static void test_map_rotation_after_map(void **state)
             /* a turn of +-34 deg about the vertical and back, on the spot (ends where it started) */
             const double a = 0.6 * sin(2.0 * M_PI * (k - walk1 + 1) / turn);
             const tvo_pose W0 = walk(walk1 - 1);
-            const double v[3] = { 0.0, a, 0.0 };
+            const double v[3] = {0.0, a, 0.0};
             double Ry[9];
             T = T_stop;
             tvo_rotvec_to_rot(v, Ry);
@@ -280,8 +283,10 @@ static void test_map_rotation_after_map(void **state)
             max_drift = sqrt(d2) > max_drift ? sqrt(d2) : max_drift;
         }
     }
-    fprintf(stderr, "map walk-turn-walk: max rotation error %.3f deg, drift while turning %.4f of %.4f walked, "
-            "%d losses, end state %d\n", max_rot, max_drift, walked, (int)res.map_losses, (int)res.map_state);
+    fprintf(stderr,
+            "map walk-turn-walk: max rotation error %.3f deg, drift while turning %.4f of %.4f walked, "
+            "%d losses, end state %d\n",
+            max_rot, max_drift, walked, (int)res.map_losses, (int)res.map_state);
     assert_true(max_rot < 2.0);
     assert_true(max_drift < 0.05 * walked);
     assert_int_equal(res.map_state, TVO_MAP_TRACKING);
@@ -315,7 +320,8 @@ static void test_map_loss_and_new_map(void **state)
         if (lost_frame >= 0 && reinit < 0 && res.map_state == TVO_MAP_INITIALISED)
             reinit = k;
     }
-    fprintf(stderr, "map loss: lost at %d, new map at %d, %d losses\n", lost_frame, reinit, (int)res.map_losses);
+    fprintf(stderr, "map loss: lost at %d, new map at %d, %d losses\n", lost_frame, reinit,
+            (int)res.map_losses);
     assert_true(lost_frame >= 70 && lost_frame < 74);
     assert_true(reinit > lost_frame && reinit < lost_frame + 40);
     assert_true(res.map_losses >= 1);
@@ -357,7 +363,8 @@ static void test_tracks_view(void **state)
     {
         int lm = 0, inl = 0;
         for (int32_t i = 0; i < n; ++i) {
-            assert_true(t[i].x >= 0.0f && t[i].x <= (float)(W - 1) && t[i].y >= 0.0f && t[i].y <= (float)(H - 1));
+            assert_true(t[i].x >= 0.0f && t[i].x <= (float)(W - 1) && t[i].y >= 0.0f &&
+                        t[i].y <= (float)(H - 1));
             assert_true(t[i].age >= 0 && t[i].age < 40);
             lm += t[i].landmark;
             inl += t[i].inlier;
@@ -396,14 +403,14 @@ static void test_map_config(void **state)
     c.map_window = TVO_VO_MAX_WINDOW;
     wide = tvo_vo_required_size(&c);
     assert_true(with > without && wide > with);
-#define REFUSED(field, value)                                                                       \
-    do {                                                                                            \
-        tvo_vo *vo = NULL;                                                                          \
-        static uint8_t mem[64];                                                                     \
-        c = c0;                                                                                     \
-        c.field = value;                                                                            \
-        assert_int_equal(tvo_vo_required_size(&c), 0);                                              \
-        assert_int_equal(tvo_vo_init(&vo, &c, mem, sizeof(mem)), TVO_ERR_ARG);                       \
+#define REFUSED(field, value)                                                  \
+    do {                                                                       \
+        tvo_vo *vo = NULL;                                                     \
+        static uint8_t mem[64];                                                \
+        c = c0;                                                                \
+        c.field = value;                                                       \
+        assert_int_equal(tvo_vo_required_size(&c), 0);                         \
+        assert_int_equal(tvo_vo_init(&vo, &c, mem, sizeof(mem)), TVO_ERR_ARG); \
     } while (0)
     REFUSED(map, 2);
     REFUSED(map, -1);
@@ -429,13 +436,10 @@ static void test_map_config(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_map_consistent_scale),
-        cmocka_unit_test(test_map_off),
-        cmocka_unit_test(test_map_pure_rotation),
-        cmocka_unit_test(test_map_rotation_after_map),
-        cmocka_unit_test(test_map_loss_and_new_map),
-        cmocka_unit_test(test_tracks_view),
-        cmocka_unit_test(test_map_config),
+            cmocka_unit_test(test_map_consistent_scale), cmocka_unit_test(test_map_off),
+            cmocka_unit_test(test_map_pure_rotation),    cmocka_unit_test(test_map_rotation_after_map),
+            cmocka_unit_test(test_map_loss_and_new_map), cmocka_unit_test(test_tracks_view),
+            cmocka_unit_test(test_map_config),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

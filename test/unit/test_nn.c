@@ -35,12 +35,24 @@ static void putf(uint8_t *p, float f)
     memcpy(&u, &f, 4);
     put32(p, u);
 }
-static void fix_crc(uint8_t *f, size_t size) { put32(f + 12, tvo_nn_crc32(0, f + 16, size - 16)); }
+static void fix_crc(uint8_t *f, size_t size)
+{
+    put32(f + 12, tvo_nn_crc32(0, f + 16, size - 16));
+}
 
 /* offsets of branch b's entry, its input table and its layer k entry */
-static uint8_t *branch_entry(uint8_t *f, uint32_t b) { return f + get32(f + 32) + 48u * b; }
-static uint8_t *input_entry(uint8_t *f, uint32_t b, uint32_t i) { return f + get32(branch_entry(f, b) + 12) + 12u * i; }
-static uint8_t *layer_entry(uint8_t *f, uint32_t b, uint32_t k) { return f + get32(branch_entry(f, b) + 16) + 64u * k; }
+static uint8_t *branch_entry(uint8_t *f, uint32_t b)
+{
+    return f + get32(f + 32) + 48u * b;
+}
+static uint8_t *input_entry(uint8_t *f, uint32_t b, uint32_t i)
+{
+    return f + get32(branch_entry(f, b) + 12) + 12u * i;
+}
+static uint8_t *layer_entry(uint8_t *f, uint32_t b, uint32_t k)
+{
+    return f + get32(branch_entry(f, b) + 16) + 64u * k;
+}
 
 static tvo_status status_of(const uint8_t *f, size_t size)
 {
@@ -187,28 +199,115 @@ static void expect(const blob *good, edit_fn edit, int fix, tvo_status want, con
     free(f);
 }
 
-static void e_short(uint8_t *f, size_t *s) { (void)f; *s = 63; }
-static void e_trunc(uint8_t *f, size_t *s) { (void)f; *s -= 1; }
-static void e_empty(uint8_t *f, size_t *s) { (void)f; *s = 0; }
-static void e_oversize(uint8_t *f, size_t *s) { (void)f; *s += 16; }
-static void e_oversize_hdr(uint8_t *f, size_t *s) { *s += 16; put32(f + 8, (uint32_t)*s); }
-static void e_magic(uint8_t *f, size_t *s) { (void)s; f[0] = 'X'; }
-static void e_major(uint8_t *f, size_t *s) { (void)s; f[4] = 2; }
-static void e_minor_newer(uint8_t *f, size_t *s) { (void)s; f[6] = 7; put32(f + 60, 123); }
-static void e_crc(uint8_t *f, size_t *s) { f[*s - 1] ^= 1; }
-static void e_header_size(uint8_t *f, size_t *s) { (void)s; put32(f + 16, 128); }
-static void e_layer_entry_size(uint8_t *f, size_t *s) { (void)s; put32(f + 40, 32); }
-static void e_layout(uint8_t *f, size_t *s) { (void)s; put32(f + 20, TVO_FEAT_LAYOUT_ID + 1); }
-static void e_nfeat(uint8_t *f, size_t *s) { (void)s; put32(f + 24, TVO_FEAT_COUNT + 1); }
-static void e_reserved_hdr(uint8_t *f, size_t *s) { (void)s; f[50] = 1; }
-static void e_nb0(uint8_t *f, size_t *s) { (void)s; put32(f + 28, 0); }
-static void e_nb7(uint8_t *f, size_t *s) { (void)s; put32(f + 28, 7); }
-static void e_bt_past(uint8_t *f, size_t *s) { put32(f + 32, (uint32_t)*s - 40); }
-static void e_bt_in_header(uint8_t *f, size_t *s) { (void)s; put32(f + 32, 16); }
-static void e_bt_misaligned(uint8_t *f, size_t *s) { (void)s; put32(f + 32, get32(f + 32) + 2); }
-static void e_dof_range(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 2), TVO_NN_CODE_COUNT); }
-static void e_step_in_1_0(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 3), TVO_NN_CODE_STEP); }
-static void e_log_step_in_1_0(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 3), TVO_NN_CODE_LOG_STEP); }
+static void e_short(uint8_t *f, size_t *s)
+{
+    (void)f;
+    *s = 63;
+}
+static void e_trunc(uint8_t *f, size_t *s)
+{
+    (void)f;
+    *s -= 1;
+}
+static void e_empty(uint8_t *f, size_t *s)
+{
+    (void)f;
+    *s = 0;
+}
+static void e_oversize(uint8_t *f, size_t *s)
+{
+    (void)f;
+    *s += 16;
+}
+static void e_oversize_hdr(uint8_t *f, size_t *s)
+{
+    *s += 16;
+    put32(f + 8, (uint32_t)*s);
+}
+static void e_magic(uint8_t *f, size_t *s)
+{
+    (void)s;
+    f[0] = 'X';
+}
+static void e_major(uint8_t *f, size_t *s)
+{
+    (void)s;
+    f[4] = 2;
+}
+static void e_minor_newer(uint8_t *f, size_t *s)
+{
+    (void)s;
+    f[6] = 7;
+    put32(f + 60, 123);
+}
+static void e_crc(uint8_t *f, size_t *s)
+{
+    f[*s - 1] ^= 1;
+}
+static void e_header_size(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(f + 16, 128);
+}
+static void e_layer_entry_size(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(f + 40, 32);
+}
+static void e_layout(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(f + 20, TVO_FEAT_LAYOUT_ID + 1);
+}
+static void e_nfeat(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(f + 24, TVO_FEAT_COUNT + 1);
+}
+static void e_reserved_hdr(uint8_t *f, size_t *s)
+{
+    (void)s;
+    f[50] = 1;
+}
+static void e_nb0(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(f + 28, 0);
+}
+static void e_nb7(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(f + 28, 7);
+}
+static void e_bt_past(uint8_t *f, size_t *s)
+{
+    put32(f + 32, (uint32_t)*s - 40);
+}
+static void e_bt_in_header(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(f + 32, 16);
+}
+static void e_bt_misaligned(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(f + 32, get32(f + 32) + 2);
+}
+static void e_dof_range(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(branch_entry(f, 2), TVO_NN_CODE_COUNT);
+}
+static void e_step_in_1_0(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(branch_entry(f, 3), TVO_NN_CODE_STEP);
+}
+static void e_log_step_in_1_0(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(branch_entry(f, 3), TVO_NN_CODE_LOG_STEP);
+}
 /* on tiny (1.0, tx..rz) declared 1.1: a step branch replacing rx, beside tx ty tz */
 static void e_step_with_t(uint8_t *f, size_t *s)
 {
@@ -217,72 +316,266 @@ static void e_step_with_t(uint8_t *f, size_t *s)
     put32(branch_entry(f, 3), TVO_NN_CODE_STEP);
 }
 /* on step.tvonn (log step, rx, ry, rz): */
-static void e_step_both(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 1), TVO_NN_CODE_STEP); }
-static void e_step_dup(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 1), TVO_NN_CODE_LOG_STEP); }
-static void e_step_plus_tz(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 3), TVO_NN_TZ); }
+static void e_step_both(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(branch_entry(f, 1), TVO_NN_CODE_STEP);
+}
+static void e_step_dup(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(branch_entry(f, 1), TVO_NN_CODE_LOG_STEP);
+}
+static void e_step_plus_tz(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(branch_entry(f, 3), TVO_NN_TZ);
+}
 static void e_step_plus_tx_first(uint8_t *f, size_t *s)
 {
     (void)s; /* tx before the step branch: refused whatever the order */
     put32(branch_entry(f, 0), TVO_NN_TX);
     put32(branch_entry(f, 1), TVO_NN_CODE_LOG_STEP);
 }
-static void e_step_minor0(uint8_t *f, size_t *s) { (void)s; f[6] = 0; }
-static void e_step_code8(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 0), 8); }
-static void e_step_linear(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 0), TVO_NN_CODE_STEP); }
-static void e_dof_dup(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 2), 1); }
-static void e_n_inputs0(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 0) + 4, 0); }
-static void e_n_inputs_big(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 0) + 4, TVO_FEAT_COUNT + 1); }
-static void e_n_layers0(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 0) + 8, 0); }
-static void e_n_layers_big(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 0) + 8, TVO_NN_MAX_LAYERS + 1); }
-static void e_inputs_past(uint8_t *f, size_t *s) { put32(branch_entry(f, 1) + 12, (uint32_t)*s - 8); }
-static void e_layers_huge(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 1) + 16, 0xFFFFFFFCu); }
-static void e_branch_reserved(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 0) + 40, 1); }
-static void e_in_scale0(uint8_t *f, size_t *s) { (void)s; putf(branch_entry(f, 0) + 20, 0.0f); }
-static void e_in_scale_neg(uint8_t *f, size_t *s) { (void)s; putf(branch_entry(f, 0) + 20, -1.0f); }
-static void e_in_zp(uint8_t *f, size_t *s) { (void)s; put32(branch_entry(f, 0) + 24, 128); }
-static void e_out_scale_nan(uint8_t *f, size_t *s) { (void)s; putf(branch_entry(f, 3) + 28, NAN); }
-static void e_out_offset_inf(uint8_t *f, size_t *s) { (void)s; putf(branch_entry(f, 3) + 32, INFINITY); }
-static void e_feat_id(uint8_t *f, size_t *s) { (void)s; put32(input_entry(f, 0, 3), TVO_FEAT_COUNT); }
-static void e_norm_nan(uint8_t *f, size_t *s) { (void)s; putf(input_entry(f, 0, 3) + 4, NAN); }
-static void e_norm_zero(uint8_t *f, size_t *s) { (void)s; putf(input_entry(f, 0, 3) + 4, 0.0f); }
-static void e_norm_off_inf(uint8_t *f, size_t *s) { (void)s; putf(input_entry(f, 0, 3) + 8, -INFINITY); }
-static void e_chain(uint8_t *f, size_t *s) { (void)s; put32(layer_entry(f, 0, 1), get32(layer_entry(f, 0, 1)) + 1); }
-static void e_first_chain(uint8_t *f, size_t *s) { (void)s; put32(layer_entry(f, 0, 0), 10); }
-static void e_n_out0(uint8_t *f, size_t *s) { (void)s; put32(layer_entry(f, 0, 0) + 4, 0); }
+static void e_step_minor0(uint8_t *f, size_t *s)
+{
+    (void)s;
+    f[6] = 0;
+}
+static void e_step_code8(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(branch_entry(f, 0), 8);
+}
+static void e_step_linear(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(branch_entry(f, 0), TVO_NN_CODE_STEP);
+}
+static void e_dof_dup(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(branch_entry(f, 2), 1);
+}
+static void e_n_inputs0(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(branch_entry(f, 0) + 4, 0);
+}
+static void e_n_inputs_big(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(branch_entry(f, 0) + 4, TVO_FEAT_COUNT + 1);
+}
+static void e_n_layers0(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(branch_entry(f, 0) + 8, 0);
+}
+static void e_n_layers_big(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(branch_entry(f, 0) + 8, TVO_NN_MAX_LAYERS + 1);
+}
+static void e_inputs_past(uint8_t *f, size_t *s)
+{
+    put32(branch_entry(f, 1) + 12, (uint32_t)*s - 8);
+}
+static void e_layers_huge(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(branch_entry(f, 1) + 16, 0xFFFFFFFCu);
+}
+static void e_branch_reserved(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(branch_entry(f, 0) + 40, 1);
+}
+static void e_in_scale0(uint8_t *f, size_t *s)
+{
+    (void)s;
+    putf(branch_entry(f, 0) + 20, 0.0f);
+}
+static void e_in_scale_neg(uint8_t *f, size_t *s)
+{
+    (void)s;
+    putf(branch_entry(f, 0) + 20, -1.0f);
+}
+static void e_in_zp(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(branch_entry(f, 0) + 24, 128);
+}
+static void e_out_scale_nan(uint8_t *f, size_t *s)
+{
+    (void)s;
+    putf(branch_entry(f, 3) + 28, NAN);
+}
+static void e_out_offset_inf(uint8_t *f, size_t *s)
+{
+    (void)s;
+    putf(branch_entry(f, 3) + 32, INFINITY);
+}
+static void e_feat_id(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(input_entry(f, 0, 3), TVO_FEAT_COUNT);
+}
+static void e_norm_nan(uint8_t *f, size_t *s)
+{
+    (void)s;
+    putf(input_entry(f, 0, 3) + 4, NAN);
+}
+static void e_norm_zero(uint8_t *f, size_t *s)
+{
+    (void)s;
+    putf(input_entry(f, 0, 3) + 4, 0.0f);
+}
+static void e_norm_off_inf(uint8_t *f, size_t *s)
+{
+    (void)s;
+    putf(input_entry(f, 0, 3) + 8, -INFINITY);
+}
+static void e_chain(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(layer_entry(f, 0, 1), get32(layer_entry(f, 0, 1)) + 1);
+}
+static void e_first_chain(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(layer_entry(f, 0, 0), 10);
+}
+static void e_n_out0(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(layer_entry(f, 0, 0) + 4, 0);
+}
 static void e_n_out_huge(uint8_t *f, size_t *s)
 {
     (void)s; /* n_in * n_out would overflow 32 bits */
     put32(layer_entry(f, 0, 0) + 4, 0x80000001u);
 }
-static void e_act(uint8_t *f, size_t *s) { (void)s; put32(layer_entry(f, 0, 0) + 8, TVO_NN_ACT_COUNT); }
-static void e_kind(uint8_t *f, size_t *s) { (void)s; put32(layer_entry(f, 0, 0) + 12, 2); }
-static void e_kind_f32_hidden(uint8_t *f, size_t *s) { (void)s; put32(layer_entry(f, 0, 0) + 12, TVO_NN_OUT_F32); }
-static void e_kind_s8_last(uint8_t *f, size_t *s) { (void)s; put32(layer_entry(f, 0, 2) + 12, TVO_NN_OUT_S8); }
-static void e_zp_range(uint8_t *f, size_t *s) { (void)s; put32(layer_entry(f, 0, 1) + 20, (uint32_t)-129); }
+static void e_act(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(layer_entry(f, 0, 0) + 8, TVO_NN_ACT_COUNT);
+}
+static void e_kind(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(layer_entry(f, 0, 0) + 12, 2);
+}
+static void e_kind_f32_hidden(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(layer_entry(f, 0, 0) + 12, TVO_NN_OUT_F32);
+}
+static void e_kind_s8_last(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(layer_entry(f, 0, 2) + 12, TVO_NN_OUT_S8);
+}
+static void e_zp_range(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(layer_entry(f, 0, 1) + 20, (uint32_t)-129);
+}
 static void e_zp_chain(uint8_t *f, size_t *s)
 {
     uint8_t *e = layer_entry(f, 0, 1);
     (void)s;
     put32(e + 16, get32(e + 16) == 5 ? 6 : 5);
 }
-static void e_layer_scale0(uint8_t *f, size_t *s) { (void)s; putf(layer_entry(f, 0, 0) + 32, 0.0f); }
-static void e_layer_scale_inf(uint8_t *f, size_t *s) { (void)s; putf(layer_entry(f, 0, 1) + 36, INFINITY); }
-static void e_w_past(uint8_t *f, size_t *s) { put32(layer_entry(f, 0, 0) + 40, ((uint32_t)*s - 32) & ~15u); }
-static void e_w_misaligned(uint8_t *f, size_t *s) { (void)s; put32(layer_entry(f, 0, 0) + 40, get32(layer_entry(f, 0, 0) + 40) + 4); }
-static void e_w_zero(uint8_t *f, size_t *s) { (void)s; put32(layer_entry(f, 0, 0) + 40, 0); }
-static void e_bias_past(uint8_t *f, size_t *s) { (void)s; put32(layer_entry(f, 1, 1) + 44, 0xFFFFFFF0u); }
-static void e_shift_f32(uint8_t *f, size_t *s) { (void)s; put32(layer_entry(f, 0, 2) + 52, 64); }
-static void e_lut_missing(uint8_t *f, size_t *s) { (void)s; put32(layer_entry(f, 0, 0) + 56, 0); }
-static void e_lut_for_none(uint8_t *f, size_t *s) { (void)s; put32(layer_entry(f, 0, 2) + 56, 64); }
-static void e_layer_reserved(uint8_t *f, size_t *s) { (void)s; put32(layer_entry(f, 0, 0) + 60, 9); }
-static void e_mult_small(uint8_t *f, size_t *s) { (void)s; put32(f + get32(layer_entry(f, 0, 0) + 48) + 4, 0x3FFFFFFFu); }
-static void e_mult_neg(uint8_t *f, size_t *s) { (void)s; put32(f + get32(layer_entry(f, 0, 0) + 48), 0x80000000u); }
-static void e_shift0(uint8_t *f, size_t *s) { (void)s; put32(f + get32(layer_entry(f, 0, 1) + 52), 0); }
-static void e_shift63(uint8_t *f, size_t *s) { (void)s; put32(f + get32(layer_entry(f, 0, 1) + 52) + 8, 63); }
-static void e_bias_overflow(uint8_t *f, size_t *s) { (void)s; put32(f + get32(layer_entry(f, 0, 0) + 44), 0x7FFFFF00u); }
-static void e_bias_overflow_neg(uint8_t *f, size_t *s) { (void)s; put32(f + get32(layer_entry(f, 2, 1) + 44), 0x80000000u); }
-static void e_dq_zero(uint8_t *f, size_t *s) { (void)s; putf(f + get32(layer_entry(f, 4, 2) + 48), 0.0f); }
-static void e_dq_nan(uint8_t *f, size_t *s) { (void)s; putf(f + get32(layer_entry(f, 4, 2) + 48), NAN); }
+static void e_layer_scale0(uint8_t *f, size_t *s)
+{
+    (void)s;
+    putf(layer_entry(f, 0, 0) + 32, 0.0f);
+}
+static void e_layer_scale_inf(uint8_t *f, size_t *s)
+{
+    (void)s;
+    putf(layer_entry(f, 0, 1) + 36, INFINITY);
+}
+static void e_w_past(uint8_t *f, size_t *s)
+{
+    put32(layer_entry(f, 0, 0) + 40, ((uint32_t)*s - 32) & ~15u);
+}
+static void e_w_misaligned(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(layer_entry(f, 0, 0) + 40, get32(layer_entry(f, 0, 0) + 40) + 4);
+}
+static void e_w_zero(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(layer_entry(f, 0, 0) + 40, 0);
+}
+static void e_bias_past(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(layer_entry(f, 1, 1) + 44, 0xFFFFFFF0u);
+}
+static void e_shift_f32(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(layer_entry(f, 0, 2) + 52, 64);
+}
+static void e_lut_missing(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(layer_entry(f, 0, 0) + 56, 0);
+}
+static void e_lut_for_none(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(layer_entry(f, 0, 2) + 56, 64);
+}
+static void e_layer_reserved(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(layer_entry(f, 0, 0) + 60, 9);
+}
+static void e_mult_small(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(f + get32(layer_entry(f, 0, 0) + 48) + 4, 0x3FFFFFFFu);
+}
+static void e_mult_neg(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(f + get32(layer_entry(f, 0, 0) + 48), 0x80000000u);
+}
+static void e_shift0(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(f + get32(layer_entry(f, 0, 1) + 52), 0);
+}
+static void e_shift63(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(f + get32(layer_entry(f, 0, 1) + 52) + 8, 63);
+}
+static void e_bias_overflow(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(f + get32(layer_entry(f, 0, 0) + 44), 0x7FFFFF00u);
+}
+static void e_bias_overflow_neg(uint8_t *f, size_t *s)
+{
+    (void)s;
+    put32(f + get32(layer_entry(f, 2, 1) + 44), 0x80000000u);
+}
+static void e_dq_zero(uint8_t *f, size_t *s)
+{
+    (void)s;
+    putf(f + get32(layer_entry(f, 4, 2) + 48), 0.0f);
+}
+static void e_dq_nan(uint8_t *f, size_t *s)
+{
+    (void)s;
+    putf(f + get32(layer_entry(f, 4, 2) + 48), NAN);
+}
 
 static void test_bad_files(void **state)
 {
@@ -425,9 +718,9 @@ static void test_kernels(void **state)
     assert_int_equal(tvo_nn_requantize(1, 1 << 30, 1), 1 << 29);
     /* fc: row 0 sum = -1, row 1 = 128 + 10, row 2 = 127 * -1 - 5 */
     tvo_nn_fc_s8(x, w, bias, mult, shift, 3, 5, 3, y);
-    assert_int_equal(y[0], 3 + 0);             /* -1 * 0.5 = -0.5 -> 0 */
-    assert_int_equal(y[1], 127);               /* 138 + 3 clamps */
-    assert_int_equal(y[2], 3 + 0);             /* -132 * 2^-11 -> 0 */
+    assert_int_equal(y[0], 3 + 0); /* -1 * 0.5 = -0.5 -> 0 */
+    assert_int_equal(y[1], 127);   /* 138 + 3 clamps */
+    assert_int_equal(y[2], 3 + 0); /* -132 * 2^-11 -> 0 */
     tvo_nn_fc_s8_f32(x, w, bias, sc, 5, 3, fy);
     assert_true(fy[0] == -0.5f && fy[1] == 138.0f && fy[2] == -264.0f);
     for (i = 0; i < 256; ++i)
@@ -500,15 +793,11 @@ static void test_input_quantisation(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_golden_tiny),
-        cmocka_unit_test(test_golden_paper),
-        cmocka_unit_test(test_golden_step),
-        cmocka_unit_test(test_bad_step_files),
-        cmocka_unit_test(test_null_and_memory),
-        cmocka_unit_test(test_bad_files),
-        cmocka_unit_test(test_kernels),
-        cmocka_unit_test(test_input_quantisation),
-        cmocka_unit_test(test_output_overflow),
+            cmocka_unit_test(test_golden_tiny),     cmocka_unit_test(test_golden_paper),
+            cmocka_unit_test(test_golden_step),     cmocka_unit_test(test_bad_step_files),
+            cmocka_unit_test(test_null_and_memory), cmocka_unit_test(test_bad_files),
+            cmocka_unit_test(test_kernels),         cmocka_unit_test(test_input_quantisation),
+            cmocka_unit_test(test_output_overflow),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

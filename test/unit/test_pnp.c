@@ -84,7 +84,7 @@ static void test_p3p_true_pose_among_solutions(void **state)
             x[i][1] = sc.x[i].y;
         }
         tvo_pose T[4];
-        int ns = tvo_p3p((const double (*)[3])X, (const double (*)[2])x, T);
+        int ns = tvo_p3p((const double(*)[3])X, (const double(*)[2])x, T);
         assert_true(ns >= 0 && ns <= 4);
         if (ns > maxsol)
             maxsol = ns;
@@ -107,7 +107,8 @@ static void test_p3p_true_pose_among_solutions(void **state)
         if (best < 1e-9)
             ++hits;
     }
-    print_message("p3p: true pose (error < 1e-9) among the solutions in %d of %d triples, up to %d solutions\n",
+    print_message("p3p: true pose (error < 1e-9) among the solutions in %d of %d triples, up to %d "
+                  "solutions\n",
                   hits, total, maxsol);
     /* random triples include a few nearly degenerate ones (rays almost coplanar with the triangle) */
     assert_true(hits >= total - 5);
@@ -129,11 +130,11 @@ static void test_p3p_degenerate(void **state)
     double nanX[3][3];
     memcpy(nanX, good, sizeof nanX);
     nanX[1][2] = NAN;
-    assert_int_equal(tvo_p3p((const double (*)[3])nanX, x, T), 0);
+    assert_int_equal(tvo_p3p((const double(*)[3])nanX, x, T), 0);
     double xs[3][2] = {{0.1, 0.0}, {0.1, 0.0}, {-0.1, -0.05}}; /* two identical rays */
-    assert_int_equal(tvo_p3p(good, (const double (*)[2])xs, T), 0);
+    assert_int_equal(tvo_p3p(good, (const double(*)[2])xs, T), 0);
     double xi[3][2] = {{0.1, 0.0}, {INFINITY, 0.1}, {-0.1, -0.05}};
-    assert_int_equal(tvo_p3p(good, (const double (*)[2])xi, T), 0);
+    assert_int_equal(tvo_p3p(good, (const double(*)[2])xi, T), 0);
     assert_int_equal(tvo_p3p(NULL, x, T), 0);
     assert_int_equal(tvo_p3p(good, NULL, T), 0);
     assert_int_equal(tvo_p3p(good, x, NULL), 0);
@@ -143,7 +144,7 @@ static void test_p3p_degenerate(void **state)
         xg[i][0] = good[i][0] / good[i][2];
         xg[i][1] = good[i][1] / good[i][2];
     }
-    int ns = tvo_p3p(good, (const double (*)[2])xg, T);
+    int ns = tvo_p3p(good, (const double(*)[2])xg, T);
     assert_true(ns >= 1);
     tvo_pose I = tvo_pose_identity();
     int found = 0;
@@ -163,7 +164,7 @@ static void test_ransac_noise_free(void **state)
         tvo_pose T = tvo_pose_identity();
         uint8_t inl[MAXN];
         int32_t ni = -1;
-        tvo_status st = tvo_pnp_ransac(NULL, (const double (*)[3])sc.X, sc.x, sc.n, &T, inl, &ni, g_scratch,
+        tvo_status st = tvo_pnp_ransac(NULL, (const double(*)[3])sc.X, sc.x, sc.n, &T, inl, &ni, g_scratch,
                                        sizeof g_scratch);
         assert_int_equal(st, TVO_OK);
         assert_int_equal(ni, sc.n);
@@ -185,7 +186,7 @@ static void test_ransac_noisy(void **state)
         tvo_pose T = tvo_pose_identity();
         int32_t ni = 0;
         double rms = 0.0;
-        assert_int_equal(tvo_pnp_ransac(NULL, (const double (*)[3])sc.X, sc.x, sc.n, &T, NULL, &ni, g_scratch,
+        assert_int_equal(tvo_pnp_ransac(NULL, (const double(*)[3])sc.X, sc.x, sc.n, &T, NULL, &ni, g_scratch,
                                         sizeof g_scratch),
                          TVO_OK);
         double er = rot_err(&T, &sc.T) * DEG, ec = c_err(&T, &sc.T);
@@ -193,11 +194,13 @@ static void test_ransac_noisy(void **state)
         worst_c = ec > worst_c ? ec : worst_c;
         assert_true(ni >= 190); /* 1.5 px threshold at 0.5 px noise: ~99 % of the points */
         /* refine on everything from the result: the rms is about the noise (0.5 px * sqrt(2)) */
-        assert_int_equal(tvo_pnp_refine(NULL, (const double (*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni, &rms),
+        assert_int_equal(tvo_pnp_refine(NULL, (const double(*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni,
+                                        &rms),
                          TVO_OK);
         assert_true(rms * F_PX > 0.4 && rms * F_PX < 0.9);
     }
-    print_message("ransac 0.5 px: worst rotation error %.4f deg, worst centre error %.4f m\n", worst_r, worst_c);
+    print_message("ransac 0.5 px: worst rotation error %.4f deg, worst centre error %.4f m\n", worst_r,
+                  worst_c);
     assert_true(worst_r < 0.15);
     assert_true(worst_c < 0.05);
 }
@@ -212,7 +215,7 @@ static void test_ransac_outliers(void **state)
         tvo_pose T = tvo_pose_identity();
         uint8_t inl[MAXN];
         int32_t ni = 0;
-        assert_int_equal(tvo_pnp_ransac(NULL, (const double (*)[3])sc.X, sc.x, sc.n, &T, inl, &ni, g_scratch,
+        assert_int_equal(tvo_pnp_ransac(NULL, (const double(*)[3])sc.X, sc.x, sc.n, &T, inl, &ni, g_scratch,
                                         sizeof g_scratch),
                          TVO_OK);
         assert_true(rot_err(&T, &sc.T) * DEG < 0.2);
@@ -245,7 +248,7 @@ static void test_ransac_nan_points_skipped(void **state)
     tvo_pose T = tvo_pose_identity();
     uint8_t inl[MAXN];
     int32_t ni = 0;
-    assert_int_equal(tvo_pnp_ransac(NULL, (const double (*)[3])sc.X, sc.x, sc.n, &T, inl, &ni, g_scratch,
+    assert_int_equal(tvo_pnp_ransac(NULL, (const double(*)[3])sc.X, sc.x, sc.n, &T, inl, &ni, g_scratch,
                                     sizeof g_scratch),
                      TVO_OK);
     assert_int_equal(ni, sc.n - sc.n / 5);
@@ -255,7 +258,8 @@ static void test_ransac_nan_points_skipped(void **state)
     /* refine skips them too */
     tvo_pose T2 = perturb(&sc.T, 1, 0.02, 0.05);
     double rms = 1.0;
-    assert_int_equal(tvo_pnp_refine(NULL, (const double (*)[3])sc.X, sc.x, NULL, sc.n, &T2, inl, &ni, &rms), TVO_OK);
+    assert_int_equal(tvo_pnp_refine(NULL, (const double(*)[3])sc.X, sc.x, NULL, sc.n, &T2, inl, &ni, &rms),
+                     TVO_OK);
     assert_int_equal(ni, sc.n - sc.n / 5);
     assert_true(rot_err(&T2, &sc.T) < 1e-9 && t_err(&T2, &sc.T) < 1e-9 && rms < 1e-9);
 }
@@ -269,20 +273,24 @@ static void test_ransac_deterministic(void **state)
     int32_t na = 0, nb = 0, nc = 0;
     tvo_pnp_config cfg;
     tvo_pnp_config_default(&cfg);
-    assert_int_equal(tvo_pnp_ransac(&cfg, (const double (*)[3])sc.X, sc.x, sc.n, &A, NULL, &na, g_scratch,
-                                    sizeof g_scratch), TVO_OK);
-    assert_int_equal(tvo_pnp_ransac(&cfg, (const double (*)[3])sc.X, sc.x, sc.n, &B, NULL, &nb, g_scratch,
-                                    sizeof g_scratch), TVO_OK);
+    assert_int_equal(tvo_pnp_ransac(&cfg, (const double(*)[3])sc.X, sc.x, sc.n, &A, NULL, &na, g_scratch,
+                                    sizeof g_scratch),
+                     TVO_OK);
+    assert_int_equal(tvo_pnp_ransac(&cfg, (const double(*)[3])sc.X, sc.x, sc.n, &B, NULL, &nb, g_scratch,
+                                    sizeof g_scratch),
+                     TVO_OK);
     assert_true(pose_equal(&A, &B) && na == nb);
     cfg.seed = 12345;
-    assert_int_equal(tvo_pnp_ransac(&cfg, (const double (*)[3])sc.X, sc.x, sc.n, &C, NULL, &nc, g_scratch,
-                                    sizeof g_scratch), TVO_OK);
+    assert_int_equal(tvo_pnp_ransac(&cfg, (const double(*)[3])sc.X, sc.x, sc.n, &C, NULL, &nc, g_scratch,
+                                    sizeof g_scratch),
+                     TVO_OK);
     assert_true(rot_err(&C, &sc.T) * DEG < 0.2 && c_err(&C, &sc.T) < 0.08);
     /* scratch at any alignment */
     tvo_pose D = tvo_pose_identity();
     int32_t nd = 0;
-    assert_int_equal(tvo_pnp_ransac(NULL, (const double (*)[3])sc.X, sc.x, sc.n, &D, NULL, &nd, g_scratch + 3,
-                                    tvo_pnp_scratch_size(sc.n)), TVO_OK);
+    assert_int_equal(tvo_pnp_ransac(NULL, (const double(*)[3])sc.X, sc.x, sc.n, &D, NULL, &nd, g_scratch + 3,
+                                    tvo_pnp_scratch_size(sc.n)),
+                     TVO_OK);
     assert_true(pose_equal(&A, &D) && na == nd);
 }
 
@@ -297,7 +305,7 @@ static void test_ransac_bounded(void **state)
     cfg.max_iterations = 1;
     tvo_pose T = tvo_pose_identity();
     int32_t ni = 0;
-    tvo_status st = tvo_pnp_ransac(&cfg, (const double (*)[3])sc.X, sc.x, sc.n, &T, NULL, &ni, g_scratch,
+    tvo_status st = tvo_pnp_ransac(&cfg, (const double(*)[3])sc.X, sc.x, sc.n, &T, NULL, &ni, g_scratch,
                                    sizeof g_scratch);
     /* one sample: either a good hypothesis or too few inliers, never anything else */
     assert_true(st == TVO_OK || st == TVO_ERR_TOO_FEW);
@@ -328,8 +336,9 @@ static void test_ransac_planar_and_far(void **state)
         }
         tvo_pose T = tvo_pose_identity();
         int32_t ni = 0;
-        assert_int_equal(tvo_pnp_ransac(NULL, (const double (*)[3])sc.X, sc.x, sc.n, &T, NULL, &ni, g_scratch,
-                                        sizeof g_scratch), TVO_OK);
+        assert_int_equal(tvo_pnp_ransac(NULL, (const double(*)[3])sc.X, sc.x, sc.n, &T, NULL, &ni, g_scratch,
+                                        sizeof g_scratch),
+                         TVO_OK);
         assert_true(ni >= (sc.n - sc.n_out) * 9 / 10);
         /* (seen: planar up to 0.06 deg / 4 mm, far up to 0.03 deg / 2.3 cm) */
         assert_true(rot_err(&T, &sc.T) * DEG < 0.15);
@@ -352,8 +361,9 @@ static void test_ransac_guess(void **state)
         make_pscene(&sc, seed, 200, 0.5, 0.4);
         tvo_pose T = perturb(&sc.T, seed, 0.002, 0.01); /* ~0.1 deg, 1 cm: a good prediction */
         int32_t ni = 0;
-        assert_int_equal(tvo_pnp_ransac(&cfg, (const double (*)[3])sc.X, sc.x, sc.n, &T, NULL, &ni, g_scratch,
-                                        sizeof g_scratch), TVO_OK);
+        assert_int_equal(tvo_pnp_ransac(&cfg, (const double(*)[3])sc.X, sc.x, sc.n, &T, NULL, &ni, g_scratch,
+                                        sizeof g_scratch),
+                         TVO_OK);
         assert_true(rot_err(&T, &sc.T) * DEG < 0.2 && c_err(&T, &sc.T) < 0.08);
         assert_true(ni >= (sc.n - sc.n_out) * 95 / 100);
         /* the same single sample without the guess */
@@ -361,15 +371,16 @@ static void test_ransac_guess(void **state)
         c0.use_guess = 0;
         tvo_pose P = tvo_pose_identity();
         int32_t np = 0;
-        plain_ok += tvo_pnp_ransac(&c0, (const double (*)[3])sc.X, sc.x, sc.n, &P, NULL, &np, g_scratch,
-                                   sizeof g_scratch) == TVO_OK && rot_err(&P, &sc.T) * DEG < 0.2;
+        plain_ok += tvo_pnp_ransac(&c0, (const double(*)[3])sc.X, sc.x, sc.n, &P, NULL, &np, g_scratch,
+                                   sizeof g_scratch) == TVO_OK &&
+                rot_err(&P, &sc.T) * DEG < 0.2;
         /* a NaN guess: as without a guess */
         tvo_pose G = tvo_pose_identity(), Q = T;
         Q.R[0] = NAN;
         int32_t nq = 0;
-        tvo_status sq = tvo_pnp_ransac(&cfg, (const double (*)[3])sc.X, sc.x, sc.n, &Q, NULL, &nq, g_scratch,
+        tvo_status sq = tvo_pnp_ransac(&cfg, (const double(*)[3])sc.X, sc.x, sc.n, &Q, NULL, &nq, g_scratch,
                                        sizeof g_scratch);
-        tvo_status sg = tvo_pnp_ransac(&c0, (const double (*)[3])sc.X, sc.x, sc.n, &G, NULL, &np, g_scratch,
+        tvo_status sg = tvo_pnp_ransac(&c0, (const double(*)[3])sc.X, sc.x, sc.n, &G, NULL, &np, g_scratch,
                                        sizeof g_scratch);
         assert_int_equal(sq, sg);
         assert_true(pose_equal(&Q, &G) && nq == (sq == TVO_OK ? np : 0));
@@ -391,17 +402,21 @@ static void test_ransac_bad_input(void **state)
     (void)state;
     pscene sc;
     make_pscene(&sc, 600, 100, 0.0, 0.0);
-    const double (*X)[3] = (const double (*)[3])sc.X;
+    const double(*X)[3] = (const double(*)[3])sc.X;
     tvo_pose T0 = perturb(&sc.T, 3, 0.3, 1.0), T = T0;
     uint8_t inl[MAXN];
     int32_t ni = 7;
     tvo_pnp_config cfg;
 
-    assert_int_equal(tvo_pnp_ransac(NULL, NULL, sc.x, sc.n, &T, inl, &ni, g_scratch, sizeof g_scratch), TVO_ERR_NULL);
+    assert_int_equal(tvo_pnp_ransac(NULL, NULL, sc.x, sc.n, &T, inl, &ni, g_scratch, sizeof g_scratch),
+                     TVO_ERR_NULL);
     expect_unchanged(&T0, &T, ni);
-    assert_int_equal(tvo_pnp_ransac(NULL, X, NULL, sc.n, &T, inl, &ni, g_scratch, sizeof g_scratch), TVO_ERR_NULL);
-    assert_int_equal(tvo_pnp_ransac(NULL, X, sc.x, sc.n, NULL, inl, &ni, g_scratch, sizeof g_scratch), TVO_ERR_NULL);
-    assert_int_equal(tvo_pnp_ransac(NULL, X, sc.x, sc.n, &T, inl, NULL, g_scratch, sizeof g_scratch), TVO_ERR_NULL);
+    assert_int_equal(tvo_pnp_ransac(NULL, X, NULL, sc.n, &T, inl, &ni, g_scratch, sizeof g_scratch),
+                     TVO_ERR_NULL);
+    assert_int_equal(tvo_pnp_ransac(NULL, X, sc.x, sc.n, NULL, inl, &ni, g_scratch, sizeof g_scratch),
+                     TVO_ERR_NULL);
+    assert_int_equal(tvo_pnp_ransac(NULL, X, sc.x, sc.n, &T, inl, NULL, g_scratch, sizeof g_scratch),
+                     TVO_ERR_NULL);
     assert_int_equal(tvo_pnp_ransac(NULL, X, sc.x, sc.n, &T, inl, &ni, NULL, sizeof g_scratch), TVO_ERR_NULL);
     expect_unchanged(&T0, &T, ni);
 
@@ -409,38 +424,71 @@ static void test_ransac_bad_input(void **state)
     for (int c = 0; c < 14; ++c) {
         tvo_pnp_config_default(&cfg);
         switch (c) {
-        case 0: cfg.threshold = 0.0; break;
-        case 1: cfg.threshold = NAN; break;
-        case 2: cfg.confidence = 0.0; break;
-        case 3: cfg.confidence = 1.0; break;
-        case 4: cfg.confidence = NAN; break;
-        case 5: cfg.max_iterations = 0; break;
-        case 6: cfg.refine_iterations = 0; break;
-        case 7: cfg.huber = 0.0; break;
-        case 8: cfg.huber = NAN; break;
-        case 9: cfg.min_inliers = 2; break;
-        case 10: cfg.threshold = INFINITY; break;
-        case 11: cfg.use_guess = 2; break;
-        case 12: cfg.use_guess = -1; break;
-        default: cfg.huber = -1.0; break;
+        case 0:
+            cfg.threshold = 0.0;
+            break;
+        case 1:
+            cfg.threshold = NAN;
+            break;
+        case 2:
+            cfg.confidence = 0.0;
+            break;
+        case 3:
+            cfg.confidence = 1.0;
+            break;
+        case 4:
+            cfg.confidence = NAN;
+            break;
+        case 5:
+            cfg.max_iterations = 0;
+            break;
+        case 6:
+            cfg.refine_iterations = 0;
+            break;
+        case 7:
+            cfg.huber = 0.0;
+            break;
+        case 8:
+            cfg.huber = NAN;
+            break;
+        case 9:
+            cfg.min_inliers = 2;
+            break;
+        case 10:
+            cfg.threshold = INFINITY;
+            break;
+        case 11:
+            cfg.use_guess = 2;
+            break;
+        case 12:
+            cfg.use_guess = -1;
+            break;
+        default:
+            cfg.huber = -1.0;
+            break;
         }
         ni = 5;
         memset(inl, 1, sizeof inl);
-        assert_int_equal(tvo_pnp_ransac(&cfg, X, sc.x, sc.n, &T, inl, &ni, g_scratch, sizeof g_scratch), TVO_ERR_ARG);
+        assert_int_equal(tvo_pnp_ransac(&cfg, X, sc.x, sc.n, &T, inl, &ni, g_scratch, sizeof g_scratch),
+                         TVO_ERR_ARG);
         expect_unchanged(&T0, &T, ni);
         assert_int_equal(inl[0], 0);
         ni = 5;
         assert_int_equal(tvo_pnp_refine(&cfg, X, sc.x, NULL, sc.n, &T, inl, &ni, NULL), TVO_ERR_ARG);
         expect_unchanged(&T0, &T, ni);
     }
-    assert_int_equal(tvo_pnp_ransac(NULL, X, sc.x, -1, &T, inl, &ni, g_scratch, sizeof g_scratch), TVO_ERR_ARG);
+    assert_int_equal(tvo_pnp_ransac(NULL, X, sc.x, -1, &T, inl, &ni, g_scratch, sizeof g_scratch),
+                     TVO_ERR_ARG);
     expect_unchanged(&T0, &T, ni);
     /* n = 3, n = 0 */
-    assert_int_equal(tvo_pnp_ransac(NULL, X, sc.x, 3, &T, inl, &ni, g_scratch, sizeof g_scratch), TVO_ERR_TOO_FEW);
+    assert_int_equal(tvo_pnp_ransac(NULL, X, sc.x, 3, &T, inl, &ni, g_scratch, sizeof g_scratch),
+                     TVO_ERR_TOO_FEW);
     expect_unchanged(&T0, &T, ni);
-    assert_int_equal(tvo_pnp_ransac(NULL, X, sc.x, 0, &T, inl, &ni, g_scratch, sizeof g_scratch), TVO_ERR_TOO_FEW);
+    assert_int_equal(tvo_pnp_ransac(NULL, X, sc.x, 0, &T, inl, &ni, g_scratch, sizeof g_scratch),
+                     TVO_ERR_TOO_FEW);
     /* scratch one byte short */
-    assert_int_equal(tvo_pnp_ransac(NULL, X, sc.x, sc.n, &T, inl, &ni, g_scratch, tvo_pnp_scratch_size(sc.n) - 1),
+    assert_int_equal(tvo_pnp_ransac(NULL, X, sc.x, sc.n, &T, inl, &ni, g_scratch,
+                                    tvo_pnp_scratch_size(sc.n) - 1),
                      TVO_ERR_NO_MEMORY);
     expect_unchanged(&T0, &T, ni);
     assert_true(tvo_pnp_scratch_size(-1) == 0);
@@ -449,18 +497,21 @@ static void test_ransac_bad_input(void **state)
     pscene bad = sc;
     for (int i = 3; i < bad.n; ++i)
         bad.x[i].x = NAN;
-    assert_int_equal(tvo_pnp_ransac(NULL, (const double (*)[3])bad.X, bad.x, bad.n, &T, inl, &ni, g_scratch,
-                                    sizeof g_scratch), TVO_ERR_TOO_FEW);
+    assert_int_equal(tvo_pnp_ransac(NULL, (const double(*)[3])bad.X, bad.x, bad.n, &T, inl, &ni, g_scratch,
+                                    sizeof g_scratch),
+                     TVO_ERR_TOO_FEW);
     expect_unchanged(&T0, &T, ni);
     /* more inliers required than there are points */
     tvo_pnp_config_default(&cfg);
     cfg.min_inliers = sc.n + 1;
-    assert_int_equal(tvo_pnp_ransac(&cfg, X, sc.x, sc.n, &T, inl, &ni, g_scratch, sizeof g_scratch), TVO_ERR_TOO_FEW);
+    assert_int_equal(tvo_pnp_ransac(&cfg, X, sc.x, sc.n, &T, inl, &ni, g_scratch, sizeof g_scratch),
+                     TVO_ERR_TOO_FEW);
     expect_unchanged(&T0, &T, ni);
     /* a non-finite pose given to RANSAC (output only) comes back as the identity on error */
     tvo_pose Tn = T0;
     Tn.t[1] = NAN;
-    assert_int_equal(tvo_pnp_ransac(NULL, X, sc.x, 3, &Tn, inl, &ni, g_scratch, sizeof g_scratch), TVO_ERR_TOO_FEW);
+    assert_int_equal(tvo_pnp_ransac(NULL, X, sc.x, 3, &Tn, inl, &ni, g_scratch, sizeof g_scratch),
+                     TVO_ERR_TOO_FEW);
     tvo_pose I = tvo_pose_identity();
     assert_true(pose_equal(&Tn, &I));
 }
@@ -483,8 +534,9 @@ static void test_ransac_degenerate_scenes(void **state)
         sc.x[i].y = Xc[1] / Xc[2];
     }
     T = T0;
-    assert_int_equal(tvo_pnp_ransac(NULL, (const double (*)[3])sc.X, sc.x, sc.n, &T, inl, &ni, g_scratch,
-                                    sizeof g_scratch), TVO_ERR_DEGENERATE);
+    assert_int_equal(tvo_pnp_ransac(NULL, (const double(*)[3])sc.X, sc.x, sc.n, &T, inl, &ni, g_scratch,
+                                    sizeof g_scratch),
+                     TVO_ERR_DEGENERATE);
     expect_unchanged(&T0, &T, ni);
     /* all points coincident */
     for (int i = 1; i < sc.n; ++i) {
@@ -492,8 +544,9 @@ static void test_ransac_degenerate_scenes(void **state)
         sc.x[i] = sc.x[0];
     }
     T = T0;
-    assert_int_equal(tvo_pnp_ransac(NULL, (const double (*)[3])sc.X, sc.x, sc.n, &T, inl, &ni, g_scratch,
-                                    sizeof g_scratch), TVO_ERR_DEGENERATE);
+    assert_int_equal(tvo_pnp_ransac(NULL, (const double(*)[3])sc.X, sc.x, sc.n, &T, inl, &ni, g_scratch,
+                                    sizeof g_scratch),
+                     TVO_ERR_DEGENERATE);
     expect_unchanged(&T0, &T, ni);
     /* points behind the camera: no rigid pose explains them with positive depths */
     pscene bh;
@@ -508,12 +561,13 @@ static void test_ransac_degenerate_scenes(void **state)
         tvo_pose_transform_point(&Twc, Xc, bh.X[i]);
     }
     T = T0;
-    assert_int_equal(tvo_pnp_ransac(NULL, (const double (*)[3])bh.X, bh.x, bh.n, &T, inl, &ni, g_scratch,
-                                    sizeof g_scratch), TVO_ERR_TOO_FEW);
+    assert_int_equal(tvo_pnp_ransac(NULL, (const double(*)[3])bh.X, bh.x, bh.n, &T, inl, &ni, g_scratch,
+                                    sizeof g_scratch),
+                     TVO_ERR_TOO_FEW);
     expect_unchanged(&T0, &T, ni);
     /* refine from the true pose: every point behind the camera */
     T = bh.T;
-    assert_int_equal(tvo_pnp_refine(NULL, (const double (*)[3])bh.X, bh.x, NULL, bh.n, &T, inl, &ni, NULL),
+    assert_int_equal(tvo_pnp_refine(NULL, (const double(*)[3])bh.X, bh.x, NULL, bh.n, &T, inl, &ni, NULL),
                      TVO_ERR_TOO_FEW);
     expect_unchanged(&bh.T, &T, ni);
 }
@@ -534,7 +588,7 @@ static void test_refine_converges(void **state)
         tvo_pnp_config_default(&cfg);
         cfg.refine_iterations = 20;
         cfg.huber = 0.05; /* the start is tens of pixels off: a wider kernel converges faster */
-        assert_int_equal(tvo_pnp_refine(&cfg, (const double (*)[3])sc.X, sc.x, NULL, sc.n, &T, inl, &ni, &rms),
+        assert_int_equal(tvo_pnp_refine(&cfg, (const double(*)[3])sc.X, sc.x, NULL, sc.n, &T, inl, &ni, &rms),
                          TVO_OK);
         assert_true(rot_err(&T, &sc.T) < 1e-9 && t_err(&T, &sc.T) < 1e-9);
         assert_int_equal(ni, sc.n);
@@ -549,7 +603,8 @@ static void test_refine_converges(void **state)
     tvo_pose T = perturb(&sc.T, 5, 0.01, 0.05);
     int32_t ni = 0;
     double rms = 0.0;
-    assert_int_equal(tvo_pnp_refine(NULL, (const double (*)[3])sc.X, sc.x, use, sc.n, &T, inl, &ni, &rms), TVO_OK);
+    assert_int_equal(tvo_pnp_refine(NULL, (const double(*)[3])sc.X, sc.x, use, sc.n, &T, inl, &ni, &rms),
+                     TVO_OK);
     assert_true(rot_err(&T, &sc.T) * DEG < 0.2 && c_err(&T, &sc.T) < 0.05);
     for (int i = 0; i < sc.n; ++i)
         if (!use[i])
@@ -575,20 +630,23 @@ static void test_refine_rotation_prior(void **state)
         c0.min_inliers = 6;
         c0.threshold = c0.huber = 4.0 / 450.0;
         T0 = Tw = Tz = perturb(&sc.T, seed, 0.01, 0.05);
-        assert_int_equal(tvo_pnp_refine(&c0, (const double (*)[3])sc.X, sc.x, NULL, sc.n, &T0, NULL, &n0, NULL),
+        assert_int_equal(tvo_pnp_refine(&c0, (const double(*)[3])sc.X, sc.x, NULL, sc.n, &T0, NULL, &n0,
+                                        NULL),
                          TVO_OK);
         /* weight 0: the prior's content is ignored (bit for bit) */
         cw = c0;
         for (int k = 0; k < 9; ++k)
             cw.rot_prior[k] = 0.5 * (double)k;
-        assert_int_equal(tvo_pnp_refine(&cw, (const double (*)[3])sc.X, sc.x, NULL, sc.n, &Tz, NULL, &nz, NULL),
+        assert_int_equal(tvo_pnp_refine(&cw, (const double(*)[3])sc.X, sc.x, NULL, sc.n, &Tz, NULL, &nz,
+                                        NULL),
                          TVO_OK);
         assert_memory_equal(&Tz, &T0, sizeof(T0));
         /* the true rotation, weighted as much as 10,000 points */
         cw = c0;
         memcpy(cw.rot_prior, sc.T.R, sizeof(cw.rot_prior));
         cw.rot_prior_weight = 1e4;
-        assert_int_equal(tvo_pnp_refine(&cw, (const double (*)[3])sc.X, sc.x, NULL, sc.n, &Tw, NULL, &nw, NULL),
+        assert_int_equal(tvo_pnp_refine(&cw, (const double(*)[3])sc.X, sc.x, NULL, sc.n, &Tw, NULL, &nw,
+                                        NULL),
                          TVO_OK);
         assert_true(rot_err(&Tw, &sc.T) * DEG < 0.01);
         sum_plain += rot_err(&T0, &sc.T);
@@ -601,7 +659,7 @@ static void test_refine_rotation_prior(void **state)
         tvo_pnp_config c;
         tvo_pose T;
         int32_t ni = 0;
-        const double w[3] = { 0.0, 10.0 / DEG, 0.0 };
+        const double w[3] = {0.0, 10.0 / DEG, 0.0};
         double Rd[9];
         make_pscene(&sc, 950, 200, 0.0, 0.0);
         tvo_pnp_config_default(&c);
@@ -609,7 +667,7 @@ static void test_refine_rotation_prior(void **state)
         tvo_la_mat3_mul(Rd, sc.T.R, c.rot_prior);
         c.rot_prior_weight = 1.0;
         T = perturb(&sc.T, 3, 0.01, 0.05);
-        assert_int_equal(tvo_pnp_refine(&c, (const double (*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni, NULL),
+        assert_int_equal(tvo_pnp_refine(&c, (const double(*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni, NULL),
                          TVO_OK);
         /* one point's worth against 200 points: pulled, but by a small fraction of the offset (measured
            0.107 deg, twice 10/201 deg, as the rotation trades partly against the translation) */
@@ -624,17 +682,17 @@ static void test_refine_rotation_prior(void **state)
         T = sc.T;
         tvo_pnp_config_default(&c);
         c.rot_prior_weight = -1.0;
-        assert_int_equal(tvo_pnp_refine(&c, (const double (*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni, NULL),
+        assert_int_equal(tvo_pnp_refine(&c, (const double(*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni, NULL),
                          TVO_ERR_ARG);
         c.rot_prior_weight = NAN;
-        assert_int_equal(tvo_pnp_refine(&c, (const double (*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni, NULL),
+        assert_int_equal(tvo_pnp_refine(&c, (const double(*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni, NULL),
                          TVO_ERR_ARG);
         c.rot_prior_weight = 1.0;
         c.rot_prior[0] = 2.0; /* not a rotation */
-        assert_int_equal(tvo_pnp_refine(&c, (const double (*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni, NULL),
+        assert_int_equal(tvo_pnp_refine(&c, (const double(*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni, NULL),
                          TVO_ERR_ARG);
         c.rot_prior[0] = NAN;
-        assert_int_equal(tvo_pnp_refine(&c, (const double (*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni, NULL),
+        assert_int_equal(tvo_pnp_refine(&c, (const double(*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni, NULL),
                          TVO_ERR_ARG);
         assert_true(tvo_pose_is_finite(&T));
     }
@@ -655,7 +713,7 @@ static void test_refine_never_worse(void **state)
         tvo_pose T0 = perturb(&sc.T, seed, 0.02 * (double)(seed - 900), 0.05 * (double)(seed - 900)), T = T0;
         int32_t ni = 0;
         cfg.refine_iterations = 1 + (int32_t)(seed % 3);
-        tvo_status st = tvo_pnp_refine(&cfg, (const double (*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni, NULL);
+        tvo_status st = tvo_pnp_refine(&cfg, (const double(*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni, NULL);
         assert_true(st == TVO_OK || st == TVO_ERR_TOO_FEW);
         assert_true(tvo_pose_is_finite(&T));
         double c0 = huber_cost(&T0, &sc, cfg.huber), c1 = huber_cost(&T, &sc, cfg.huber);
@@ -671,7 +729,8 @@ static void test_refine_never_worse(void **state)
     make_pscene(&sc, 970, 100, 0.0, 0.0);
     tvo_pose T = sc.T;
     int32_t ni = 0;
-    assert_int_equal(tvo_pnp_refine(NULL, (const double (*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni, NULL), TVO_OK);
+    assert_int_equal(tvo_pnp_refine(NULL, (const double(*)[3])sc.X, sc.x, NULL, sc.n, &T, NULL, &ni, NULL),
+                     TVO_OK);
     assert_true(rot_err(&T, &sc.T) < 1e-14 && t_err(&T, &sc.T) < 1e-13);
 }
 
@@ -712,7 +771,8 @@ static void test_refine_restores(void **state)
     uint8_t inl[MAXN];
     int32_t ni = 0;
     double rms = 1.0;
-    assert_int_equal(tvo_pnp_refine(&cfg, (const double (*)[3])sc.X, sc.x, NULL, sc.n, &T, inl, &ni, &rms), TVO_OK);
+    assert_int_equal(tvo_pnp_refine(&cfg, (const double(*)[3])sc.X, sc.x, NULL, sc.n, &T, inl, &ni, &rms),
+                     TVO_OK);
     assert_true(pose_equal(&T, &T0));
     int expect = 0; /* the near points and the far ones near the image centre (within 1.5 px at T0) */
     for (int i = 0; i < sc.n; ++i) {
@@ -723,7 +783,8 @@ static void test_refine_restores(void **state)
     assert_true(inl[0] && inl[1] && inl[2] && rms < 1.5 / F_PX);
     /* more iterations: a damped step that helps, never one that pushes the near points behind */
     cfg.refine_iterations = 10;
-    assert_int_equal(tvo_pnp_refine(&cfg, (const double (*)[3])sc.X, sc.x, NULL, sc.n, &T, inl, &ni, &rms), TVO_OK);
+    assert_int_equal(tvo_pnp_refine(&cfg, (const double(*)[3])sc.X, sc.x, NULL, sc.n, &T, inl, &ni, &rms),
+                     TVO_OK);
     assert_false(pose_equal(&T, &T0));
     assert_true(huber_cost(&T, &sc, cfg.huber) < huber_cost(&T0, &sc, cfg.huber));
     for (int i = 0; i < 3; ++i) {
@@ -738,7 +799,7 @@ static void test_refine_bad_input(void **state)
     (void)state;
     pscene sc;
     make_pscene(&sc, 1100, 30, 0.0, 0.0);
-    const double (*X)[3] = (const double (*)[3])sc.X;
+    const double(*X)[3] = (const double(*)[3])sc.X;
     tvo_pose T0 = perturb(&sc.T, 2, 0.01, 0.01), T = T0;
     uint8_t inl[MAXN];
     int32_t ni = 5;
@@ -807,10 +868,10 @@ static void *stk_work(void *arg)
     int32_t ni = 0;
     double rms;
     uint8_t *inl = g_scratch + 8 * MAXN / 2; /* not on this stack */
-    j->ok = tvo_pnp_ransac(NULL, (const double (*)[3])j->sc->X, j->sc->x, j->sc->n, &T, NULL, &ni, g_scratch,
+    j->ok = tvo_pnp_ransac(NULL, (const double(*)[3])j->sc->X, j->sc->x, j->sc->n, &T, NULL, &ni, g_scratch,
                            tvo_pnp_scratch_size(j->sc->n)) == TVO_OK;
-    j->ok &= tvo_pnp_refine(NULL, (const double (*)[3])j->sc->X, j->sc->x, NULL, j->sc->n, &T, inl, &ni, &rms) ==
-             TVO_OK;
+    j->ok &= tvo_pnp_refine(NULL, (const double(*)[3])j->sc->X, j->sc->x, NULL, j->sc->n, &T, inl, &ni,
+                            &rms) == TVO_OK;
     return NULL;
 }
 
@@ -846,31 +907,32 @@ static void test_stack(void **state)
     size_t base = stack_used(stk_idle, NULL), used = stack_used(stk_work, &j);
     assert_true(base != (size_t)-1 && used != (size_t)-1);
     assert_true(j.ok);
-    print_message("pnp: stack %zu bytes above the thread baseline (bound %d)\n", used - base, PNP_STACK_BOUND);
+    print_message("pnp: stack %zu bytes above the thread baseline (bound %d)\n", used - base,
+                  PNP_STACK_BOUND);
     assert_true(used - base < PNP_STACK_BOUND);
 }
 
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_p3p_true_pose_among_solutions),
-        cmocka_unit_test(test_p3p_degenerate),
-        cmocka_unit_test(test_ransac_noise_free),
-        cmocka_unit_test(test_ransac_noisy),
-        cmocka_unit_test(test_ransac_outliers),
-        cmocka_unit_test(test_ransac_nan_points_skipped),
-        cmocka_unit_test(test_ransac_deterministic),
-        cmocka_unit_test(test_ransac_bounded),
-        cmocka_unit_test(test_ransac_guess),
-        cmocka_unit_test(test_ransac_planar_and_far),
-        cmocka_unit_test(test_ransac_bad_input),
-        cmocka_unit_test(test_ransac_degenerate_scenes),
-        cmocka_unit_test(test_refine_converges),
-        cmocka_unit_test(test_refine_never_worse),
-        cmocka_unit_test(test_refine_restores),
-        cmocka_unit_test(test_refine_rotation_prior),
-        cmocka_unit_test(test_refine_bad_input),
-        cmocka_unit_test(test_stack),
+            cmocka_unit_test(test_p3p_true_pose_among_solutions),
+            cmocka_unit_test(test_p3p_degenerate),
+            cmocka_unit_test(test_ransac_noise_free),
+            cmocka_unit_test(test_ransac_noisy),
+            cmocka_unit_test(test_ransac_outliers),
+            cmocka_unit_test(test_ransac_nan_points_skipped),
+            cmocka_unit_test(test_ransac_deterministic),
+            cmocka_unit_test(test_ransac_bounded),
+            cmocka_unit_test(test_ransac_guess),
+            cmocka_unit_test(test_ransac_planar_and_far),
+            cmocka_unit_test(test_ransac_bad_input),
+            cmocka_unit_test(test_ransac_degenerate_scenes),
+            cmocka_unit_test(test_refine_converges),
+            cmocka_unit_test(test_refine_never_worse),
+            cmocka_unit_test(test_refine_restores),
+            cmocka_unit_test(test_refine_rotation_prior),
+            cmocka_unit_test(test_refine_bad_input),
+            cmocka_unit_test(test_stack),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

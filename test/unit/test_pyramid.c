@@ -74,7 +74,7 @@ static void test_bad_inputs(void **state)
     assert_null(tvo_pyramid_level(&p, 3).data);
     assert_null(tvo_pyramid_level(&p, -1).data);
     assert_null(tvo_pyramid_level(NULL, 0).data);
-    assert_int_equal(tvo_image_check(&(tvo_image){ 0, 0, 0, NULL }), TVO_ERR_NULL);
+    assert_int_equal(tvo_image_check(&(tvo_image){0, 0, 0, NULL}), TVO_ERR_NULL);
     {
         tvo_image l2 = tvo_pyramid_level(&p, 2);
         assert_int_equal(tvo_image_check(&l2), TVO_OK);
@@ -95,7 +95,7 @@ static int ref_reflect(int i, int n)
 
 static void ref_pyr_down(const uint8_t *src, int w, int h, uint8_t *dst)
 {
-    static const int k[5] = { 1, 4, 6, 4, 1 };
+    static const int k[5] = {1, 4, 6, 4, 1};
     int dw = (w + 1) / 2, dh = (h + 1) / 2;
     for (int y = 0; y < dh; ++y)
         for (int x = 0; x < dw; ++x) {
@@ -158,7 +158,8 @@ static void test_borrowed_level0(void **state)
     assert_true(b.data[0] == src && b.stride[0] == 97);
     for (int l = 1; l < 3; ++l)
         for (int y = 0; y < full.height[l]; ++y)
-            assert_memory_equal(b.data[l] + y * b.stride[l], full.data[l] + y * full.stride[l], (size_t)full.width[l]);
+            assert_memory_equal(b.data[l] + y * b.stride[l], full.data[l] + y * full.stride[l],
+                                (size_t)full.width[l]);
     assert_int_equal(tvo_pyramid_keep_level0(&b, kept, 96), TVO_ERR_SIZE);
     assert_int_equal(tvo_pyramid_keep_level0(NULL, kept, 100), TVO_ERR_NULL);
     assert_int_equal(tvo_pyramid_keep_level0(&b, NULL, 100), TVO_ERR_NULL);
@@ -220,12 +221,12 @@ static void test_constant_image_stays_constant(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_required_size_and_geometry),
-        cmocka_unit_test(test_bad_inputs),
-        cmocka_unit_test(test_values_match_reference),
-        cmocka_unit_test(test_borrowed_level0),
-        cmocka_unit_test(test_pyr_down_tiny),
-        cmocka_unit_test(test_constant_image_stays_constant),
+            cmocka_unit_test(test_required_size_and_geometry),
+            cmocka_unit_test(test_bad_inputs),
+            cmocka_unit_test(test_values_match_reference),
+            cmocka_unit_test(test_borrowed_level0),
+            cmocka_unit_test(test_pyr_down_tiny),
+            cmocka_unit_test(test_constant_image_stays_constant),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

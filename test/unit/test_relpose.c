@@ -21,7 +21,7 @@ static void test_fivept_noise_free(void **state)
         make_scene(&sc, 1000 + trial, 5, 30.0, 1.0, 0.0, 0.0, 0);
         double a[5][2], b[5][2], E[10][9];
         scene_arrays(&sc, 5, a, b);
-        int ns = tvo_essential_5pt((const double (*)[2])a, (const double (*)[2])b, E);
+        int ns = tvo_essential_5pt((const double(*)[2])a, (const double(*)[2])b, E);
         assert_true(ns >= 0 && ns <= 10);
         /* ground-truth E, normalised, compared up to sign */
         double S[9] = {0, -sc.t[2], sc.t[1], sc.t[2], 0, -sc.t[0], -sc.t[1], sc.t[0], 0}, Eg[9];
@@ -74,7 +74,8 @@ static uint64_t fnv_double(uint64_t h, double v)
 static void bits_sample(uint64_t *s, int small_rot, int outliers, double a[5][2], double b[5][2])
 {
     double amp = small_rot ? 0.01 : 0.4;
-    double q[4] = {1.0, amp * (2.0 * urand(s) - 1.0), amp * (2.0 * urand(s) - 1.0), amp * (2.0 * urand(s) - 1.0)};
+    double q[4] = {1.0, amp * (2.0 * urand(s) - 1.0), amp * (2.0 * urand(s) - 1.0),
+                   amp * (2.0 * urand(s) - 1.0)};
     double nq = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     for (int k = 0; k < 4; ++k)
         q[k] /= nq;
@@ -113,7 +114,7 @@ static void test_fivept_bits(void **state)
     for (int trial = 0; trial < 400; ++trial) {
         double a[5][2], b[5][2], E[10][9];
         bits_sample(&s, trial % 2, trial % 4 == 3, a, b);
-        int ns = tvo_essential_5pt((const double (*)[2])a, (const double (*)[2])b, E);
+        int ns = tvo_essential_5pt((const double(*)[2])a, (const double(*)[2])b, E);
         assert_true(ns >= 0 && ns <= 10);
         total += ns;
         h = fnv_double(h, (double)ns);
@@ -142,7 +143,10 @@ typedef struct dg_problem {
     int n;
 } dg_problem;
 
-static double dg_u(uint64_t *s) { return 2.0 * urand(s) - 1.0; } /* uniform in [-1, 1) */
+static double dg_u(uint64_t *s)
+{
+    return 2.0 * urand(s) - 1.0;
+} /* uniform in [-1, 1) */
 
 static void dg_make(uint64_t *s, int kind, dg_problem *p)
 {
@@ -238,19 +242,20 @@ static void test_relpose_bits(void **state)
             b[i][0] = p.x2[i].x;
             b[i][1] = p.x2[i].y;
         }
-        int ns = tvo_essential_5pt((const double (*)[2])a, (const double (*)[2])b, E);
+        int ns = tvo_essential_5pt((const double(*)[2])a, (const double(*)[2])b, E);
         h = fnv_double(h, (double)ns);
         for (int m = 0; m < ns; ++m)
             for (int k = 0; k < 9; ++k)
                 h = fnv_double(h, E[m][k]);
     }
     /* the problems reach every branch that sets a flag */
-    assert_int_equal(flags_seen, TVO_RELPOSE_FLAG_LOW_PARALLAX | TVO_RELPOSE_FLAG_ROTATION_ONLY |
-                                     TVO_RELPOSE_FLAG_HOMOGRAPHY | TVO_RELPOSE_FLAG_LOW_CONFIDENCE |
-                                     TVO_RELPOSE_FLAG_AMBIGUOUS);
+    assert_int_equal(flags_seen,
+                     TVO_RELPOSE_FLAG_LOW_PARALLAX | TVO_RELPOSE_FLAG_ROTATION_ONLY |
+                             TVO_RELPOSE_FLAG_HOMOGRAPHY | TVO_RELPOSE_FLAG_LOW_CONFIDENCE |
+                             TVO_RELPOSE_FLAG_AMBIGUOUS);
     if (h != expected)
-        print_message("test_relpose_bits: digest 0x%016llxULL, expected 0x%016llxULL\n", (unsigned long long)h,
-                      (unsigned long long)expected);
+        print_message("test_relpose_bits: digest 0x%016llxULL, expected 0x%016llxULL\n",
+                      (unsigned long long)h, (unsigned long long)expected);
     assert_true(h == expected);
 }
 
@@ -267,10 +272,12 @@ static void test_pipeline_noise_free(void **state)
             make_scene(&sc, 77 + trial, 200, 20.0, 1.0, 0.0, 0.0, 0);
             cfg.seed = (uint64_t)trial;
             assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &out, NULL, g_scratch,
-                                                  sizeof g_scratch), TVO_OK);
+                                                  sizeof g_scratch),
+                             TVO_OK);
             assert_true(tvo_la_rot_dist(out.R, sc.R) < 1e-6);
             assert_true(t_err_deg(out.t, sc.t) < 1e-4);
-            assert_int_equal(out.flags & (TVO_RELPOSE_FLAG_ROTATION_ONLY | TVO_RELPOSE_FLAG_LOW_CONFIDENCE), 0);
+            assert_int_equal(out.flags & (TVO_RELPOSE_FLAG_ROTATION_ONLY | TVO_RELPOSE_FLAG_LOW_CONFIDENCE),
+                             0);
             /* the rotation-only reference is reported too, and is a rotation */
             assert_true(fabs(tvo_la_mat3_det(out.R_rot) - 1.0) < 1e-9);
             assert_int_equal(out.inliers, sc.n);
@@ -300,7 +307,8 @@ static void test_pipeline_noise_outliers(void **state)
         make_scene(&sc, 5000 + trial, 300, 20.0, 1.0, 0.5, 0.3, 0);
         cfg.seed = (uint64_t)trial;
         assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &out, mask, g_scratch,
-                                              sizeof g_scratch), TVO_OK);
+                                              sizeof g_scratch),
+                         TVO_OK);
         rerr[trial] = tvo_la_rot_dist(out.R, sc.R) * DEG;
         terr[trial] = (out.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY) ? 180.0 : t_err_deg(out.t, sc.t);
         if (rerr[trial] < 1.0 && terr[trial] < 5.0)
@@ -313,8 +321,8 @@ static void test_pipeline_noise_outliers(void **state)
     }
     qsort(rerr, TRIALS, sizeof(double), cmp_double);
     qsort(terr, TRIALS, sizeof(double), cmp_double);
-    fprintf(stderr, "noise+outliers: median rot %.4f deg, median t %.4f deg, success %d/%d\n", rerr[TRIALS / 2],
-            terr[TRIALS / 2], success, TRIALS);
+    fprintf(stderr, "noise+outliers: median rot %.4f deg, median t %.4f deg, success %d/%d\n",
+            rerr[TRIALS / 2], terr[TRIALS / 2], success, TRIALS);
     assert_true(rerr[TRIALS / 2] <= 0.05);
     assert_true(terr[TRIALS / 2] <= 1.0);
     assert_true(success >= TRIALS - TRIALS / 200); /* >= 99.5 % */
@@ -333,7 +341,8 @@ static void test_pure_rotation(void **state)
         make_scene(&sc, 900 + trial, 300, 20.0, (trial & 1) ? 0.001 : 0.0, 0.5, 0.3, 0);
         cfg.seed = (uint64_t)trial;
         assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &out, NULL, g_scratch,
-                                              sizeof g_scratch), TVO_OK);
+                                              sizeof g_scratch),
+                         TVO_OK);
         double e = tvo_la_rot_dist(out.R, sc.R) * DEG;
         assert_true(e <= 0.1);
         assert_true(out.flags & TVO_RELPOSE_FLAG_LOW_PARALLAX);
@@ -391,20 +400,24 @@ static void test_sideways_baseline(void **state)
         }
         tvo_relpose out;
         cfg.seed = (uint64_t)trial;
-        assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &out, NULL, g_scratch, sizeof g_scratch),
+        assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &out, NULL, g_scratch,
+                                              sizeof g_scratch),
                          TVO_OK);
         below += out.parallax_deg < cfg.min_parallax_deg;
         double re = tvo_la_rot_dist(out.R, sc.R) * DEG, te = t_err_deg(out.t, sc.t);
         terr[trial] = te;
         if (trial < 3 || (out.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY) || re > 0.2 || te > 5.0)
-            fprintf(stderr, "sideways trial %d: parallax %.3f deg, inliers %d, flags %d, rot %.3f deg, t %.2f deg\n",
+            fprintf(stderr,
+                    "sideways trial %d: parallax %.3f deg, inliers %d, flags %d, rot %.3f deg, t %.2f deg\n",
                     trial, out.parallax_deg, out.inliers, out.flags, re, te);
         assert_false(out.flags & TVO_RELPOSE_FLAG_ROTATION_ONLY);
         assert_true(re <= 0.2);
     }
     qsort(terr, 20, sizeof(double), cmp_double);
-    fprintf(stderr, "sideways baseline: median parallax below min_parallax_deg in %d of 20 trials; translation "
-            "direction error median %.2f deg, max %.2f deg\n", below, terr[10], terr[19]);
+    fprintf(stderr,
+            "sideways baseline: median parallax below min_parallax_deg in %d of 20 trials; translation "
+            "direction error median %.2f deg, max %.2f deg\n",
+            below, terr[10], terr[19]);
     /* an 11 cm baseline at 3-8 m leaves the direction's forward component weakly determined (the
      * rotation-translation ambiguity of a narrow baseline): bound the median, not every trial */
     assert_true(terr[10] <= 5.0);
@@ -425,7 +438,8 @@ static void test_planar_scene(void **state)
             make_scene(&sc, 300 + trial, 300, 15.0, 1.0, 0.5, 0.2, kind);
             cfg.seed = (uint64_t)trial;
             assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &out, NULL, g_scratch,
-                                                  sizeof g_scratch), TVO_OK);
+                                                  sizeof g_scratch),
+                             TVO_OK);
             double re = tvo_la_rot_dist(out.R, sc.R) * DEG, te = t_err_deg(out.t, sc.t);
             int correct = re < 0.5 && te < 3.0;
             if (out.flags & TVO_RELPOSE_FLAG_HOMOGRAPHY)
@@ -439,7 +453,8 @@ static void test_planar_scene(void **state)
                 /* ambiguous: low confidence too, the twin differs, and one of the two is the truth */
                 double re2 = tvo_la_rot_dist(out.R_alt, sc.R) * DEG, te2 = t_err_deg(out.t_alt, sc.t);
                 assert_true(out.flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE);
-                assert_true(tvo_la_rot_dist(out.R, out.R_alt) * DEG > 0.5 || t_err_deg(out.t, out.t_alt) > 2.0);
+                assert_true(tvo_la_rot_dist(out.R, out.R_alt) * DEG > 0.5 ||
+                            t_err_deg(out.t, out.t_alt) > 2.0);
                 ++amb;
                 either += correct || (re2 < 0.5 && te2 < 3.0);
             } else {
@@ -447,8 +462,10 @@ static void test_planar_scene(void **state)
                 assert_memory_equal(out.t, out.t_alt, sizeof out.t);
             }
         }
-        fprintf(stderr, "planar kind %d: %d/%d correct, homography chosen %d, low-confidence %d, ambiguous %d "
-                "(truth among the twins: %d)\n", kind, ok, trials, h_flag, flagged, amb, either);
+        fprintf(stderr,
+                "planar kind %d: %d/%d correct, homography chosen %d, low-confidence %d, ambiguous %d "
+                "(truth among the twins: %d)\n",
+                kind, ok, trials, h_flag, flagged, amb, either);
         assert_true(either >= amb * 8 / 10);
         assert_true(h_flag >= trials * 8 / 10);
         if (kind == 2) /* sideways motion is not ambiguous: all correct */
@@ -464,8 +481,10 @@ static void test_deterministic(void **state)
     tvo_relpose_config cfg;
     tvo_relpose_config_default(&cfg);
     make_scene(&sc, 42, 300, 20.0, 1.0, 0.5, 0.3, 0);
-    assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &a, NULL, g_scratch, sizeof g_scratch), TVO_OK);
-    assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &b, NULL, g_scratch, sizeof g_scratch), TVO_OK);
+    assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &a, NULL, g_scratch, sizeof g_scratch),
+                     TVO_OK);
+    assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &b, NULL, g_scratch, sizeof g_scratch),
+                     TVO_OK);
     assert_memory_equal(&a, &b, sizeof a);
     assert_true(a.iterations >= 1 && a.iterations <= cfg.max_iters);
 }
@@ -490,7 +509,8 @@ static void test_bad_input(void **state)
     assert_int_equal(out.R[0], 1.0);
     assert_int_equal(out.flags, TVO_RELPOSE_FLAG_LOW_CONFIDENCE);
     assert_int_equal(tvo_relpose_estimate(&cfg, sc.x1, sc.x2, sc.n, &out, mask, sb,
-                                          tvo_relpose_scratch_size(sc.n) - 1), TVO_ERR_NO_MEMORY);
+                                          tvo_relpose_scratch_size(sc.n) - 1),
+                     TVO_ERR_NO_MEMORY);
     assert_true(tvo_relpose_scratch_size(INT32_MAX) > tvo_relpose_scratch_size(1000));
     assert_true(tvo_relpose_scratch_size(-1) > 0);
     cfg.method = TVO_RELPOSE_8PT;
@@ -546,8 +566,8 @@ static void test_bad_input(void **state)
     assert_int_equal(tvo_relpose_estimate(NULL, other, line, 20, &out, mask, sb, ss), TVO_ERR_DEGENERATE);
     /* minimal-solver bad input */
     double E[10][9], a[5][2] = {{0}}, b[5][2] = {{0}};
-    assert_int_equal(tvo_essential_5pt(NULL, (const double (*)[2])b, E), 0);
-    assert_int_equal(tvo_essential_5pt((const double (*)[2])a, (const double (*)[2])b, E), 0);
+    assert_int_equal(tvo_essential_5pt(NULL, (const double(*)[2])b, E), 0);
+    assert_int_equal(tvo_essential_5pt((const double(*)[2])a, (const double(*)[2])b, E), 0);
     assert_int_equal(tvo_essential_8pt(NULL, NULL, 8, E[0]), 0);
 }
 
@@ -563,8 +583,8 @@ static void test_eightpt_paths(void **state)
         make_scene(&sc, 7000 + seed, 9, 20.0, 1.0, 0.0, 0.0, 0);
         double a[9][2], b[9][2], E8[9], E9[9], Et[9], S[9];
         scene_arrays(&sc, 9, a, b);
-        assert_int_equal(tvo_essential_8pt((const double (*)[2])a, (const double (*)[2])b, 8, E8), 1);
-        assert_int_equal(tvo_essential_8pt((const double (*)[2])a, (const double (*)[2])b, 9, E9), 1);
+        assert_int_equal(tvo_essential_8pt((const double(*)[2])a, (const double(*)[2])b, 8, E8), 1);
+        assert_int_equal(tvo_essential_8pt((const double(*)[2])a, (const double(*)[2])b, 9, E9), 1);
         tvo_la_skew(sc.t, S);
         tvo_la_mat3_mul(S, sc.R, Et);
         double n2 = 0.0;
@@ -589,7 +609,7 @@ static void test_eightpt_paths(void **state)
         scene pl;
         make_scene(&pl, 9000 + seed, 8, 20.0, 1.0, 0.0, 0.0, 1);
         scene_arrays(&pl, 8, a, b);
-        assert_int_equal(tvo_essential_8pt((const double (*)[2])a, (const double (*)[2])b, 8, E8), 0);
+        assert_int_equal(tvo_essential_8pt((const double(*)[2])a, (const double(*)[2])b, 8, E8), 0);
     }
     assert_int_equal(checked, 200);
 }
@@ -637,7 +657,6 @@ static void test_nasty_input(void **state)
     }
 }
 
-
 /* tvo_la_select_kth (the median of relpose's parallax / Cauchy scale and of the VO's relative scale)
  * against a sorted copy: every k of random arrays of 1..200 values, with many duplicates, sorted and
  * reversed inputs */
@@ -651,8 +670,10 @@ static void test_select_kth(void **state)
         const int kind = trial % 4;
         for (int32_t i = 0; i < n; ++i) {
             const double r = (double)(tvo_test_rand(&s) % 1000u) - 500.0;
-            a[i] = kind == 0 ? r : kind == 1 ? (double)(tvo_test_rand(&s) % 3u) /* duplicates */
-                 : kind == 2 ? (double)i : (double)(n - i);
+            a[i] = kind == 0    ? r
+                    : kind == 1 ? (double)(tvo_test_rand(&s) % 3u) /* duplicates */
+                    : kind == 2 ? (double)i
+                                : (double)(n - i);
         }
         memcpy(sorted, a, sizeof(double) * (size_t)n);
         qsort(sorted, (size_t)n, sizeof(double), cmp_double);
@@ -761,21 +782,21 @@ static void test_linalg(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_linalg),
-        cmocka_unit_test(test_poly_roots_degree10),
-        cmocka_unit_test(test_select_kth),
-        cmocka_unit_test(test_fivept_noise_free),
-        cmocka_unit_test(test_fivept_bits),
-        cmocka_unit_test(test_relpose_bits),
-        cmocka_unit_test(test_pipeline_noise_free),
-        cmocka_unit_test(test_pipeline_noise_outliers),
-        cmocka_unit_test(test_pure_rotation),
-        cmocka_unit_test(test_sideways_baseline),
-        cmocka_unit_test(test_planar_scene),
-        cmocka_unit_test(test_eightpt_paths),
-        cmocka_unit_test(test_deterministic),
-        cmocka_unit_test(test_bad_input),
-        cmocka_unit_test(test_nasty_input),
+            cmocka_unit_test(test_linalg),
+            cmocka_unit_test(test_poly_roots_degree10),
+            cmocka_unit_test(test_select_kth),
+            cmocka_unit_test(test_fivept_noise_free),
+            cmocka_unit_test(test_fivept_bits),
+            cmocka_unit_test(test_relpose_bits),
+            cmocka_unit_test(test_pipeline_noise_free),
+            cmocka_unit_test(test_pipeline_noise_outliers),
+            cmocka_unit_test(test_pure_rotation),
+            cmocka_unit_test(test_sideways_baseline),
+            cmocka_unit_test(test_planar_scene),
+            cmocka_unit_test(test_eightpt_paths),
+            cmocka_unit_test(test_deterministic),
+            cmocka_unit_test(test_bad_input),
+            cmocka_unit_test(test_nasty_input),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

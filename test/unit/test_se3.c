@@ -171,7 +171,8 @@ static void check_rotvec_roundtrip(const double v[3], double tol_abs)
     assert_true(mat_diff(R, R2, 9) < 1e-13);
     if (th < PI - 1e-6) { /* unique below pi */
         if (mat_diff(v, w, 3) >= tol_abs)
-            fprintf(stderr, "rotvec (%.17g %.17g %.17g) -> (%.17g %.17g %.17g)\n", v[0], v[1], v[2], w[0], w[1], w[2]);
+            fprintf(stderr, "rotvec (%.17g %.17g %.17g) -> (%.17g %.17g %.17g)\n", v[0], v[1], v[2], w[0],
+                    w[1], w[2]);
         assert_true(mat_diff(v, w, 3) < tol_abs);
     } else { /* near/at pi: v or -v (same rotation when |v| = pi) */
         double wn[3] = {-w[0], -w[1], -w[2]};
@@ -206,11 +207,21 @@ static void test_rotvec(void **state)
         if (n < 0.05)
             continue;
         switch (k % 5) {
-        case 0: th = 1e-12 * (1 + urand(&s)); break;  /* tiny */
-        case 1: th = 1e-7 * (1 + urand(&s)); break;   /* around the series switch */
-        case 2: th = PI - 1e-9; break;                /* near pi */
-        case 3: th = PI; break;                       /* exactly pi */
-        default: th = PI * 0.5 * (1 + urand(&s)); break;
+        case 0:
+            th = 1e-12 * (1 + urand(&s));
+            break; /* tiny */
+        case 1:
+            th = 1e-7 * (1 + urand(&s));
+            break; /* around the series switch */
+        case 2:
+            th = PI - 1e-9;
+            break; /* near pi */
+        case 3:
+            th = PI;
+            break; /* exactly pi */
+        default:
+            th = PI * 0.5 * (1 + urand(&s));
+            break;
         }
         for (i = 0; i < 3; ++i)
             v[i] = ax[i] / n * th;
@@ -336,15 +347,15 @@ static void test_body_to_camera(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_identity_inverse_compose),
-        cmocka_unit_test(test_matrix_roundtrip),
-        cmocka_unit_test(test_quat),
-        cmocka_unit_test(test_quat_degenerate),
-        cmocka_unit_test(test_rotvec),
-        cmocka_unit_test(test_orthonormalize),
-        cmocka_unit_test(test_finite),
-        cmocka_unit_test(test_angles),
-        cmocka_unit_test(test_body_to_camera),
+            cmocka_unit_test(test_identity_inverse_compose),
+            cmocka_unit_test(test_matrix_roundtrip),
+            cmocka_unit_test(test_quat),
+            cmocka_unit_test(test_quat_degenerate),
+            cmocka_unit_test(test_rotvec),
+            cmocka_unit_test(test_orthonormalize),
+            cmocka_unit_test(test_finite),
+            cmocka_unit_test(test_angles),
+            cmocka_unit_test(test_body_to_camera),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

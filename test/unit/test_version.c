@@ -21,7 +21,8 @@ static void test_runtime_matches_header(void **state)
     char buf[32];
     snprintf(buf, sizeof buf, "%d.%d.%d", TVO_VERSION_MAJOR, TVO_VERSION_MINOR, TVO_VERSION_PATCH);
     assert_string_equal(buf, TVO_VERSION_STRING);
-    assert_int_equal(TVO_VERSION_NUMBER, TVO_VERSION_MAJOR * 10000L + TVO_VERSION_MINOR * 100L + TVO_VERSION_PATCH);
+    assert_int_equal(TVO_VERSION_NUMBER,
+                     TVO_VERSION_MAJOR * 10000L + TVO_VERSION_MINOR * 100L + TVO_VERSION_PATCH);
     assert_true(TVO_VERSION_MINOR < 100 && TVO_VERSION_PATCH < 100);
 }
 
@@ -31,7 +32,8 @@ static void test_matches_project_version(void **state)
     (void)state;
     const char *src = getenv("TVO_SOURCE_DIR");
     if (src == NULL) {
-        fprintf(stderr, "test_version: TVO_SOURCE_DIR not set (run through ctest): project version not checked\n");
+        fprintf(stderr,
+                "test_version: TVO_SOURCE_DIR not set (run through ctest): project version not checked\n");
         skip();
     }
     char path[4096];
@@ -57,8 +59,8 @@ static void test_matches_project_version(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_runtime_matches_header),
-        cmocka_unit_test(test_matches_project_version),
+            cmocka_unit_test(test_runtime_matches_header),
+            cmocka_unit_test(test_matches_project_version),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

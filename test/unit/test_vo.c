@@ -84,7 +84,7 @@ static double rot_err_deg(const tvo_pose *est, const tvo_pose *gt)
 static tvo_pose motion(int k, const double dir[3], double step, double yaw_deg)
 {
     tvo_pose T = tvo_pose_identity();
-    const double v[3] = { 0.0, yaw_deg * M_PI / 180.0 * k, 0.02 * sin(0.3 * k) };
+    const double v[3] = {0.0, yaw_deg * M_PI / 180.0 * k, 0.02 * sin(0.3 * k)};
     tvo_rotvec_to_rot(v, T.R);
     for (int i = 0; i < 3; ++i)
         T.t[i] = dir[i] * step * k;
@@ -130,13 +130,13 @@ static void run_sequence(fixture *f, const double dir[3], double step, double ya
 
 static void test_translating_camera(void **state)
 {
-    const double dir[3] = { 0.8, 0.1, 0.6 };
+    const double dir[3] = {0.8, 0.1, 0.6};
     run_sequence(*state, dir, 0.10, 0.3, 12, 1);
 }
 
 static void test_pure_rotation_reports_rotation_only(void **state)
 {
-    const double dir[3] = { 0.0, 0.0, 0.0 };
+    const double dir[3] = {0.0, 0.0, 0.0};
     run_sequence(*state, dir, 0.0, 0.8, 10, 0);
 }
 
@@ -145,8 +145,8 @@ static void test_pure_rotation_reports_rotation_only(void **state)
  * AMBIGUOUS and the VO picks the twin that continues the recent motion; without one, the epipolar
  * model's choice (still flagged: in a scene that is one plane and nothing else, two views cannot tell).
  * Never a lost frame (that integrated an identity rotation), never an unflagged wrong twin. */
-static void run_plane(fixture *f, const double dir[3], double step, int frames, int *ok_frames, int *ambiguous,
-                      int *wrong, double *max_rot_err)
+static void run_plane(fixture *f, const double dir[3], double step, int frames, int *ok_frames,
+                      int *ambiguous, int *wrong, double *max_rot_err)
 {
     tvo_pose prev = tvo_pose_identity();
     *ok_frames = *ambiguous = *wrong = 0;
@@ -185,10 +185,12 @@ static void test_single_plane_twins(void **state)
     double rmax;
     /* mostly sideways: some frames ambiguous, resolved by the motion of the frames before them
        (29 of 29 frames with a translation, 8 ambiguous, 0.02 deg max rotation error when written) */
-    const double side[3] = { 1.0, 0.2, 0.3 };
+    const double side[3] = {1.0, 0.2, 0.3};
     run_plane(*state, side, 0.04, 30, &ok, &amb, &wrong, &rmax);
-    fprintf(stderr, "plane, sideways: %d of 29 frames with a translation (%d wrong), %d ambiguous, max rot err "
-            "%.3f deg\n", ok, wrong, amb, rmax);
+    fprintf(stderr,
+            "plane, sideways: %d of 29 frames with a translation (%d wrong), %d ambiguous, max rot err "
+            "%.3f deg\n",
+            ok, wrong, amb, rmax);
     assert_true(amb > 0);
     assert_true(ok == 29);
     assert_int_equal(wrong, 0);
@@ -202,10 +204,12 @@ static void test_single_plane_unresolved(void **state)
     /* oblique towards the wall: every frame ambiguous from the start, no motion to resolve them with:
        the frames keep their rotation and a flagged translation (when written: 29 of 29 frames with a
        translation, 29 ambiguous; which twin comes out is the epipolar model's choice) */
-    const double oblique[3] = { 0.6, 0.0, 0.8 };
+    const double oblique[3] = {0.6, 0.0, 0.8};
     run_plane(*state, oblique, 0.04, 30, &ok, &amb, &wrong, &rmax);
-    fprintf(stderr, "plane, oblique: %d of 29 frames with a translation (%d wrong, all flagged), %d ambiguous, "
-            "max rot err %.3f deg\n", ok, wrong, amb, rmax);
+    fprintf(stderr,
+            "plane, oblique: %d of 29 frames with a translation (%d wrong, all flagged), %d ambiguous, "
+            "max rot err %.3f deg\n",
+            ok, wrong, amb, rmax);
     assert_true(amb >= 25);
     assert_true(rmax < 1.5);
 }
@@ -214,15 +218,15 @@ static void test_single_plane_unresolved(void **state)
  * room; rel_scale must give |t_k| / |t_(k-1)| within a few percent on the frames where it is available,
  * be unavailable (0, never NaN) on the first two frames and after a reset, and after rotation-only
  * frames. Steps 4-12 cm at 20-60 px of flow keep most tracks inside the 320x240 view. */
-static const double scale_steps[] = { 0.08, 0.05, 0.10, 0.07, 0.12, 0.06, 0.09, 0.045, 0.08, 0.11,
-                                      0.055, 0.09, 0.07, 0.10, 0.06, 0.08 };
+static const double scale_steps[] = {0.08, 0.05, 0.10,  0.07, 0.12, 0.06, 0.09, 0.045,
+                                     0.08, 0.11, 0.055, 0.09, 0.07, 0.10, 0.06, 0.08};
 #define SCALE_FRAMES ((int)(sizeof(scale_steps) / sizeof(scale_steps[0])) + 1)
 
 static tvo_pose scale_pose(int k, const double dir[3])
 {
     tvo_pose T = tvo_pose_identity();
     double s = 0.0;
-    const double v[3] = { 0.01 * sin(0.5 * k), 0.004 * k, 0.0 };
+    const double v[3] = {0.01 * sin(0.5 * k), 0.004 * k, 0.0};
     for (int j = 0; j < k; ++j)
         s += scale_steps[j];
     tvo_rotvec_to_rot(v, T.R);
@@ -234,7 +238,7 @@ static tvo_pose scale_pose(int k, const double dir[3])
 static void test_relative_scale(void **state)
 {
     fixture *f = *state;
-    const double dir[3] = { 0.6, 0.1, -0.79 }; /* sideways and backwards: the far wall stays in view */
+    const double dir[3] = {0.6, 0.1, -0.79}; /* sideways and backwards: the far wall stays in view */
     double worst = 0.0, prop = scale_steps[0], prop_worst = 0.0;
     int avail = 0;
     for (int k = 0; k < SCALE_FRAMES; ++k) {
@@ -249,13 +253,14 @@ static void test_relative_scale(void **state)
             continue;
         }
         if (getenv("TVO_TEST_VERBOSE") != NULL)
-            fprintf(stderr, "frame %2d: state %d tracked %d inliers %d rel_scale %g points %d\n", k, (int)res.state,
-                    (int)res.tracked, (int)res.inliers, res.rel_scale, (int)res.rel_scale_points);
+            fprintf(stderr, "frame %2d: state %d tracked %d inliers %d rel_scale %g points %d\n", k,
+                    (int)res.state, (int)res.tracked, (int)res.inliers, res.rel_scale,
+                    (int)res.rel_scale_points);
         if (res.rel_scale != TVO_VO_REL_SCALE_NONE) {
             const double truth = scale_steps[k - 1] / scale_steps[k - 2];
             const double e = fabs(res.rel_scale / truth - 1.0);
-            fprintf(stderr, "frame %2d: rel_scale %.4f truth %.4f (%+.2f %%) from %d tracks\n", k, res.rel_scale,
-                    truth, 100.0 * (res.rel_scale / truth - 1.0), (int)res.rel_scale_points);
+            fprintf(stderr, "frame %2d: rel_scale %.4f truth %.4f (%+.2f %%) from %d tracks\n", k,
+                    res.rel_scale, truth, 100.0 * (res.rel_scale / truth - 1.0), (int)res.rel_scale_points);
             assert_int_equal(res.state, TVO_VO_OK);
             assert_true(res.rel_scale_points >= f->cfg.min_scale_points);
             worst = e > worst ? e : worst;
@@ -270,8 +275,10 @@ static void test_relative_scale(void **state)
             prop = scale_steps[k - 1]; /* (not reached when every frame has one) */
         }
     }
-    fprintf(stderr, "relative scale: %d of %d frames, worst error %.2f %%; propagated from the first step: worst "
-            "%.2f %%\n", avail, SCALE_FRAMES - 2, 100.0 * worst, 100.0 * prop_worst);
+    fprintf(stderr,
+            "relative scale: %d of %d frames, worst error %.2f %%; propagated from the first step: worst "
+            "%.2f %%\n",
+            avail, SCALE_FRAMES - 2, 100.0 * worst, 100.0 * prop_worst);
     assert_true(avail >= (SCALE_FRAMES - 2) * 8 / 10);
     assert_true(worst < 0.06);
     assert_true(prop_worst < 0.06);
@@ -295,7 +302,7 @@ static void test_relative_scale(void **state)
 static void test_relative_scale_rotation_only(void **state)
 {
     fixture *f = *state;
-    const double dir[3] = { 0.0, 0.0, 0.0 };
+    const double dir[3] = {0.0, 0.0, 0.0};
     for (int k = 0; k < 8; ++k) {
         tvo_pose T = motion(k, dir, 0.0, 0.8);
         tvo_vo_result res;
@@ -332,7 +339,7 @@ static void run_chain(int keyframe, int frames, double step, int noise, double *
     size_t need;
     tvo_pose prev = tvo_pose_identity(), T0 = tvo_pose_identity();
     tvo_traj traj;
-    const double dir[3] = { 0.5, 0.05, 0.86 };
+    const double dir[3] = {0.5, 0.05, 0.86};
     uint64_t seed = 7;
     tvo_vo_config_default(&cfg, &cam);
     cfg.keyframe = keyframe;
@@ -372,7 +379,9 @@ static void run_chain(int keyframe, int frames, double step, int noise, double *
             assert_int_equal(tvo_traj_step(&traj, &res.T_prev_cur, len), TVO_OK);
             assert_true(rot_err_deg(&res.T_prev_cur, &gt) < 0.2);
             if (getenv("TVO_TEST_VERBOSE") != NULL)
-                fprintf(stderr, "kf %d frame %2d: state %d age %d par %.3f step rot err %.4f chained %.4f dir %.2f inl %d\n",
+                fprintf(stderr,
+                        "kf %d frame %2d: state %d age %d par %.3f step rot err %.4f chained %.4f dir %.2f "
+                        "inl %d\n",
                         keyframe, k, (int)res.state, (int)res.keyframe_age, res.parallax_deg,
                         rot_err_deg(&res.T_prev_cur, &gt), rot_err_deg(&traj.T_w_c, &T),
                         res.state == TVO_VO_OK ? angle_between(res.T_prev_cur.t, gt.t) * 180.0 / M_PI : 0.0,
@@ -388,8 +397,10 @@ static void run_chain(int keyframe, int frames, double step, int noise, double *
 static void test_keyframe_rotation(void **state)
 {
     /* step (m), noise (grey levels), frames; the end errors noted above are printed */
-    static const struct { double step; int noise, frames; } runs[] = {
-        { 0.03, 0, 40 }, { 0.0, 0, 30 }, { 0.02, 8, 60 } };
+    static const struct {
+        double step;
+        int noise, frames;
+    } runs[] = {{0.03, 0, 40}, {0.0, 0, 30}, {0.02, 8, 60}};
     (void)state;
     for (size_t r = 0; r < sizeof(runs) / sizeof(runs[0]); ++r) {
         double off_err, on_err, off_dir, on_dir;
@@ -397,7 +408,8 @@ static void test_keyframe_rotation(void **state)
         const int frames = runs[r].frames;
         run_chain(0, frames, runs[r].step, runs[r].noise, &off_err, &off_dir, &off_kf);
         run_chain(1, frames, runs[r].step, runs[r].noise, &on_err, &on_dir, &on_kf);
-        fprintf(stderr, "keyframe rotation, step %.2f m, noise %d: rotation error after %d frames %.4f deg off, "
+        fprintf(stderr,
+                "keyframe rotation, step %.2f m, noise %d: rotation error after %d frames %.4f deg off, "
                 "%.4f deg on (%d frames with the keyframe rotation); max direction error %.2f / %.2f deg\n",
                 runs[r].step, runs[r].noise, frames, off_err, on_err, on_kf, off_dir, on_dir);
         assert_int_equal(off_kf, 0);
@@ -421,7 +433,7 @@ static void run_fast_yaw(int predict, int frames, int *posed, double *max_err)
     tvo_vo *vo;
     void *mem;
     uint8_t *px = malloc(W * H);
-    const double dir[3] = { 0.3, 0.0, 1.0 };
+    const double dir[3] = {0.3, 0.0, 1.0};
     tvo_pose prev = tvo_pose_identity();
     assert_non_null(px);
     tvo_vo_config_default(&cfg, &cam);
@@ -459,8 +471,10 @@ static void test_track_prediction(void **state)
     (void)state;
     run_fast_yaw(1, 14, &on, &on_err);
     run_fast_yaw(0, 14, &off, &off_err);
-    fprintf(stderr, "fast yaw, 12 frames after the first two: %d with a pose (max rotation error %.3f deg) with "
-            "the prediction, %d (%.3f deg) without\n", on, on_err, off, off_err);
+    fprintf(stderr,
+            "fast yaw, 12 frames after the first two: %d with a pose (max rotation error %.3f deg) with "
+            "the prediction, %d (%.3f deg) without\n",
+            on, on_err, off, off_err);
     assert_int_equal(on, 12);
     assert_true(on_err < 0.5);
     assert_true(off < 6);
@@ -691,17 +705,17 @@ static void test_bad_input(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test_setup_teardown(test_translating_camera, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_pure_rotation_reports_rotation_only, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_single_plane_twins, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_single_plane_unresolved, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_relative_scale, setup, teardown),
-        cmocka_unit_test_setup_teardown(test_relative_scale_rotation_only, setup, teardown),
-        cmocka_unit_test(test_keyframe_rotation),
-        cmocka_unit_test(test_track_prediction),
-        cmocka_unit_test(test_scale_filter),
-        cmocka_unit_test(test_refine_step_length),
-        cmocka_unit_test_setup_teardown(test_bad_input, setup, teardown),
+            cmocka_unit_test_setup_teardown(test_translating_camera, setup, teardown),
+            cmocka_unit_test_setup_teardown(test_pure_rotation_reports_rotation_only, setup, teardown),
+            cmocka_unit_test_setup_teardown(test_single_plane_twins, setup, teardown),
+            cmocka_unit_test_setup_teardown(test_single_plane_unresolved, setup, teardown),
+            cmocka_unit_test_setup_teardown(test_relative_scale, setup, teardown),
+            cmocka_unit_test_setup_teardown(test_relative_scale_rotation_only, setup, teardown),
+            cmocka_unit_test(test_keyframe_rotation),
+            cmocka_unit_test(test_track_prediction),
+            cmocka_unit_test(test_scale_filter),
+            cmocka_unit_test(test_refine_step_length),
+            cmocka_unit_test_setup_teardown(test_bad_input, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

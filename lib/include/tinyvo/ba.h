@@ -102,13 +102,13 @@ typedef struct tvo_ba_obs {
 typedef struct tvo_ba_config {
     int32_t max_iterations; /* LM iterations cap (accepted + rejected steps), 1..TVO_BA_MAX_ITERATIONS; default 10 */
     double huber;           /* Huber width in normalised units, finite > 0; default 2.0 / 458 */
-    double lambda_init;     /* initial LM damping (relative to the diagonal), finite in (0, 1e12]; default 1e-3 */
-    double min_depth;       /* an observation whose point has Z_c below this is left out of the step
+    double lambda_init; /* initial LM damping (relative to the diagonal), finite in (0, 1e12]; default 1e-3 */
+    double min_depth;   /* an observation whose point has Z_c below this is left out of the step
                                (counted in obs_skipped); finite > 0; default 1e-3 (world units) */
-    int32_t max_poses;      /* capacities the scratch is sized for: 1..TVO_BA_MAX_POSES, */
-    int32_t max_points;     /* 1..TVO_BA_MAX_POINTS, */
-    int32_t max_obs;        /* 1..TVO_BA_MAX_OBS; defaults 10, 1024, 4096 */
-    double max_point_cond;  /* (added) condition estimate above which a point is held fixed, finite >= 1;
+    int32_t max_poses;  /* capacities the scratch is sized for: 1..TVO_BA_MAX_POSES, */
+    int32_t max_points; /* 1..TVO_BA_MAX_POINTS, */
+    int32_t max_obs;    /* 1..TVO_BA_MAX_OBS; defaults 10, 1024, 4096 */
+    double max_point_cond; /* (added) condition estimate above which a point is held fixed, finite >= 1;
                                default 1e6 (see "Held points" above) */
 } tvo_ba_config;
 
@@ -116,37 +116,37 @@ typedef struct tvo_ba_config {
 void tvo_ba_config_default(tvo_ba_config *cfg);
 
 typedef struct tvo_ba_problem {
-    int32_t n_poses;           /* 1..cfg->max_poses */
-    tvo_pose *T_c_w;           /* in/out [n_poses]: camera poses (world -> camera); R must be a rotation */
-    const uint8_t *pose_fixed; /* [n_poses], nonzero = held constant (the gauge: the caller fixes at least 1,
+    int32_t n_poses;            /* 1..cfg->max_poses */
+    tvo_pose *T_c_w;            /* in/out [n_poses]: camera poses (world -> camera); R must be a rotation */
+    const uint8_t *pose_fixed;  /* [n_poses], nonzero = held constant (the gauge: the caller fixes at least 1,
                                   normally the 2 oldest for a monocular window to hold the scale) */
-    int32_t n_points;          /* 0..cfg->max_points */
-    double (*X)[3];            /* in/out [n_points]: world points */
+    int32_t n_points;           /* 0..cfg->max_points */
+    double (*X)[3];             /* in/out [n_points]: world points */
     const uint8_t *point_fixed; /* [n_points], nonzero = held constant; or NULL (all free) */
-    int32_t n_obs;             /* 0..cfg->max_obs */
-    const tvo_ba_obs *obs;     /* [n_obs]; the order does not matter (results do not depend on it
+    int32_t n_obs;              /* 0..cfg->max_obs */
+    const tvo_ba_obs *obs;      /* [n_obs]; the order does not matter (results do not depend on it
                                   except for rounding) */
 } tvo_ba_problem;
 
 enum {
-    TVO_BA_FLAG_COST_ROSE = 1,      /* no step lowered the cost: the state is unchanged (bit-identical) */
-    TVO_BA_FLAG_SINGULAR = 2,       /* the undamped reduced system at the start, or a damped one, was not
+    TVO_BA_FLAG_COST_ROSE = 1,     /* no step lowered the cost: the state is unchanged (bit-identical) */
+    TVO_BA_FLAG_SINGULAR = 2,      /* the undamped reduced system at the start, or a damped one, was not
                                        positive definite, or a free pose had no usable observation */
-    TVO_BA_FLAG_ITER_CAP = 4,       /* stopped by max_iterations before converging */
-    TVO_BA_FLAG_POINTS_SKIPPED = 8  /* some free points had < 2 usable observations or an ill-conditioned
+    TVO_BA_FLAG_ITER_CAP = 4,      /* stopped by max_iterations before converging */
+    TVO_BA_FLAG_POINTS_SKIPPED = 8 /* some free points had < 2 usable observations or an ill-conditioned
                                        3x3 block and were held fixed (points_skipped says how many) */
 };
 
 typedef struct tvo_ba_report {
-    int32_t iterations;      /* steps tried (accepted + rejected), <= max_iterations */
-    int32_t accepted;        /* steps accepted */
-    int32_t flags;           /* TVO_BA_FLAG_* */
-    int32_t points_skipped;  /* free points held fixed at the last linearisation */
-    double cost_initial;     /* robust cost of the input state over the usable observations */
-    double cost_final;       /* robust cost of the output state over the same observations (<= cost_initial) */
-    int32_t obs_skipped;     /* (added) observations left out (not usable at the input state: non-finite
+    int32_t iterations;     /* steps tried (accepted + rejected), <= max_iterations */
+    int32_t accepted;       /* steps accepted */
+    int32_t flags;          /* TVO_BA_FLAG_* */
+    int32_t points_skipped; /* free points held fixed at the last linearisation */
+    double cost_initial;    /* robust cost of the input state over the usable observations */
+    double cost_final;      /* robust cost of the output state over the same observations (<= cost_initial) */
+    int32_t obs_skipped;    /* (added) observations left out (not usable at the input state: non-finite
                                 x, y or Z_c < min_depth) */
-    int32_t poses_free;      /* (added) free poses that were optimised at the last linearisation */
+    int32_t poses_free;     /* (added) free poses that were optimised at the last linearisation */
 } tvo_ba_report;
 
 /* Bytes of scratch tvo_ba_solve() needs for problems within cfg's capacities; 0 for an invalid (or

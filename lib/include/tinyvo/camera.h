@@ -55,10 +55,10 @@ typedef enum tvo_distortion {
 } tvo_distortion;
 
 typedef struct tvo_camera {
-    int32_t width, height;        /* pixels, 1 .. TVO_MAX_IMAGE_DIM */
-    double fx, fy, cx, cy;        /* pixels; fx, fy > 0 */
+    int32_t width, height; /* pixels, 1 .. TVO_MAX_IMAGE_DIM */
+    double fx, fy, cx, cy; /* pixels; fx, fy > 0 */
     tvo_distortion model;
-    double k[5];                  /* RADTAN: k1 k2 p1 p2 k3 (OpenCV order; k3 = 0 when 4 given);
+    double k[5]; /* RADTAN: k1 k2 p1 p2 k3 (OpenCV order; k3 = 0 when 4 given);
                                      EQUIDISTANT: k1 k2 k3 k4 (k[4] unused); NONE: unused */
 } tvo_camera;
 

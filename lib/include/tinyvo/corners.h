@@ -20,8 +20,8 @@ extern "C" {
 #endif
 
 typedef struct tvo_corner {
-    float x, y;   /* pixels, level-0 coordinates (integers for FAST corners) */
-    float score;  /* FAST score, or the Harris / Shi-Tomasi response (see tvo_detect_config.score) */
+    float x, y;  /* pixels, level-0 coordinates (integers for FAST corners) */
+    float score; /* FAST score, or the Harris / Shi-Tomasi response (see tvo_detect_config.score) */
 } tvo_corner;
 
 /* ---- FAST-9 ---------------------------------------------------------------------------------------
@@ -48,17 +48,15 @@ size_t tvo_fast_scratch_size(int32_t width);
  * TVO_ERR_ARG (threshold out of range, capacity < 0); TVO_ERR_NO_MEMORY when scratch_size is too small
  * (then *count = 0), or when there are more corners than `capacity`: then out holds the first `capacity`
  * corners in row-major order and *count = capacity. */
-tvo_status tvo_fast9_detect(const tvo_image *img, int32_t threshold, int nonmax,
-                            tvo_corner *out, int32_t capacity, int32_t *count,
-                            void *scratch, size_t scratch_size);
+tvo_status tvo_fast9_detect(const tvo_image *img, int32_t threshold, int nonmax, tvo_corner *out,
+                            int32_t capacity, int32_t *count, void *scratch, size_t scratch_size);
 
 /* The same, restricted to the corners with y_begin <= y < y_end: exactly the corners (and scores, and
  * non-max decisions) that tvo_fast9_detect reports in those rows. Lets callers bound memory by detecting in
  * horizontal bands (tvo_detect does). Rows are clamped to the image; an empty range gives 0 corners.
  * Cost: rows y_begin-4 .. y_end+3 are read. Same statuses as tvo_fast9_detect. */
-tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int nonmax,
-                                 int32_t y_begin, int32_t y_end,
-                                 tvo_corner *out, int32_t capacity, int32_t *count,
+tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int nonmax, int32_t y_begin,
+                                 int32_t y_end, tvo_corner *out, int32_t capacity, int32_t *count,
                                  void *scratch, size_t scratch_size);
 
 /* OpenCV's FAST-9 score (definition above) of pixel (x, y); x, y must be >= 3 inside the image (no check
@@ -68,9 +66,9 @@ int32_t tvo_fast9_score_at(const tvo_image *img, int32_t x, int32_t y);
 
 /* ---- Harris / Shi-Tomasi -------------------------------------------------------------------------- */
 typedef enum tvo_score_kind {
-    TVO_SCORE_FAST = 0,        /* FAST score (integer, see above) */
-    TVO_SCORE_HARRIS = 1,      /* det(M) - k trace(M)^2, as cv::cornerHarris */
-    TVO_SCORE_SHI_TOMASI = 2   /* smaller eigenvalue of M, as cv::cornerMinEigenVal */
+    TVO_SCORE_FAST = 0,      /* FAST score (integer, see above) */
+    TVO_SCORE_HARRIS = 1,    /* det(M) - k trace(M)^2, as cv::cornerHarris */
+    TVO_SCORE_SHI_TOMASI = 2 /* smaller eigenvalue of M, as cv::cornerMinEigenVal */
 } tvo_score_kind;
 
 /* Largest accepted block_size (also the smallest is 1). Keeps the integer sums exact in int32. */
@@ -100,23 +98,23 @@ tvo_status tvo_corner_response(const tvo_image *img, tvo_score_kind kind, int32_
  * (x - block_size/2 - 1 >= 0 and x + (block_size-1-block_size/2) + 1 < width, same for y), where no border
  * reflection happens. Returns 0.0f for a bad view, kind, block_size, non-finite k or a pixel too close to the
  * border. Cost: O(block_size^2). */
-float tvo_corner_score_at(const tvo_image *img, int32_t x, int32_t y, tvo_score_kind kind,
-                          int32_t block_size, float harris_k);
+float tvo_corner_score_at(const tvo_image *img, int32_t x, int32_t y, tvo_score_kind kind, int32_t block_size,
+                          float harris_k);
 
 /* ---- bucketed detector ----------------------------------------------------------------------------- */
 typedef struct tvo_detect_config {
-    int32_t fast_threshold;   /* FAST threshold, [0, 255]; default 20 */
-    tvo_score_kind score;     /* ranking score; default TVO_SCORE_SHI_TOMASI */
-    int32_t block_size;       /* Harris/Shi-Tomasi window, [1, TVO_CORNER_MAX_BLOCK]; default 5 */
-    float harris_k;           /* finite; default 0.04 */
+    int32_t fast_threshold;       /* FAST threshold, [0, 255]; default 20 */
+    tvo_score_kind score;         /* ranking score; default TVO_SCORE_SHI_TOMASI */
+    int32_t block_size;           /* Harris/Shi-Tomasi window, [1, TVO_CORNER_MAX_BLOCK]; default 5 */
+    float harris_k;               /* finite; default 0.04 */
     int32_t grid_cols, grid_rows; /* bucketing grid, each [1, 256]; default 8 x 6 */
-    int32_t max_corners;      /* total new corners wanted, >= 0; default 300 */
-    int32_t max_per_cell;     /* >= 0; 0 = ceil(max_corners / (grid_cols*grid_rows)); default 0 */
-    float min_distance;       /* px between kept corners and from existing points, finite, >= 0;
+    int32_t max_corners;          /* total new corners wanted, >= 0; default 300 */
+    int32_t max_per_cell;         /* >= 0; 0 = ceil(max_corners / (grid_cols*grid_rows)); default 0 */
+    float min_distance;           /* px between kept corners and from existing points, finite, >= 0;
                                  0 disables the check; default 10 */
-    int32_t border;           /* px ignored at the image border, >= 0; default 8. The effective border is
+    int32_t border;               /* px ignored at the image border, >= 0; default 8. The effective border is
                                  at least 3 (FAST) and block_size/2 + 2 (Harris/Shi-Tomasi). */
-    int32_t candidates_per_cell; /* FAST corners kept per cell (the strongest by FAST score) before the
+    int32_t candidates_per_cell;  /* FAST corners kept per cell (the strongest by FAST score) before the
                                     ranking score is computed, [0, 4096]; 0 = 3 * per-cell quota (min 12);
                                     default 0. Bounds the Harris/Shi-Tomasi evaluations. */
 } tvo_detect_config;
@@ -151,10 +149,9 @@ size_t tvo_detect_scratch_size(const tvo_detect_config *cfg, int32_t width, int3
  * TVO_ERR_ARG (bad config, capacity < 0, n_existing < 0); TVO_ERR_SIZE (bad view);
  * TVO_ERR_NO_MEMORY (scratch_size < tvo_detect_scratch_size()). *count is 0 on any error.
  * Cost: one FAST pass plus about grid_cols*grid_rows*candidates_per_cell score evaluations. */
-tvo_status tvo_detect(const tvo_detect_config *cfg, const tvo_image *img,
-                      const tvo_point2f *existing, int32_t n_existing,
-                      tvo_corner *out, int32_t capacity, int32_t *count,
-                      void *scratch, size_t scratch_size);
+tvo_status tvo_detect(const tvo_detect_config *cfg, const tvo_image *img, const tvo_point2f *existing,
+                      int32_t n_existing, tvo_corner *out, int32_t capacity, int32_t *count, void *scratch,
+                      size_t scratch_size);
 
 #ifdef __cplusplus
 }

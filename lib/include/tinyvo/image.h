@@ -19,10 +19,10 @@ extern "C" {
 #define TVO_IMAGE_MAX_STRIDE (INT32_MAX / 4)
 
 typedef struct tvo_image {
-    const int32_t width;   /* pixels */
-    const int32_t height;  /* pixels */
-    const int32_t stride;  /* bytes from one row to the next, >= width */
-    uint8_t *data;         /* first pixel; owned by the caller */
+    const int32_t width;  /* pixels */
+    const int32_t height; /* pixels */
+    const int32_t stride; /* bytes from one row to the next, >= width */
+    uint8_t *data;        /* first pixel; owned by the caller */
 } tvo_image;
 
 /* Make a view. Does not validate: pass the result to tvo_image_check(). */

@@ -55,12 +55,12 @@ typedef struct tvo_lk_config {
     float epsilon;           /* px, stop when the step is at most this long; 0..10, default 0.01 */
     float min_eig_threshold; /* as OpenCV's minEigThreshold (min eigenvalue of G / win_size^2, with
                                 derivatives in units of 32 grey levels per px); >= 0, default 1e-4 */
-    int32_t use_initial_flow;/* nonzero: next_pts holds the initial guess (level-0 px) */
-    int32_t fb_check;        /* nonzero: forward-backward check (doubles the cost) */
-    float fb_max_error;      /* px, > 0, largest accepted forward-backward distance; default 1.0 */
-    int32_t force_portable;  /* nonzero: only the portable C kernels, no SIMD; the results are
+    int32_t use_initial_flow; /* nonzero: next_pts holds the initial guess (level-0 px) */
+    int32_t fb_check;         /* nonzero: forward-backward check (doubles the cost) */
+    float fb_max_error;       /* px, > 0, largest accepted forward-backward distance; default 1.0 */
+    int32_t force_portable;   /* nonzero: only the portable C kernels, no SIMD; the results are
                                 bit-identical either way (all window sums are exact integers); default 0 */
-    int32_t fb_levels;       /* with fb_check: pyramid levels the way back uses, 0..TVO_MAX_PYR_LEVELS;
+    int32_t fb_levels;        /* with fb_check: pyramid levels the way back uses, 0..TVO_MAX_PYR_LEVELS;
                                 0: all of the forward track's (the full check); k > 0: levels k-1..0 only,
                                 starting from the start point (prev_pts, scaled), which costs about k /
                                 (max_level + 1) of a full backward track. A point that drifted fails it

@@ -28,13 +28,17 @@ extern "C" {
 
 /* ---- features: the VO front end fills a float array indexed by these ids -------------------- */
 enum tvo_feature {
-    TVO_FEAT_RX = 0, TVO_FEAT_RY, TVO_FEAT_RZ, /* raw VO relative rotation prev->cur as rotation vector, rad */
-    TVO_FEAT_TX, TVO_FEAT_TY, TVO_FEAT_TZ,     /* raw VO unit translation direction (camera frame of prev) */
-    TVO_FEAT_INLIER_RATIO,                     /* inliers / tracked points, 0..1 */
-    TVO_FEAT_PARALLAX_DEG,                     /* median rotation-compensated parallax, degrees */
-    TVO_FEAT_TRACKS,                           /* tracked points / 1000 */
-    TVO_FEAT_DT,                               /* seconds since previous frame */
-    TVO_FEAT_ROT_ONLY,                         /* 1 if the front end reported rotation-only, else 0 */
+    TVO_FEAT_RX = 0,
+    TVO_FEAT_RY,
+    TVO_FEAT_RZ, /* raw VO relative rotation prev->cur as rotation vector, rad */
+    TVO_FEAT_TX,
+    TVO_FEAT_TY,
+    TVO_FEAT_TZ,           /* raw VO unit translation direction (camera frame of prev) */
+    TVO_FEAT_INLIER_RATIO, /* inliers / tracked points, 0..1 */
+    TVO_FEAT_PARALLAX_DEG, /* median rotation-compensated parallax, degrees */
+    TVO_FEAT_TRACKS,       /* tracked points / 1000 */
+    TVO_FEAT_DT,           /* seconds since previous frame */
+    TVO_FEAT_ROT_ONLY,     /* 1 if the front end reported rotation-only, else 0 */
     TVO_FEAT_COUNT
 };
 /* Identifies the list above. A model whose layout id differs is refused with TVO_ERR_MISMATCH. */
@@ -44,8 +48,8 @@ enum tvo_feature {
  * (rotation vector of R_prev_cur, rad); index 6 (TVO_NN_STEP, tvo_nn_run_all only) = the metric length
  * |t| of the step (metres), which tvo_vo_refine applies to the raw VO unit translation. */
 enum tvo_nn_dof { TVO_NN_TX = 0, TVO_NN_TY, TVO_NN_TZ, TVO_NN_RX, TVO_NN_RY, TVO_NN_RZ, TVO_NN_DOF_COUNT };
-#define TVO_NN_STEP 6                 /* output index of the step length */
-#define TVO_NN_OUT_COUNT 7            /* outputs of tvo_nn_run_all */
+#define TVO_NN_STEP 6      /* output index of the step length */
+#define TVO_NN_OUT_COUNT 7 /* outputs of tvo_nn_run_all */
 
 /* Branch DoF codes of the file (docs/weights-format.md): 0..5 the DoFs above; since version 1.1 also a
  * step-length branch, whose value is |t| in metres (code 6) or ln |t| (code 7; the interpreter returns
@@ -58,21 +62,21 @@ enum tvo_nn_dof { TVO_NN_TX = 0, TVO_NN_TY, TVO_NN_TZ, TVO_NN_RX, TVO_NN_RY, TVO
 #define TVO_NN_LOG_STEP_MAX 8.0f
 
 /* ---- format constants (docs/weights-format.md) ------------------------------------------------ */
-#define TVO_NN_MAGIC 0x4E4E5654u      /* bytes "TVNN" read as a little-endian u32 */
-#define TVO_NN_VERSION_MAJOR 1u       /* a file with another major version is refused */
-#define TVO_NN_VERSION_MINOR 1u       /* files with a higher minor version are accepted; 1: step-length codes */
+#define TVO_NN_MAGIC 0x4E4E5654u /* bytes "TVNN" read as a little-endian u32 */
+#define TVO_NN_VERSION_MAJOR 1u  /* a file with another major version is refused */
+#define TVO_NN_VERSION_MINOR 1u  /* files with a higher minor version are accepted; 1: step-length codes */
 #define TVO_NN_HEADER_SIZE 64u
 #define TVO_NN_BRANCH_ENTRY_SIZE 48u
 #define TVO_NN_INPUT_ENTRY_SIZE 12u
 #define TVO_NN_LAYER_ENTRY_SIZE 64u
-#define TVO_NN_PAYLOAD_ALIGN 16u      /* weight blocks; int32/float arrays are 4-aligned, tables 16 */
+#define TVO_NN_PAYLOAD_ALIGN 16u /* weight blocks; int32/float arrays are 4-aligned, tables 16 */
 
 /* Limits a model must respect (overridable on the compiler command line). */
 #ifndef TVO_NN_MAX_LAYERS
-#define TVO_NN_MAX_LAYERS 8           /* layers per branch */
+#define TVO_NN_MAX_LAYERS 8 /* layers per branch */
 #endif
 #ifndef TVO_NN_MAX_WIDTH
-#define TVO_NN_MAX_WIDTH 4096         /* inputs or outputs of one layer; keeps int32 sums exact */
+#define TVO_NN_MAX_WIDTH 4096 /* inputs or outputs of one layer; keeps int32 sums exact */
 #endif
 #ifndef TVO_NN_MAX_FILE_SIZE
 #define TVO_NN_MAX_FILE_SIZE (64u * 1024u * 1024u)
@@ -82,8 +86,8 @@ enum tvo_nn_dof { TVO_NN_TX = 0, TVO_NN_TY, TVO_NN_TZ, TVO_NN_RX, TVO_NN_RY, TVO
 typedef enum tvo_nn_act {
     TVO_NN_ACT_NONE = 0,
     TVO_NN_ACT_RELU = 1,
-    TVO_NN_ACT_LEAKY_RELU = 2,        /* slope 0.01 (PyTorch default) */
-    TVO_NN_ACT_ELU = 3,               /* alpha 1 */
+    TVO_NN_ACT_LEAKY_RELU = 2, /* slope 0.01 (PyTorch default) */
+    TVO_NN_ACT_ELU = 3,        /* alpha 1 */
     TVO_NN_ACT_SELU = 4,
     TVO_NN_ACT_TANH = 5,
     TVO_NN_ACT_SIGMOID = 6,
@@ -91,8 +95,8 @@ typedef enum tvo_nn_act {
 } tvo_nn_act;
 
 /* Layer output kinds. */
-#define TVO_NN_OUT_S8 0u              /* requantised int8 (hidden layers) */
-#define TVO_NN_OUT_F32 1u             /* dequantised float32 (the last layer of a branch, 1 output) */
+#define TVO_NN_OUT_S8 0u  /* requantised int8 (hidden layers) */
+#define TVO_NN_OUT_F32 1u /* dequantised float32 (the last layer of a branch, 1 output) */
 
 /* A loaded model. Lives in the memory handed to tvo_nn_load(); opaque. */
 typedef struct tvo_nn tvo_nn;
@@ -139,7 +143,8 @@ tvo_status tvo_nn_run(const tvo_nn *nn, const float features[TVO_FEAT_COUNT], fl
 /* Same as tvo_nn_run with the seven outputs: out[TVO_NN_STEP] is the step length (m) of a model with a
  * step-length branch (code 6: the branch's value, any sign; code 7: exp of the clamped value, > 0), NaN
  * otherwise. tvo_nn_run gives the first six of these. */
-tvo_status tvo_nn_run_all(const tvo_nn *nn, const float features[TVO_FEAT_COUNT], float out[TVO_NN_OUT_COUNT]);
+tvo_status tvo_nn_run_all(const tvo_nn *nn, const float features[TVO_FEAT_COUNT],
+                          float out[TVO_NN_OUT_COUNT]);
 
 /* Bit d (0..6) set when the model provides output d (bit 6: a step-length branch). 0 for NULL. */
 int32_t tvo_nn_output_mask(const tvo_nn *nn);
@@ -186,8 +191,8 @@ void tvo_nn_fc_s8_cols(const int8_t *x, const int8_t *wt, const int32_t *bias, c
 #endif
 
 /* Fully connected int8 layer with float output: y[o] = (float)acc * scale[o], acc as above. */
-void tvo_nn_fc_s8_f32(const int8_t *x, const int8_t *w, const int32_t *bias, const float *scale,
-                      int32_t n_in, int32_t n_out, float *y);
+void tvo_nn_fc_s8_f32(const int8_t *x, const int8_t *w, const int32_t *bias, const float *scale, int32_t n_in,
+                      int32_t n_out, float *y);
 
 /* Lookup-table activation in place: x[i] = lut[x[i] + 128]. */
 void tvo_nn_lut_s8(int8_t *x, int32_t n, const int8_t lut[256]);

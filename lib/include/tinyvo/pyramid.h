@@ -29,14 +29,14 @@ extern "C" {
 #define TVO_PYR_MIN_LEVEL_DIM 8
 
 typedef struct tvo_pyramid {
-    int32_t levels;                        /* levels including level 0, 1..TVO_MAX_PYR_LEVELS */
-    int32_t width[TVO_MAX_PYR_LEVELS];     /* pixels; width[l + 1] = (width[l] + 1) / 2 */
-    int32_t height[TVO_MAX_PYR_LEVELS];    /* pixels; height[l + 1] = (height[l] + 1) / 2 */
-    int32_t stride[TVO_MAX_PYR_LEVELS];    /* bytes between rows, >= width, multiple of 16 (a borrowed
+    int32_t levels;                     /* levels including level 0, 1..TVO_MAX_PYR_LEVELS */
+    int32_t width[TVO_MAX_PYR_LEVELS];  /* pixels; width[l + 1] = (width[l] + 1) / 2 */
+    int32_t height[TVO_MAX_PYR_LEVELS]; /* pixels; height[l + 1] = (height[l] + 1) / 2 */
+    int32_t stride[TVO_MAX_PYR_LEVELS]; /* bytes between rows, >= width, multiple of 16 (a borrowed
                                               level 0: the stride of the image it points to) */
-    uint8_t *data[TVO_MAX_PYR_LEVELS];     /* inside the caller's memory, 16-byte aligned */
-    uint16_t *row_tmp;                     /* internal: build row buffer, inside the caller's memory */
-    int32_t own0;                          /* internal: 1 level 0 in the caller's memory, 0 borrowed */
+    uint8_t *data[TVO_MAX_PYR_LEVELS];  /* inside the caller's memory, 16-byte aligned */
+    uint16_t *row_tmp;                  /* internal: build row buffer, inside the caller's memory */
+    int32_t own0;                       /* internal: 1 level 0 in the caller's memory, 0 borrowed */
 } tvo_pyramid;
 
 /* Bytes of memory tvo_pyramid_init() needs for this geometry (any alignment of mem is fine: the

@@ -49,17 +49,17 @@ typedef enum tvo_relpose_method {
 } tvo_relpose_method;
 
 typedef struct tvo_relpose_config {
-    tvo_relpose_method method;  /* default TVO_RELPOSE_5PT */
-    double threshold;           /* inlier threshold on the Sampson error, in NORMALISED image units
+    tvo_relpose_method method; /* default TVO_RELPOSE_5PT */
+    double threshold;          /* inlier threshold on the Sampson error, in NORMALISED image units
                                    (pixels / focal length), > 0; default 1.0 / 460 */
-    double confidence;          /* RANSAC confidence p in (0, 1); default 0.999 */
-    int32_t max_iters;          /* hard bound on RANSAC iterations, >= 1; default 1000 */
-    uint64_t seed;              /* seed of the deterministic generator; default 0x5eed */
-    double min_parallax_deg;    /* median rotation-compensated parallax (degrees) below which the
+    double confidence;         /* RANSAC confidence p in (0, 1); default 0.999 */
+    int32_t max_iters;         /* hard bound on RANSAC iterations, >= 1; default 1000 */
+    uint64_t seed;             /* seed of the deterministic generator; default 0x5eed */
+    double min_parallax_deg;   /* median rotation-compensated parallax (degrees) below which the
                                    result is rotation-only; >= 0, 0 disables; default 0.5 */
-    int32_t min_inliers;        /* fewer inliers -> LOW_CONFIDENCE; >= 0; default 15 */
-    int32_t use_homography;     /* 1: score a homography for dominant planes (default); 0: never */
-    int32_t refine_iters;       /* Levenberg-Marquardt iterations per refinement round, 0..100;
+    int32_t min_inliers;       /* fewer inliers -> LOW_CONFIDENCE; >= 0; default 15 */
+    int32_t use_homography;    /* 1: score a homography for dominant planes (default); 0: never */
+    int32_t refine_iters;      /* Levenberg-Marquardt iterations per refinement round, 0..100;
                                    default 10 (0 disables the refinement) */
 } tvo_relpose_config;
 
@@ -79,16 +79,16 @@ enum {
 };
 
 typedef struct tvo_relpose {
-    double R[9];        /* row-major rotation, X2 = R * X1 + t (frame 1 -> frame 2) */
-    double t[3];        /* unit translation direction; all zero when ROTATION_ONLY */
-    int32_t inliers;    /* inlier count of the chosen model */
-    int32_t flags;      /* TVO_RELPOSE_FLAG_* */
-    double parallax_deg;/* median rotation-compensated parallax angle of the inliers (degrees),
+    double R[9];         /* row-major rotation, X2 = R * X1 + t (frame 1 -> frame 2) */
+    double t[3];         /* unit translation direction; all zero when ROTATION_ONLY */
+    int32_t inliers;     /* inlier count of the chosen model */
+    int32_t flags;       /* TVO_RELPOSE_FLAG_* */
+    double parallax_deg; /* median rotation-compensated parallax angle of the inliers (degrees),
                            compensated with the best rotation-only model */
-    int32_t iterations; /* RANSAC iterations run (epipolar model) */
-    double R_alt[9];    /* with TVO_RELPOSE_FLAG_AMBIGUOUS: the twin pose (unit t_alt); else a copy of R, t */
+    int32_t iterations;  /* RANSAC iterations run (epipolar model) */
+    double R_alt[9]; /* with TVO_RELPOSE_FLAG_AMBIGUOUS: the twin pose (unit t_alt); else a copy of R, t */
     double t_alt[3];
-    double R_rot[9];    /* the rotation-only model fitted on the same points (identity when none): a
+    double R_rot[9]; /* the rotation-only model fitted on the same points (identity when none): a
                            sanity reference for R at low parallax, whatever model was chosen */
 } tvo_relpose;
 
@@ -124,9 +124,9 @@ size_t tvo_relpose_scratch_size(int32_t max_points);
  * points collinear in one image); on error *out is R = I, t = 0, LOW_CONFIDENCE and the mask is 0.
  * Cost: about 2.75M instructions (x86-64 with SSE2) for 300 points with 30 % outliers and the default
  * configuration (docs/evaluation.md); at most cfg->max_iters RANSAC iterations, each linear in n. */
-tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg, const tvo_point2d *x1,
-                                const tvo_point2d *x2, int32_t n, tvo_relpose *out,
-                                uint8_t *inlier_mask, void *scratch, size_t scratch_size);
+tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg, const tvo_point2d *x1, const tvo_point2d *x2,
+                                int32_t n, tvo_relpose *out, uint8_t *inlier_mask, void *scratch,
+                                size_t scratch_size);
 
 #ifdef __cplusplus
 }

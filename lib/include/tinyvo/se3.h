@@ -15,8 +15,8 @@ extern "C" {
 #endif
 
 typedef struct tvo_pose {
-    double R[9];   /* rotation, row-major */
-    double t[3];   /* translation, metres */
+    double R[9]; /* rotation, row-major */
+    double t[3]; /* translation, metres */
 } tvo_pose;
 
 tvo_pose tvo_pose_identity(void);
@@ -61,7 +61,8 @@ double tvo_rot_orthogonality_error(const double R[9]);
 /* The paper's ground-truth transformation: body poses T_w_b(k), T_w_b(k+1) (e.g. EuRoC ground truth)
  * and the camera extrinsics T_b_s (EuRoC T_BS: body <- sensor) -> the camera's relative pose
  * T_ck_ck1 = inv(T_w_b(k) T_BS) * T_w_b(k+1) T_BS (maps points from camera k+1 to camera k). */
-tvo_pose tvo_pose_body_to_camera_relative(const tvo_pose *T_w_bk, const tvo_pose *T_w_bk1, const tvo_pose *T_b_s);
+tvo_pose tvo_pose_body_to_camera_relative(const tvo_pose *T_w_bk, const tvo_pose *T_w_bk1,
+                                          const tvo_pose *T_b_s);
 
 /* Rotation error angle between two rotations, radians in [0, pi]: angle(A^T B). */
 double tvo_rot_distance(const double A[9], const double B[9]);

@@ -58,17 +58,17 @@ extern "C" {
 
 /* What the VO made of a frame. */
 typedef enum tvo_vo_state {
-    TVO_VO_OK = 0,             /* relative pose with a translation direction (relpose_flags AMBIGUOUS:
+    TVO_VO_OK = 0,            /* relative pose with a translation direction (relpose_flags AMBIGUOUS:
                                   one of a plane's twin poses, chosen as the one that continues the
                                   translation of the last 3 frames within 45 degrees, else the epipolar
                                   model's choice without the homography: may be the wrong twin when the
                                   scene is one plane only) */
-    TVO_VO_INITIALISING = 1,   /* first frame (or first after a reset): corners detected, identity pose */
-    TVO_VO_ROTATION_ONLY = 2,  /* low parallax, or no translation we could trust (too few cheirality-
+    TVO_VO_INITIALISING = 1,  /* first frame (or first after a reset): corners detected, identity pose */
+    TVO_VO_ROTATION_ONLY = 2, /* low parallax, or no translation we could trust (too few cheirality-
                                   consistent inliers, or a pose whose rotation is > 2 deg and > 10x the
                                   parallax away from the rotation-only model): rotation estimated,
                                   translation reported as zero */
-    TVO_VO_LOST = 3,           /* too few tracks or no trustworthy model: identity pose, tracker re-initialised */
+    TVO_VO_LOST = 3, /* too few tracks or no trustworthy model: identity pose, tracker re-initialised */
     TVO_VO_STATE_COUNT = 4
 } tvo_vo_state;
 
@@ -79,22 +79,22 @@ typedef enum tvo_vo_stage {
     TVO_STAGE_UNDISTORT = 2,
     TVO_STAGE_POSE = 3,
     TVO_STAGE_DETECT = 4,
-    TVO_STAGE_MAP = 5,         /* the local map: PnP, keyframes, triangulation, bundle adjustment */
+    TVO_STAGE_MAP = 5, /* the local map: PnP, keyframes, triangulation, bundle adjustment */
     TVO_STAGE_TOTAL = 6,
     TVO_STAGE_COUNT = 7
 } tvo_vo_stage;
 
 /* What the local map (cfg.map) made of a frame. */
 typedef enum tvo_vo_map_state {
-    TVO_MAP_OFF = 0,           /* cfg.map = 0: T_w_c is the two-view chain with unit steps */
-    TVO_MAP_INITIALISING = 1,  /* no map yet (first frames, or after a loss): the map waits for a pair of
+    TVO_MAP_OFF = 0,          /* cfg.map = 0: T_w_c is the two-view chain with unit steps */
+    TVO_MAP_INITIALISING = 1, /* no map yet (first frames, or after a loss): the map waits for a pair of
                                   frames with enough parallax; T_w_c continues the two-view chain (its
                                   rotation, and its translation direction times the last map's speed) */
-    TVO_MAP_INITIALISED = 2,   /* this frame and the waiting reference became the map's two first
+    TVO_MAP_INITIALISED = 2,  /* this frame and the waiting reference became the map's two first
                                   keyframes; T_w_c is the new map's */
-    TVO_MAP_TRACKING = 3,      /* T_w_c from PnP on the map's landmarks (and the bundle adjustment when
+    TVO_MAP_TRACKING = 3,     /* T_w_c from PnP on the map's landmarks (and the bundle adjustment when
                                   the frame is a keyframe) */
-    TVO_MAP_LOST = 4,          /* tracking against the map failed in this frame (too few landmarks still
+    TVO_MAP_LOST = 4,         /* tracking against the map failed in this frame (too few landmarks still
                                   tracked, PnP refused, or a map rotation that disagrees with the frame's
                                   two-view rotation): the map is dropped, T_w_c continues the two-view
                                   chain, and a new map starts from this frame */
@@ -115,8 +115,8 @@ typedef struct tvo_vo_config {
     int32_t fast_min_threshold; /* low-contrast fallback: when a detection finds fewer than a quarter of the
                                    corners wanted, it is repeated with this FAST threshold (if it is lower
                                    than detect.fast_threshold); [0, 255], 0 disables; default 7 */
-    double pose_threshold_px;   /* RANSAC inlier threshold in pixels, converted with the focal length; default 1.0 */
-    int32_t min_scale_points;   /* relative scale (tvo_vo_result.rel_scale): fewer usable three-frame tracks
+    double pose_threshold_px; /* RANSAC inlier threshold in pixels, converted with the focal length; default 1.0 */
+    int32_t min_scale_points; /* relative scale (tvo_vo_result.rel_scale): fewer usable three-frame tracks
                                    than this -> not available; >= 3 (above max_tracks: never); default 20 */
     double scale_min_parallax_deg; /* ...a track is usable when both of its pairs (k-2,k-1) and (k-1,k) see it
                                    with at least this ray angle, in degrees, (0, 10]; default 0.1 */
@@ -126,17 +126,17 @@ typedef struct tvo_vo_config {
        within 2 deg of the chained frame-to-frame rotation) and has more parallax than the frame-to-frame
        one (any, on a rotation-only frame), the frame's rotation is R_cK R_pK^T (R_pK: K -> previous
        frame), so the chained rotation does not drift between keyframes */
-    int32_t keyframe;           /* 1: on, 0: frame-to-frame only; default 1 */
-    int32_t keyframe_min_tracks;/* a new keyframe when fewer tracks seen in K survive; >= 0 (above
+    int32_t keyframe;                 /* 1: on, 0: frame-to-frame only; default 1 */
+    int32_t keyframe_min_tracks;      /* a new keyframe when fewer tracks seen in K survive; >= 0 (above
                                    max_tracks: every frame, which turns the keyframe rotation off);
                                    default 100 */
     double keyframe_max_parallax_deg; /* ...or when the K -> cur parallax exceeds this, (0, 90]; default 5 */
-    double keyframe_max_rot_deg;/* ...or the K -> cur rotation, (0, 180]; default 10 */
+    double keyframe_max_rot_deg;      /* ...or the K -> cur rotation, (0, 180]; default 10 */
     int32_t keyframe_translation; /* 1: on a frame with the keyframe rotation, the translation direction is
                                    re-fitted to it (R fixed, t linear: smallest eigenvector of the 3x3
                                    normal matrix of the rows (R x1) x x2 over the inliers, sign by
                                    cheirality); 0: the 5-point direction is kept; default 1 */
-    int32_t track_prediction;   /* 1: LK starts each track where the previous frame's rotation (scaled to
+    int32_t track_prediction;     /* 1: LK starts each track where the previous frame's rotation (scaled to
                                    this frame's interval; constant angular velocity, points at infinity)
                                    moves it, when the previous frame had a pose and the intervals are
                                    within 2x; 0: at its previous position. For cameras whose frames move
@@ -145,28 +145,28 @@ typedef struct tvo_vo_config {
     /* local map (vo.h header comment, "The local map"): keyframes in a sliding window, landmarks
        triangulated between them, every frame posed by PnP on the landmarks its tracks carry, and a
        windowed bundle adjustment at each new keyframe */
-    int32_t map;                /* 1: on; 0: two-view only (the VO of earlier versions); default 1 */
-    int32_t map_window;         /* keyframes in the window, [3, TVO_VO_MAX_WINDOW]; default 6 */
-    int32_t map_max_landmarks;  /* landmark capacity, [16, 100000], or 0: 2 x max_tracks; default 0 */
-    int32_t map_min_points;     /* a frame with fewer PnP inliers loses the map, [6, 100000] (above
+    int32_t map;                  /* 1: on; 0: two-view only (the VO of earlier versions); default 1 */
+    int32_t map_window;           /* keyframes in the window, [3, TVO_VO_MAX_WINDOW]; default 6 */
+    int32_t map_max_landmarks;    /* landmark capacity, [16, 100000], or 0: 2 x max_tracks; default 0 */
+    int32_t map_min_points;       /* a frame with fewer PnP inliers loses the map, [6, 100000] (above
                                    max_tracks: the map never tracks); default 20 */
     double map_init_parallax_deg; /* the initial pair needs this median parallax, (0, 30]; default 1 */
     double map_tri_parallax_deg;  /* a track is triangulated when its rays are this far apart, (0, 30];
                                    default 1 */
-    double map_kf_baseline;     /* a new keyframe when the camera moved more than this x the median depth
+    double map_kf_baseline;       /* a new keyframe when the camera moved more than this x the median depth
                                    of its landmarks since the last keyframe, (0, 10]; default 0.1 */
-    double map_kf_points_ratio; /* ...or when fewer than this share of the last keyframe's landmarks
+    double map_kf_points_ratio;   /* ...or when fewer than this share of the last keyframe's landmarks
                                    remain inliers, [0, 1]; default 0.8 */
-    int32_t map_kf_max_frames;  /* ...or after this many frames, [1, 100000]; default 30 (and after
+    int32_t map_kf_max_frames;    /* ...or after this many frames, [1, 100000]; default 30 (and after
                                    keyframe_max_rot_deg of rotation) */
-    int32_t map_ba_iterations;  /* Levenberg-Marquardt iterations of the bundle adjustment, [1, 100];
+    int32_t map_ba_iterations;    /* Levenberg-Marquardt iterations of the bundle adjustment, [1, 100];
                                    default 5 */
-    double map_rot_prior;       /* weight of this frame's two-view rotation (turning the last pose) as a
+    double map_rot_prior;         /* weight of this frame's two-view rotation (turning the last pose) as a
                                    prior on its map pose (pnp.h, rot_prior_weight), [0, 1e12]; 0: none;
                                    default 100 (as much as 100 points' reprojection errors: the
                                    per-frame rotation mostly follows the two-view estimate, the map
                                    corrects its drift) */
-    tvo_clock_fn clock;         /* optional (NULL: no timings) */
+    tvo_clock_fn clock;           /* optional (NULL: no timings) */
     void *clock_user;
 } tvo_vo_config;
 
@@ -178,17 +178,17 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
 
 typedef struct tvo_vo_result {
     tvo_vo_state state;
-    int32_t relpose_flags;     /* TVO_RELPOSE_FLAG_* of this frame's estimate (0 when none ran) */
-    tvo_status pose_status;    /* status of this frame's relative-pose estimate (TVO_OK when none ran) */
-    tvo_pose T_prev_cur;       /* raw relative pose: p_prev = R p_cur + t, |t| = 1 or t = 0 */
-    int32_t tracked;           /* tracks that survived LK + forward-backward into this frame */
-    int32_t inliers;           /* pose inliers among them */
-    int32_t new_corners;       /* corners added by re-detection in this frame */
-    int32_t tracks;            /* tracks carried to the next frame */
-    double parallax_deg;       /* median rotation-compensated parallax of the inliers */
-    int64_t dt_ns;             /* time since the previous frame (0 on the first; at most INT64_MAX) */
+    int32_t relpose_flags;          /* TVO_RELPOSE_FLAG_* of this frame's estimate (0 when none ran) */
+    tvo_status pose_status;         /* status of this frame's relative-pose estimate (TVO_OK when none ran) */
+    tvo_pose T_prev_cur;            /* raw relative pose: p_prev = R p_cur + t, |t| = 1 or t = 0 */
+    int32_t tracked;                /* tracks that survived LK + forward-backward into this frame */
+    int32_t inliers;                /* pose inliers among them */
+    int32_t new_corners;            /* corners added by re-detection in this frame */
+    int32_t tracks;                 /* tracks carried to the next frame */
+    double parallax_deg;            /* median rotation-compensated parallax of the inliers */
+    int64_t dt_ns;                  /* time since the previous frame (0 on the first; at most INT64_MAX) */
     float features[TVO_FEAT_COUNT]; /* front-end features for the per-DoF networks (nn.h layout) */
-    double rel_scale;          /* relative scale r = |t_k| / |t_(k-1)|: the metric length of this frame's step
+    double rel_scale;         /* relative scale r = |t_k| / |t_(k-1)|: the metric length of this frame's step
                                   over the previous frame's, from the tracks seen in frames k-2, k-1 and k,
                                   triangulated in frame k-1 once with the previous step's unit translation
                                   and once with this one's (median depth ratio). TVO_VO_REL_SCALE_NONE (0)
@@ -196,21 +196,21 @@ typedef struct tvo_vo_result {
                                   translation: initialising, rotation-only, lost, after a reset), or fewer
                                   than cfg.min_scale_points tracks have enough parallax and positive depth in
                                   both pairs (e.g. most tracks re-detected). Otherwise finite and > 0. */
-    int32_t rel_scale_points;  /* tracks the median used (may be > 0 with rel_scale 0: too few of them) */
-    int32_t keyframe_age;      /* > 0: the rotation is the keyframe rotation, K being this many frames back;
+    int32_t rel_scale_points; /* tracks the median used (may be > 0 with rel_scale 0: too few of them) */
+    int32_t keyframe_age;     /* > 0: the rotation is the keyframe rotation, K being this many frames back;
                                   0: frame-to-frame */
     /* the pose in the VO's world: the camera of the first frame after init is the origin; the unit of
        length is the first map's initial baseline, and it holds for the whole run (see map_state for
        where the pose comes from). Always finite. */
     tvo_pose T_w_c;
     tvo_vo_map_state map_state;
-    int32_t keyframe;          /* 1 when this frame became a map keyframe */
-    int32_t map_points;        /* landmarks (PnP inliers) this frame's pose used */
-    int32_t map_new_points;    /* landmarks triangulated in this frame */
-    int32_t map_landmarks;     /* landmarks in the map after this frame */
-    int32_t map_losses;        /* map losses since init (TVO_MAP_LOST frames) */
-    int32_t ba_iterations;     /* bundle adjustment iterations in this frame (0: none ran) */
-    int32_t ba_flags;          /* its TVO_BA_FLAG_* (ba.h) */
+    int32_t keyframe;       /* 1 when this frame became a map keyframe */
+    int32_t map_points;     /* landmarks (PnP inliers) this frame's pose used */
+    int32_t map_new_points; /* landmarks triangulated in this frame */
+    int32_t map_landmarks;  /* landmarks in the map after this frame */
+    int32_t map_losses;     /* map losses since init (TVO_MAP_LOST frames) */
+    int32_t ba_iterations;  /* bundle adjustment iterations in this frame (0: none ran) */
+    int32_t ba_flags;       /* its TVO_BA_FLAG_* (ba.h) */
     int64_t stage_ns[TVO_STAGE_COUNT];
 } tvo_vo_result;
 
@@ -219,12 +219,12 @@ typedef struct tvo_vo_result {
 
 /* A track as the VO holds it after a frame (tvo_vo_tracks). */
 typedef struct tvo_vo_track {
-    float x, y;                /* position in the last frame, pixels of the raw (distorted) image */
-    uint32_t id;               /* unique per track while the VO lives (wraps after 2^32 tracks) */
-    int32_t age;               /* frames it has been tracked through (0: detected in the last frame) */
-    uint8_t inlier;            /* 1: it supported the last frame's pose (map inlier when the map tracked
+    float x, y;       /* position in the last frame, pixels of the raw (distorted) image */
+    uint32_t id;      /* unique per track while the VO lives (wraps after 2^32 tracks) */
+    int32_t age;      /* frames it has been tracked through (0: detected in the last frame) */
+    uint8_t inlier;   /* 1: it supported the last frame's pose (map inlier when the map tracked
                                   the frame, else an inlier of the two-view pose) */
-    uint8_t landmark;          /* 1: it carries a map landmark */
+    uint8_t landmark; /* 1: it carries a map landmark */
 } tvo_vo_track;
 
 typedef struct tvo_vo tvo_vo;
@@ -267,10 +267,10 @@ tvo_status tvo_vo_refine(const tvo_nn *nn, const tvo_vo_result *res, tvo_pose *s
  * (n_k <= 0 or not finite) the prediction alone is kept. The state is two numbers: no allocation.
  * log/exp are evaluated with + - * / and frexp/ldexp only, so results agree across targets. */
 typedef struct tvo_scale_filter {
-    double alpha;              /* weight of the prior per step, [0, 1] */
-    double log_s;              /* log of the last step length (m), valid when has_s */
+    double alpha; /* weight of the prior per step, [0, 1] */
+    double log_s; /* log of the last step length (m), valid when has_s */
     int32_t has_s;
-    int32_t steps;             /* updates done since init */
+    int32_t steps; /* updates done since init */
 } tvo_scale_filter;
 
 /* TVO_ERR_NULL, or TVO_ERR_ARG for alpha outside [0, 1] (or NaN): f is then unusable (its updates return
@@ -286,7 +286,7 @@ tvo_status tvo_scale_filter_update(tvo_scale_filter *f, double rel_scale, double
 
 /* Trajectory integration: T_w_c(k+1) = T_w_c(k) * [R | scale * t]. */
 typedef struct tvo_traj {
-    tvo_pose T_w_c;            /* current camera pose in the world */
+    tvo_pose T_w_c; /* current camera pose in the world */
     int32_t steps;
 } tvo_traj;
 void tvo_traj_init(tvo_traj *traj, const tvo_pose *T_w_c0);

@@ -39,10 +39,10 @@
 #endif
 
 /* Thresholds of the solver (relative to the scale of the quantity they test) */
-#define FP_TINY 1e-300       /* a norm or scale at or below this is zero */
-#define FP_RANK_REL 1e-10    /* null space: |R_kk| <= this * |R_00| is rank loss */
-#define FP_PIVOT_REL 1e-14   /* elimination: a pivot <= this * the largest entry is singular */
-#define FP_ROOT_REL 1e-12    /* B(z)'s null vector: |third entry| <= this * its norm has no (x, y) */
+#define FP_TINY 1e-300     /* a norm or scale at or below this is zero */
+#define FP_RANK_REL 1e-10  /* null space: |R_kk| <= this * |R_00| is rank loss */
+#define FP_PIVOT_REL 1e-14 /* elimination: a pivot <= this * the largest entry is singular */
+#define FP_ROOT_REL 1e-12  /* B(z)'s null vector: |third entry| <= this * its norm has no (x, y) */
 
 /* q = a * b: linear (order above) times linear, quadratic result */
 FP_INLINE void mul_ll(const double a[4], const double b[4], double q[10])
@@ -69,11 +69,11 @@ typedef __m128d fp_v;
 #define FP_ADD(a, b) _mm_add_pd(a, b)
 #define FP_MUL(a, b) _mm_mul_pd(a, b)
 /* result k: lane 0 to lo[k], lane 1 to hi[k] */
-#define FP_OUT(k, v)                                                                              \
-    do {                                                                                          \
-        const fp_v r_ = (v);                                                                      \
-        _mm_storel_pd(lo + (k), r_);                                                              \
-        _mm_storeh_pd(hi + (k), r_);                                                              \
+#define FP_OUT(k, v)                 \
+    do {                             \
+        const fp_v r_ = (v);         \
+        _mm_storel_pd(lo + (k), r_); \
+        _mm_storeh_pd(hi + (k), r_); \
     } while (0)
 #else
 typedef double fp_v;

@@ -80,7 +80,8 @@ typedef struct lk_work {
  *     gradient sums (a11, a12, a22) into A;
  *   tvo_lk_mismatch_simd: the sums of (J - I) * Ix and * Iy of the (win+1)^2 J block at src. */
 void tvo_lk_scharr_simd(const uint8_t *src, int32_t sstride, lk_work *wk);
-void tvo_lk_prev_interp_simd(const uint8_t *s, int32_t sstride, const int32_t wt[4], lk_work *wk, int64_t A[3]);
+void tvo_lk_prev_interp_simd(const uint8_t *s, int32_t sstride, const int32_t wt[4], lk_work *wk,
+                             int64_t A[3]);
 void tvo_lk_mismatch_simd(const uint8_t *src, int32_t sstride, const int32_t wt[4], const lk_work *wk,
                           int64_t *b1, int64_t *b2);
 #endif

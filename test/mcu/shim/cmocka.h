@@ -24,8 +24,14 @@ struct CMUnitTest {
     void *initial_state;
 };
 
-#define cmocka_unit_test(f) { #f, f, NULL, NULL, NULL }
-#define cmocka_unit_test_setup_teardown(f, s, t) { #f, f, s, t, NULL }
+#define cmocka_unit_test(f)     \
+    {                           \
+#f, f, NULL, NULL, NULL \
+    }
+#define cmocka_unit_test_setup_teardown(f, s, t) \
+    {                                            \
+#f, f, s, t, NULL                        \
+    }
 
 static jmp_buf tvo_cm_jmp;
 static int tvo_cm_skipped;
@@ -45,21 +51,57 @@ static void tvo_cm_fail(const char *file, int line, const char *fmt, ...)
 #define print_error(...) printf(__VA_ARGS__)
 #define fail() tvo_cm_fail(__FILE__, __LINE__, "fail()")
 #define fail_msg(...) tvo_cm_fail(__FILE__, __LINE__, __VA_ARGS__)
-#define skip() do { tvo_cm_skipped = 1; longjmp(tvo_cm_jmp, 2); } while (0)
-#define assert_true(c) do { if (!(c)) tvo_cm_fail(__FILE__, __LINE__, "%s", #c); } while (0)
-#define assert_false(c) do { if (c) tvo_cm_fail(__FILE__, __LINE__, "!(%s)", #c); } while (0)
-#define assert_non_null(p) do { if ((p) == NULL) tvo_cm_fail(__FILE__, __LINE__, "%s is NULL", #p); } while (0)
-#define assert_null(p) do { if ((p) != NULL) tvo_cm_fail(__FILE__, __LINE__, "%s is not NULL", #p); } while (0)
-#define assert_int_equal(a, b) do { const long long tvo_a_ = (long long)(a), tvo_b_ = (long long)(b); \
-        if (tvo_a_ != tvo_b_) tvo_cm_fail(__FILE__, __LINE__, "%ld != %ld (%s, %s)", (long)tvo_a_, (long)tvo_b_, #a, #b); } while (0)
-#define assert_int_not_equal(a, b) do { if ((long long)(a) == (long long)(b)) \
-        tvo_cm_fail(__FILE__, __LINE__, "%s == %s", #a, #b); } while (0)
-#define assert_memory_equal(a, b, n) do { if (memcmp((a), (b), (n)) != 0) \
-        tvo_cm_fail(__FILE__, __LINE__, "memory differs (%s, %s)", #a, #b); } while (0)
-#define assert_string_equal(a, b) do { if (strcmp((a), (b)) != 0) \
-        tvo_cm_fail(__FILE__, __LINE__, "\"%s\" != \"%s\"", (a), (b)); } while (0)
-#define assert_string_not_equal(a, b) do { if (strcmp((a), (b)) == 0) \
-        tvo_cm_fail(__FILE__, __LINE__, "\"%s\" == \"%s\"", (a), (b)); } while (0)
+#define skip()                  \
+    do {                        \
+        tvo_cm_skipped = 1;     \
+        longjmp(tvo_cm_jmp, 2); \
+    } while (0)
+#define assert_true(c)                                 \
+    do {                                               \
+        if (!(c))                                      \
+            tvo_cm_fail(__FILE__, __LINE__, "%s", #c); \
+    } while (0)
+#define assert_false(c)                                   \
+    do {                                                  \
+        if (c)                                            \
+            tvo_cm_fail(__FILE__, __LINE__, "!(%s)", #c); \
+    } while (0)
+#define assert_non_null(p)                                     \
+    do {                                                       \
+        if ((p) == NULL)                                       \
+            tvo_cm_fail(__FILE__, __LINE__, "%s is NULL", #p); \
+    } while (0)
+#define assert_null(p)                                             \
+    do {                                                           \
+        if ((p) != NULL)                                           \
+            tvo_cm_fail(__FILE__, __LINE__, "%s is not NULL", #p); \
+    } while (0)
+#define assert_int_equal(a, b)                                                                          \
+    do {                                                                                                \
+        const long long tvo_a_ = (long long)(a), tvo_b_ = (long long)(b);                               \
+        if (tvo_a_ != tvo_b_)                                                                           \
+            tvo_cm_fail(__FILE__, __LINE__, "%ld != %ld (%s, %s)", (long)tvo_a_, (long)tvo_b_, #a, #b); \
+    } while (0)
+#define assert_int_not_equal(a, b)                               \
+    do {                                                         \
+        if ((long long)(a) == (long long)(b))                    \
+            tvo_cm_fail(__FILE__, __LINE__, "%s == %s", #a, #b); \
+    } while (0)
+#define assert_memory_equal(a, b, n)                                            \
+    do {                                                                        \
+        if (memcmp((a), (b), (n)) != 0)                                         \
+            tvo_cm_fail(__FILE__, __LINE__, "memory differs (%s, %s)", #a, #b); \
+    } while (0)
+#define assert_string_equal(a, b)                                          \
+    do {                                                                   \
+        if (strcmp((a), (b)) != 0)                                         \
+            tvo_cm_fail(__FILE__, __LINE__, "\"%s\" != \"%s\"", (a), (b)); \
+    } while (0)
+#define assert_string_not_equal(a, b)                                      \
+    do {                                                                   \
+        if (strcmp((a), (b)) == 0)                                         \
+            tvo_cm_fail(__FILE__, __LINE__, "\"%s\" == \"%s\"", (a), (b)); \
+    } while (0)
 
 static int tvo_cm_run(const char *group, const struct CMUnitTest *t, size_t n, CMFixtureFunction gsetup,
                       CMFixtureFunction gteardown)

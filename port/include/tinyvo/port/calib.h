@@ -50,7 +50,7 @@ extern "C" {
 #endif
 
 typedef enum tvo_calib_format {
-    TVO_CALIB_AUTO = 0,        /* detect from the keys (for tvo_calib_parse's format argument) */
+    TVO_CALIB_AUTO = 0, /* detect from the keys (for tvo_calib_parse's format argument) */
     TVO_CALIB_EUROC = 1,
     TVO_CALIB_KALIBR_CAMCHAIN = 2,
     TVO_CALIB_KALIBR = 3,
@@ -64,12 +64,12 @@ typedef enum tvo_calib_format {
 #define TVO_CALIB_MAX_FILE ((size_t)4 << 20)
 
 typedef struct tvo_calib {
-    tvo_camera camera;        /* checked with tvo_camera_check */
-    tvo_calib_format format;  /* the format that was read */
-    int has_T_BS;             /* 1 when the file gives the camera's pose in a body/IMU frame */
-    tvo_pose T_BS;            /* body <- camera: EuRoC T_BS, Kalibr inv(T_cam_imu) or T_imu_cam;
+    tvo_camera camera;                    /* checked with tvo_camera_check */
+    tvo_calib_format format;              /* the format that was read */
+    int has_T_BS;                         /* 1 when the file gives the camera's pose in a body/IMU frame */
+    tvo_pose T_BS;                        /* body <- camera: EuRoC T_BS, Kalibr inv(T_cam_imu) or T_imu_cam;
                                  rotation re-orthonormalised; identity when has_T_BS is 0 */
-    double rate_hz;           /* frame rate when the file gives one (EuRoC rate_hz), else 0 */
+    double rate_hz;                       /* frame rate when the file gives one (EuRoC rate_hz), else 0 */
     char camera_name[TVO_CALIB_MAX_NAME]; /* the camchain entry read ("cam0"), "" for other formats */
 } tvo_calib;
 

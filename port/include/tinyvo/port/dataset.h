@@ -75,8 +75,8 @@ tvo_status tvo_kitti_parse_calib(const char *text, size_t len, double P0[12], ch
 
 /* A KITTI poses file: 12 numbers per line (blank lines skipped), each a rigid 3x4 T_w_c (rotation
  * orthonormal to 1e-3, re-orthonormalised; translation within +-TVO_EUROC_MAX_COORD). */
-tvo_status tvo_kitti_parse_poses(const char *text, size_t len, tvo_pose *poses, int32_t capacity, int32_t *count,
-                                 char *err, size_t err_size);
+tvo_status tvo_kitti_parse_poses(const char *text, size_t len, tvo_pose *poses, int32_t capacity,
+                                 int32_t *count, char *err, size_t err_size);
 
 #ifdef __cplusplus
 }

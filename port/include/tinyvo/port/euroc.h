@@ -44,14 +44,14 @@ extern "C" {
 #define TVO_EUROC_MAX_COORD 1e9
 
 typedef struct tvo_euroc_frame {
-    int64_t t_ns;                     /* timestamp, nanoseconds */
-    char file[TVO_EUROC_MAX_NAME];    /* file name inside <cam>/data/ (no '/' or '\\', not "." or "..") */
+    int64_t t_ns;                  /* timestamp, nanoseconds */
+    char file[TVO_EUROC_MAX_NAME]; /* file name inside <cam>/data/ (no '/' or '\\', not "." or "..") */
 } tvo_euroc_frame;
 
 typedef struct tvo_euroc_gt_row {
-    int64_t t_ns;       /* nanoseconds */
-    double p[3];        /* position of the body in the world frame, metres */
-    double q_wxyz[4];   /* orientation of the body (T_w_b rotation), unit quaternion w x y z */
+    int64_t t_ns;     /* nanoseconds */
+    double p[3];      /* position of the body in the world frame, metres */
+    double q_wxyz[4]; /* orientation of the body (T_w_b rotation), unit quaternion w x y z */
 } tvo_euroc_gt_row;
 
 typedef struct tvo_euroc tvo_euroc; /* opaque */
@@ -119,7 +119,8 @@ tvo_status tvo_euroc_groundtruth(const tvo_euroc *seq, int64_t t_ns, int64_t tol
  * slerp in rotation) when they are at most max_gap_ns apart; an exact match returns that row.
  * Errors as tvo_euroc_groundtruth; TVO_ERR_RANGE when t_ns is outside the ground truth's time span
  * or the bracketing rows are more than max_gap_ns apart. */
-tvo_status tvo_euroc_groundtruth_interp(const tvo_euroc *seq, int64_t t_ns, int64_t max_gap_ns, tvo_pose *T_w_b);
+tvo_status tvo_euroc_groundtruth_interp(const tvo_euroc *seq, int64_t t_ns, int64_t max_gap_ns,
+                                        tvo_pose *T_w_b);
 /* Replace the ground truth by the file at path: a csv (as state_groundtruth_estimate0/data.csv) or
  * a space-separated text file `t px py pz qw qx qy qz` (as ../shared/data/euroc/groundtruth/ *.txt;
  * timestamps in ns, a fractional part is rounded). On error the previous ground truth is kept.

@@ -81,8 +81,8 @@ typedef struct tvo_v4l2_sys {
 const tvo_v4l2_sys *tvo_v4l2_sys_libc(void);
 
 typedef struct tvo_v4l2_config {
-    const char *device;      /* device path, e.g. "/dev/video0"; must stay valid during open */
-    int32_t width;           /* requested size in pixels, 1..TVO_MAX_IMAGE_DIM (default 640x480) */
+    const char *device; /* device path, e.g. "/dev/video0"; must stay valid during open */
+    int32_t width;      /* requested size in pixels, 1..TVO_MAX_IMAGE_DIM (default 640x480) */
     int32_t height;
     int32_t fps;             /* requested frames per second, 0 = driver default (default 30) */
     uint32_t buffer_count;   /* buffers asked for, 2..TVO_V4L2_MAX_BUFFERS (default 4); the driver
@@ -96,38 +96,38 @@ typedef struct tvo_v4l2_config {
 
 /* What the driver granted. */
 typedef struct tvo_v4l2_format {
-    int32_t width;           /* pixels */
+    int32_t width; /* pixels */
     int32_t height;
-    int32_t bytesperline;    /* bytes per row of the first plane */
-    uint32_t sizeimage;      /* bytes of one full frame as the driver reports it */
-    uint32_t pixelformat;    /* TVO_V4L2_PIX_* */
-    int32_t fps_num;         /* granted rate fps_num/fps_den frames per second; 0/1 = unknown */
+    int32_t bytesperline; /* bytes per row of the first plane */
+    uint32_t sizeimage;   /* bytes of one full frame as the driver reports it */
+    uint32_t pixelformat; /* TVO_V4L2_PIX_* */
+    int32_t fps_num;      /* granted rate fps_num/fps_den frames per second; 0/1 = unknown */
     int32_t fps_den;
     uint32_t buffer_count;   /* buffers mapped and streaming, 2..TVO_V4L2_MAX_BUFFERS */
     int32_t buffers_granted; /* what VIDIOC_REQBUFS returned (may exceed buffer_count) */
 } tvo_v4l2_format;
 
 typedef struct tvo_v4l2_stats {
-    uint64_t frames;         /* good frames delivered */
-    uint64_t error_buffers;  /* buffers flagged V4L2_BUF_FLAG_ERROR, skipped */
-    uint64_t short_buffers;  /* buffers with bytesused below one image, skipped */
-    uint64_t sequence_gaps;  /* frames the driver dropped, from gaps in buffer sequence numbers */
-    uint64_t retries;        /* EINTR / EAGAIN retries */
+    uint64_t frames;        /* good frames delivered */
+    uint64_t error_buffers; /* buffers flagged V4L2_BUF_FLAG_ERROR, skipped */
+    uint64_t short_buffers; /* buffers with bytesused below one image, skipped */
+    uint64_t sequence_gaps; /* frames the driver dropped, from gaps in buffer sequence numbers */
+    uint64_t retries;       /* EINTR / EAGAIN retries */
 } tvo_v4l2_stats;
 
 typedef struct tvo_v4l2_frame {
-    const uint8_t *data;     /* first byte of the driver buffer (read-only; valid until requeue) */
-    uint32_t bytesused;      /* bytes the driver filled */
-    int32_t width;           /* pixels */
+    const uint8_t *data; /* first byte of the driver buffer (read-only; valid until requeue) */
+    uint32_t bytesused;  /* bytes the driver filled */
+    int32_t width;       /* pixels */
     int32_t height;
-    int32_t stride;          /* bytes per row of the first plane */
-    uint32_t pixelformat;    /* TVO_V4L2_PIX_* */
-    int zero_copy;           /* 1: data is an 8-bit luma image (width, height, stride) as is */
-    int64_t timestamp_ns;    /* capture time, CLOCK_MONOTONIC nanoseconds */
+    int32_t stride;            /* bytes per row of the first plane */
+    uint32_t pixelformat;      /* TVO_V4L2_PIX_* */
+    int zero_copy;             /* 1: data is an 8-bit luma image (width, height, stride) as is */
+    int64_t timestamp_ns;      /* capture time, CLOCK_MONOTONIC nanoseconds */
     int timestamp_from_driver; /* 1: driver's monotonic buffer stamp; 0: taken at dequeue */
-    uint32_t sequence;       /* driver frame counter */
-    uint32_t skipped;        /* bad buffers skipped just before this frame */
-    uint32_t index;          /* driver buffer index (private to requeue) */
+    uint32_t sequence;         /* driver frame counter */
+    uint32_t skipped;          /* bad buffers skipped just before this frame */
+    uint32_t index;            /* driver buffer index (private to requeue) */
 } tvo_v4l2_frame;
 
 /* Capture state. Fields are private; the caller only owns the storage. */
