@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
-# Static analysis of lib/, port/ and examples/ (issue 7): cppcheck and clang-tidy from Debian, with the
+# Static analysis of lib/, port/ and examples/: cppcheck and clang-tidy from Debian, with the
 # checked-in configuration (.clang-tidy at the top, tools/cppcheck-suppressions.txt with a reason per
 # line). Any finding fails the script. Run by tools/run-tests.sh after the ASan stage.
 #   - configures build/static (Release, no tests/benchmarks) only to get its compile_commands.json
@@ -12,7 +12,15 @@ cd "$ROOT"
 JOBS="${JOBS:-2}"
 
 . "$ROOT/tools/apt-lib.sh"
-tvo_apt_ensure run-static cppcheck clang-tidy || exit 1   # clang-tidy brings run-clang-tidy
+tvo_apt_ensure run-static cppcheck clang-tidy clang-format || exit 1   # clang-tidy brings run-clang-tidy
+
+echo "== clang-format $(clang-format --version | sed -n 's/.*version \([0-9.]*\).*/\1/p' | head -1) (.clang-format)"
+# every C source and header of the repository is formatted; fix with: clang-format -i FILE
+if git rev-parse --git-dir >/dev/null 2>&1; then
+  git ls-files -z '*.c' '*.h' | xargs -0 clang-format --dry-run --Werror
+else
+  find lib port examples test -name '*.c' -o -name '*.h' | xargs clang-format --dry-run --Werror
+fi
 
 BUILD=build/static
 cmake -S . -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_EXPORT_COMPILE_COMMANDS=ON \

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
-# Per-function stack frames of the C core from GCC's -fstack-usage (issue 7; docs/limits.md).
+# Per-function stack frames of the C core from GCC's -fstack-usage (docs/limits.md).
 # Configures build/stack (Release, -fstack-usage, core only), builds it, and prints the largest frames
 # of lib/ from the .su files: bytes, qualifier and function. "static" is a fixed frame; "dynamic,bounded"
 # is a frame GCC adjusts around calls by a bounded amount (the figure includes it); a plain "dynamic"

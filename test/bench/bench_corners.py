@@ -11,7 +11,7 @@ Jobs timed (median ms per 752x480 frame over frames x repeats):
   OpenCV  FAST t=20 + nonmax, then keep the strongest per 8x6 cell to 300 (numpy selection)
   OpenCV  goodFeaturesToTrack(300, quality 0.01, minDistance 10, blockSize 5)
   OpenCV  FAST t=20 + nonmax alone
-Prints the ratios tinyvo/OpenCV. Target (issue 2): tvo_detect <= 0.5 ms per 752x480 frame.
+Prints the ratios tinyvo/OpenCV. Target: tvo_detect <= 0.5 ms per 752x480 frame.
 """
 import argparse
 import ctypes

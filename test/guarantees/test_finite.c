@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Guarantee: never a NaN or infinite pose, whatever the input (issue 7).
+/* Guarantee: never a NaN or infinite pose, whatever the input.
  *
  * tvo_vo_process is fed random, black, white, constant, alternating and checkerboard frames and the
  * synthetic corridor, at tiny, extreme-aspect and large sizes (within TVO_MAX_IMAGE_DIM), with huge,

@@ -3,7 +3,7 @@
 #include "tvo_guarantee.h"
 
 /* Image views: sizes and strides. A stride above TVO_IMAGE_MAX_STRIDE used to be accepted and made
- * FAST's circle offsets (3 * stride, int32) overflow: UBSan reported it (issue 7). */
+ * FAST's circle offsets (3 * stride, int32) overflow: UBSan reported it. */
 static void test_image_view_limits(void **state)
 {
     static uint8_t px[64];

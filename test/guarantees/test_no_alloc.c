@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Guarantee: no heap allocation after init in the per-frame path (issue 7).
+/* Guarantee: no heap allocation after init in the per-frame path.
  *
  * This executable defines malloc, calloc, realloc, free and the aligned allocators itself; they forward
  * to glibc's __libc_* entry points and count calls while `g_counting` is set. Because the symbols are

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Guarantee: identical output for identical input (issue 7), within one build.
+/* Guarantee: identical output for identical input, within one build.
  *
  * The same frames go through two fresh VO objects whose memory blocks were filled with different garbage
  * (0x00 and 0xFF) and start at different alignments, and through the same object again after

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Guarantee: bounded stack in the per-frame path (issue 7; figures and bound in docs/limits.md).
+/* Guarantee: bounded stack in the per-frame path (figures and bound in docs/limits.md).
  *
  * The per-frame work (tvo_vo_process, tvo_nn_run, tvo_vo_refine, tvo_traj_step) runs in a pthread whose
  * stack this test allocates and paints with a pattern; afterwards the lowest overwritten byte gives the

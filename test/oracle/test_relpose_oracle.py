@@ -320,7 +320,7 @@ def test_euroc_stereo(rp, data_dir):
     print(f"\nEuRoC V1_01_easy_head cam0->cam1 ({len(res)} pairs): median rot/t error "
           f"tinyvo {med[0]:.3f}/{med[1]:.2f} deg, OpenCV {med[2]:.3f}/{med[3]:.2f} deg; rotation-only {rot_only}; "
           f"correspondences within 1 px of the true epipolar line: {np.median(res[:, 5]):.2f}")
-    # issue 3 targets 0.3 deg / 5 deg, met with these (reference) correspondences; docs/geometry.md
+    # the targets are 0.3 deg / 5 deg, met with these (reference) correspondences; docs/geometry.md
     # explains why the translation direction has no large margin on this single static scene
     assert med[0] <= med[2] and med[1] <= med[3]
     assert med[0] <= 0.3 and med[1] <= 5.0

@@ -431,7 +431,7 @@ def _main(a, sizes) -> int:
     for k, v in res["step_level"].items():
         L.append(f"| {k} | " + " | ".join(f"{v[d]:.4f}" for d in DOFS) + " |")
     L += ["", "## Models", "", "Quantised (int8) vs float: RMS difference of each DoF's output on the validation rows, "
-          "in % of that DoF's ground-truth std (issue 5's bound: 2 %).", "",
+          "in % of that DoF's ground-truth std (bound: 2 %).", "",
           "| activation | bytes | MACs/frame | " + " | ".join(f"q-vs-f {nnfmt.DOFS[d]} %" for d in dofs) + " |",
           "|---" * (3 + len(dofs)) + "|"]
     for act, m in res["models"].items():
