@@ -32,6 +32,8 @@
 #include "tinyvo/version.h"
 #include "tinyvo/vo.h"
 
+#include "settings.h"
+
 enum scale_mode { SCALE_NONE, SCALE_GT, SCALE_MODEL, SCALE_PROPAGATE, SCALE_CONST };
 enum skip_kind { SKIP_MISSING, SKIP_CORRUPT, SKIP_SIZE, SKIP_TIMESTAMP, SKIP_BAD_ROW, SKIP_COUNT };
 static const char *const skip_names[SKIP_COUNT] = {"missing", "corrupt", "wrong_size", "timestamp",
@@ -47,6 +49,8 @@ static const char *const stage_names[TVO_STAGE_COUNT] = {"pyramid", "track", "un
 static const char *const map_state_names[TVO_MAP_STATE_COUNT] = {"off", "initialising", "initialised",
                                                                  "tracking", "lost"};
 
+#define TVO_REPLAY_MAX_SETS 64
+
 typedef struct options {
     const char *dir, *cam, *out, *model, *stats, *features, *tracks;
     const char *poses, *calib, *calib_cam;
@@ -58,6 +62,8 @@ typedef struct options {
     int track_prediction; /* --track-prediction 0|1 (< 0: the library's default) */
     int map;              /* --map 0|1 (< 0: the library's default) */
     long max_frames;
+    const char *sets[TVO_REPLAY_MAX_SETS]; /* --set NAME=VALUE, in order */
+    int n_sets, list_settings;
 } options;
 
 static void usage(FILE *f)
@@ -109,6 +115,9 @@ static void usage(FILE *f)
             "  --quiet              no progress line and no summary (errors and skipped frames\n"
             "                       are still reported)\n"
             "  --print-memory       print the VO working-memory size for the sequence and exit\n"
+            "  --set NAME=VALUE     set a field of tvo_vo_config (vo.h) by name, e.g. map_window=8,\n"
+            "                       lk.win_size=15; repeatable, applied after the switches above\n"
+            "  --list-settings      print every NAME --set knows, its type and default, and exit\n"
             "  --version            print the version and exit\n"
             "  --help               this text\n"
             "Exit codes: 0 done, 1 runtime error, 2 usage error.\n");
@@ -252,12 +261,27 @@ static int parse_args(int argc, char **argv, options *o)
             o->quiet = 1;
         } else if (!strcmp(a, "--print-memory")) {
             o->print_memory = 1;
+        } else if (!strcmp(a, "--set")) {
+            tvo_vo_config check;
+            NEED_VALUE();
+            tvo_vo_config_default(&check, NULL);
+            if (tvo_replay_setting_apply(&check, v) != 0)
+                return -1;
+            if (o->n_sets == TVO_REPLAY_MAX_SETS) {
+                fprintf(stderr, "tvo_replay: at most %d --set options\n", TVO_REPLAY_MAX_SETS);
+                return -1;
+            }
+            o->sets[o->n_sets++] = v;
+        } else if (!strcmp(a, "--list-settings")) {
+            o->list_settings = 1;
         } else {
             fprintf(stderr, "tvo_replay: unknown option '%s' (see --help)\n", a);
             return -1;
         }
 #undef NEED_VALUE
     }
+    if (o->list_settings)
+        return 0;
     if (o->dir == NULL) {
         fprintf(stderr, "tvo_replay: one of --euroc, --tum, --kitti is required (see --help)\n");
         return -1;
@@ -418,6 +442,11 @@ int main(int argc, char **argv)
 
     if (parse_args(argc, argv, &o) != 0)
         return 2;
+    if (o.list_settings) {
+        tvo_vo_config_default(&cfg, NULL);
+        tvo_replay_settings_print(stdout, &cfg);
+        return 0;
+    }
     tty = !o.quiet && isatty(STDERR_FILENO);
 
     memset(&calib, 0, sizeof(calib));
@@ -489,9 +518,14 @@ int main(int argc, char **argv)
         cfg.track_prediction = o.track_prediction;
     if (o.map >= 0)
         cfg.map = o.map;
+    for (int k = 0; k < o.n_sets; ++k)
+        (void)tvo_replay_setting_apply(&cfg, o.sets[k]); /* checked by parse_args */
     vo_size = tvo_vo_required_size(&cfg);
     if (vo_size == 0) {
-        fprintf(stderr, "tvo_replay: the camera of %s is not usable (check the calibration)\n", o.dir);
+        fprintf(stderr,
+                "tvo_replay: the configuration is not usable for %s (check the calibration and the --set "
+                "values: vo.h gives each field's range)\n",
+                o.dir);
         goto cleanup;
     }
     if (o.print_memory) {

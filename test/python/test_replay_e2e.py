@@ -189,6 +189,38 @@ def test_cli_usage_errors_name_the_option():
         assert r.returncode == 2 and part in r.stderr and r.stderr.count("\n") == 1, (args, r.stderr)
 
 
+def test_replay_set_settings(replayed, tmp_path):
+    """--set NAME=VALUE reaches tvo_vo_config: usage errors name the setting, --list-settings gives the
+    library's defaults, an out-of-range value is refused by the library (exit 1, no trajectory), and a
+    valid one changes the run while the default value set explicitly reproduces it byte for byte."""
+    replay = program("tvo_replay")
+    for args, part in ((["--set", "nosuch=1"], "no setting 'nosuch'"), (["--set", "map_window"], "NAME=VALUE"),
+                       (["--set", "lk.win_size=1.5"], "lk.win_size needs an integer"),
+                       (["--set", "map_kf_baseline=nan"], "map_kf_baseline needs a finite number"),
+                       (["--set", "lk.epsilon=1e40"], "lk.epsilon needs a finite number")):
+        r = run([replay, "--euroc", "a", "--out", "x"] + args)
+        assert r.returncode == 2 and part in r.stderr and r.stderr.count("\n") == 1, (args, r.stderr)
+    r = run([replay, "--list-settings"])
+    assert r.returncode == 0
+    table = {ln.split()[0]: ln.split()[2] for ln in r.stdout.splitlines()}
+    assert table["map_window"] == "6" and table["lk.win_size"] == "21" and table["map"] == "1"
+    assert len(table) >= 40
+    seq = tmp_path / "seq"
+    subprocess.run([sys.executable, "-m", "tinyvo_tools.synth", "--out", str(seq), "--builtin", "handheld",
+                    "--frames", "40", "--seed", "2", "--quiet"], check=True)
+    outs = {}
+    for tag, sets in (("default", []), ("explicit", ["--set", "map_window=6", "--set", "lk.win_size=21"]),
+                      ("small", ["--set", "lk.win_size=9", "--set", "max_tracks=100", "--set", "min_tracks=60"])):
+        outs[tag] = tmp_path / f"{tag}.txt"
+        r = run([replay, "--euroc", str(seq), "--out", str(outs[tag]), "--quiet"] + sets)
+        assert r.returncode == 0, r.stderr
+    assert outs["explicit"].read_bytes() == outs["default"].read_bytes()
+    assert outs["small"].read_bytes() != outs["default"].read_bytes()
+    bad = tmp_path / "bad.txt"
+    r = run([replay, "--euroc", str(seq), "--out", str(bad), "--set", "map_window=2"])
+    assert r.returncode == 1 and "not usable" in r.stderr and "--set" in r.stderr and not bad.exists()
+
+
 def test_live_checks_before_the_camera(tmp_path):
     live = program("tvo_live")
     missing_dev = ["--device", "/nonexistent/video9"]
