@@ -514,11 +514,12 @@ static int pencil_eig(const double D[9], double *sa, double *sb, double ea[3], d
     return 1;
 }
 
-int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4])
+/* unit bearings y of the image points x and the world triangle's equations q; d12 = X0 - X1 and nw =
+ * d12 x (X0 - X2) are kept for the pose. 0 when a point is unusable or the triangle or the rays
+ * degenerate. */
+static int p3p_setup(const double X[3][3], const double x[3][2], double y[3][3], double d12[3], double nw[3],
+                     p3p_eq *q)
 {
-    if (X == NULL || x == NULL || T_c_w == NULL)
-        return 0;
-    double y[3][3];
     for (int i = 0; i < 3; ++i) {
         tvo_point2d p;
         p.x = x[i][0];
@@ -530,31 +531,56 @@ int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4])
         y[i][1] = p.y / nn;
         y[i][2] = 1.0 / nn;
     }
-    double d12[3], d13[3], d23[3], nw[3];
+    double d13[3], d23[3];
     for (int k = 0; k < 3; ++k) {
         d12[k] = X[0][k] - X[1][k];
         d13[k] = X[0][k] - X[2][k];
         d23[k] = X[1][k] - X[2][k];
     }
-    p3p_eq q;
-    q.a12 = dot3(d12, d12);
-    q.a13 = dot3(d13, d13);
-    q.a23 = dot3(d23, d23);
+    q->a12 = dot3(d12, d12);
+    q->a13 = dot3(d13, d13);
+    q->a23 = dot3(d23, d23);
     cross3(d12, d13, nw);
-    if (!(dot3(nw, nw) > 1e-20 * q.a12 * q.a13) || !(q.a23 > 0.0))
+    if (!(dot3(nw, nw) > 1e-20 * q->a12 * q->a13) || !(q->a23 > 0.0))
         return 0; /* coincident or collinear */
-    q.c12 = dot3(y[0], y[1]);
-    q.c13 = dot3(y[0], y[2]);
-    q.c23 = dot3(y[1], y[2]);
-    if (q.c12 > 1.0 - 1e-15 || q.c13 > 1.0 - 1e-15 || q.c23 > 1.0 - 1e-15)
+    q->c12 = dot3(y[0], y[1]);
+    q->c13 = dot3(y[0], y[2]);
+    q->c23 = dot3(y[1], y[2]);
+    if (q->c12 > 1.0 - 1e-15 || q->c13 > 1.0 - 1e-15 || q->c23 > 1.0 - 1e-15)
         return 0; /* coincident rays */
+    return 1;
+}
 
-    /* l^T D1 l = 0, l^T D2 l = 0 on the solution */
-    const double D1[9] = {q.a23, -q.a23 * q.c12, 0.0,   -q.a23 * q.c12, q.a23 - q.a12, q.a12 * q.c23,
-                          0.0,   q.a12 * q.c23,  -q.a12};
-    const double D2[9] = {q.a23,          0.0,           -q.a23 * q.c13, 0.0, -q.a13, q.a13 * q.c23,
-                          -q.a23 * q.c13, q.a13 * q.c23, q.a23 - q.a13};
-    const double S[9] = {2.0, -q.c12, -q.c13, -q.c12, 2.0, -q.c23, -q.c13, -q.c23, 2.0};
+/* the homogeneous quadrics D1, D2: l^T D1 l = 0, l^T D2 l = 0 on the solution */
+static void p3p_conics(const p3p_eq *q, double D1[9], double D2[9])
+{
+    D1[0] = q->a23;
+    D1[1] = -q->a23 * q->c12;
+    D1[2] = 0.0;
+    D1[3] = -q->a23 * q->c12;
+    D1[4] = q->a23 - q->a12;
+    D1[5] = q->a12 * q->c23;
+    D1[6] = 0.0;
+    D1[7] = q->a12 * q->c23;
+    D1[8] = -q->a12;
+    D2[0] = q->a23;
+    D2[1] = 0.0;
+    D2[2] = -q->a23 * q->c13;
+    D2[3] = 0.0;
+    D2[4] = -q->a13;
+    D2[5] = q->a13 * q->c23;
+    D2[6] = -q->a23 * q->c13;
+    D2[7] = q->a13 * q->c23;
+    D2[8] = q->a23 - q->a13;
+}
+
+/* The rank-2 pencil D0 = D1 + g D2 (g a real root of det(D0) = 0) and its non-null eigenpairs
+ * (|*sa| >= |*sb|): the candidate roots are tried best-conditioned first (|p'(g)| / (1 + g^2)), the
+ * first indefinite pencil wins, else the first that decomposes; D2 alone when the cubic has no real
+ * root (its leading coefficient vanished: the root went to infinity). 0 if no candidate decomposes. */
+static int p3p_pencil(const double D1[9], const double D2[9], double *sa, double *sb, double ea[3],
+                      double eb[3])
+{
     double J1[9], J2[9], c[4], roots[3];
     adj3(D1, J1);
     adj3(D2, J2);
@@ -564,8 +590,6 @@ int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4])
     c[3] = D2[0] * J2[0] + D2[1] * J2[3] + D2[2] * J2[6];
     int nr = cubic_roots(c, roots);
 
-    /* candidate pencils D1 + g D2, best-conditioned root first (|p'(g)| / (1 + g^2)); D2 alone when the
-     * polynomial has no real root (its leading coefficient vanished: the root went to infinity) */
     double gs[3], score[3];
     int ng = 0;
     for (int i = 0; i < nr; ++i) {
@@ -581,7 +605,6 @@ int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4])
         gs[pos] = g;
         score[pos] = sc;
     }
-    double sa = 0.0, sb = 0.0, ea[3] = {0.0, 0.0, 0.0}, eb[3] = {0.0, 0.0, 0.0};
     int have = 0, found = 0;
     for (int cand = 0; cand < (ng > 0 ? ng : 1) && !found; ++cand) {
         double D0[9], ca, cb, va[3], vb[3];
@@ -591,20 +614,26 @@ int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4])
             continue;
         int indefinite = ca * cb < 0.0;
         if (indefinite || !have) {
-            sa = ca;
-            sb = cb;
-            memcpy(ea, va, sizeof ea);
-            memcpy(eb, vb, sizeof eb);
+            *sa = ca;
+            *sb = cb;
+            memcpy(ea, va, 3 * sizeof *ea);
+            memcpy(eb, vb, 3 * sizeof *eb);
             have = 1;
             found = indefinite;
         }
     }
-    if (!have)
-        return 0;
+    return have;
+}
+
+/* The positive depths l (sols, distinct, at most 4) in the planes (ea -+ s eb) . l = 0, s = sqrt(-sb /
+ * sa): in each plane the directions where l^T D1 l = l^T D2 l = 0, scaled by the sum of the three
+ * distance equations, polished by Gauss-Newton and kept when every equation holds to PNP_EQ_TOL. */
+static int p3p_depths(const p3p_eq *q, const double D1[9], const double D2[9], double sa, double sb,
+                      const double ea[3], const double eb[3], double sols[4][3])
+{
+    const double S[9] = {2.0, -q->c12, -q->c13, -q->c12, 2.0, -q->c23, -q->c13, -q->c23, 2.0};
     double s = -sb / sa;
     s = s > 0.0 ? sqrt(s) : 0.0;
-
-    double sols[4][3];
     int nsol = 0;
     for (int sign = 0; sign < 2; ++sign) {
         double u[3], mu[2][3];
@@ -617,7 +646,7 @@ int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4])
             double den = qform(S, mu[j]);
             if (!(den > 0.0))
                 continue;
-            double kk = sqrt((q.a12 + q.a13 + q.a23) / den);
+            double kk = sqrt((q->a12 + q->a13 + q->a23) / den);
             double l[3] = {kk * mu[j][0], kk * mu[j][1], kk * mu[j][2]};
             if (l[0] + l[1] + l[2] < 0.0) {
                 l[0] = -l[0];
@@ -626,7 +655,7 @@ int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4])
             }
             if (!(l[0] > 0.0 && l[1] > 0.0 && l[2] > 0.0))
                 continue;
-            if (!(p3p_polish(&q, l) <= PNP_EQ_TOL))
+            if (!(p3p_polish(q, l) <= PNP_EQ_TOL))
                 continue;
             if (!(l[0] > 0.0 && l[1] > 0.0 && l[2] > 0.0))
                 continue;
@@ -640,8 +669,15 @@ int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4])
             memcpy(sols[nsol++], l, sizeof l);
         }
     }
+    return nsol;
+}
 
-    /* poses: R maps the world triangle's orthonormal frame onto the camera triangle's */
+/* the poses of the depth solutions: R maps the world triangle's orthonormal frame (from d12 and its
+ * normal nw) onto the camera triangle's, t the world centroid onto the camera one; a degenerate or
+ * non-finite pose is left out. y and sols are only read. Returns the number written to T_c_w. */
+static int p3p_poses(const double X[3][3], double y[3][3], const double d12[3], const double nw[3],
+                     double sols[4][3], int nsol, tvo_pose T_c_w[4])
+{
     double w1[3], w2[3], w3[3];
     memcpy(w1, d12, sizeof w1);
     normalize3(w1);
@@ -683,6 +719,23 @@ int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4])
         T_c_w[nout++] = T;
     }
     return nout;
+}
+
+int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4])
+{
+    if (X == NULL || x == NULL || T_c_w == NULL)
+        return 0;
+    double y[3][3], d12[3], nw[3], D1[9], D2[9];
+    p3p_eq q;
+    if (!p3p_setup(X, x, y, d12, nw, &q))
+        return 0;
+    p3p_conics(&q, D1, D2);
+    double sa = 0.0, sb = 0.0, ea[3] = {0.0, 0.0, 0.0}, eb[3] = {0.0, 0.0, 0.0};
+    if (!p3p_pencil(D1, D2, &sa, &sb, ea, eb))
+        return 0;
+    double sols[4][3];
+    int nsol = p3p_depths(&q, D1, D2, sa, sb, ea, eb, sols);
+    return p3p_poses(X, y, d12, nw, sols, nsol, T_c_w);
 }
 
 /* ---- refinement --------------------------------------------------------------------------------- */
@@ -953,6 +1006,94 @@ static double msac_cost(const tvo_pose *T, const double (*X)[3], const tvo_point
     return cost;
 }
 
+/* The RANSAC hypothesis search over the m usable points idx: the guess *best scored first when
+ * use_guess (guess_finite: it was a finite pose), then P3P on random 3-point samples whose 4th point
+ * is an inlier of a solution, each scored by its MSAC cost (bailing out above the best), the iteration
+ * count adapted to the best inlier ratio. *best and *best_cost: the lowest-cost hypothesis. TVO_OK
+ * when there is one, else TVO_ERR_TOO_FEW (P3P had solutions) or TVO_ERR_DEGENERATE (it never had). */
+static tvo_status ransac_search(const tvo_pnp_config *cfg, const double (*X)[3], const tvo_point2d *x,
+                                const int32_t *idx, int32_t m, int guess_finite, tvo_pose *best,
+                                double *best_cost)
+{
+    const double th = cfg->threshold, th2 = th * th;
+    pnp_rng rng;
+    rng_seed(&rng, cfg->seed);
+    *best_cost = DBL_MAX;
+    int32_t best_inl = 0, need_it = cfg->max_iterations;
+    int have = 0, any = 0;
+    if (cfg->use_guess && guess_finite) {
+        int32_t cnt;
+        double cost = msac_cost(best, X, x, idx, m, th2, DBL_MAX, &cnt);
+        if (cnt > 0) {
+            *best_cost = cost;
+            best_inl = cnt;
+            have = 1;
+            need_it = ransac_needed(cfg->confidence, best_inl, m, PNP_SAMPLE, cfg->max_iterations);
+        }
+    }
+    for (int32_t it = 0; it < need_it; ++it) {
+        int32_t s[PNP_SAMPLE] = {0, 0, 0, 0};
+        double Xs[3][3], xs[3][2];
+        tvo_pose sol[4];
+        rng_sample(&rng, m, PNP_SAMPLE, s);
+        for (int j = 0; j < 3; ++j) {
+            int32_t i = idx[s[j]];
+            memcpy(Xs[j], X[i], sizeof Xs[j]);
+            xs[j][0] = x[i].x;
+            xs[j][1] = x[i].y;
+        }
+        int ns = tvo_p3p((const double(*)[3])Xs, (const double(*)[2])xs, sol);
+        if (ns == 0)
+            continue;
+        any = 1;
+        int32_t i4 = idx[s[3]];
+        for (int h = 0; h < ns; ++h) {
+            int front;
+            double e2 = reproj_err2(&sol[h], X[i4], &x[i4], &front);
+            if (!front || !(e2 < th2))
+                continue;
+            int32_t cnt;
+            double cost = msac_cost(&sol[h], X, x, idx, m, th2, *best_cost, &cnt);
+            if (cost < *best_cost) {
+                *best = sol[h];
+                *best_cost = cost;
+                best_inl = cnt;
+                have = 1;
+                need_it = ransac_needed(cfg->confidence, best_inl, m, PNP_SAMPLE, cfg->max_iterations);
+            }
+        }
+    }
+    if (!have)
+        return any ? TVO_ERR_TOO_FEW : TVO_ERR_DEGENERATE;
+    return TVO_OK;
+}
+
+/* Local optimisation of the best hypothesis: refine on its inliers, re-select them on all n points,
+ * while the inlier set grows (PNP_LO_ROUNDS at most); a refinement is kept only when its MSAC cost
+ * over idx is not above the best's. mask: the final inliers. Returns their count. */
+static int32_t ransac_local_opt(const tvo_pnp_config *cfg, const double (*X)[3], const tvo_point2d *x,
+                                int32_t n, const int32_t *idx, int32_t m, tvo_pose *best, double best_cost,
+                                uint8_t *mask)
+{
+    const double th = cfg->threshold, th2 = th * th;
+    int32_t cnt = mark_inliers(best, X, x, NULL, n, th, mask, NULL);
+    for (int round = 0; round < PNP_LO_ROUNDS && cnt >= 3; ++round) {
+        tvo_pose Tr = *best;
+        int32_t cr;
+        refine_core(cfg, X, x, mask, n, &Tr);
+        double cost = msac_cost(&Tr, X, x, idx, m, th2, DBL_MAX, &cr);
+        if (!(cost <= best_cost) || !tvo_pose_is_finite(&Tr))
+            break;
+        *best = Tr;
+        best_cost = cost;
+        int32_t prev = cnt;
+        cnt = mark_inliers(best, X, x, NULL, n, th, mask, NULL);
+        if (cnt <= prev)
+            break;
+    }
+    return cnt;
+}
+
 tvo_status tvo_pnp_ransac(const tvo_pnp_config *cfg, const double (*X)[3], const tvo_point2d *x, int32_t n,
                           tvo_pose *T_c_w, uint8_t *inliers, int32_t *n_inliers, void *scratch,
                           size_t scratch_size)
@@ -992,74 +1133,12 @@ tvo_status tvo_pnp_ransac(const tvo_pnp_config *cfg, const double (*X)[3], const
     if (m < PNP_SAMPLE)
         return TVO_ERR_TOO_FEW;
 
-    const double th = cfg->threshold, th2 = th * th;
-    pnp_rng rng;
-    rng_seed(&rng, cfg->seed);
     tvo_pose best = *T_c_w;
-    double best_cost = DBL_MAX;
-    int32_t best_inl = 0, need_it = cfg->max_iterations;
-    int have = 0, any = 0;
-    if (cfg->use_guess && guess_finite) {
-        int32_t cnt;
-        double cost = msac_cost(&best, X, x, idx, m, th2, DBL_MAX, &cnt);
-        if (cnt > 0) {
-            best_cost = cost;
-            best_inl = cnt;
-            have = 1;
-            need_it = ransac_needed(cfg->confidence, best_inl, m, PNP_SAMPLE, cfg->max_iterations);
-        }
-    }
-    for (int32_t it = 0; it < need_it; ++it) {
-        int32_t s[PNP_SAMPLE] = {0, 0, 0, 0};
-        double Xs[3][3], xs[3][2];
-        tvo_pose sol[4];
-        rng_sample(&rng, m, PNP_SAMPLE, s);
-        for (int j = 0; j < 3; ++j) {
-            int32_t i = idx[s[j]];
-            memcpy(Xs[j], X[i], sizeof Xs[j]);
-            xs[j][0] = x[i].x;
-            xs[j][1] = x[i].y;
-        }
-        int ns = tvo_p3p((const double(*)[3])Xs, (const double(*)[2])xs, sol);
-        if (ns == 0)
-            continue;
-        any = 1;
-        int32_t i4 = idx[s[3]];
-        for (int h = 0; h < ns; ++h) {
-            int front;
-            double e2 = reproj_err2(&sol[h], X[i4], &x[i4], &front);
-            if (!front || !(e2 < th2))
-                continue;
-            int32_t cnt;
-            double cost = msac_cost(&sol[h], X, x, idx, m, th2, best_cost, &cnt);
-            if (cost < best_cost) {
-                best = sol[h];
-                best_cost = cost;
-                best_inl = cnt;
-                have = 1;
-                need_it = ransac_needed(cfg->confidence, best_inl, m, PNP_SAMPLE, cfg->max_iterations);
-            }
-        }
-    }
-    if (!have)
-        return any ? TVO_ERR_TOO_FEW : TVO_ERR_DEGENERATE;
-
-    /* local optimisation: refine on the inliers, re-select, while the inlier set grows */
-    int32_t cnt = mark_inliers(&best, X, x, NULL, n, th, mask, NULL);
-    for (int round = 0; round < PNP_LO_ROUNDS && cnt >= 3; ++round) {
-        tvo_pose Tr = best;
-        int32_t cr;
-        refine_core(cfg, X, x, mask, n, &Tr);
-        double cost = msac_cost(&Tr, X, x, idx, m, th2, DBL_MAX, &cr);
-        if (!(cost <= best_cost) || !tvo_pose_is_finite(&Tr))
-            break;
-        best = Tr;
-        best_cost = cost;
-        int32_t prev = cnt;
-        cnt = mark_inliers(&best, X, x, NULL, n, th, mask, NULL);
-        if (cnt <= prev)
-            break;
-    }
+    double best_cost;
+    tvo_status st = ransac_search(cfg, X, x, idx, m, guess_finite, &best, &best_cost);
+    if (st != TVO_OK)
+        return st;
+    int32_t cnt = ransac_local_opt(cfg, X, x, n, idx, m, &best, best_cost, mask);
     if (cnt < cfg->min_inliers)
         return TVO_ERR_TOO_FEW;
     *T_c_w = best;
