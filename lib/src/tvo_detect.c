@@ -331,20 +331,152 @@ static int det_try_take(det_box *grid, const det_layout *L, float md2, const det
     return 1;
 }
 
+/* the buffers of one call, carved from the caller's scratch by det_bind */
+typedef struct det_work {
+    void *fast_mem;
+    tvo_corner *band;
+    det_cand *cand; /* ncells shortlists (heaps, then sorted) of L.ncand candidates each */
+    int32_t *ncand, *nexist, *cursor, *taken_n; /* per cell */
+    det_box *grid;                              /* gw x gh spacing grid */
+    det_pick *picks;
+} det_work;
+
+/* carve the buffers of layout L from scratch (16-aligned), zero the per-cell counters, empty the grid */
+static void det_bind(const det_layout *L, void *scratch, det_work *w)
+{
+    uint8_t *base;
+    int32_t i;
+    {
+        size_t mis = (size_t)((uintptr_t)scratch % 16u);
+        base = (uint8_t *)scratch + (mis ? 16u - mis : 0);
+    }
+    w->fast_mem = base + L->off_fast;
+    w->band = (tvo_corner *)(void *)(base + L->off_band);
+    w->cand = (det_cand *)(void *)(base + L->off_cand);
+    w->ncand = (int32_t *)(void *)(base + L->off_ncand);
+    w->nexist = (int32_t *)(void *)(base + L->off_nexist);
+    w->cursor = (int32_t *)(void *)(base + L->off_cursor);
+    w->taken_n = w->cursor + L->ncells;
+    w->grid = (det_box *)(void *)(base + L->off_grid);
+    w->picks = (det_pick *)(void *)(base + L->off_picks);
+    memset(w->ncand, 0, (size_t)L->ncells * sizeof(int32_t));
+    memset(w->nexist, 0, (size_t)L->ncells * sizeof(int32_t));
+    memset(w->cursor, 0, 2u * (size_t)L->ncells * sizeof(int32_t));
+    for (i = 0; i < L->gw * L->gh; ++i) {
+        w->grid[i].x0 = 1.0f;
+        w->grid[i].x1 = 0.0f;
+        w->grid[i].y0 = w->grid[i].y1 = 0.0f;
+    }
+}
+
+/* existing points: per-cell counts (inside the inner region) and the spacing grid (inside the image) */
+static void det_add_existing(const tvo_detect_config *cfg, const det_layout *L, int32_t W, int32_t H,
+                             const tvo_point2f *existing, int32_t n_existing, det_work *w)
+{
+    int32_t i, B = L->border;
+    for (i = 0; i < n_existing; ++i) {
+        float x = existing[i].x, y = existing[i].y;
+        if (!(x >= 0.0f && y >= 0.0f && x < (float)W && y < (float)H))
+            continue;
+        if (L->gw > 0)
+            det_grid_add(w->grid, L, x, y);
+        {
+            int32_t u = (int32_t)x - B, v = (int32_t)y - B;
+            if (x >= (float)B && y >= (float)B && u < L->inner_w && v < L->inner_h) {
+                int32_t cx = (int32_t)(((int64_t)u * cfg->grid_cols) / L->inner_w);
+                int32_t cy = (int32_t)(((int64_t)v * cfg->grid_rows) / L->inner_h);
+                w->nexist[cy * cfg->grid_cols + cx]++;
+            }
+        }
+    }
+}
+
+/* FAST in bands of rows; shortlist the strongest per cell (cells already full of existing points skipped) */
+static tvo_status det_shortlist(const tvo_detect_config *cfg, const tvo_image *img, const det_layout *L,
+                                det_work *w)
+{
+    int32_t W = img->width, H = img->height, B = L->border, y0;
+    for (y0 = B; y0 < H - B; y0 += DET_BAND) {
+        int32_t y1 = y0 + DET_BAND < H - B ? y0 + DET_BAND : H - B;
+        int32_t nb = 0, k;
+        tvo_status st = tvo_fast9_detect_rows(img, cfg->fast_threshold, 1, y0, y1, w->band, L->band_cap, &nb,
+                                              w->fast_mem, tvo_fast_scratch_size(W));
+        if (st != TVO_OK && st != TVO_ERR_NO_MEMORY)
+            return st;
+        for (k = 0; k < nb; ++k) {
+            int32_t x = (int32_t)w->band[k].x, y = (int32_t)w->band[k].y, cx, cy, cell;
+            det_cand cd;
+            if (x < B || x >= W - B)
+                continue;
+            cx = (int32_t)(((int64_t)(x - B) * cfg->grid_cols) / L->inner_w);
+            cy = (int32_t)(((int64_t)(y - B) * cfg->grid_rows) / L->inner_h);
+            cell = cy * cfg->grid_cols + cx;
+            if (w->nexist[cell] >= L->quota)
+                continue;
+            cd.x = x;
+            cd.y = y;
+            cd.score = w->band[k].score;
+            cd.order = y * W + x;
+            det_heap_push(w->cand + (size_t)cell * (size_t)L->ncand, &w->ncand[cell], L->ncand, &cd);
+        }
+    }
+    return TVO_OK;
+}
+
+/* pass 1: rank each cell's shortlist and pick greedily up to the cell's quota; cursor: where it stopped */
+static void det_pick_per_cell(const tvo_detect_config *cfg, const tvo_image *img, const det_layout *L,
+                              float md2, det_work *w, int32_t *npicks)
+{
+    int32_t c;
+    for (c = 0; c < L->ncells; ++c) {
+        det_cand *h = w->cand + (size_t)c * (size_t)L->ncand;
+        int32_t n = w->ncand[c], q = L->quota - w->nexist[c], k;
+        if (n == 0 || q <= 0)
+            continue;
+        if (cfg->score != TVO_SCORE_FAST)
+            for (k = 0; k < n; ++k)
+                h[k].score = tvo_corner_score_at(img, h[k].x, h[k].y, cfg->score, cfg->block_size,
+                                                 cfg->harris_k);
+        det_sort_cands(h, n);
+        for (k = 0; k < n && w->taken_n[c] < q; ++k)
+            det_try_take(w->grid, L, md2, &h[k], c, &w->taken_n[c], w->picks, npicks);
+        w->cursor[c] = k;
+    }
+}
+
+/* pass 2: too few corners overall: the non-full cells give their next best in turns, up to limit */
+static void det_pick_in_turns(const det_layout *L, float md2, int32_t limit, det_work *w, int32_t *npicks)
+{
+    int32_t c;
+    for (;;) {
+        int progress = 0;
+        for (c = 0; c < L->ncells && *npicks < limit; ++c) {
+            det_cand *h = w->cand + (size_t)c * (size_t)L->ncand;
+            if (L->quota - w->nexist[c] <= 0)
+                continue;
+            while (w->cursor[c] < w->ncand[c]) {
+                int took = det_try_take(w->grid, L, md2, &h[w->cursor[c]], c, &w->taken_n[c], w->picks,
+                                        npicks);
+                ++w->cursor[c];
+                if (took) {
+                    progress = 1;
+                    break;
+                }
+            }
+        }
+        if (!progress || *npicks >= limit)
+            break;
+    }
+}
+
 tvo_status tvo_detect(const tvo_detect_config *cfg, const tvo_image *img, const tvo_point2f *existing,
                       int32_t n_existing, tvo_corner *out, int32_t capacity, int32_t *count, void *scratch,
                       size_t scratch_size)
 {
     det_layout L;
+    det_work w;
     tvo_status st;
-    uint8_t *base;
-    void *fast_mem;
-    tvo_corner *band;
-    det_cand *cand;
-    int32_t *ncand, *nexist, *cursor, *taken_n;
-    det_box *grid;
-    det_pick *picks;
-    int32_t W, H, B, i, c, y0, npicks = 0, limit;
+    int32_t i, npicks = 0, limit;
     float md, md2;
 
     if (count != NULL)
@@ -369,122 +501,27 @@ tvo_status tvo_detect(const tvo_detect_config *cfg, const tvo_image *img, const 
         if (!isfinite(existing[i].x) || !isfinite(existing[i].y))
             return TVO_ERR_NOT_FINITE;
 
-    W = img->width;
-    H = img->height;
-    B = L.border;
     limit = capacity < cfg->max_corners ? capacity : cfg->max_corners;
     if (L.inner_w <= 0 || L.inner_h <= 0 || limit == 0 || L.quota == 0)
         return TVO_OK;
 
-    {
-        size_t mis = (size_t)((uintptr_t)scratch % 16u);
-        base = (uint8_t *)scratch + (mis ? 16u - mis : 0);
-    }
-    fast_mem = base + L.off_fast;
-    band = (tvo_corner *)(void *)(base + L.off_band);
-    cand = (det_cand *)(void *)(base + L.off_cand);
-    ncand = (int32_t *)(void *)(base + L.off_ncand);
-    nexist = (int32_t *)(void *)(base + L.off_nexist);
-    cursor = (int32_t *)(void *)(base + L.off_cursor);
-    taken_n = cursor + L.ncells;
-    grid = (det_box *)(void *)(base + L.off_grid);
-    picks = (det_pick *)(void *)(base + L.off_picks);
-    memset(ncand, 0, (size_t)L.ncells * sizeof(int32_t));
-    memset(nexist, 0, (size_t)L.ncells * sizeof(int32_t));
-    memset(cursor, 0, 2u * (size_t)L.ncells * sizeof(int32_t));
+    det_bind(&L, scratch, &w);
     md = cfg->min_distance;
     md2 = md * md;
-    for (i = 0; i < L.gw * L.gh; ++i) {
-        grid[i].x0 = 1.0f;
-        grid[i].x1 = 0.0f;
-        grid[i].y0 = grid[i].y1 = 0.0f;
-    }
+    det_add_existing(cfg, &L, img->width, img->height, existing, n_existing, &w);
+    st = det_shortlist(cfg, img, &L, &w);
+    if (st != TVO_OK)
+        return st;
+    det_pick_per_cell(cfg, img, &L, md2, &w, &npicks);
+    det_pick_in_turns(&L, md2, limit, &w, &npicks);
 
-    /* existing points: per-cell counts (inside the inner region) and the spacing grid (inside the image) */
-    for (i = 0; i < n_existing; ++i) {
-        float x = existing[i].x, y = existing[i].y;
-        if (!(x >= 0.0f && y >= 0.0f && x < (float)W && y < (float)H))
-            continue;
-        if (L.gw > 0)
-            det_grid_add(grid, &L, x, y);
-        {
-            int32_t u = (int32_t)x - B, v = (int32_t)y - B;
-            if (x >= (float)B && y >= (float)B && u < L.inner_w && v < L.inner_h) {
-                int32_t cx = (int32_t)(((int64_t)u * cfg->grid_cols) / L.inner_w);
-                int32_t cy = (int32_t)(((int64_t)v * cfg->grid_rows) / L.inner_h);
-                nexist[cy * cfg->grid_cols + cx]++;
-            }
-        }
-    }
-
-    /* FAST in bands of rows; shortlist the strongest per cell */
-    for (y0 = B; y0 < H - B; y0 += DET_BAND) {
-        int32_t y1 = y0 + DET_BAND < H - B ? y0 + DET_BAND : H - B;
-        int32_t nb = 0, k;
-        st = tvo_fast9_detect_rows(img, cfg->fast_threshold, 1, y0, y1, band, L.band_cap, &nb, fast_mem,
-                                   tvo_fast_scratch_size(W));
-        if (st != TVO_OK && st != TVO_ERR_NO_MEMORY)
-            return st;
-        for (k = 0; k < nb; ++k) {
-            int32_t x = (int32_t)band[k].x, y = (int32_t)band[k].y, cx, cy, cell;
-            det_cand cd;
-            if (x < B || x >= W - B)
-                continue;
-            cx = (int32_t)(((int64_t)(x - B) * cfg->grid_cols) / L.inner_w);
-            cy = (int32_t)(((int64_t)(y - B) * cfg->grid_rows) / L.inner_h);
-            cell = cy * cfg->grid_cols + cx;
-            if (nexist[cell] >= L.quota)
-                continue;
-            cd.x = x;
-            cd.y = y;
-            cd.score = band[k].score;
-            cd.order = y * W + x;
-            det_heap_push(cand + (size_t)cell * (size_t)L.ncand, &ncand[cell], L.ncand, &cd);
-        }
-    }
-
-    /* pass 1: rank each cell's shortlist and pick greedily up to the cell's quota */
-    for (c = 0; c < L.ncells; ++c) {
-        det_cand *h = cand + (size_t)c * (size_t)L.ncand;
-        int32_t n = ncand[c], q = L.quota - nexist[c], k;
-        if (n == 0 || q <= 0)
-            continue;
-        if (cfg->score != TVO_SCORE_FAST)
-            for (k = 0; k < n; ++k)
-                h[k].score = tvo_corner_score_at(img, h[k].x, h[k].y, cfg->score, cfg->block_size,
-                                                 cfg->harris_k);
-        det_sort_cands(h, n);
-        for (k = 0; k < n && taken_n[c] < q; ++k)
-            det_try_take(grid, &L, md2, &h[k], c, &taken_n[c], picks, &npicks);
-        cursor[c] = k;
-    }
-    /* pass 2: too few corners overall: the non-full cells give their next best in turns */
-    for (;;) {
-        int progress = 0;
-        for (c = 0; c < L.ncells && npicks < limit; ++c) {
-            det_cand *h = cand + (size_t)c * (size_t)L.ncand;
-            if (L.quota - nexist[c] <= 0)
-                continue;
-            while (cursor[c] < ncand[c]) {
-                int took = det_try_take(grid, &L, md2, &h[cursor[c]], c, &taken_n[c], picks, &npicks);
-                ++cursor[c];
-                if (took) {
-                    progress = 1;
-                    break;
-                }
-            }
-        }
-        if (!progress || npicks >= limit)
-            break;
-    }
-
-    det_sort_picks(picks, npicks);
+    det_sort_picks(w.picks, npicks);
     if (npicks > limit)
         npicks = limit;
     for (i = 0; i < npicks; ++i) {
-        out[i].x = picks[i].x;
-        out[i].y = picks[i].y;
-        out[i].score = picks[i].score;
+        out[i].x = w.picks[i].x;
+        out[i].y = w.picks[i].y;
+        out[i].score = w.picks[i].score;
     }
     *count = npicks;
     return TVO_OK;
