@@ -267,6 +267,91 @@ tvo_status tvo_nn_required_size(const void *file, size_t file_size, size_t *byte
     return tvo_nn_validate((const uint8_t *)file, file_size, bytes);
 }
 
+/* one validated layer entry le into L: weights (column-major for small S8 layers), the bias with the
+ * input zero point folded in, the requantisation (S8) or output scales (F32), the activation table;
+ * the network's MAC count and widest layer (*width) grow with it */
+static tvo_status load_layer(const uint8_t *f, const uint8_t *le, tvo_arena *arena, tvo_nn *nn,
+                             tvo_nn_layer_rt *L, uint32_t *width)
+{
+    uint32_t n_in = rd_u32(le), n_out = rd_u32(le + 4), o, j;
+    int32_t in_zp = rd_i32(le + 16);
+    const uint8_t *wf = f + rd_u32(le + 40), *bf = f + rd_u32(le + 44), *mf = f + rd_u32(le + 48);
+    L->n_in = (int32_t)n_in;
+    L->n_out = (int32_t)n_out;
+    L->act = (int32_t)rd_u32(le + 8);
+    L->out_kind = (int32_t)rd_u32(le + 12);
+    L->out_zp = rd_i32(le + 20);
+    L->w = (int8_t *)tvo_arena_alloc(arena, tvo_arena_round((size_t)n_in * n_out));
+    L->bias = (int32_t *)tvo_arena_alloc(arena, tvo_arena_round((size_t)n_out * 4u));
+    if (L->w == NULL || L->bias == NULL)
+        return TVO_ERR_NO_MEMORY;
+    const int8_t *ws = (const int8_t *)wf; /* int8_t is two's complement: bytes read as-is */
+    L->cols = L->out_kind == (int32_t)TVO_NN_OUT_S8 && n_in < TVO_NN_COLS_MAX_IN;
+    for (o = 0; o < n_out; ++o)
+        for (j = 0; j < n_in; ++j)
+            L->w[L->cols ? (size_t)j * n_out + o : (size_t)o * n_in + j] = ws[(size_t)o * n_in + j];
+    for (o = 0; o < n_out; ++o) {
+        int32_t rowsum = 0;
+        for (j = 0; j < n_in; ++j)
+            rowsum += ws[(size_t)o * n_in + j];
+        /* bias + sum w (x - zp) = (bias - zp sum w) + sum w x; bounded by the validation */
+        L->bias[o] = rd_i32(bf + 4u * o) - in_zp * rowsum;
+    }
+    if (L->out_kind == (int32_t)TVO_NN_OUT_S8) {
+        const uint8_t *sf = f + rd_u32(le + 52);
+        L->mult = (int32_t *)tvo_arena_alloc(arena, tvo_arena_round((size_t)n_out * 4u));
+        L->shift = (int32_t *)tvo_arena_alloc(arena, tvo_arena_round((size_t)n_out * 4u));
+        if (L->mult == NULL || L->shift == NULL)
+            return TVO_ERR_NO_MEMORY;
+        for (o = 0; o < n_out; ++o) {
+            L->mult[o] = rd_i32(mf + 4u * o);
+            L->shift[o] = rd_i32(sf + 4u * o);
+        }
+    } else {
+        L->scale = (float *)tvo_arena_alloc(arena, tvo_arena_round((size_t)n_out * 4u));
+        if (L->scale == NULL)
+            return TVO_ERR_NO_MEMORY;
+        for (o = 0; o < n_out; ++o)
+            L->scale[o] = rd_f32(mf + 4u * o);
+    }
+    if (L->act != TVO_NN_ACT_NONE) {
+        L->lut = (int8_t *)tvo_arena_alloc(arena, 256u);
+        if (L->lut == NULL)
+            return TVO_ERR_NO_MEMORY;
+        memcpy(L->lut, f + rd_u32(le + 56), 256u);
+    }
+    nn->macs += n_in * n_out;
+    if (n_out > *width)
+        *width = n_out;
+    return TVO_OK;
+}
+
+/* one validated branch entry e into br: its header, input normalisation, then its layers */
+static tvo_status load_branch(const uint8_t *f, const uint8_t *e, tvo_arena *arena, tvo_nn *nn,
+                              tvo_nn_branch_rt *br, uint32_t *width)
+{
+    uint32_t in_off = rd_u32(e + 12), ly_off = rd_u32(e + 16), i, k;
+    br->dof = (int32_t)rd_u32(e);
+    br->n_in = (int32_t)rd_u32(e + 4);
+    br->n_layers = (int32_t)rd_u32(e + 8);
+    br->in_scale = rd_f32(e + 20);
+    br->in_zp = rd_i32(e + 24);
+    br->out_scale = rd_f32(e + 28);
+    br->out_offset = rd_f32(e + 32);
+    nn->mask |= (int32_t)1 << (br->dof < TVO_NN_STEP ? br->dof : TVO_NN_STEP);
+    for (i = 0; i < (uint32_t)br->n_in; ++i) {
+        const uint8_t *ie = f + in_off + (size_t)i * TVO_NN_INPUT_ENTRY_SIZE;
+        br->ids[i] = (uint8_t)rd_u32(ie);
+        br->norm_scale[i] = rd_f32(ie + 4);
+        br->norm_offset[i] = rd_f32(ie + 8);
+        nn->feature_mask |= 1u << br->ids[i];
+    }
+    for (k = 0; k < (uint32_t)br->n_layers; ++k)
+        TVO_TRY(load_layer(f, f + ly_off + (size_t)k * TVO_NN_LAYER_ENTRY_SIZE, arena, nn, &br->layers[k],
+                           width));
+    return TVO_OK;
+}
+
 tvo_status tvo_nn_load(tvo_nn **out, const void *file, size_t file_size, void *mem, size_t mem_size)
 {
     const uint8_t *f = (const uint8_t *)file;
@@ -289,80 +374,9 @@ tvo_status tvo_nn_load(tvo_nn **out, const void *file, size_t file_size, void *m
     memset(nn, 0, sizeof *nn);
     nb = rd_u32(f + 28);
     nn->n_branches = (int32_t)nb;
-    for (b = 0; b < nb; ++b) {
-        const uint8_t *e = f + rd_u32(f + 32) + (size_t)b * TVO_NN_BRANCH_ENTRY_SIZE;
-        tvo_nn_branch_rt *br = &nn->br[b];
-        uint32_t in_off = rd_u32(e + 12), ly_off = rd_u32(e + 16), i, k;
-        br->dof = (int32_t)rd_u32(e);
-        br->n_in = (int32_t)rd_u32(e + 4);
-        br->n_layers = (int32_t)rd_u32(e + 8);
-        br->in_scale = rd_f32(e + 20);
-        br->in_zp = rd_i32(e + 24);
-        br->out_scale = rd_f32(e + 28);
-        br->out_offset = rd_f32(e + 32);
-        nn->mask |= (int32_t)1 << (br->dof < TVO_NN_STEP ? br->dof : TVO_NN_STEP);
-        for (i = 0; i < (uint32_t)br->n_in; ++i) {
-            const uint8_t *ie = f + in_off + (size_t)i * TVO_NN_INPUT_ENTRY_SIZE;
-            br->ids[i] = (uint8_t)rd_u32(ie);
-            br->norm_scale[i] = rd_f32(ie + 4);
-            br->norm_offset[i] = rd_f32(ie + 8);
-            nn->feature_mask |= 1u << br->ids[i];
-        }
-        for (k = 0; k < (uint32_t)br->n_layers; ++k) {
-            const uint8_t *le = f + ly_off + (size_t)k * TVO_NN_LAYER_ENTRY_SIZE;
-            tvo_nn_layer_rt *L = &br->layers[k];
-            uint32_t n_in = rd_u32(le), n_out = rd_u32(le + 4), o, j;
-            int32_t in_zp = rd_i32(le + 16);
-            const uint8_t *wf = f + rd_u32(le + 40), *bf = f + rd_u32(le + 44), *mf = f + rd_u32(le + 48);
-            L->n_in = (int32_t)n_in;
-            L->n_out = (int32_t)n_out;
-            L->act = (int32_t)rd_u32(le + 8);
-            L->out_kind = (int32_t)rd_u32(le + 12);
-            L->out_zp = rd_i32(le + 20);
-            L->w = (int8_t *)tvo_arena_alloc(&arena, tvo_arena_round((size_t)n_in * n_out));
-            L->bias = (int32_t *)tvo_arena_alloc(&arena, tvo_arena_round((size_t)n_out * 4u));
-            if (L->w == NULL || L->bias == NULL)
-                return TVO_ERR_NO_MEMORY;
-            const int8_t *ws = (const int8_t *)wf; /* int8_t is two's complement: bytes read as-is */
-            L->cols = L->out_kind == (int32_t)TVO_NN_OUT_S8 && n_in < TVO_NN_COLS_MAX_IN;
-            for (o = 0; o < n_out; ++o)
-                for (j = 0; j < n_in; ++j)
-                    L->w[L->cols ? (size_t)j * n_out + o : (size_t)o * n_in + j] = ws[(size_t)o * n_in + j];
-            for (o = 0; o < n_out; ++o) {
-                int32_t rowsum = 0;
-                for (j = 0; j < n_in; ++j)
-                    rowsum += ws[(size_t)o * n_in + j];
-                /* bias + sum w (x - zp) = (bias - zp sum w) + sum w x; bounded by the validation */
-                L->bias[o] = rd_i32(bf + 4u * o) - in_zp * rowsum;
-            }
-            if (L->out_kind == (int32_t)TVO_NN_OUT_S8) {
-                const uint8_t *sf = f + rd_u32(le + 52);
-                L->mult = (int32_t *)tvo_arena_alloc(&arena, tvo_arena_round((size_t)n_out * 4u));
-                L->shift = (int32_t *)tvo_arena_alloc(&arena, tvo_arena_round((size_t)n_out * 4u));
-                if (L->mult == NULL || L->shift == NULL)
-                    return TVO_ERR_NO_MEMORY;
-                for (o = 0; o < n_out; ++o) {
-                    L->mult[o] = rd_i32(mf + 4u * o);
-                    L->shift[o] = rd_i32(sf + 4u * o);
-                }
-            } else {
-                L->scale = (float *)tvo_arena_alloc(&arena, tvo_arena_round((size_t)n_out * 4u));
-                if (L->scale == NULL)
-                    return TVO_ERR_NO_MEMORY;
-                for (o = 0; o < n_out; ++o)
-                    L->scale[o] = rd_f32(mf + 4u * o);
-            }
-            if (L->act != TVO_NN_ACT_NONE) {
-                L->lut = (int8_t *)tvo_arena_alloc(&arena, 256u);
-                if (L->lut == NULL)
-                    return TVO_ERR_NO_MEMORY;
-                memcpy(L->lut, f + rd_u32(le + 56), 256u);
-            }
-            nn->macs += n_in * n_out;
-            if (n_out > width)
-                width = n_out;
-        }
-    }
+    for (b = 0; b < nb; ++b)
+        TVO_TRY(load_branch(f, f + rd_u32(f + 32) + (size_t)b * TVO_NN_BRANCH_ENTRY_SIZE, &arena, nn,
+                            &nn->br[b], &width));
     nn->max_width = (int32_t)width;
     nn->scratch_a = (int8_t *)tvo_arena_alloc(&arena, tvo_arena_round(width));
     nn->scratch_b = (int8_t *)tvo_arena_alloc(&arena, tvo_arena_round(width));
