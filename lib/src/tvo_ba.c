@@ -679,16 +679,105 @@ static tvo_status check_problem(const tvo_ba_config *cfg, const tvo_ba_problem *
     return TVO_OK;
 }
 
+/* observations grouped by point (counting sort, stable): pt_obs[pt_start[j] .. pt_start[j + 1]) */
+static void group_by_point(const tvo_ba_problem *p, ba_ws *ws)
+{
+    for (int32_t j = 0; j <= p->n_points; ++j)
+        ws->pt_start[j] = 0;
+    for (int32_t k = 0; k < p->n_obs; ++k)
+        ws->pt_start[p->obs[k].point + 1]++;
+    for (int32_t j = 0; j < p->n_points; ++j)
+        ws->pt_start[j + 1] += ws->pt_start[j];
+    for (int32_t j = 0; j < p->n_points; ++j)
+        ws->pt_nuse[j] = ws->pt_start[j]; /* fill cursor */
+    for (int32_t k = 0; k < p->n_obs; ++k)
+        ws->pt_obs[ws->pt_nuse[p->obs[k].point]++] = k;
+}
+
+/* the state of the current linearisation: its cost and counts (see linearise) */
+typedef struct ba_lin {
+    double cost;
+    int32_t n_used, n_skip, n_held, nfree;
+} ba_lin;
+
+/* linearise at the current state into *L; a starved free pose flags the report singular */
+static void relinearise(const tvo_ba_config *cfg, const tvo_ba_problem *p, ba_ws *ws, int first, ba_lin *L,
+                        tvo_ba_report *r)
+{
+    int starved;
+    L->cost = linearise(cfg, p, ws, first, &L->n_used, &L->n_skip, &L->n_held, &L->nfree, &starved);
+    if (starved)
+        r->flags |= TVO_BA_FLAG_SINGULAR;
+}
+
+/* One Levenberg-Marquardt trial at damping *lambda: solve the damped reduced system, apply the step
+ * and keep it when the cost drops by more than ACCEPT_REL of it (*lambda / 10, relinearise next:
+ * *linearised = 0), else restore the state (*lambda * 10); a singular system raises *lambda too.
+ * Returns 1 when the solve has converged (the model promises no meaningful decrease, or an accepted
+ * step gained less than CONVERGED_REL). */
+static int lm_trial(const tvo_ba_config *cfg, tvo_ba_problem *p, ba_ws *ws, ba_lin *L, double *lambda,
+                    int *linearised, tvo_ba_report *r)
+{
+    double cnew;
+    if (!build_solve(cfg, p, ws, L->nfree, *lambda, PIVOT_DAMPED, 1)) {
+        r->iterations++;
+        r->flags |= TVO_BA_FLAG_SINGULAR;
+        *lambda *= 10.0;
+        return 0;
+    }
+    if (!(predicted_drop(p, ws, *lambda) > ACCEPT_REL * L->cost))
+        return 1; /* the model promises no meaningful decrease: a stationary point */
+    r->iterations++;
+    if (!apply_step(p, ws, L->nfree) || !((cnew = eval_cost(cfg, p, ws)) < L->cost - ACCEPT_REL * L->cost)) {
+        restore(p, ws);
+        *lambda *= 10.0;
+        return 0;
+    }
+    const double drop = L->cost - cnew;
+    r->accepted++;
+    L->cost = cnew;
+    *lambda = *lambda / 10.0 < LAMBDA_MIN ? LAMBDA_MIN : *lambda / 10.0;
+    *linearised = 0;
+    return drop < CONVERGED_REL * (L->cost + drop);
+}
+
+/* The damped iterations from the first linearisation *L (at most max_iterations trials, relinearising
+ * after each accepted step). Returns 1 when converged: nothing left to optimise, the cost at
+ * COST_FLOOR per observation, no meaningful decrease, or the damping above LAMBDA_MAX; 0 at the
+ * iteration cap. */
+static int lm_iterate(const tvo_ba_config *cfg, tvo_ba_problem *p, ba_ws *ws, ba_lin *L, tvo_ba_report *r)
+{
+    double lambda = cfg->lambda_init;
+    int linearised = 1;
+    backup(p, ws);
+    for (int32_t it = 0; it < cfg->max_iterations; ++it) {
+        int has_free_point = 0;
+        if (!linearised) {
+            relinearise(cfg, p, ws, 0, L, r);
+            backup(p, ws);
+            linearised = 1;
+        }
+        for (int32_t j = 0; j < p->n_points && !has_free_point; ++j)
+            has_free_point = ws->pstate[j] == PT_FREE;
+        if (L->n_used == 0 || L->cost <= COST_FLOOR * (double)L->n_used ||
+            (L->nfree == 0 && !has_free_point) || !isfinite(L->cost))
+            return 1;
+        if (lm_trial(cfg, p, ws, L, &lambda, &linearised, r))
+            return 1;
+        if (lambda > LAMBDA_MAX)
+            return 1; /* no step lowers the cost any more */
+    }
+    return 0;
+}
+
 tvo_status tvo_ba_solve(const tvo_ba_config *cfg, tvo_ba_problem *p, void *scratch, size_t scratch_size,
                         tvo_ba_report *rep)
 {
     ba_ws ws;
+    ba_lin L;
     tvo_ba_report r;
     tvo_status st;
     uint8_t *base;
-    double cost, lambda;
-    int32_t n_used, n_skip, n_held, nfree, it;
-    int starved, converged = 0, linearised = 1;
     if (cfg == NULL || p == NULL || scratch == NULL)
         return TVO_ERR_NULL;
     if (!cfg_valid(cfg))
@@ -700,86 +789,24 @@ tvo_status tvo_ba_solve(const tvo_ba_config *cfg, tvo_ba_problem *p, void *scrat
         return TVO_ERR_NO_MEMORY;
     base = (uint8_t *)scratch + ((16u - ((uintptr_t)scratch & 15u)) & 15u);
     (void)carve(cfg, base, &ws);
-
-    /* observations grouped by point (counting sort, stable) */
-    for (int32_t j = 0; j <= p->n_points; ++j)
-        ws.pt_start[j] = 0;
-    for (int32_t k = 0; k < p->n_obs; ++k)
-        ws.pt_start[p->obs[k].point + 1]++;
-    for (int32_t j = 0; j < p->n_points; ++j)
-        ws.pt_start[j + 1] += ws.pt_start[j];
-    for (int32_t j = 0; j < p->n_points; ++j)
-        ws.pt_nuse[j] = ws.pt_start[j]; /* fill cursor */
-    for (int32_t k = 0; k < p->n_obs; ++k)
-        ws.pt_obs[ws.pt_nuse[p->obs[k].point]++] = k;
+    group_by_point(p, &ws);
 
     memset(&r, 0, sizeof r);
-    cost = linearise(cfg, p, &ws, 1, &n_used, &n_skip, &n_held, &nfree, &starved);
-    r.cost_initial = cost;
-    if (starved)
-        r.flags |= TVO_BA_FLAG_SINGULAR;
+    relinearise(cfg, p, &ws, 1, &L, &r);
+    r.cost_initial = L.cost;
     /* the undamped reduced system: is every free pose determined? */
-    if (nfree > 0 && !build_solve(cfg, p, &ws, nfree, 0.0, PIVOT_SINGULAR, 0))
+    if (L.nfree > 0 && !build_solve(cfg, p, &ws, L.nfree, 0.0, PIVOT_SINGULAR, 0))
         r.flags |= TVO_BA_FLAG_SINGULAR;
-    lambda = cfg->lambda_init;
-    backup(p, &ws);
-    for (it = 0; it < cfg->max_iterations; ++it) {
-        int has_free_point = 0;
-        double cnew;
-        if (!linearised) {
-            cost = linearise(cfg, p, &ws, 0, &n_used, &n_skip, &n_held, &nfree, &starved);
-            if (starved)
-                r.flags |= TVO_BA_FLAG_SINGULAR;
-            backup(p, &ws);
-            linearised = 1;
-        }
-        for (int32_t j = 0; j < p->n_points && !has_free_point; ++j)
-            has_free_point = ws.pstate[j] == PT_FREE;
-        if (n_used == 0 || cost <= COST_FLOOR * (double)n_used || (nfree == 0 && !has_free_point) ||
-            !isfinite(cost)) {
-            converged = 1;
-            break;
-        }
-        if (!build_solve(cfg, p, &ws, nfree, lambda, PIVOT_DAMPED, 1)) {
-            r.iterations++;
-            r.flags |= TVO_BA_FLAG_SINGULAR;
-            lambda *= 10.0;
-        } else {
-            if (!(predicted_drop(p, &ws, lambda) > ACCEPT_REL * cost)) {
-                converged = 1; /* the model promises no meaningful decrease: a stationary point */
-                break;
-            }
-            r.iterations++;
-            if (!apply_step(p, &ws, nfree) || !((cnew = eval_cost(cfg, p, &ws)) < cost - ACCEPT_REL * cost)) {
-                restore(p, &ws);
-                lambda *= 10.0;
-            } else {
-                const double drop = cost - cnew;
-                r.accepted++;
-                cost = cnew;
-                lambda = lambda / 10.0 < LAMBDA_MIN ? LAMBDA_MIN : lambda / 10.0;
-                linearised = 0;
-                if (drop < CONVERGED_REL * (cost + drop)) {
-                    converged = 1;
-                    break;
-                }
-            }
-        }
-        if (lambda > LAMBDA_MAX) {
-            converged = 1; /* no step lowers the cost any more */
-            break;
-        }
-    }
-    if (!converged)
+    if (!lm_iterate(cfg, p, &ws, &L, &r))
         r.flags |= TVO_BA_FLAG_ITER_CAP;
     if (r.accepted == 0 && r.iterations > 0)
         r.flags |= TVO_BA_FLAG_COST_ROSE;
-    if (n_held > 0)
+    if (L.n_held > 0)
         r.flags |= TVO_BA_FLAG_POINTS_SKIPPED;
-    r.points_skipped = n_held;
-    r.obs_skipped = n_skip;
-    r.poses_free = nfree;
-    r.cost_final = cost;
+    r.points_skipped = L.n_held;
+    r.obs_skipped = L.n_skip;
+    r.poses_free = L.nfree;
+    r.cost_final = L.cost;
     if (rep != NULL)
         *rep = r;
     return TVO_OK;
