@@ -99,11 +99,58 @@ static void cr_products(const tvo_image *img, int32_t r, const int32_t *xm, cons
     }
 }
 
+/* the column sums v += p of the product row entering the window (width w) */
+static void cr_columns_add(size_t w, const int32_t *pa, const int32_t *pb, const int32_t *pc, int32_t *va,
+                           int32_t *vb, int32_t *vc)
+{
+    for (size_t x = 0; x < w; ++x) {
+        va[x] += pa[x];
+        vb[x] += pb[x];
+        vc[x] += pc[x];
+    }
+}
+
+/* the column sums v -= p of the product row leaving the window (width w) */
+static void cr_columns_sub(size_t w, const int32_t *pa, const int32_t *pb, const int32_t *pc, int32_t *va,
+                           int32_t *vb, int32_t *vc)
+{
+    for (size_t x = 0; x < w; ++x) {
+        va[x] -= pa[x];
+        vb[x] -= pb[x];
+        vc[x] -= pc[x];
+    }
+}
+
+/* one output row o from its column sums: horizontal window sums (columns x-lo .. x+hi, reflected) as a
+ * running sum over x, then the response of each */
+static void cr_row_responses(int32_t W, int32_t lo, int32_t hi, const int32_t *va, const int32_t *vb,
+                             const int32_t *vc, double s2, tvo_score_kind kind, float harris_k, float *o)
+{
+    int32_t sa = 0, sb = 0, sc = 0, i, x;
+    for (i = -lo; i <= hi; ++i) {
+        int32_t j = tvo_reflect101(i, W);
+        sa += va[j];
+        sb += vb[j];
+        sc += vc[j];
+    }
+    for (x = 0;; ++x) {
+        int32_t jo, jn;
+        o[x] = cr_response(sa, sb, sc, s2, kind, (double)harris_k);
+        if (x + 1 >= W)
+            break;
+        jo = tvo_reflect101(x - lo, W);
+        jn = tvo_reflect101(x + hi + 1, W);
+        sa += va[jn] - va[jo];
+        sb += vb[jn] - vb[jo];
+        sc += vc[jn] - vc[jo];
+    }
+}
+
 tvo_status tvo_corner_response(const tvo_image *img, tvo_score_kind kind, int32_t block_size, float harris_k,
                                float *out, int32_t out_stride, void *scratch, size_t scratch_size)
 {
     tvo_status st;
-    int32_t W, H, bs, lo, hi, x, y, t, i;
+    int32_t W, H, bs, lo, hi, x, y, t;
     size_t w;
     int32_t *mem, *ring, *va, *vb, *vc, *xm, *xp;
     double s2;
@@ -152,50 +199,17 @@ tvo_status tvo_corner_response(const tvo_image *img, tvo_score_kind kind, int32_
     for (t = -lo; t < hi; ++t) {
         int32_t *pa = ring + (size_t)((t + lo) % bs) * 3u * w, *pb = pa + w, *pc = pb + w;
         cr_products(img, tvo_reflect101(t, H), xm, xp, pa, pb, pc);
-        for (x = 0; x < W; ++x) {
-            va[x] += pa[x];
-            vb[x] += pb[x];
-            vc[x] += pc[x];
-        }
+        cr_columns_add(w, pa, pb, pc, va, vb, vc);
     }
     for (y = 0; y < H; ++y) {
         int32_t tn = y + hi; /* the row entering the window */
         int32_t *pa = ring + (size_t)((tn + lo) % bs) * 3u * w, *pb = pa + w, *pc = pb + w;
-        float *o = out + (size_t)y * (size_t)out_stride;
-        int32_t sa, sb, sc;
         /* the slot of tn holds row tn - bs (= y - lo - 1), which leaves the window: subtract it first */
-        if (y > 0) {
-            for (x = 0; x < W; ++x) {
-                va[x] -= pa[x];
-                vb[x] -= pb[x];
-                vc[x] -= pc[x];
-            }
-        }
+        if (y > 0)
+            cr_columns_sub(w, pa, pb, pc, va, vb, vc);
         cr_products(img, tvo_reflect101(tn, H), xm, xp, pa, pb, pc);
-        for (x = 0; x < W; ++x) {
-            va[x] += pa[x];
-            vb[x] += pb[x];
-            vc[x] += pc[x];
-        }
-        /* horizontal window sums with reflected columns: running sum over x */
-        sa = sb = sc = 0;
-        for (i = -lo; i <= hi; ++i) {
-            int32_t j = tvo_reflect101(i, W);
-            sa += va[j];
-            sb += vb[j];
-            sc += vc[j];
-        }
-        for (x = 0;; ++x) {
-            int32_t jo, jn;
-            o[x] = cr_response(sa, sb, sc, s2, kind, (double)harris_k);
-            if (x + 1 >= W)
-                break;
-            jo = tvo_reflect101(x - lo, W);
-            jn = tvo_reflect101(x + hi + 1, W);
-            sa += va[jn] - va[jo];
-            sb += vb[jn] - vb[jo];
-            sc += vc[jn] - vc[jo];
-        }
+        cr_columns_add(w, pa, pb, pc, va, vb, vc);
+        cr_row_responses(W, lo, hi, va, vb, vc, s2, kind, harris_k, out + (size_t)y * (size_t)out_stride);
     }
     return TVO_OK;
 }
