@@ -16,6 +16,10 @@
 #define PNP_SAMPLE 4       /* 3 points for P3P and one to check it */
 #define PNP_EQ_TOL 1e-6    /* P3P: relative residual of the distance equations to keep a solution */
 #define PNP_GN_STEPS 5     /* P3P: Gauss-Newton polish steps at most */
+#define PNP_GN_DONE 1e-15  /* P3P: a relative residual at or below this needs no polish step */
+#define PNP_FLAT 1e-20     /* P3P: a triangle with |d12 x d13|^2 <= this |d12|^2 |d13|^2 is degenerate */
+#define PNP_RAY_COS 1e-15  /* P3P: two bearings with a cosine above 1 - this coincide */
+#define PNP_DUP_REL 1e-9   /* P3P: depth solutions closer than this share of their sum (L1) are one */
 #define PNP_REL_GAIN 1e-10 /* LM: an accepted step gaining less than this share of the cost ends it */
 #define PNP_MU0 1e-4       /* LM: initial damping */
 #define PNP_MU_MIN 1e-12
@@ -249,7 +253,7 @@ static double p3p_relres(const p3p_eq *q, const double l[3])
 static double p3p_polish(const p3p_eq *q, double l[3])
 {
     double best = p3p_relres(q, l);
-    for (int it = 0; it < PNP_GN_STEPS && best > 1e-15; ++it) {
+    for (int it = 0; it < PNP_GN_STEPS && best > PNP_GN_DONE; ++it) {
         double f[3], J[9], A[9], d[3], ln[3];
         p3p_residual(q, l, f);
         J[0] = 2.0 * (l[0] - q->c12 * l[1]);
@@ -541,12 +545,12 @@ static int p3p_setup(const double X[3][3], const double x[3][2], double y[3][3],
     q->a13 = dot3(d13, d13);
     q->a23 = dot3(d23, d23);
     cross3(d12, d13, nw);
-    if (!(dot3(nw, nw) > 1e-20 * q->a12 * q->a13) || !(q->a23 > 0.0))
+    if (!(dot3(nw, nw) > PNP_FLAT * q->a12 * q->a13) || !(q->a23 > 0.0))
         return 0; /* coincident or collinear */
     q->c12 = dot3(y[0], y[1]);
     q->c13 = dot3(y[0], y[2]);
     q->c23 = dot3(y[1], y[2]);
-    if (q->c12 > 1.0 - 1e-15 || q->c13 > 1.0 - 1e-15 || q->c23 > 1.0 - 1e-15)
+    if (q->c12 > 1.0 - PNP_RAY_COS || q->c13 > 1.0 - PNP_RAY_COS || q->c23 > 1.0 - PNP_RAY_COS)
         return 0; /* coincident rays */
     return 1;
 }
@@ -662,7 +666,7 @@ static int p3p_depths(const p3p_eq *q, const double D1[9], const double D2[9], d
             int dup = 0;
             for (int o = 0; o < nsol && !dup; ++o) {
                 double dd = fabs(sols[o][0] - l[0]) + fabs(sols[o][1] - l[1]) + fabs(sols[o][2] - l[2]);
-                dup = dd <= 1e-9 * (l[0] + l[1] + l[2]);
+                dup = dd <= PNP_DUP_REL * (l[0] + l[1] + l[2]);
             }
             if (dup)
                 continue;
@@ -695,7 +699,7 @@ static int p3p_poses(const double X[3][3], double y[3][3], const double d12[3], 
             p13[k] = P[0][k] - P[2][k];
         }
         cross3(p12, p13, nc);
-        if (!(dot3(nc, nc) > 1e-20 * dot3(p12, p12) * dot3(p13, p13)))
+        if (!(dot3(nc, nc) > PNP_FLAT * dot3(p12, p12) * dot3(p13, p13)))
             continue;
         memcpy(e1, p12, sizeof e1);
         normalize3(e1);
