@@ -330,6 +330,34 @@ BA_INLINE int lin_obs(const tvo_ba_config *c, const tvo_ba_problem *p, const tvo
     return 1;
 }
 
+/* Holds (PT_HELD) the free points with fewer than 2 usable observations or an ill-conditioned 3x3
+ * block (a pivot below PIVOT_POINT, or a condition estimate trace(V) |V^-1|_F above max_point_cond).
+ * Returns how many. */
+static int32_t hold_points(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *ws)
+{
+    int32_t held = 0;
+    for (int32_t j = 0; j < p->n_points; ++j) {
+        double V9[9], Vi[9], tr, fro = 0.0;
+        if (ws->pstate[j] != PT_FREE)
+            continue;
+        for (int a = 0; a < 9; ++a)
+            V9[a] = ws->V[j][sym3[a / 3][a % 3]];
+        if (ws->pt_nuse[j] < 2 || !chol3_inv(V9, PIVOT_POINT, Vi)) {
+            ws->pstate[j] = PT_HELD;
+            held++;
+            continue;
+        }
+        tr = V9[0] + V9[4] + V9[8];
+        for (int a = 0; a < 9; ++a)
+            fro += Vi[a] * Vi[a];
+        if (!(tr * sqrt(fro) <= c->max_point_cond)) {
+            ws->pstate[j] = PT_HELD;
+            held++;
+        }
+    }
+    return held;
+}
+
 /* Builds the per-pose and per-point blocks at the current state, marks usable observations (first:
  * from all of them; later: from those usable before, which accepted steps keep usable), decides the held
  * points and the free-pose slots. Returns the cost (over the usable observations); counts to
@@ -340,7 +368,7 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
                         int *pose_starved)
 {
     double cost = 0.0;
-    int32_t used = 0, nfree = 0, held = 0;
+    int32_t used = 0, nfree = 0;
     *pose_starved = 0;
     for (int32_t i = 0; i < p->n_poses; ++i) {
         ws->pose_nuse[i] = 0;
@@ -385,26 +413,7 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
             }
         }
     }
-    /* held points: too few usable observations or an ill-conditioned block */
-    for (int32_t j = 0; j < p->n_points; ++j) {
-        double V9[9], Vi[9], tr, fro = 0.0;
-        if (ws->pstate[j] != PT_FREE)
-            continue;
-        for (int a = 0; a < 9; ++a)
-            V9[a] = ws->V[j][sym3[a / 3][a % 3]];
-        if (ws->pt_nuse[j] < 2 || !chol3_inv(V9, PIVOT_POINT, Vi)) {
-            ws->pstate[j] = PT_HELD;
-            held++;
-            continue;
-        }
-        tr = V9[0] + V9[4] + V9[8];
-        for (int a = 0; a < 9; ++a)
-            fro += Vi[a] * Vi[a];
-        if (!(tr * sqrt(fro) <= c->max_point_cond)) {
-            ws->pstate[j] = PT_HELD;
-            held++;
-        }
-    }
+    const int32_t held = hold_points(c, p, ws);
     for (int32_t i = 0; i < p->n_poses; ++i) {
         ws->slot[i] = -1;
         ws->tpos[i] = -1;
@@ -479,6 +488,33 @@ static int32_t point_blocks(const tvo_ba_config *c, const tvo_ba_problem *p, ba_
     return nt;
 }
 
+/* the back-substitution for the free points: dx_j = Vi (-gx_j - sum_k W_k^T dc_k), W_k and Vi
+ * recomputed at damping dmp; 0 if a point block does not factor (not reached after build_solve) */
+static int back_substitute(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *ws, double dmp)
+{
+    for (int32_t j = 0; j < p->n_points; ++j) {
+        double t[3], Vi[9];
+        int32_t nt;
+        if (ws->pstate[j] != PT_FREE)
+            continue;
+        if (!point_inv(ws, j, dmp, Vi))
+            return 0; /* not reached: the same block factored in build_solve */
+        nt = point_blocks(c, p, ws, j);
+        t[0] = -ws->gx[j][0];
+        t[1] = -ws->gx[j][1];
+        t[2] = -ws->gx[j][2];
+        for (int32_t m = 0; m < nt; ++m) {
+            const double *Wk = ws->Wp[m], *d = ws->dc + 6 * ws->tlist[m];
+            for (int b2 = 0; b2 < 3; ++b2)
+                for (int a = 0; a < 6; ++a)
+                    t[b2] -= Wk[3 * a + b2] * d[a];
+        }
+        for (int a = 0; a < 3; ++a)
+            ws->dx[j][a] = Vi[3 * a] * t[0] + Vi[3 * a + 1] * t[1] + Vi[3 * a + 2] * t[2];
+    }
+    return 1;
+}
+
 /* Builds and solves the damped system (lambda; Cholesky pivot bound rel) into ws->dc (poses, by slot)
  * and ws->dx (free points). Returns 0 when a factorisation fails. With solve == 0 only the reduced
  * system's factorisation is attempted (the singularity test). */
@@ -544,28 +580,7 @@ static int build_solve(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *w
         return 1;
     if (n > 0)
         chol_solve(S, n, ws->b, ws->dc);
-    /* back-substitution: dx_j = Vi (-gx_j - sum_k W_k^T dc_k), W_k and Vi recomputed */
-    for (int32_t j = 0; j < p->n_points; ++j) {
-        double t[3], Vi[9];
-        int32_t nt;
-        if (ws->pstate[j] != PT_FREE)
-            continue;
-        if (!point_inv(ws, j, dmp, Vi))
-            return 0; /* not reached: the same block factored above */
-        nt = point_blocks(c, p, ws, j);
-        t[0] = -ws->gx[j][0];
-        t[1] = -ws->gx[j][1];
-        t[2] = -ws->gx[j][2];
-        for (int32_t m = 0; m < nt; ++m) {
-            const double *Wk = ws->Wp[m], *d = ws->dc + 6 * ws->tlist[m];
-            for (int b2 = 0; b2 < 3; ++b2)
-                for (int a = 0; a < 6; ++a)
-                    t[b2] -= Wk[3 * a + b2] * d[a];
-        }
-        for (int a = 0; a < 3; ++a)
-            ws->dx[j][a] = Vi[3 * a] * t[0] + Vi[3 * a + 1] * t[1] + Vi[3 * a + 2] * t[2];
-    }
-    return 1;
+    return back_substitute(c, p, ws, dmp);
 }
 
 /* Applies the step; 0 (nothing written) when a value of the step or of the result is not finite. */
