@@ -188,7 +188,11 @@ static int config_valid(const tvo_vo_config *cfg)
 
 static size_t scratch_need(const tvo_vo_config *cfg)
 {
-    size_t a = tvo_detect_scratch_size(&cfg->detect, cfg->camera.width, cfg->camera.height);
+    /* detections ask for up to max_tracks corners (detect_append), whatever detect.max_corners says */
+    tvo_detect_config dc = cfg->detect;
+    size_t a;
+    dc.max_corners = cfg->max_tracks;
+    a = tvo_detect_scratch_size(&dc, cfg->camera.width, cfg->camera.height);
     size_t b = tvo_lk_scratch_size(&cfg->lk);
     size_t c = tvo_relpose_scratch_size(cfg->max_tracks);
     size_t d = tvo_size_mul((size_t)cfg->max_tracks, sizeof(double)); /* depth ratios (rel_scale) */

@@ -134,6 +134,28 @@ static void test_translating_camera(void **state)
     run_sequence(*state, dir, 0.10, 0.3, 12, 1);
 }
 
+/* Detections fill the track list up to max_tracks whatever detect.max_corners says (vo.h): with more
+ * tracks than detect.max_corners and no map (whose scratch would otherwise be the largest), the scratch
+ * must still hold a detection of max_tracks corners, or every frame finds none and stays LOST. */
+static void test_more_tracks_than_max_corners(void **state)
+{
+    const double dir[3] = {0.8, 0.1, 0.6};
+    fixture *f = *state;
+    tvo_camera cam = test_camera();
+    size_t need;
+    free(f->mem);
+    tvo_vo_config_default(&f->cfg, &cam);
+    f->cfg.map = 0;
+    f->cfg.max_tracks = 2 * f->cfg.detect.max_corners;
+    f->cfg.min_tracks = f->cfg.detect.max_corners;
+    need = tvo_vo_required_size(&f->cfg);
+    assert_true(need > 0);
+    f->mem = malloc(need);
+    assert_non_null(f->mem);
+    assert_int_equal(tvo_vo_init(&f->vo, &f->cfg, f->mem, need), TVO_OK);
+    run_sequence(f, dir, 0.10, 0.3, 8, 1);
+}
+
 static void test_pure_rotation_reports_rotation_only(void **state)
 {
     const double dir[3] = {0.0, 0.0, 0.0};
@@ -706,6 +728,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
             cmocka_unit_test_setup_teardown(test_translating_camera, setup, teardown),
+            cmocka_unit_test_setup_teardown(test_more_tracks_than_max_corners, setup, teardown),
             cmocka_unit_test_setup_teardown(test_pure_rotation_reports_rotation_only, setup, teardown),
             cmocka_unit_test_setup_teardown(test_single_plane_twins, setup, teardown),
             cmocka_unit_test_setup_teardown(test_single_plane_unresolved, setup, teardown),
