@@ -353,3 +353,32 @@ def test_cli_gt_format(tmp_path, capsys):
         tev.main(["--est", "x", "--gt", "y", "--gt-format", "evo"])
     assert e.value.code == 2
     assert "--gt-format" in capsys.readouterr().err
+
+
+def test_same_frames_as_restricts_to_the_peers_frames(tmp_path):
+    """--same-frames-as: only the estimate's frames that the other trajectory also has are evaluated. The
+    estimate is exact except for its first 10 frames (pushed 1 m away), and the peer starts after them:
+    on the common frames the ATE is zero, on all frames it is not."""
+    g = gt_body(120)
+    synth_dir = tmp_path / "seq"
+    (synth_dir / "mav0" / "state_groundtruth_estimate0").mkdir(parents=True)
+    (synth_dir / "mav0" / "cam0").mkdir(parents=True)
+    trajio.write_euroc_groundtruth(str(synth_dir / "mav0" / "state_groundtruth_estimate0" / "data.csv"), g)
+    trajio.write_sensor_yaml(str(synth_dir / "mav0" / "cam0" / "sensor.yaml"), trajio.CameraInfo())
+    est = cam(g)
+    est.poses[:10, 0, 3] += 1.0
+    trajio.write_tum(str(tmp_path / "est.txt"), est)
+    peer = Trajectory(est.t_ns[10:] + 2_000_000, est.poses[10:])  # 2 ms off: still the same frames
+    trajio.write_tum(str(tmp_path / "peer.txt"), peer)
+    ev_all = tev.evaluate_files(str(tmp_path / "est.txt"), str(synth_dir))
+    ev = tev.evaluate_files(str(tmp_path / "est.txt"), str(synth_dir), same_frames_as=str(tmp_path / "peer.txt"))
+    assert ev_all.result["standard"]["ate_m"]["rmse"] > 0.05
+    assert ev.result["standard"]["ate_m"]["rmse"] < 1e-8
+    assert ev.result["poses"]["associated"] == 110
+    assert ev.result["inputs"]["same_frames_as"]["frames_kept"] == 110
+    assert ev.result["inputs"]["same_frames_as"]["frames_of_estimate"] == 120
+    # no frame in common: a clear error
+    far = Trajectory(est.t_ns + 10**12, est.poses)
+    trajio.write_tum(str(tmp_path / "far.txt"), far)
+    with pytest.raises(ValueError, match="frames in common"):
+        tev.evaluate_files(str(tmp_path / "est.txt"), str(synth_dir), same_frames_as=str(tmp_path / "far.txt"))

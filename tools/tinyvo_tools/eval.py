@@ -199,11 +199,30 @@ def load_groundtruth(path: str, fmt: str = "auto", times=None):
     return gt, (trajio.find_cam_yaml(path) if fmt == "euroc" else None), fmt, why
 
 
+def restrict_to_frames_of(est: Trajectory, other: Trajectory, max_diff_s: float):
+    """The poses of ``est`` whose timestamp is within ``max_diff_s`` of one of ``other``'s: two methods
+    compared on the frames both report (a peer that starts late or drops frames is otherwise compared
+    on fewer, often easier, frames). Returns the restricted trajectory and (kept, of)."""
+    if len(other) == 0:
+        raise ValueError("--same-frames-as: the trajectory has no poses")
+    ref = np.sort(other.t_ns)
+    pos = np.clip(np.searchsorted(ref, est.t_ns), 1, len(ref) - 1) if len(ref) > 1 else np.zeros(len(est), int)
+    near = np.minimum(np.abs(est.t_ns - ref[pos]), np.abs(est.t_ns - ref[np.maximum(pos - 1, 0)]))
+    keep = near <= int(round(max_diff_s * 1e9))
+    if keep.sum() < 3:
+        raise ValueError(f"--same-frames-as: only {int(keep.sum())} frames in common (tolerance {max_diff_s} s)")
+    return Trajectory(est.t_ns[keep], est.poses[keep], est.frame, est.source), (int(keep.sum()), len(est))
+
+
 def evaluate_files(est_path: str, gt_path: str, tbs_yaml: str | None = None, metric_scale: bool = False,
                    max_diff_s: float = 0.01, frame: str = "camera", plots_dir: str | None = None,
-                   out_json: str | None = None, gt_format: str = "auto", gt_times: str | None = None) -> Evaluation:
+                   out_json: str | None = None, gt_format: str = "auto", gt_times: str | None = None,
+                   same_frames_as: str | None = None) -> Evaluation:
     """The command line's work as a function (used by the bench and the README demo)."""
     est = trajio.read_tum(est_path, frame)
+    kept = None
+    if same_frames_as:
+        est, kept = restrict_to_frames_of(est, trajio.read_tum(same_frames_as, frame), max_diff_s)
     gt, auto_yaml, fmt, why = load_groundtruth(gt_path, gt_format, gt_times)
     if frame == "body":
         T_BS, tbs_src = np.eye(4), "not used (--frame body)"
@@ -218,6 +237,9 @@ def evaluate_files(est_path: str, gt_path: str, tbs_yaml: str | None = None, met
     ev = evaluate(est, gt, T_BS, metric_scale, max_diff_s, frame)
     ev.result["inputs"] = {"estimate": os.path.abspath(est_path), "ground_truth": gt.source,
                            "ground_truth_format": fmt, "ground_truth_format_why": why, "T_BS": tbs_src}
+    if kept is not None:
+        ev.result["inputs"]["same_frames_as"] = {"trajectory": os.path.abspath(same_frames_as),
+                                                 "frames_kept": kept[0], "frames_of_estimate": kept[1]}
     if plots_dir:
         ev.result["plots"] = make_plots(ev, plots_dir)
     if out_json:
@@ -310,11 +332,13 @@ def main(argv=None) -> int:
     ap.add_argument("--max-diff", type=float, default=0.01, help="association tolerance, s (default 0.01)")
     ap.add_argument("--out", help="write the result JSON here")
     ap.add_argument("--plots", help="write PNG plots into this folder")
+    ap.add_argument("--same-frames-as", metavar="TRAJ",
+                    help="evaluate only the frames of --est that this TUM trajectory (a peer's) also has")
     a = ap.parse_args(argv)
 
     def body():
         ev = evaluate_files(a.est, a.gt, a.tbs, a.metric_scale, a.max_diff, a.frame, a.plots, a.out,
-                            a.gt_format, a.gt_times)
+                            a.gt_format, a.gt_times, a.same_frames_as)
         if not a.quiet:
             inp = ev.result["inputs"]
             print(f"ground truth: {inp['ground_truth_format']} ({inp['ground_truth_format_why']})")
