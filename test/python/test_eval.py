@@ -382,3 +382,14 @@ def test_same_frames_as_restricts_to_the_peers_frames(tmp_path):
     trajio.write_tum(str(tmp_path / "far.txt"), far)
     with pytest.raises(ValueError, match="frames in common"):
         tev.evaluate_files(str(tmp_path / "est.txt"), str(synth_dir), same_frames_as=str(tmp_path / "far.txt"))
+
+
+def test_static_estimate_is_a_clear_error():
+    """A trajectory that does not move (a camera that only turns: every position the same) has no Sim(3)
+    alignment: a ValueError saying so (one line from the CLI, a FAILED row in the suite), not evo's
+    exception."""
+    g = gt_body(60)
+    est = cam(g)
+    est.poses[:, :3, 3] = 0.0
+    with pytest.raises(ValueError, match="alignment is not possible"):
+        tev.evaluate(est, g)

@@ -34,6 +34,7 @@ import sys
 from dataclasses import dataclass, field
 
 import numpy as np
+from evo.core.geometry import GeometryException
 from scipy.spatial.transform import Rotation
 
 from . import cli, trajio
@@ -145,7 +146,13 @@ def evaluate(est: Trajectory, gt_body: Trajectory, T_BS=None, metric_scale: bool
     est_raw = np.array(est_e.poses_se3)
 
     aligned = copy.deepcopy(est_e)
-    r_a, t_a, s = aligned.align(ref, correct_scale=not metric_scale)
+    try:
+        r_a, t_a, s = aligned.align(ref, correct_scale=not metric_scale)
+    except GeometryException as e:
+        # evo's Umeyama needs positions that span more than a line: a camera that only turns (or a
+        # trajectory standing still) has no alignment, and so no ATE
+        raise ValueError(f"{'SE(3)' if metric_scale else 'Sim(3)'} alignment is not possible: the positions "
+                         f"do not span enough ({e}); a rotation-only or static sequence has no ATE") from e
     est_al = np.array(aligned.poses_se3)
 
     ape_t = metrics.APE(metrics.PoseRelation.translation_part)
