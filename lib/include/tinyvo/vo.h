@@ -123,7 +123,7 @@ typedef struct tvo_vo_config {
     /* keyframe rotation: the tracks keep their normalised position in a keyframe K; each frame also
        estimates K -> cur from the tracks seen since K (same relpose config), and when that estimate is
        trustworthy (not low-confidence or ambiguous, >= min_pose_tracks inliers and half of the tracks,
-       within 2 deg of the chained frame-to-frame rotation) and has more parallax than the frame-to-frame
+       within 1 deg of the chained frame-to-frame rotation) and has more parallax than the frame-to-frame
        one (any, on a rotation-only frame), the frame's rotation is R_cK R_pK^T (R_pK: K -> previous
        frame), so the chained rotation does not drift between keyframes */
     int32_t keyframe;                 /* 1: on, 0: frame-to-frame only; default 1 */
