@@ -67,6 +67,18 @@ static void centre(const tvo_pose *T, double C[3])
     C[2] = -C[2];
 }
 
+/* The distance between the centres of the cameras of A and B. */
+static double centre_distance(const tvo_pose *A, const tvo_pose *B)
+{
+    double ca[3], cb[3], d[3];
+    centre(A, ca);
+    centre(B, cb);
+    d[0] = cb[0] - ca[0];
+    d[1] = cb[1] - ca[1];
+    d[2] = cb[2] - ca[2];
+    return sqrt(dot3(d, d));
+}
+
 static double focal(const tvo_vo_config *cfg)
 {
     return 0.5 * (cfg->camera.fx + cfg->camera.fy);
@@ -318,17 +330,12 @@ static void mark_tracked(tvo_map *m, const tvo_map_tracks *tr)
 static void update_speed(tvo_map *m)
 {
     const tvo_map_kf *a, *b;
-    double ca[3], cb[3], d[3], dist, dt;
+    double dist, dt;
     if (m->n_kf < 2)
         return;
     a = kf_at(m, 0);
     b = kf_at(m, m->n_kf - 1);
-    centre(&a->T_c_w, ca);
-    centre(&b->T_c_w, cb);
-    d[0] = cb[0] - ca[0];
-    d[1] = cb[1] - ca[1];
-    d[2] = cb[2] - ca[2];
-    dist = sqrt(dot3(d, d));
+    dist = centre_distance(&a->T_c_w, &b->T_c_w);
     dt = (double)dt_ns(b->t_ns, a->t_ns) * 1e-9;
     if (dt > 0.0 && dist > 0.0 && isfinite(dist / dt))
         m->speed = dist / dt;
@@ -491,13 +498,7 @@ static int init_pair_pose(tvo_map *m, const tvo_vo_config *cfg, const tvo_map_tr
  * run's unit. */
 static double init_baseline(const tvo_map *m, const tvo_pose *T_c_w_chain, int64_t t_ns)
 {
-    double cr[3], cc[3], d[3], baseline;
-    centre(&m->ref_T_c_w, cr);
-    centre(T_c_w_chain, cc);
-    d[0] = cc[0] - cr[0];
-    d[1] = cc[1] - cr[1];
-    d[2] = cc[2] - cr[2];
-    baseline = sqrt(dot3(d, d));
+    double baseline = centre_distance(&m->ref_T_c_w, T_c_w_chain);
     if (!(baseline > 0.0) || !isfinite(baseline))
         baseline = m->speed > 0.0 ? m->speed * (double)dt_ns(t_ns, m->ref_t_ns) * 1e-9 : 1.0;
     if (!(baseline > 0.0) || !isfinite(baseline))
@@ -705,13 +706,7 @@ static int need_keyframe(const tvo_map *m, const tvo_vo_config *cfg, const tvo_p
                          double depth_med)
 {
     const tvo_map_kf *k = &m->kf[(m->kf_head + m->n_kf - 1) % m->window];
-    double ck[3], cc[3], d[3], base;
-    centre(&k->T_c_w, ck);
-    centre(T, cc);
-    d[0] = cc[0] - ck[0];
-    d[1] = cc[1] - ck[1];
-    d[2] = cc[2] - ck[2];
-    base = sqrt(dot3(d, d));
+    const double base = centre_distance(&k->T_c_w, T);
     /* a keyframe that barely moved adds no structure (nothing to triangulate) and, as one of the two
        oldest of a later window, would hold the scale on a tiny baseline: none while the camera only
        turns, whatever the other criteria say (the map is lost instead when its points run out) */

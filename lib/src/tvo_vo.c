@@ -471,6 +471,14 @@ static double dot3(const double a[3], const double b[3])
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
+/* The homogeneous ray (x, y, 1) of a normalised point. */
+static void homog(tvo_point2d p, double h[3])
+{
+    h[0] = p.x;
+    h[1] = p.y;
+    h[2] = 1.0;
+}
+
 /* Depth along the ray xb (homogeneous, z = 1) in frame b of the point seen along xa in frame a, with
  * X_b = R X_a + t: lambda xb - nu (R xa) = t, solved by crossing with R xa. 0 when the two rays are
  * closer than the angle whose squared sine is sin2_min (no usable parallax) or the point is behind
@@ -516,15 +524,9 @@ static double relative_scale(tvo_vo *vo, const double R[9], const double t[3], i
         double xa[3], xb[3], xc[3], da, db;
         if (!vo->has0[i])
             continue;
-        xa[0] = vo->x0[i].x;
-        xa[1] = vo->x0[i].y;
-        xa[2] = 1.0;
-        xb[0] = vo->x1[i].x;
-        xb[1] = vo->x1[i].y;
-        xb[2] = 1.0;
-        xc[0] = vo->x2[i].x;
-        xc[1] = vo->x2[i].y;
-        xc[2] = 1.0;
+        homog(vo->x0[i], xa);
+        homog(vo->x1[i], xb);
+        homog(vo->x2[i], xc);
         da = depth_in_b(vo->R0, vo->t0, xa, xb, sin2_min); /* frame k-1 from (k-2, k-1) */
         if (da <= 0.0)
             continue;
@@ -631,12 +633,8 @@ static int translation_given_rotation(const tvo_vo *vo, const double R[9], int32
         double x1[3], x2[3], Rx[3], a[3];
         if (!vo->mask[i])
             continue;
-        x1[0] = vo->x1[i].x;
-        x1[1] = vo->x1[i].y;
-        x1[2] = 1.0;
-        x2[0] = vo->x2[i].x;
-        x2[1] = vo->x2[i].y;
-        x2[2] = 1.0;
+        homog(vo->x1[i], x1);
+        homog(vo->x2[i], x2);
         tvo_la_mat3_vec(R, x1, Rx);
         tvo_la_cross(Rx, x2, a);
         for (int r = 0; r < 3; ++r)
@@ -661,12 +659,8 @@ static int translation_given_rotation(const tvo_vo *vo, const double R[9], int32
         double x1[3], x2[3];
         if (!vo->mask[i])
             continue;
-        x1[0] = vo->x1[i].x;
-        x1[1] = vo->x1[i].y;
-        x1[2] = 1.0;
-        x2[0] = vo->x2[i].x;
-        x2[1] = vo->x2[i].y;
-        x2[2] = 1.0;
+        homog(vo->x1[i], x1);
+        homog(vo->x2[i], x2);
         front += depth_in_b(R, u, x1, x2, 0.0) > 0.0;
         back += depth_in_b(R, un, x1, x2, 0.0) > 0.0;
     }
