@@ -20,6 +20,15 @@ def cam(traj):
     return traj.to_camera(EUROC_CAM0_T_BS)
 
 
+def euroc_folder(d, g):
+    """A EuRoC folder at d holding ground truth g and the default camera's sensor.yaml."""
+    (d / "mav0" / "state_groundtruth_estimate0").mkdir(parents=True)
+    (d / "mav0" / "cam0").mkdir(parents=True)
+    trajio.write_euroc_groundtruth(str(d / "mav0" / "state_groundtruth_estimate0" / "data.csv"), g)
+    trajio.write_sensor_yaml(str(d / "mav0" / "cam0" / "sensor.yaml"), trajio.CameraInfo())
+    return d
+
+
 def test_gt_against_itself_is_zero():
     g = gt_body()
     ev = tev.evaluate(cam(g), g)
@@ -162,11 +171,7 @@ def test_bad_inputs():
 
 def test_cli_writes_json_and_plots(tmp_path, capsys):
     g = gt_body(120)
-    synth_dir = tmp_path / "seq"
-    (synth_dir / "mav0" / "state_groundtruth_estimate0").mkdir(parents=True)
-    (synth_dir / "mav0" / "cam0").mkdir(parents=True)
-    trajio.write_euroc_groundtruth(str(synth_dir / "mav0" / "state_groundtruth_estimate0" / "data.csv"), g)
-    trajio.write_sensor_yaml(str(synth_dir / "mav0" / "cam0" / "sensor.yaml"), trajio.CameraInfo())
+    synth_dir = euroc_folder(tmp_path / "seq", g)
     est = cam(g)
     est.poses[:, :3, 3] *= 0.5  # monocular scale
     trajio.write_tum(str(tmp_path / "est.txt"), est)
@@ -360,11 +365,7 @@ def test_same_frames_as_restricts_to_the_peers_frames(tmp_path):
     estimate is exact except for its first 10 frames (pushed 1 m away), and the peer starts after them:
     on the common frames the ATE is zero, on all frames it is not."""
     g = gt_body(120)
-    synth_dir = tmp_path / "seq"
-    (synth_dir / "mav0" / "state_groundtruth_estimate0").mkdir(parents=True)
-    (synth_dir / "mav0" / "cam0").mkdir(parents=True)
-    trajio.write_euroc_groundtruth(str(synth_dir / "mav0" / "state_groundtruth_estimate0" / "data.csv"), g)
-    trajio.write_sensor_yaml(str(synth_dir / "mav0" / "cam0" / "sensor.yaml"), trajio.CameraInfo())
+    synth_dir = euroc_folder(tmp_path / "seq", g)
     est = cam(g)
     est.poses[:10, 0, 3] += 1.0
     trajio.write_tum(str(tmp_path / "est.txt"), est)

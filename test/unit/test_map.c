@@ -21,15 +21,7 @@
 
 static tvo_camera test_camera(void)
 {
-    tvo_camera cam;
-    memset(&cam, 0, sizeof(cam));
-    cam.width = W;
-    cam.height = H;
-    cam.fx = cam.fy = FOCAL;
-    cam.cx = (W - 1) / 2.0;
-    cam.cy = (H - 1) / 2.0;
-    cam.model = TVO_DIST_NONE;
-    return cam;
+    return tvo_camera_make_pinhole(W, H, FOCAL, FOCAL, (W - 1) / 2.0, (H - 1) / 2.0);
 }
 
 typedef struct fixture {

@@ -23,15 +23,7 @@ static void render(const tvo_pose *T_w_c, uint8_t *img)
 
 static tvo_camera test_camera(void)
 {
-    tvo_camera cam;
-    memset(&cam, 0, sizeof(cam));
-    cam.width = W;
-    cam.height = H;
-    cam.fx = cam.fy = FOCAL;
-    cam.cx = (W - 1) / 2.0;
-    cam.cy = (H - 1) / 2.0;
-    cam.model = TVO_DIST_NONE;
-    return cam;
+    return tvo_camera_make_pinhole(W, H, FOCAL, FOCAL, (W - 1) / 2.0, (H - 1) / 2.0);
 }
 
 typedef struct fixture {
@@ -41,18 +33,23 @@ typedef struct fixture {
     uint8_t img[W * H];
 } fixture;
 
-static int setup(void **state)
+/* The VO of f->cfg in a block of its required size. */
+static void open_vo(fixture *f)
 {
-    fixture *f = calloc(1, sizeof(fixture));
-    tvo_camera cam = test_camera();
-    size_t need;
-    assert_non_null(f);
-    tvo_vo_config_default(&f->cfg, &cam);
-    need = tvo_vo_required_size(&f->cfg);
+    const size_t need = tvo_vo_required_size(&f->cfg);
     assert_true(need > 0);
     f->mem = malloc(need);
     assert_non_null(f->mem);
     assert_int_equal(tvo_vo_init(&f->vo, &f->cfg, f->mem, need), TVO_OK);
+}
+
+static int setup(void **state)
+{
+    fixture *f = calloc(1, sizeof(fixture));
+    tvo_camera cam = test_camera();
+    assert_non_null(f);
+    tvo_vo_config_default(&f->cfg, &cam);
+    open_vo(f);
     *state = f;
     return 0;
 }
@@ -141,18 +138,11 @@ static void test_more_tracks_than_max_corners(void **state)
 {
     const double dir[3] = {0.8, 0.1, 0.6};
     fixture *f = *state;
-    tvo_camera cam = test_camera();
-    size_t need;
     free(f->mem);
-    tvo_vo_config_default(&f->cfg, &cam);
     f->cfg.map = 0;
     f->cfg.max_tracks = 2 * f->cfg.detect.max_corners;
     f->cfg.min_tracks = f->cfg.detect.max_corners;
-    need = tvo_vo_required_size(&f->cfg);
-    assert_true(need > 0);
-    f->mem = malloc(need);
-    assert_non_null(f->mem);
-    assert_int_equal(tvo_vo_init(&f->vo, &f->cfg, f->mem, need), TVO_OK);
+    open_vo(f);
     run_sequence(f, dir, 0.10, 0.3, 8, 1);
 }
 
