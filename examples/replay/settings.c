@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-typedef enum { KIND_I32, KIND_F64, KIND_F32 } setting_kind;
+typedef enum { KIND_I32, KIND_F64, KIND_F32, KIND_U64 } setting_kind;
 
 typedef struct setting {
     const char *name;
@@ -29,6 +29,10 @@ typedef struct setting {
 #define S_F(f)                                   \
     {                                            \
 #f, offsetof(tvo_vo_config, f), KIND_F32 \
+    }
+#define S_U(f)                                   \
+    {                                            \
+#f, offsetof(tvo_vo_config, f), KIND_U64 \
     }
 
 /* Every scalar field a user tunes; the camera comes from the dataset or --calib, the clock from the
@@ -82,6 +86,7 @@ static const setting settings[] = {
         S_I(relpose.min_inliers),
         S_I(relpose.use_homography),
         S_I(relpose.refine_iters),
+        S_U(relpose.seed),
 };
 
 static const setting *setting_find(const char *name, size_t len)
@@ -121,6 +126,13 @@ int tvo_replay_setting_apply(tvo_vo_config *cfg, const char *assignment)
             return -1;
         }
         *(int32_t *)(void *)field = (int32_t)x;
+    } else if (s->kind == KIND_U64) {
+        unsigned long long x = strtoull(v, &end, 0);
+        if (end == v || *end != '\0' || errno != 0 || v[0] == '-') {
+            fprintf(stderr, "tvo_replay: --set %s needs an unsigned integer (got '%s')\n", s->name, v);
+            return -1;
+        }
+        *(uint64_t *)(void *)field = (uint64_t)x;
     } else {
         double x = strtod(v, &end);
         if (end == v || *end != '\0' || errno != 0 || !isfinite(x) ||
@@ -143,6 +155,9 @@ void tvo_replay_settings_print(FILE *f, const tvo_vo_config *cfg)
         const unsigned char *field = (const unsigned char *)cfg + settings[i].offset;
         if (settings[i].kind == KIND_I32)
             fprintf(f, "%-28s int     %ld\n", settings[i].name, (long)*(const int32_t *)(const void *)field);
+        else if (settings[i].kind == KIND_U64)
+            fprintf(f, "%-28s uint64  %llu\n", settings[i].name,
+                    (unsigned long long)*(const uint64_t *)(const void *)field);
         else if (settings[i].kind == KIND_F64)
             fprintf(f, "%-28s double  %.17g\n", settings[i].name, *(const double *)(const void *)field);
         else

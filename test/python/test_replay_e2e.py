@@ -197,24 +197,29 @@ def test_replay_set_settings(replayed, tmp_path):
     for args, part in ((["--set", "nosuch=1"], "no setting 'nosuch'"), (["--set", "map_window"], "NAME=VALUE"),
                        (["--set", "lk.win_size=1.5"], "lk.win_size needs an integer"),
                        (["--set", "map_kf_baseline=nan"], "map_kf_baseline needs a finite number"),
-                       (["--set", "lk.epsilon=1e40"], "lk.epsilon needs a finite number")):
+                       (["--set", "lk.epsilon=1e40"], "lk.epsilon needs a finite number"),
+                       (["--set", "relpose.seed=-3"], "relpose.seed needs an unsigned integer")):
         r = run([replay, "--euroc", "a", "--out", "x"] + args)
         assert r.returncode == 2 and part in r.stderr and r.stderr.count("\n") == 1, (args, r.stderr)
     r = run([replay, "--list-settings"])
     assert r.returncode == 0
     table = {ln.split()[0]: ln.split()[2] for ln in r.stdout.splitlines()}
     assert table["map_window"] == "6" and table["lk.win_size"] == "21" and table["map"] == "1"
+    assert table["relpose.seed"] == str(0x5eed)
     assert len(table) >= 40
     seq = tmp_path / "seq"
     subprocess.run([sys.executable, "-m", "tinyvo_tools.synth", "--out", str(seq), "--builtin", "handheld",
                     "--frames", "40", "--seed", "2", "--quiet"], check=True)
     outs = {}
     for tag, sets in (("default", []), ("explicit", ["--set", "map_window=6", "--set", "lk.win_size=21"]),
+                      ("seed", ["--set", "relpose.seed=0x5eed"]), ("seed2", ["--set", "relpose.seed=7"]),
                       ("small", ["--set", "lk.win_size=9", "--set", "max_tracks=100", "--set", "min_tracks=60"])):
         outs[tag] = tmp_path / f"{tag}.txt"
         r = run([replay, "--euroc", str(seq), "--out", str(outs[tag]), "--quiet"] + sets)
         assert r.returncode == 0, r.stderr
     assert outs["explicit"].read_bytes() == outs["default"].read_bytes()
+    assert outs["seed"].read_bytes() == outs["default"].read_bytes()
+    assert outs["seed2"].read_bytes() != outs["default"].read_bytes()
     assert outs["small"].read_bytes() != outs["default"].read_bytes()
     bad = tmp_path / "bad.txt"
     r = run([replay, "--euroc", str(seq), "--out", str(bad), "--set", "map_window=2"])
