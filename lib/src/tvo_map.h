@@ -117,11 +117,15 @@ void tvo_map_clear(tvo_map *m);
 void tvo_map_reset(tvo_map *m);
 
 /* One frame after the VO's two-view step. R_cur_prev: the two-view rotation of this frame (NULL when
- * none), T_c_w_prior: the pose the VO would report without the map (the two-view chain), used as the
- * reference pose when a new map starts. Tracks' lm / tri_* are updated, *out filled. Uses scratch. */
+ * none): it turns the motion model's prediction, and the map's rotation must stay within
+ * TVO_MAP_ROT_CHECK_DEG of it. rot_weight: the weight of R_cur_prev as a prior on the PnP rotation
+ * (pnp.h rot_prior_weight; 0: none), lowered for the frame when the landmarks alone disagree with it
+ * beyond their noise (tvo_map.c, consistent_prior). T_c_w_prior: the pose the VO would report without
+ * the map (the two-view chain), used as the reference pose when a new map starts. Tracks' lm / tri_*
+ * are updated, *out filled. Uses scratch. */
 tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
-                           const double *R_cur_prev, const tvo_pose *T_c_w_prior, void *scratch,
-                           size_t scratch_size, tvo_map_frame *out);
+                           const double *R_cur_prev, double rot_weight, const tvo_pose *T_c_w_prior,
+                           void *scratch, size_t scratch_size, tvo_map_frame *out);
 
 /* Tracks added after tvo_map_process (re-detection) start their wait for triangulation in this frame. */
 void tvo_map_new_tracks(const tvo_map *m, tvo_map_tracks *tr, int32_t first);
