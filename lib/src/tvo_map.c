@@ -206,6 +206,8 @@ void tvo_map_clear(tvo_map *m)
     m->frames_since_kf = 0;
     m->cur_kf_id = -1;
     m->lm_cursor = 0;
+    m->depth_med = 0.0;
+    m->rms = 0.0;
     for (int32_t i = 0; i < m->max_lm; ++i) {
         m->lm[i].alive = 0;
         m->lm[i].tracked = 0;
@@ -604,22 +606,50 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
 
 /* The predicted pose of this frame: the last pose moved by the last velocity (scaled to this frame's
  * interval) with the two-view rotation of this frame when there is one. */
-static tvo_pose predict(const tvo_map *m, int64_t t_ns, const double *R_cur_prev)
+/* The motion model's step to this frame (T_cur_prev): the last velocity scaled to this frame's
+ * interval (the identity without one). */
+static tvo_pose predicted_step(const tvo_map *m, int64_t t_ns)
 {
-    tvo_pose step = m->vel, T;
+    tvo_pose step = m->vel;
     double ratio = 1.0;
     if (!m->has_vel)
-        step = tvo_pose_identity();
-    if (m->has_vel && m->vel_dt_ns > 0 && t_ns > m->last_t_ns)
+        return tvo_pose_identity();
+    if (m->vel_dt_ns > 0 && t_ns > m->last_t_ns)
         ratio = (double)dt_ns(t_ns, m->last_t_ns) / (double)m->vel_dt_ns;
     if (!(ratio > 0.0 && ratio < 4.0))
         ratio = 1.0;
     for (int c = 0; c < 3; ++c)
         step.t[c] *= ratio;
+    return step;
+}
+
+static tvo_pose predict(const tvo_map *m, int64_t t_ns, const double *R_cur_prev)
+{
+    tvo_pose step = predicted_step(m, t_ns), T;
     if (R_cur_prev != NULL)
         memcpy(step.R, R_cur_prev, sizeof(step.R));
     T = tvo_pose_compose(&step, &m->last_T_c_w);
     return T;
+}
+
+/* The prior's weight for a rotation-only two-view rotation. Such an estimate cannot see a translation
+ * whose flow is below its parallax bound, and absorbs up to b = |t| / Z of it (rad; t: the motion
+ * model's translation for this frame, Z: the landmarks' median depth, both in map units): as a
+ * measurement its variance per axis is sigma^2 / w + b^2 rather than sigma^2 / w (pnp.h's unit: w counts
+ * as one point's error per rad^2; sigma: a point's reprojection error, the last landmarks-only RMS, or
+ * pose_threshold_px before there is one), i.e. the weight w / (1 + w b^2 / sigma^2). A camera that only
+ * turns keeps the full weight; one that drifts sideways in front of far points loses most of it. */
+static double rotation_only_weight(const tvo_map *m, const tvo_vo_config *cfg, int64_t t_ns)
+{
+    const tvo_pose step = predicted_step(m, t_ns);
+    const double w = cfg->map_rot_prior;
+    const double sigma = m->rms > 0.0 ? m->rms : cfg->pose_threshold_px / focal(cfg);
+    double b2, r;
+    if (!(m->depth_med > 0.0))
+        return w;
+    b2 = dot3(step.t, step.t) / (m->depth_med * m->depth_med);
+    r = w / (1.0 + w * b2 / (sigma * sigma));
+    return isfinite(r) && r >= 0.0 ? r : w;
 }
 
 /* The covariance of the rotation of T (posed on the k landmarks X without a prior; inliers where inl[q])
@@ -716,17 +746,20 @@ static double rot_chi2(const double Sig[9], double v, const double d[3])
  * rotation is further from it than TVO_MAP_ROT_PRIOR_GATE allows under the two covariances (the
  * prior's being rms^2 / w per axis: pnp.h, a weight w counts as one point's error per rad^2), the
  * weight is halved until they agree and the pose refined again with it. 1 when *T, *ni and inl were
- * replaced (inl: the inliers of the new pose, k entries). */
+ * replaced (inl: the inliers of the new pose, k entries). *rms_out gets the landmarks-only pose's
+ * reprojection RMS when it was computed. */
 static int consistent_prior(const tvo_pnp_config *pc, const double (*X)[3], const tvo_point2d *x, int32_t k,
-                            int32_t min_points, uint8_t *inl, tvo_pose *T, int32_t *ni)
+                            int32_t min_points, uint8_t *inl, tvo_pose *T, int32_t *ni, double *rms_out)
 {
     tvo_pnp_config pf = *pc;
     tvo_pose Tf = *T, Tw;
     int32_t nf = 0, nw = 0;
     double rms = 0.0, Sig[9], d[3], Rd[9], v, w = pc->rot_prior_weight;
     pf.rot_prior_weight = 0.0;
-    if (tvo_pnp_refine(&pf, X, x, NULL, k, &Tf, inl, &nf, &rms) != TVO_OK || nf < min_points ||
-        !(rms > 0.0) || !landmark_rot_cov(X, inl, k, &Tf, rms, Sig))
+    if (tvo_pnp_refine(&pf, X, x, NULL, k, &Tf, inl, &nf, &rms) != TVO_OK || nf < min_points || !(rms > 0.0))
+        return 0;
+    *rms_out = rms;
+    if (!landmark_rot_cov(X, inl, k, &Tf, rms, Sig))
         return 0;
     tvo_la_mat3_mul_bt(Tf.R, pc->rot_prior, Rd); /* R_free R_prior^T */
     tvo_rot_to_rotvec(Rd, d);
@@ -757,7 +790,7 @@ static int consistent_prior(const tvo_pnp_config *pc, const double (*X)[3], cons
 /* Pose this frame on the landmarks the tracks carry. 1 when posed (T written, tr->inlier set, the
  * outliers' landmarks unlinked from their tracks); *depth_med gets the inliers' median depth. */
 static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
-                       const double *R_cur_prev, double rot_weight, void *scratch, size_t scratch_size,
+                       const double *R_cur_prev, int rot_only, void *scratch, size_t scratch_size,
                        tvo_pose *T, int32_t *n_in, double *depth_med)
 {
     const int32_t n = tr->n;
@@ -798,10 +831,10 @@ static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr,
     pc.threshold = TVO_MAP_PNP_THRESHOLD_PX / focal(cfg);
     pc.huber = pc.threshold;
     pc.min_inliers = cfg->map_min_points;
-    if (R_cur_prev != NULL && rot_weight > 0.0) {
+    if (R_cur_prev != NULL && cfg->map_rot_prior > 0.0) {
         /* this frame's two-view rotation turns the last pose: a prior on the rotation */
         tvo_la_mat3_mul(R_cur_prev, m->last_T_c_w.R, pc.rot_prior);
-        pc.rot_prior_weight = rot_weight;
+        pc.rot_prior_weight = rot_only ? rotation_only_weight(m, cfg, t_ns) : cfg->map_rot_prior;
     }
     *T = predict(m, t_ns, R_cur_prev);
     st = tvo_pnp_refine(&pc, (const double(*)[3])X, x, NULL, k, T, inl, &ni, NULL);
@@ -821,7 +854,8 @@ static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr,
            translation that the landmarks' depths tell apart) */
         tvo_pose Tc = *T;
         int32_t nc = ni;
-        if (consistent_prior(&pc, (const double(*)[3])X, x, k, cfg->map_min_points, inl_free, &Tc, &nc)) {
+        if (consistent_prior(&pc, (const double(*)[3])X, x, k, cfg->map_min_points, inl_free, &Tc, &nc,
+                             &m->rms)) {
             *T = Tc;
             ni = nc;
             memcpy(inl, inl_free, (size_t)k);
@@ -1109,18 +1143,18 @@ static void lose(tvo_map *m, tvo_map_tracks *tr, int64_t t_ns, const tvo_pose *T
 }
 
 static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
-                         const double *R_cur_prev, double rot_weight, const tvo_pose *T_c_w_prior,
-                         void *scratch, size_t scratch_size, tvo_map_frame *out);
+                         const double *R_cur_prev, int rot_only, const tvo_pose *T_c_w_prior, void *scratch,
+                         size_t scratch_size, tvo_map_frame *out);
 
 tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
-                           const double *R_cur_prev, double rot_weight, const tvo_pose *T_c_w_prior,
-                           void *scratch, size_t scratch_size, tvo_map_frame *out)
+                           const double *R_cur_prev, int rot_only, const tvo_pose *T_c_w_prior, void *scratch,
+                           size_t scratch_size, tvo_map_frame *out)
 {
     memset(out, 0, sizeof(*out));
     out->T_c_w = *T_c_w_prior;
     m->cur_kf_id = -1;
     m->serial = m->serial < INT32_MAX - 1 ? m->serial + 1 : 0; /* wraps after 2^31 frames */
-    tvo_map_step(m, cfg, tr, t_ns, R_cur_prev, rot_weight, T_c_w_prior, scratch, scratch_size, out);
+    tvo_map_step(m, cfg, tr, t_ns, R_cur_prev, rot_only, T_c_w_prior, scratch, scratch_size, out);
     /* only the map's own poses serve triangulation (the two-view chain's are in another geometry); the
        reference frame's entry is written when it becomes keyframe 0 */
     if (out->state == TVO_MAP_TRACKING || out->state == TVO_MAP_INITIALISED)
@@ -1133,8 +1167,8 @@ tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks 
 }
 
 static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
-                         const double *R_cur_prev, double rot_weight, const tvo_pose *T_c_w_prior,
-                         void *scratch, size_t scratch_size, tvo_map_frame *out)
+                         const double *R_cur_prev, int rot_only, const tvo_pose *T_c_w_prior, void *scratch,
+                         size_t scratch_size, tvo_map_frame *out)
 {
     tvo_pose T;
     int32_t n_in = 0;
@@ -1160,13 +1194,13 @@ static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
         }
         return;
     }
-    if (!track_frame(m, cfg, tr, t_ns, R_cur_prev, rot_weight, scratch, scratch_size, &T, &n_in,
-                     &depth_med)) {
+    if (!track_frame(m, cfg, tr, t_ns, R_cur_prev, rot_only, scratch, scratch_size, &T, &n_in, &depth_med)) {
         lose(m, tr, t_ns, T_c_w_prior, out);
         return;
     }
     mark_tracked(m, tr);
     out->state = TVO_MAP_TRACKING;
+    m->depth_med = depth_med;
     out->points = n_in;
     if (need_keyframe(m, cfg, &T, n_in, depth_med)) {
         /* the frame keeps its tracking pose (what it was measured to be when it came); the map keeps the

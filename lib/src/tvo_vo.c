@@ -782,13 +782,10 @@ static void map_step(tvo_vo *vo, tvo_vo_result *res, int64_t t_ns, const double 
         res->map_state = TVO_MAP_OFF;
         return;
     }
-    /* a rotation-only estimate has absorbed the flow of whatever translation the frame had (the two
-       views cannot tell it from a turn; the landmarks' depths can): no prior on the map's rotation */
-    const double rot_weight = res->state == TVO_VO_ROTATION_ONLY ? 0.0 : vo->cfg.map_rot_prior;
     memset(vo->ok2, 1, (size_t)vo->n);
     tr = map_tracks(vo);
-    if (tvo_map_process(&vo->map, &vo->cfg, &tr, t_ns, R_cur_prev, rot_weight, &prior, vo->scratch,
-                        vo->scratch_size, &mf) != TVO_OK ||
+    if (tvo_map_process(&vo->map, &vo->cfg, &tr, t_ns, R_cur_prev, res->state == TVO_VO_ROTATION_ONLY, &prior,
+                        vo->scratch, vo->scratch_size, &mf) != TVO_OK ||
         !tvo_pose_is_finite(&mf.T_c_w)) {
         mf.T_c_w = prior;
         mf.state = TVO_MAP_LOST;
