@@ -35,6 +35,13 @@
  * one) is not trusted: the map is dropped (a wrong PnP minimum on few points). */
 #define TVO_MAP_ROT_CHECK_DEG 5.0
 
+/* The two-view rotation prior of a frame's PnP keeps its weight while the rotation the landmarks alone
+ * give is within this chi-square value (3 degrees of freedom, 99 %) of it under the two estimates'
+ * covariances (consistent_prior); beyond it the weight is lowered until they agree... */
+#define TVO_MAP_ROT_PRIOR_GATE 11.345
+/* ...by halving it, up to this many times (2^-40: nothing left). */
+#define TVO_MAP_ROT_PRIOR_HALVINGS 40
+
 /* ---- small vector helpers ----------------------------------------------------------------------- */
 
 static double dot3(const double a[3], const double b[3])
@@ -111,7 +118,7 @@ static size_t track_scratch(const tvo_vo_config *cfg)
     const size_t n = (size_t)cfg->max_tracks;
     size_t s = tvo_arena_round(tvo_size_mul(n, 3 * sizeof(double)));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))));
-    s = tvo_size_add(s, tvo_arena_round(n));
+    s = tvo_size_add(s, tvo_arena_round(n) * 2);
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(int32_t))));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(double))));
     return tvo_size_add(s, tvo_arena_round(tvo_pnp_scratch_size(cfg->max_tracks)));
@@ -199,6 +206,8 @@ void tvo_map_clear(tvo_map *m)
     m->frames_since_kf = 0;
     m->cur_kf_id = -1;
     m->lm_cursor = 0;
+    m->depth_med = 0.0;
+    m->rms = 0.0;
     for (int32_t i = 0; i < m->max_lm; ++i) {
         m->lm[i].alive = 0;
         m->lm[i].tracked = 0;
@@ -597,35 +606,198 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
 
 /* The predicted pose of this frame: the last pose moved by the last velocity (scaled to this frame's
  * interval) with the two-view rotation of this frame when there is one. */
-static tvo_pose predict(const tvo_map *m, int64_t t_ns, const double *R_cur_prev)
+/* The motion model's step to this frame (T_cur_prev): the last velocity scaled to this frame's
+ * interval (the identity without one). */
+static tvo_pose predicted_step(const tvo_map *m, int64_t t_ns)
 {
-    tvo_pose step = m->vel, T;
+    tvo_pose step = m->vel;
     double ratio = 1.0;
     if (!m->has_vel)
-        step = tvo_pose_identity();
-    if (m->has_vel && m->vel_dt_ns > 0 && t_ns > m->last_t_ns)
+        return tvo_pose_identity();
+    if (m->vel_dt_ns > 0 && t_ns > m->last_t_ns)
         ratio = (double)dt_ns(t_ns, m->last_t_ns) / (double)m->vel_dt_ns;
     if (!(ratio > 0.0 && ratio < 4.0))
         ratio = 1.0;
     for (int c = 0; c < 3; ++c)
         step.t[c] *= ratio;
+    return step;
+}
+
+static tvo_pose predict(const tvo_map *m, int64_t t_ns, const double *R_cur_prev)
+{
+    tvo_pose step = predicted_step(m, t_ns), T;
     if (R_cur_prev != NULL)
         memcpy(step.R, R_cur_prev, sizeof(step.R));
     T = tvo_pose_compose(&step, &m->last_T_c_w);
     return T;
 }
 
+/* The prior's weight for a rotation-only two-view rotation. Such an estimate cannot see a translation
+ * whose flow is below its parallax bound, and absorbs up to b = |t| / Z of it (rad; t: the motion
+ * model's translation for this frame, Z: the landmarks' median depth, both in map units): as a
+ * measurement its variance per axis is sigma^2 / w + b^2 rather than sigma^2 / w (pnp.h's unit: w counts
+ * as one point's error per rad^2; sigma: a point's reprojection error, the last landmarks-only RMS, or
+ * pose_threshold_px before there is one), i.e. the weight w / (1 + w b^2 / sigma^2). A camera that only
+ * turns keeps the full weight; one that drifts sideways in front of far points loses most of it. */
+static double rotation_only_weight(const tvo_map *m, const tvo_vo_config *cfg, int64_t t_ns)
+{
+    const tvo_pose step = predicted_step(m, t_ns);
+    const double w = cfg->map_rot_prior;
+    const double sigma = m->rms > 0.0 ? m->rms : cfg->pose_threshold_px / focal(cfg);
+    double b2, r;
+    if (!(m->depth_med > 0.0))
+        return w;
+    b2 = dot3(step.t, step.t) / (m->depth_med * m->depth_med);
+    r = w / (1.0 + w * b2 / (sigma * sigma));
+    return isfinite(r) && r >= 0.0 ? r : w;
+}
+
+/* The covariance of the rotation of T (posed on the k landmarks X without a prior; inliers where inl[q])
+ * in Sig: rms^2 Lambda^-1, Lambda the rotation block of the Gauss-Newton normal matrix of the
+ * reprojection errors (normalised units) with the translation marginalised out (its Schur complement).
+ * 0 when it cannot be computed (too few points, a singular block). */
+static int landmark_rot_cov(const double (*X)[3], const uint8_t *inl, int32_t k, const tvo_pose *T,
+                            double rms, double Sig[9])
+{
+    static const double e[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    double H[36] = {0}, A[9], B[9], C[9], Ci[9], L[9], BCi[9], BCiBt[9];
+    const double s2 = rms * rms;
+    for (int32_t q = 0; q < k; ++q) {
+        double p[3], J[12];
+        if (!inl[q])
+            continue;
+        tvo_pose_transform_point(T, X[q], p);
+        if (!(p[2] > 0.0))
+            continue;
+        {
+            /* the rows of d(u, v) / d(r, dt) for p' = exp(r) p + dt: a, b = d(u, v) / dp, whose
+               rotation parts are a x p, b x p (up to a common sign, which Lambda does not see) */
+            const double iz = 1.0 / p[2], u = p[0] * iz, v = p[1] * iz;
+            const double a[3] = {iz, 0.0, -u * iz}, b[3] = {0.0, iz, -v * iz};
+            J[0] = a[1] * p[2] - a[2] * p[1];
+            J[1] = a[2] * p[0] - a[0] * p[2];
+            J[2] = a[0] * p[1] - a[1] * p[0];
+            J[3] = a[0];
+            J[4] = a[1];
+            J[5] = a[2];
+            J[6] = b[1] * p[2] - b[2] * p[1];
+            J[7] = b[2] * p[0] - b[0] * p[2];
+            J[8] = b[0] * p[1] - b[1] * p[0];
+            J[9] = b[0];
+            J[10] = b[1];
+            J[11] = b[2];
+            for (int r = 0; r < 6; ++r)
+                for (int c = 0; c < 6; ++c)
+                    H[6 * r + c] += J[r] * J[c] + J[6 + r] * J[6 + c];
+        }
+    }
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) {
+            A[3 * r + c] = H[6 * r + c];
+            B[3 * r + c] = H[6 * r + 3 + c];
+            C[3 * r + c] = H[6 * (r + 3) + 3 + c];
+        }
+    for (int c = 0; c < 3; ++c) { /* C^-1, column by column */
+        double M[9], rhs[3] = {e[c], e[3 + c], e[6 + c]}, col[3];
+        memcpy(M, C, sizeof(M));
+        if (tvo_la_solve(M, rhs, 3, col) != TVO_OK)
+            return 0;
+        Ci[c] = col[0];
+        Ci[3 + c] = col[1];
+        Ci[6 + c] = col[2];
+    }
+    tvo_la_mat3_mul(B, Ci, BCi);
+    tvo_la_mat3_mul_bt(BCi, B, BCiBt);
+    for (int i = 0; i < 9; ++i)
+        L[i] = A[i] - BCiBt[i];
+    for (int c = 0; c < 3; ++c) { /* Lambda^-1 */
+        double M[9], rhs[3] = {e[c], e[3 + c], e[6 + c]}, col[3];
+        memcpy(M, L, sizeof(M));
+        if (tvo_la_solve(M, rhs, 3, col) != TVO_OK)
+            return 0;
+        Sig[c] = s2 * col[0];
+        Sig[3 + c] = s2 * col[1];
+        Sig[6 + c] = s2 * col[2];
+    }
+    for (int i = 0; i < 9; ++i)
+        if (!isfinite(Sig[i]))
+            return 0;
+    return 1;
+}
+
+/* d^T (Sig + v I)^-1 d: the chi-square value of the rotation difference d (rotation vector) between
+ * the landmarks' rotation (covariance Sig) and a prior of variance v per axis; -1 when singular. */
+static double rot_chi2(const double Sig[9], double v, const double d[3])
+{
+    double M[9], rhs[3], x[3], chi2;
+    memcpy(M, Sig, sizeof(M));
+    M[0] += v;
+    M[4] += v;
+    M[8] += v;
+    memcpy(rhs, d, sizeof(rhs));
+    if (tvo_la_solve(M, rhs, 3, x) != TVO_OK)
+        return -1.0;
+    chi2 = dot3(d, x);
+    return isfinite(chi2) && chi2 >= 0.0 ? chi2 : -1.0;
+}
+
+/* The rotation prior of pc against the landmarks (*T: the pose refined with the prior): the pose refined
+ * without it gives the landmarks' own rotation and its covariance (landmark_rot_cov); when the prior's
+ * rotation is further from it than TVO_MAP_ROT_PRIOR_GATE allows under the two covariances (the
+ * prior's being rms^2 / w per axis: pnp.h, a weight w counts as one point's error per rad^2), the
+ * weight is halved until they agree and the pose refined again with it. 1 when *T, *ni and inl were
+ * replaced (inl: the inliers of the new pose, k entries). *rms_out gets the landmarks-only pose's
+ * reprojection RMS when it was computed. */
+static int consistent_prior(const tvo_pnp_config *pc, const double (*X)[3], const tvo_point2d *x, int32_t k,
+                            int32_t min_points, uint8_t *inl, tvo_pose *T, int32_t *ni, double *rms_out)
+{
+    tvo_pnp_config pf = *pc;
+    tvo_pose Tf = *T, Tw;
+    int32_t nf = 0, nw = 0;
+    double rms = 0.0, Sig[9], d[3], Rd[9], v, w = pc->rot_prior_weight;
+    pf.rot_prior_weight = 0.0;
+    if (tvo_pnp_refine(&pf, X, x, NULL, k, &Tf, inl, &nf, &rms) != TVO_OK || nf < min_points || !(rms > 0.0))
+        return 0;
+    *rms_out = rms;
+    if (!landmark_rot_cov(X, inl, k, &Tf, rms, Sig))
+        return 0;
+    tvo_la_mat3_mul_bt(Tf.R, pc->rot_prior, Rd); /* R_free R_prior^T */
+    tvo_rot_to_rotvec(Rd, d);
+    v = rms * rms;
+    if (!(rot_chi2(Sig, v / w, d) > TVO_MAP_ROT_PRIOR_GATE))
+        return 0; /* they agree: the pose with the full prior stands */
+    for (int it = 0; it < TVO_MAP_ROT_PRIOR_HALVINGS; ++it) {
+        w *= 0.5;
+        if (rot_chi2(Sig, v / w, d) <= TVO_MAP_ROT_PRIOR_GATE)
+            break;
+    }
+    pf.rot_prior_weight = w;
+    Tw = *T;
+    if (tvo_pnp_refine(&pf, X, x, NULL, k, &Tw, inl, &nw, NULL) == TVO_OK && nw >= min_points) {
+        *T = Tw;
+        *ni = nw;
+        return 1;
+    }
+    /* the refinement with the lowered weight failed: the landmarks' own pose (again, for its inliers) */
+    pf.rot_prior_weight = 0.0;
+    if (tvo_pnp_refine(&pf, X, x, NULL, k, &Tf, inl, &nf, NULL) != TVO_OK || nf < min_points)
+        return 0;
+    *T = Tf;
+    *ni = nf;
+    return 1;
+}
+
 /* Pose this frame on the landmarks the tracks carry. 1 when posed (T written, tr->inlier set, the
  * outliers' landmarks unlinked from their tracks); *depth_med gets the inliers' median depth. */
 static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
-                       const double *R_cur_prev, void *scratch, size_t scratch_size, tvo_pose *T,
-                       int32_t *n_in, double *depth_med)
+                       const double *R_cur_prev, int rot_only, void *scratch, size_t scratch_size,
+                       tvo_pose *T, int32_t *n_in, double *depth_med)
 {
     const int32_t n = tr->n;
     carve c;
     double(*X)[3], *depth;
     tvo_point2d *x;
-    uint8_t *inl;
+    uint8_t *inl, *inl_free;
     int32_t *idx, k = 0, ni = 0, nd = 0;
     void *ps;
     const size_t ps_size = tvo_pnp_scratch_size(cfg->max_tracks);
@@ -637,10 +809,12 @@ static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr,
     X = (double(*)[3])take(&c, (size_t)n * 3 * sizeof(double));
     x = (tvo_point2d *)take(&c, (size_t)n * sizeof(tvo_point2d));
     inl = (uint8_t *)take(&c, (size_t)n);
+    inl_free = (uint8_t *)take(&c, (size_t)n);
     idx = (int32_t *)take(&c, (size_t)n * sizeof(int32_t));
     depth = (double *)take(&c, (size_t)n * sizeof(double));
     ps = take(&c, ps_size);
-    if (X == NULL || x == NULL || inl == NULL || idx == NULL || depth == NULL || ps == NULL)
+    if (X == NULL || x == NULL || inl == NULL || inl_free == NULL || idx == NULL || depth == NULL ||
+        ps == NULL)
         return 0;
     for (int32_t i = 0; i < n; ++i) {
         tr->inlier[i] = 0;
@@ -660,7 +834,7 @@ static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr,
     if (R_cur_prev != NULL && cfg->map_rot_prior > 0.0) {
         /* this frame's two-view rotation turns the last pose: a prior on the rotation */
         tvo_la_mat3_mul(R_cur_prev, m->last_T_c_w.R, pc.rot_prior);
-        pc.rot_prior_weight = cfg->map_rot_prior;
+        pc.rot_prior_weight = rot_only ? rotation_only_weight(m, cfg, t_ns) : cfg->map_rot_prior;
     }
     *T = predict(m, t_ns, R_cur_prev);
     st = tvo_pnp_refine(&pc, (const double(*)[3])X, x, NULL, k, T, inl, &ni, NULL);
@@ -674,6 +848,19 @@ static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr,
     }
     if (ni < cfg->map_min_points)
         return 0;
+    if (pc.rot_prior_weight > 0.0) {
+        /* the prior is a measurement of the rotation: it keeps its weight only while the landmarks alone
+           agree with it (the two-view rotation of a low-parallax frame can have absorbed the flow of a
+           translation that the landmarks' depths tell apart) */
+        tvo_pose Tc = *T;
+        int32_t nc = ni;
+        if (consistent_prior(&pc, (const double(*)[3])X, x, k, cfg->map_min_points, inl_free, &Tc, &nc,
+                             &m->rms)) {
+            *T = Tc;
+            ni = nc;
+            memcpy(inl, inl_free, (size_t)k);
+        }
+    }
     if (R_cur_prev != NULL) {
         /* the map's rotation must agree with the frame's own two-view rotation */
         double Rrel[9];
@@ -956,18 +1143,18 @@ static void lose(tvo_map *m, tvo_map_tracks *tr, int64_t t_ns, const tvo_pose *T
 }
 
 static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
-                         const double *R_cur_prev, const tvo_pose *T_c_w_prior, void *scratch,
+                         const double *R_cur_prev, int rot_only, const tvo_pose *T_c_w_prior, void *scratch,
                          size_t scratch_size, tvo_map_frame *out);
 
 tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
-                           const double *R_cur_prev, const tvo_pose *T_c_w_prior, void *scratch,
+                           const double *R_cur_prev, int rot_only, const tvo_pose *T_c_w_prior, void *scratch,
                            size_t scratch_size, tvo_map_frame *out)
 {
     memset(out, 0, sizeof(*out));
     out->T_c_w = *T_c_w_prior;
     m->cur_kf_id = -1;
     m->serial = m->serial < INT32_MAX - 1 ? m->serial + 1 : 0; /* wraps after 2^31 frames */
-    tvo_map_step(m, cfg, tr, t_ns, R_cur_prev, T_c_w_prior, scratch, scratch_size, out);
+    tvo_map_step(m, cfg, tr, t_ns, R_cur_prev, rot_only, T_c_w_prior, scratch, scratch_size, out);
     /* only the map's own poses serve triangulation (the two-view chain's are in another geometry); the
        reference frame's entry is written when it becomes keyframe 0 */
     if (out->state == TVO_MAP_TRACKING || out->state == TVO_MAP_INITIALISED)
@@ -980,7 +1167,7 @@ tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks 
 }
 
 static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
-                         const double *R_cur_prev, const tvo_pose *T_c_w_prior, void *scratch,
+                         const double *R_cur_prev, int rot_only, const tvo_pose *T_c_w_prior, void *scratch,
                          size_t scratch_size, tvo_map_frame *out)
 {
     tvo_pose T;
@@ -1007,12 +1194,13 @@ static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
         }
         return;
     }
-    if (!track_frame(m, cfg, tr, t_ns, R_cur_prev, scratch, scratch_size, &T, &n_in, &depth_med)) {
+    if (!track_frame(m, cfg, tr, t_ns, R_cur_prev, rot_only, scratch, scratch_size, &T, &n_in, &depth_med)) {
         lose(m, tr, t_ns, T_c_w_prior, out);
         return;
     }
     mark_tracked(m, tr);
     out->state = TVO_MAP_TRACKING;
+    m->depth_med = depth_med;
     out->points = n_in;
     if (need_keyframe(m, cfg, &T, n_in, depth_med)) {
         /* the frame keeps its tracking pose (what it was measured to be when it came); the map keeps the

@@ -92,6 +92,8 @@ typedef struct tvo_map {
     double speed;      /* map units per second of the last map (> 0 when known) */
     int32_t kf_points; /* landmarks the last keyframe saw (for the keyframe decision) */
     int32_t frames_since_kf;
+    double depth_med; /* median depth of the last tracked frame's inliers (map units; 0: unknown) */
+    double rms;       /* the last landmarks-only PnP reprojection RMS (normalised; 0: unknown) */
     int32_t losses;
     int32_t cur_kf_id; /* id of the keyframe made in the last processed frame, or -1 */
     int32_t lm_cursor; /* where the search for a free landmark slot starts */
@@ -117,10 +119,16 @@ void tvo_map_clear(tvo_map *m);
 void tvo_map_reset(tvo_map *m);
 
 /* One frame after the VO's two-view step. R_cur_prev: the two-view rotation of this frame (NULL when
- * none), T_c_w_prior: the pose the VO would report without the map (the two-view chain), used as the
- * reference pose when a new map starts. Tracks' lm / tri_* are updated, *out filled. Uses scratch. */
+ * none): it turns the motion model's prediction, it is a prior on the PnP rotation (weight
+ * cfg->map_rot_prior, lowered for a rotation-only estimate by the translation the motion model predicts,
+ * and for any frame whose landmarks alone disagree with it beyond their noise: tvo_map.c,
+ * rotation_only_weight and consistent_prior), and the map's rotation must stay within
+ * TVO_MAP_ROT_CHECK_DEG of it. rot_only: 1 when that rotation is a rotation-only estimate (no
+ * translation seen). T_c_w_prior: the pose the VO would report without the map (the two-view chain),
+ * used as the reference pose when a new map starts. Tracks' lm / tri_* are updated, *out filled. Uses
+ * scratch. */
 tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
-                           const double *R_cur_prev, const tvo_pose *T_c_w_prior, void *scratch,
+                           const double *R_cur_prev, int rot_only, const tvo_pose *T_c_w_prior, void *scratch,
                            size_t scratch_size, tvo_map_frame *out);
 
 /* Tracks added after tvo_map_process (re-detection) start their wait for triangulation in this frame. */

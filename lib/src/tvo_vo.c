@@ -784,8 +784,8 @@ static void map_step(tvo_vo *vo, tvo_vo_result *res, int64_t t_ns, const double 
     }
     memset(vo->ok2, 1, (size_t)vo->n);
     tr = map_tracks(vo);
-    if (tvo_map_process(&vo->map, &vo->cfg, &tr, t_ns, R_cur_prev, &prior, vo->scratch, vo->scratch_size,
-                        &mf) != TVO_OK ||
+    if (tvo_map_process(&vo->map, &vo->cfg, &tr, t_ns, R_cur_prev, res->state == TVO_VO_ROTATION_ONLY, &prior,
+                        vo->scratch, vo->scratch_size, &mf) != TVO_OK ||
         !tvo_pose_is_finite(&mf.T_c_w)) {
         mf.T_c_w = prior;
         mf.state = TVO_MAP_LOST;

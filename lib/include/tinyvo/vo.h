@@ -165,7 +165,11 @@ typedef struct tvo_vo_config {
                                    prior on its map pose (pnp.h, rot_prior_weight), [0, 1e12]; 0: none;
                                    default 100 (as much as 100 points' reprojection errors: the
                                    per-frame rotation mostly follows the two-view estimate, the map
-                                   corrects its drift) */
+                                   corrects its drift). Lowered for a rotation-only frame by the
+                                   translation flow the motion model predicts (which such a rotation
+                                   absorbs), and for any frame whose landmarks alone give a rotation
+                                   that disagrees with the prior beyond the two estimates' noise (a
+                                   chi-square test at 99 %); docs/design.md */
     tvo_clock_fn clock;           /* optional (NULL: no timings) */
     void *clock_user;
 } tvo_vo_config;
