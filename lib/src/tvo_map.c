@@ -604,8 +604,6 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
 
 /* ---- tracking ----------------------------------------------------------------------------------- */
 
-/* The predicted pose of this frame: the last pose moved by the last velocity (scaled to this frame's
- * interval) with the two-view rotation of this frame when there is one. */
 /* The motion model's step to this frame (T_cur_prev): the last velocity scaled to this frame's
  * interval (the identity without one). */
 static tvo_pose predicted_step(const tvo_map *m, int64_t t_ns)
@@ -623,6 +621,8 @@ static tvo_pose predicted_step(const tvo_map *m, int64_t t_ns)
     return step;
 }
 
+/* The predicted pose of this frame: the last pose moved by the last velocity (scaled to this frame's
+ * interval) with the two-view rotation of this frame when there is one. */
 static tvo_pose predict(const tvo_map *m, int64_t t_ns, const double *R_cur_prev)
 {
     tvo_pose step = predicted_step(m, t_ns), T;
