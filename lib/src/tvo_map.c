@@ -790,7 +790,7 @@ static int consistent_prior(const tvo_pnp_config *pc, const double (*X)[3], cons
 /* Pose this frame on the landmarks the tracks carry. 1 when posed (T written, tr->inlier set, the
  * outliers' landmarks unlinked from their tracks); *depth_med gets the inliers' median depth. */
 static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
-                       const double *R_cur_prev, int rot_only, void *scratch, size_t scratch_size,
+                       const double *R_cur_prev, int prior_flags, void *scratch, size_t scratch_size,
                        tvo_pose *T, int32_t *n_in, double *depth_med)
 {
     const int32_t n = tr->n;
@@ -834,7 +834,8 @@ static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr,
     if (R_cur_prev != NULL && cfg->map_rot_prior > 0.0) {
         /* this frame's two-view rotation turns the last pose: a prior on the rotation */
         tvo_la_mat3_mul(R_cur_prev, m->last_T_c_w.R, pc.rot_prior);
-        pc.rot_prior_weight = rot_only ? rotation_only_weight(m, cfg, t_ns) : cfg->map_rot_prior;
+        pc.rot_prior_weight = (prior_flags & TVO_MAP_PRIOR_ROT_ONLY) ? rotation_only_weight(m, cfg, t_ns)
+                                                                     : cfg->map_rot_prior;
     }
     *T = predict(m, t_ns, R_cur_prev);
     st = tvo_pnp_refine(&pc, (const double(*)[3])X, x, NULL, k, T, inl, &ni, NULL);
@@ -848,10 +849,11 @@ static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr,
     }
     if (ni < cfg->map_min_points)
         return 0;
-    if (pc.rot_prior_weight > 0.0) {
-        /* the prior is a measurement of the rotation: it keeps its weight only while the landmarks alone
-           agree with it (the two-view rotation of a low-parallax frame can have absorbed the flow of a
-           translation that the landmarks' depths tell apart) */
+    if (pc.rot_prior_weight > 0.0 && (prior_flags & TVO_MAP_PRIOR_WEAK)) {
+        /* a weak prior is a measurement of the rotation that keeps its weight only while the landmarks
+           alone agree with it (the two-view rotation of a low-parallax frame can have absorbed the flow
+           of a translation that the landmarks' depths tell apart, a plane's twin is off by about the
+           parallax); a well-conditioned two-view rotation is better than the landmarks' own */
         tvo_pose Tc = *T;
         int32_t nc = ni;
         if (consistent_prior(&pc, (const double(*)[3])X, x, k, cfg->map_min_points, inl_free, &Tc, &nc,
@@ -1143,18 +1145,18 @@ static void lose(tvo_map *m, tvo_map_tracks *tr, int64_t t_ns, const tvo_pose *T
 }
 
 static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
-                         const double *R_cur_prev, int rot_only, const tvo_pose *T_c_w_prior, void *scratch,
-                         size_t scratch_size, tvo_map_frame *out);
+                         const double *R_cur_prev, int prior_flags, const tvo_pose *T_c_w_prior,
+                         void *scratch, size_t scratch_size, tvo_map_frame *out);
 
 tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
-                           const double *R_cur_prev, int rot_only, const tvo_pose *T_c_w_prior, void *scratch,
-                           size_t scratch_size, tvo_map_frame *out)
+                           const double *R_cur_prev, int prior_flags, const tvo_pose *T_c_w_prior,
+                           void *scratch, size_t scratch_size, tvo_map_frame *out)
 {
     memset(out, 0, sizeof(*out));
     out->T_c_w = *T_c_w_prior;
     m->cur_kf_id = -1;
     m->serial = m->serial < INT32_MAX - 1 ? m->serial + 1 : 0; /* wraps after 2^31 frames */
-    tvo_map_step(m, cfg, tr, t_ns, R_cur_prev, rot_only, T_c_w_prior, scratch, scratch_size, out);
+    tvo_map_step(m, cfg, tr, t_ns, R_cur_prev, prior_flags, T_c_w_prior, scratch, scratch_size, out);
     /* only the map's own poses serve triangulation (the two-view chain's are in another geometry); the
        reference frame's entry is written when it becomes keyframe 0 */
     if (out->state == TVO_MAP_TRACKING || out->state == TVO_MAP_INITIALISED)
@@ -1167,8 +1169,8 @@ tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks 
 }
 
 static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
-                         const double *R_cur_prev, int rot_only, const tvo_pose *T_c_w_prior, void *scratch,
-                         size_t scratch_size, tvo_map_frame *out)
+                         const double *R_cur_prev, int prior_flags, const tvo_pose *T_c_w_prior,
+                         void *scratch, size_t scratch_size, tvo_map_frame *out)
 {
     tvo_pose T;
     int32_t n_in = 0;
@@ -1194,7 +1196,8 @@ static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
         }
         return;
     }
-    if (!track_frame(m, cfg, tr, t_ns, R_cur_prev, rot_only, scratch, scratch_size, &T, &n_in, &depth_med)) {
+    if (!track_frame(m, cfg, tr, t_ns, R_cur_prev, prior_flags, scratch, scratch_size, &T, &n_in,
+                     &depth_med)) {
         lose(m, tr, t_ns, T_c_w_prior, out);
         return;
     }

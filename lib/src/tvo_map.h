@@ -118,18 +118,23 @@ void tvo_map_clear(tvo_map *m);
 /* Back to the state after tvo_map_init (everything forgotten). */
 void tvo_map_reset(tvo_map *m);
 
+/* What the VO knows of its two-view rotation (the prior_flags of tvo_map_process). */
+enum {
+    TVO_MAP_PRIOR_ROT_ONLY = 1, /* a rotation-only estimate (no translation seen) */
+    TVO_MAP_PRIOR_WEAK = 2 /* a poorly conditioned one (rotation-only, a plane's twin, little parallax) */
+};
+
 /* One frame after the VO's two-view step. R_cur_prev: the two-view rotation of this frame (NULL when
  * none): it turns the motion model's prediction, it is a prior on the PnP rotation (weight
  * cfg->map_rot_prior, lowered for a rotation-only estimate by the translation the motion model predicts,
- * and for any frame whose landmarks alone disagree with it beyond their noise: tvo_map.c,
+ * and for a weak one whose landmarks alone disagree with it beyond their noise: tvo_map.c,
  * rotation_only_weight and consistent_prior), and the map's rotation must stay within
- * TVO_MAP_ROT_CHECK_DEG of it. rot_only: 1 when that rotation is a rotation-only estimate (no
- * translation seen). T_c_w_prior: the pose the VO would report without the map (the two-view chain),
+ * TVO_MAP_ROT_CHECK_DEG of it. prior_flags: TVO_MAP_PRIOR_* bits. T_c_w_prior: the pose the VO would report without the map (the two-view chain),
  * used as the reference pose when a new map starts. Tracks' lm / tri_* are updated, *out filled. Uses
  * scratch. */
 tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
-                           const double *R_cur_prev, int rot_only, const tvo_pose *T_c_w_prior, void *scratch,
-                           size_t scratch_size, tvo_map_frame *out);
+                           const double *R_cur_prev, int prior_flags, const tvo_pose *T_c_w_prior,
+                           void *scratch, size_t scratch_size, tvo_map_frame *out);
 
 /* Tracks added after tvo_map_process (re-detection) start their wait for triangulation in this frame. */
 void tvo_map_new_tracks(const tvo_map *m, tvo_map_tracks *tr, int32_t first);

@@ -770,6 +770,24 @@ static tvo_map_tracks map_tracks(tvo_vo *vo)
     return tr;
 }
 
+/* Below this parallax (deg) a frame's two-view rotation is a weak prior for the map (tvo_map.h): on the
+ * long MH_01 render the landmarks' own rotation was the better one below about 0.2 deg, the two-view
+ * rotation above it; testing the prior on frames up to 0.5 deg made the KITTI 01 highway frames worse
+ * (per-frame rotation RPE 0.05-0.07 -> 0.08-0.11 deg over five RANSAC seeds). */
+#define TVO_VO_WEAK_PRIOR_PARALLAX_DEG 0.2
+
+/* The map's view of this frame's two-view rotation: rotation-only, and weak (rotation-only, a plane's
+ * twin, or little parallax). */
+static int map_prior_flags(const tvo_vo_result *res)
+{
+    const int rot_only = res->state == TVO_VO_ROTATION_ONLY;
+    int f = rot_only ? TVO_MAP_PRIOR_ROT_ONLY : 0;
+    if (rot_only || (res->relpose_flags & TVO_RELPOSE_FLAG_AMBIGUOUS) ||
+        res->parallax_deg < TVO_VO_WEAK_PRIOR_PARALLAX_DEG)
+        f |= TVO_MAP_PRIOR_WEAK;
+    return f;
+}
+
 /* The map's part of a frame, after the two-view step: vo->x2 holds the normalised positions of the
  * vo->n carried tracks. R_cur_prev: this frame's two-view rotation, or NULL. Sets vo->T_c_w. */
 static void map_step(tvo_vo *vo, tvo_vo_result *res, int64_t t_ns, const double *R_cur_prev)
@@ -784,8 +802,8 @@ static void map_step(tvo_vo *vo, tvo_vo_result *res, int64_t t_ns, const double 
     }
     memset(vo->ok2, 1, (size_t)vo->n);
     tr = map_tracks(vo);
-    if (tvo_map_process(&vo->map, &vo->cfg, &tr, t_ns, R_cur_prev, res->state == TVO_VO_ROTATION_ONLY, &prior,
-                        vo->scratch, vo->scratch_size, &mf) != TVO_OK ||
+    if (tvo_map_process(&vo->map, &vo->cfg, &tr, t_ns, R_cur_prev, map_prior_flags(res), &prior, vo->scratch,
+                        vo->scratch_size, &mf) != TVO_OK ||
         !tvo_pose_is_finite(&mf.T_c_w)) {
         mf.T_c_w = prior;
         mf.state = TVO_MAP_LOST;

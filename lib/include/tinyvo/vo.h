@@ -167,9 +167,10 @@ typedef struct tvo_vo_config {
                                    per-frame rotation mostly follows the two-view estimate, the map
                                    corrects its drift). Lowered for a rotation-only frame by the
                                    translation flow the motion model predicts (which such a rotation
-                                   absorbs), and for any frame whose landmarks alone give a rotation
-                                   that disagrees with the prior beyond the two estimates' noise (a
-                                   chi-square test at 99 %); docs/design.md */
+                                   absorbs), and for a frame with a weak two-view rotation
+                                   (rotation-only, a plane's twin, below 0.2 deg of parallax) whose
+                                   landmarks alone give a rotation that disagrees with the prior beyond
+                                   the two estimates' noise (a chi-square test at 99 %); docs/design.md */
     tvo_clock_fn clock;           /* optional (NULL: no timings) */
     void *clock_user;
 } tvo_vo_config;
