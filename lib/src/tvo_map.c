@@ -652,6 +652,22 @@ static double rotation_only_weight(const tvo_map *m, const tvo_vo_config *cfg, i
     return isfinite(r) && r >= 0.0 ? r : w;
 }
 
+/* Inv = M^-1 (3x3, row-major), column by column by tvo_la_solve; 0 when M is singular. */
+static int mat3_inverse(const double M[9], double Inv[9])
+{
+    for (int c = 0; c < 3; ++c) {
+        double W[9], rhs[3] = {0.0, 0.0, 0.0}, col[3];
+        rhs[c] = 1.0;
+        memcpy(W, M, sizeof(W));
+        if (tvo_la_solve(W, rhs, 3, col) != TVO_OK)
+            return 0;
+        Inv[c] = col[0];
+        Inv[3 + c] = col[1];
+        Inv[6 + c] = col[2];
+    }
+    return 1;
+}
+
 /* The covariance of the rotation of T (posed on the k landmarks X without a prior; inliers where inl[q])
  * in Sig: rms^2 Lambda^-1, Lambda the rotation block of the Gauss-Newton normal matrix of the
  * reprojection errors (normalised units) with the translation marginalised out (its Schur complement).
@@ -659,8 +675,7 @@ static double rotation_only_weight(const tvo_map *m, const tvo_vo_config *cfg, i
 static int landmark_rot_cov(const double (*X)[3], const uint8_t *inl, int32_t k, const tvo_pose *T,
                             double rms, double Sig[9])
 {
-    static const double e[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-    double H[36] = {0}, A[9], B[9], C[9], Ci[9], L[9], BCi[9], BCiBt[9];
+    double H[36] = {0}, A[9], B[9], C[9], Ci[9], L[9], Li[9], BCi[9], BCiBt[9];
     const double s2 = rms * rms;
     for (int32_t q = 0; q < k; ++q) {
         double p[3], J[12];
@@ -674,18 +689,10 @@ static int landmark_rot_cov(const double (*X)[3], const uint8_t *inl, int32_t k,
                rotation parts are a x p, b x p (up to a common sign, which Lambda does not see) */
             const double iz = 1.0 / p[2], u = p[0] * iz, v = p[1] * iz;
             const double a[3] = {iz, 0.0, -u * iz}, b[3] = {0.0, iz, -v * iz};
-            J[0] = a[1] * p[2] - a[2] * p[1];
-            J[1] = a[2] * p[0] - a[0] * p[2];
-            J[2] = a[0] * p[1] - a[1] * p[0];
-            J[3] = a[0];
-            J[4] = a[1];
-            J[5] = a[2];
-            J[6] = b[1] * p[2] - b[2] * p[1];
-            J[7] = b[2] * p[0] - b[0] * p[2];
-            J[8] = b[0] * p[1] - b[1] * p[0];
-            J[9] = b[0];
-            J[10] = b[1];
-            J[11] = b[2];
+            tvo_la_cross(a, p, J);
+            memcpy(J + 3, a, sizeof(a));
+            tvo_la_cross(b, p, J + 6);
+            memcpy(J + 9, b, sizeof(b));
             for (int r = 0; r < 6; ++r)
                 for (int c = 0; c < 6; ++c)
                     H[6 * r + c] += J[r] * J[c] + J[6 + r] * J[6 + c];
@@ -697,31 +704,19 @@ static int landmark_rot_cov(const double (*X)[3], const uint8_t *inl, int32_t k,
             B[3 * r + c] = H[6 * r + 3 + c];
             C[3 * r + c] = H[6 * (r + 3) + 3 + c];
         }
-    for (int c = 0; c < 3; ++c) { /* C^-1, column by column */
-        double M[9], rhs[3] = {e[c], e[3 + c], e[6 + c]}, col[3];
-        memcpy(M, C, sizeof(M));
-        if (tvo_la_solve(M, rhs, 3, col) != TVO_OK)
-            return 0;
-        Ci[c] = col[0];
-        Ci[3 + c] = col[1];
-        Ci[6 + c] = col[2];
-    }
+    if (!mat3_inverse(C, Ci))
+        return 0;
     tvo_la_mat3_mul(B, Ci, BCi);
     tvo_la_mat3_mul_bt(BCi, B, BCiBt);
     for (int i = 0; i < 9; ++i)
         L[i] = A[i] - BCiBt[i];
-    for (int c = 0; c < 3; ++c) { /* Lambda^-1 */
-        double M[9], rhs[3] = {e[c], e[3 + c], e[6 + c]}, col[3];
-        memcpy(M, L, sizeof(M));
-        if (tvo_la_solve(M, rhs, 3, col) != TVO_OK)
-            return 0;
-        Sig[c] = s2 * col[0];
-        Sig[3 + c] = s2 * col[1];
-        Sig[6 + c] = s2 * col[2];
-    }
-    for (int i = 0; i < 9; ++i)
+    if (!mat3_inverse(L, Li))
+        return 0;
+    for (int i = 0; i < 9; ++i) {
+        Sig[i] = s2 * Li[i];
         if (!isfinite(Sig[i]))
             return 0;
+    }
     return 1;
 }
 
