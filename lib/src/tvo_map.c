@@ -24,9 +24,12 @@
 #define TVO_MAP_KF_MIN_BASELINE 0.25
 /* PnP inlier threshold, in pixels. */
 #define TVO_MAP_PNP_THRESHOLD_PX 2.0
-/* The initial pair needs this many triangulated landmarks, and this share of the reference's tracks
- * still tracked; a reference older than TVO_MAP_REF_MAX_FRAMES frames without success is renewed. */
+/* The initial pair needs max(TVO_MAP_INIT_MIN_POINTS, cfg.max_tracks / TVO_MAP_INIT_TRACKS_DIV)
+ * triangulated landmarks (100 with the default 300 tracks, as ORB-SLAM's monocular initialisation asks
+ * for 100 map points), and half of the reference's tracks still tracked; a reference older than
+ * TVO_MAP_REF_MAX_FRAMES frames without success, or with fewer of its tracks left, is renewed. */
 #define TVO_MAP_INIT_MIN_POINTS 40
+#define TVO_MAP_INIT_TRACKS_DIV 3
 #define TVO_MAP_REF_MAX_FRAMES 60
 /* The initial pair is refused when its rotation is further than max(10 x its parallax, this) from its
  * own rotation-only model (a wrong epipolar minimum). */
@@ -213,6 +216,13 @@ void tvo_map_clear(tvo_map *m)
         m->lm[i].tracked = 0;
         m->lm[i].n_obs = 0;
     }
+}
+
+/* The landmarks a new map needs (see TVO_MAP_INIT_MIN_POINTS). */
+static int32_t init_min_points(const tvo_vo_config *cfg)
+{
+    const int32_t k = cfg->max_tracks / TVO_MAP_INIT_TRACKS_DIV;
+    return k > TVO_MAP_INIT_MIN_POINTS ? k : TVO_MAP_INIT_MIN_POINTS;
 }
 
 /* ---- keyframes and landmarks -------------------------------------------------------------------- */
@@ -481,7 +491,7 @@ static int init_pair_pose(tvo_map *m, const tvo_vo_config *cfg, const tvo_map_tr
             ++ip->k;
         }
     }
-    if (ip->k < TVO_MAP_INIT_MIN_POINTS)
+    if (ip->k < init_min_points(cfg))
         return 0;
     relpose_config(cfg, &rc);
     if (tvo_relpose_estimate(&rc, ip->xa, ip->xb, ip->k, rp, ip->mask, rs, rs_size) != TVO_OK)
@@ -489,7 +499,7 @@ static int init_pair_pose(tvo_map *m, const tvo_vo_config *cfg, const tvo_map_tr
     if (rp->flags &
         (TVO_RELPOSE_FLAG_LOW_CONFIDENCE | TVO_RELPOSE_FLAG_AMBIGUOUS | TVO_RELPOSE_FLAG_ROTATION_ONLY))
         return 0;
-    if (rp->parallax_deg < cfg->map_init_parallax_deg || rp->inliers < TVO_MAP_INIT_MIN_POINTS ||
+    if (rp->parallax_deg < cfg->map_init_parallax_deg || rp->inliers < init_min_points(cfg) ||
         2 * rp->inliers < ip->k)
         return 0;
     {
@@ -563,7 +573,7 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
         T_cur_ref.t[c2] = ip.rp.t[c2] / tn * baseline;
     T1 = tvo_pose_compose(&T_cur_ref, &T0);
     made = init_landmarks(m, cfg, tr, &ip, &T0, t0, &T1, t_ns);
-    if (made < TVO_MAP_INIT_MIN_POINTS) {
+    if (made < init_min_points(cfg)) {
         /* not enough structure yet: back to waiting on the same reference */
         for (int32_t i = 0; i < tr->n; ++i)
             tr->lm[i] = -1;
@@ -1186,7 +1196,7 @@ static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
             int32_t k = 0;
             for (int32_t i = 0; i < tr->n; ++i)
                 k += tr->tri_fr[i] == m->ref_serial && tr->x_ok[i];
-            if (m->ref_frames > TVO_MAP_REF_MAX_FRAMES || k < TVO_MAP_INIT_MIN_POINTS)
+            if (m->ref_frames > TVO_MAP_REF_MAX_FRAMES || k < init_min_points(cfg))
                 start_ref(m, tr, t_ns, T_c_w_prior);
         }
         return;

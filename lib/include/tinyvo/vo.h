@@ -24,7 +24,7 @@
  * cfg.map_ba_iterations iterations, the two oldest keyframes fixed to hold the gauge and the scale: they
  * are fixed, not marginalised), after which observations above 2.5 px are dropped.
  * The map starts from two frames with cfg.map_init_parallax_deg of median parallax (5-point pose,
- * triangulated inliers). Until then, and after a loss, T_w_c continues the two-view chain: its rotation,
+ * triangulated inliers: at least max(40, cfg.max_tracks / 3) landmarks). Until then, and after a loss, T_w_c continues the two-view chain: its rotation,
  * and its translation direction times the last map's speed (one unit per frame before the first map).
  * A frame whose PnP fails, or whose map rotation is more than 5 deg from its own two-view rotation, loses
  * the map (map_state TVO_MAP_LOST, counted in map_losses); a new map starts from that frame, its initial
