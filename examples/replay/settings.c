@@ -40,6 +40,7 @@ typedef struct setting {
 static const setting settings[] = {
         S_I(max_tracks),
         S_I(min_tracks),
+        S_D(redetect_coverage),
         S_I(min_pose_tracks),
         S_I(fast_min_threshold),
         S_D(pose_threshold_px),

@@ -61,7 +61,8 @@ struct tvo_vo {
     uint8_t *minl;        /* [max_tracks] */
     uint32_t next_id;
     tvo_map map;
-    tvo_pose T_c_w; /* the last frame's pose in the VO's world (world -> camera) */
+    tvo_pose T_c_w;    /* the last frame's pose in the VO's world (world -> camera) */
+    int32_t cover_ref; /* cells of the coverage grid the tracks covered after the last detection */
     void *scratch;
     size_t scratch_size;
 };
@@ -103,6 +104,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     tvo_relpose_config_default(&cfg->relpose);
     cfg->max_tracks = 300;
     cfg->min_tracks = 200;
+    cfg->redetect_coverage = 0.75;
     cfg->min_pose_tracks = 30;
     cfg->fast_min_threshold = 7; /* as ORB-SLAM's second FAST pass (20 then 7) */
     cfg->pose_threshold_px = 1.0;
@@ -137,6 +139,8 @@ static int config_valid(const tvo_vo_config *cfg)
     if (cfg == NULL || tvo_camera_check(&cfg->camera) != TVO_OK)
         return 0;
     if (cfg->max_tracks < 16 || cfg->max_tracks > 100000)
+        return 0;
+    if (!(cfg->redetect_coverage >= 0.0 && cfg->redetect_coverage <= 1.0))
         return 0;
     if (cfg->min_tracks < 0 || cfg->min_tracks > cfg->max_tracks)
         return 0;
@@ -398,6 +402,26 @@ static int32_t detect_append(tvo_vo *vo, const tvo_pyramid *pyr, int32_t thresho
     return got;
 }
 
+/* The coverage grid (cfg.redetect_coverage): cells of an 8 x 6 grid over the frame holding a track. */
+#define TVO_VO_COVER_COLS 8
+#define TVO_VO_COVER_ROWS 6
+static int32_t track_coverage(const tvo_vo *vo)
+{
+    uint64_t cells = 0;
+    int32_t n = 0;
+    const float sx = (float)TVO_VO_COVER_COLS / (float)vo->cfg.camera.width,
+                sy = (float)TVO_VO_COVER_ROWS / (float)vo->cfg.camera.height;
+    for (int32_t i = 0; i < vo->n; ++i) {
+        int32_t cx = (int32_t)(vo->pts[i].x * sx), cy = (int32_t)(vo->pts[i].y * sy);
+        cx = cx < 0 ? 0 : (cx >= TVO_VO_COVER_COLS ? TVO_VO_COVER_COLS - 1 : cx);
+        cy = cy < 0 ? 0 : (cy >= TVO_VO_COVER_ROWS ? TVO_VO_COVER_ROWS - 1 : cy);
+        cells |= (uint64_t)1 << (cy * TVO_VO_COVER_COLS + cx);
+    }
+    for (; cells != 0; cells &= cells - 1)
+        ++n;
+    return n;
+}
+
 /* Re-detection: the configured threshold first; on a low-contrast frame (fewer than a quarter of the
  * corners wanted) a second pass with fast_min_threshold fills the rest. */
 static int32_t redetect(tvo_vo *vo, const tvo_pyramid *pyr)
@@ -407,6 +431,7 @@ static int32_t redetect(tvo_vo *vo, const tvo_pyramid *pyr)
     if (got < wanted / 4 && vo->cfg.fast_min_threshold > 0 &&
         vo->cfg.fast_min_threshold < vo->cfg.detect.fast_threshold)
         got += detect_append(vo, pyr, vo->cfg.fast_min_threshold);
+    vo->cover_ref = track_coverage(vo);
     return got;
 }
 
@@ -1033,7 +1058,9 @@ static void stage_redetect(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
 {
     const int32_t before = vo->n;
     int64_t t1 = now_ns(vo);
-    if (vo->n < vo->cfg.min_tracks)
+    if (vo->n < vo->cfg.min_tracks ||
+        (vo->n < vo->cfg.max_tracks &&
+         (double)track_coverage(vo) < vo->cfg.redetect_coverage * (double)vo->cover_ref))
         res->new_corners = redetect(vo, fc->pc);
     res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
     t1 = now_ns(vo);

@@ -492,6 +492,76 @@ static void test_track_prediction(void **state)
     assert_true(off < 6);
 }
 
+/* Cells of an 8 x 6 grid over the frame that hold one of the VO's tracks. */
+static int covered_cells(const tvo_vo *vo)
+{
+    tvo_vo_track t[300];
+    int32_t n = 0;
+    int cells[48] = {0}, c = 0;
+    assert_int_equal(tvo_vo_tracks(vo, t, 300, &n), TVO_OK);
+    for (int32_t i = 0; i < n && i < 300; ++i) {
+        const int cx = (int)(t[i].x * 8.0f / W), cy = (int)(t[i].y * 6.0f / H);
+        cells[(cy < 5 ? cy : 5) * 8 + (cx < 7 ? cx : 7)] = 1;
+    }
+    for (int i = 0; i < 48; ++i)
+        c += cells[i];
+    return c;
+}
+
+/* A steady turn (1 deg a frame, 30 frames): the tracks leave on one side and the other side empties while
+ * their count stays above min_tracks. With cfg.redetect_coverage the VO re-detects into the empty side;
+ * without it no corner is added and the tracks end up on part of the frame. */
+static void run_turn(double coverage, int *redetections, int *min_cells, int *last_cells)
+{
+    fixture f;
+    tvo_camera cam = test_camera();
+    tvo_pose prev = tvo_pose_identity();
+    tvo_vo_config_default(&f.cfg, &cam);
+    f.cfg.min_tracks = 100;
+    f.cfg.redetect_coverage = coverage;
+    open_vo(&f);
+    *redetections = 0;
+    *min_cells = 48;
+    for (int k = 0; k < 30; ++k) {
+        const double zero[3] = {0.0, 0.0, 0.0};
+        tvo_pose T = motion(k, zero, 0.0, 1.0);
+        tvo_vo_result res;
+        tvo_image img = tvo_image_make(W, H, W, f.img);
+        int c;
+        render(&T, f.img);
+        assert_int_equal(tvo_vo_process(f.vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
+        if (k > 0) {
+            tvo_pose gt = tvo_pose_relative(&prev, &T);
+            assert_true(res.state == TVO_VO_OK || res.state == TVO_VO_ROTATION_ONLY);
+            assert_true(rot_err_deg(&res.T_prev_cur, &gt) < 0.2);
+            assert_true(res.tracked >= f.cfg.min_tracks); /* the count alone never asks for corners */
+            *redetections += res.new_corners > 0;
+        }
+        c = covered_cells(f.vo);
+        *min_cells = c < *min_cells ? c : *min_cells;
+        *last_cells = c;
+        prev = T;
+    }
+    free(f.mem);
+}
+
+static void test_redetect_coverage(void **state)
+{
+    int on_det, on_min, on_last, off_det, off_min, off_last;
+    (void)state;
+    run_turn(0.75, &on_det, &on_min, &on_last);
+    run_turn(0.0, &off_det, &off_min, &off_last);
+    fprintf(stderr,
+            "turn, 30 frames: %d re-detections, %d-%d of 48 cells covered (last %d) with the coverage "
+            "rule; %d, %d-%d (last %d) without\n",
+            on_det, on_min, 48, on_last, off_det, off_min, 48, off_last);
+    /* measured: 1 re-detection, at least 36 cells covered with the rule; 29 cells at the end without */
+    assert_true(on_det >= 1);
+    assert_true(on_min >= 33);
+    assert_int_equal(off_det, 0);
+    assert_true(off_last <= 32);
+}
+
 /* The step-length filter: propagation, the prior's pull, its log/exp against libm, bad input. */
 static void test_scale_filter(void **state)
 {
@@ -673,6 +743,17 @@ static void test_bad_input(void **state)
     bad = f->cfg;
     bad.pose_threshold_px = -1.0;
     assert_int_equal(tvo_vo_required_size(&bad), 0);
+    {
+        const double cov[3] = {-0.1, 1.5, NAN}; /* redetect_coverage outside [0, 1] */
+        for (int i = 0; i < 3; ++i) {
+            bad = f->cfg;
+            bad.redetect_coverage = cov[i];
+            assert_int_equal(tvo_vo_required_size(&bad), 0);
+        }
+        bad = f->cfg;
+        bad.redetect_coverage = 0.0; /* off is valid */
+        assert_int_equal(tvo_vo_required_size(&bad), tvo_vo_required_size(&f->cfg));
+    }
     /* keyframe rotation and track prediction settings out of their documented ranges (vo.h) */
     {
         tvo_vo_config kb[9];
@@ -726,6 +807,7 @@ int main(void)
             cmocka_unit_test_setup_teardown(test_relative_scale_rotation_only, setup, teardown),
             cmocka_unit_test(test_keyframe_rotation),
             cmocka_unit_test(test_track_prediction),
+            cmocka_unit_test(test_redetect_coverage),
             cmocka_unit_test(test_scale_filter),
             cmocka_unit_test(test_refine_step_length),
             cmocka_unit_test_setup_teardown(test_bad_input, setup, teardown),

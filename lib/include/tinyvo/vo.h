@@ -111,6 +111,10 @@ typedef struct tvo_vo_config {
     tvo_relpose_config relpose; /* RANSAC; relpose.threshold is derived from pose_threshold_px */
     int32_t max_tracks;         /* capacity of the track list, >= 16; default 300 */
     int32_t min_tracks;         /* re-detect when fewer tracks survive; default 200 */
+    double redetect_coverage;   /* ...or when the tracks cover fewer cells of an 8 x 6 grid over the frame
+                                   than this share of the cells they covered after the last detection (a
+                                   turn leaves the tracks on one side of the frame, and the rotation of a
+                                   one-sided set is poorly conditioned); [0, 1], 0 disables; default 0.75 */
     int32_t min_pose_tracks;    /* fewer tracked points than this -> LOST; default 30 */
     int32_t fast_min_threshold; /* low-contrast fallback: when a detection finds fewer than a quarter of the
                                    corners wanted, it is repeated with this FAST threshold (if it is lower
