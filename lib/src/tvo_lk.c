@@ -45,6 +45,9 @@ void tvo_lk_config_default(tvo_lk_config *cfg)
     cfg->fb_max_error = 1.0f;
     cfg->force_portable = 0;
     cfg->fb_levels = 0;
+    cfg->pred_levels = 0;
+    cfg->pred_win_size = 0;
+    cfg->pred_fb_levels = 0;
 }
 
 /* Whether tvo_lk_track() runs the SIMD kernels with this window (they need 8-column strips). */
@@ -87,6 +90,14 @@ tvo_status tvo_lk_config_check(const tvo_lk_config *cfg)
         return TVO_ERR_ARG;
     if (cfg->fb_levels < 0 || cfg->fb_levels > TVO_MAX_PYR_LEVELS)
         return TVO_ERR_ARG;
+    if (cfg->pred_levels < 0 || cfg->pred_levels > TVO_MAX_PYR_LEVELS)
+        return TVO_ERR_ARG;
+    if (cfg->pred_win_size != 0 &&
+        (cfg->pred_win_size < TVO_LK_MIN_WIN_SIZE || cfg->pred_win_size > TVO_LK_MAX_WIN_SIZE ||
+         (cfg->pred_win_size & 1) == 0))
+        return TVO_ERR_ARG;
+    if (cfg->pred_fb_levels < 0 || cfg->pred_fb_levels > TVO_MAX_PYR_LEVELS)
+        return TVO_ERR_ARG;
     return TVO_OK;
 }
 
@@ -107,13 +118,19 @@ static void lk_blocks(int32_t win, size_t sz[LK_NBLOCKS])
     sz[8] = q * q;
 }
 
+/* The larger of the two windows (the scratch is laid out for it; the other uses a part of it). */
+static int32_t lk_max_win(const tvo_lk_config *cfg)
+{
+    return cfg->pred_win_size > cfg->win_size ? cfg->pred_win_size : cfg->win_size;
+}
+
 size_t tvo_lk_scratch_size(const tvo_lk_config *cfg)
 {
     size_t sz[LK_NBLOCKS], total = TVO_ARENA_ALIGN - 1u;
     int i;
     if (tvo_lk_config_check(cfg) != TVO_OK)
         return 0;
-    lk_blocks(cfg->win_size, sz);
+    lk_blocks(lk_max_win(cfg), sz);
     for (i = 0; i < LK_NBLOCKS; ++i)
         total = tvo_size_add(total, tvo_arena_round(sz[i]));
     return total;
@@ -564,57 +581,88 @@ static tvo_status lk_validate(const tvo_lk_config *cfg, const tvo_pyramid *prev,
     return TVO_OK;
 }
 
-tvo_status tvo_lk_track(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,
-                        const tvo_point2f *prev_pts, tvo_point2f *next_pts, uint8_t *status, float *err,
-                        int32_t n, void *scratch, size_t scratch_size)
-{
-    lk_work wk;
+/* One of the two ways a point is tracked: the configuration's, or the predicted points' (pred_*). */
+typedef struct lk_mode {
     lk_params prm;
-    int32_t i, top, fb_top;
+    lk_work wk;
+    int32_t top, fb_top, fb_levels;
+} lk_mode;
+
+static void lk_mode_init(lk_mode *md, const tvo_lk_config *cfg, const tvo_pyramid *prev, int32_t win,
+                         int32_t levels, int32_t fb_levels)
+{
+    tvo_lk_config c = *cfg;
+    c.win_size = win;
+    md->prm.win = win;
+    md->prm.max_iters = cfg->max_iters;
+    md->prm.eps2 = (double)cfg->epsilon * (double)cfg->epsilon;
+    md->prm.min_eig = cfg->min_eig_threshold;
+    md->prm.simd = lk_use_simd(&c);
+    /* as OpenCV: levels whose size is <= the window are not used */
+    md->top = cfg->max_level;
+    if (levels > 0 && levels - 1 < md->top)
+        md->top = levels - 1;
+    while (md->top > 0 && (prev->width[md->top] <= win || prev->height[md->top] <= win))
+        --md->top;
+    md->fb_levels = fb_levels;
+    md->fb_top = fb_levels - 1 < md->top ? fb_levels - 1 : md->top;
+}
+
+tvo_status tvo_lk_track_pred(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,
+                             const tvo_point2f *prev_pts, tvo_point2f *next_pts, const uint8_t *pred,
+                             uint8_t *status, float *err, int32_t n, void *scratch, size_t scratch_size)
+{
+    lk_mode mode[2];
+    int32_t i, last = -1;
+    int two;
     tvo_status st;
 
     if (status == NULL)
         return TVO_ERR_NULL;
     st = lk_validate(cfg, prev, next, prev_pts, next_pts, n, scratch, scratch_size);
     if (st == TVO_OK)
-        st = lk_work_init(&wk, cfg->win_size, scratch, scratch_size);
+        st = lk_work_init(&mode[0].wk, cfg->win_size, scratch, scratch_size);
+    /* the predicted points' way differs from the others' only with some pred_* field set */
+    two = pred != NULL && (cfg->pred_levels > 0 || cfg->pred_win_size > 0 || cfg->pred_fb_levels > 0);
+    if (st == TVO_OK && two)
+        st = lk_work_init(&mode[1].wk, cfg->pred_win_size > 0 ? cfg->pred_win_size : cfg->win_size, scratch,
+                          scratch_size);
     if (st != TVO_OK) {
         if (n > 0)
             memset(status, TVO_LK_LOST, (size_t)n);
         return st;
     }
+    lk_mode_init(&mode[0], cfg, prev, cfg->win_size, 0, cfg->fb_levels);
+    if (two)
+        lk_mode_init(&mode[1], cfg, prev, cfg->pred_win_size > 0 ? cfg->pred_win_size : cfg->win_size,
+                     cfg->pred_levels, cfg->pred_fb_levels > 0 ? cfg->pred_fb_levels : cfg->fb_levels);
 
-    prm.win = cfg->win_size;
-    prm.max_iters = cfg->max_iters;
-    prm.eps2 = (double)cfg->epsilon * (double)cfg->epsilon;
-    prm.min_eig = cfg->min_eig_threshold;
-    prm.simd = lk_use_simd(cfg);
-
-    /* as OpenCV: levels whose size is <= the window are not used */
-    top = cfg->max_level;
-    while (top > 0 && (prev->width[top] <= prm.win || prev->height[top] <= prm.win))
-        --top;
-
-    fb_top = cfg->fb_levels - 1 < top ? cfg->fb_levels - 1 : top;
     for (i = 0; i < n; ++i) {
+        const int32_t k = two && pred[i] ? 1 : 0;
+        lk_mode *md = &mode[k];
         float x0 = prev_pts[i].x, y0 = prev_pts[i].y;
         float nx = next_pts[i].x, ny = next_pts[i].y;
         const float gx = nx - x0, gy = ny - y0; /* the guess's displacement (use_initial_flow) */
         float e = 0.f;
-        int ok = lk_track_point(&prm, prev, next, top, x0, y0, cfg->use_initial_flow != 0, &nx, &ny, &wk,
-                                err != NULL ? &e : NULL);
+        int ok;
+        if (k != last) { /* the two modes share the scratch: the other one's cached block is gone */
+            md->wk.jp_data = NULL;
+            last = k;
+        }
+        ok = lk_track_point(&md->prm, prev, next, md->top, x0, y0, cfg->use_initial_flow != 0, &nx, &ny,
+                            &md->wk, err != NULL ? &e : NULL);
         if (ok && cfg->fb_check) {
             /* the way back starts at the guess's displacement reversed (no displacement without a guess) */
             float bx = cfg->use_initial_flow ? nx - gx : nx, by = cfg->use_initial_flow ? ny - gy : ny, ddx,
                   ddy;
             int back;
-            if (cfg->fb_levels > 0) { /* the short way back: from the start point, on the finest levels */
+            if (md->fb_levels > 0) { /* the short way back: from the start point, on the finest levels */
                 bx = x0;
                 by = y0;
-                back = lk_track_point(&prm, next, prev, fb_top, nx, ny, 1, &bx, &by, &wk, NULL);
+                back = lk_track_point(&md->prm, next, prev, md->fb_top, nx, ny, 1, &bx, &by, &md->wk, NULL);
             } else
-                back = lk_track_point(&prm, next, prev, top, nx, ny, cfg->use_initial_flow != 0, &bx, &by,
-                                      &wk, NULL);
+                back = lk_track_point(&md->prm, next, prev, md->top, nx, ny, cfg->use_initial_flow != 0, &bx,
+                                      &by, &md->wk, NULL);
             ddx = bx - x0;
             ddy = by - y0;
             if (!back ||
@@ -631,4 +679,12 @@ tvo_status tvo_lk_track(const tvo_lk_config *cfg, const tvo_pyramid *prev, const
             err[i] = e;
     }
     return TVO_OK;
+}
+
+tvo_status tvo_lk_track(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,
+                        const tvo_point2f *prev_pts, tvo_point2f *next_pts, uint8_t *status, float *err,
+                        int32_t n, void *scratch, size_t scratch_size)
+{
+    return tvo_lk_track_pred(cfg, prev, next, prev_pts, next_pts, NULL, status, err, n, scratch,
+                             scratch_size);
 }

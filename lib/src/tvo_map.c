@@ -642,6 +642,27 @@ static tvo_pose predict(const tvo_map *m, int64_t t_ns, const double *R_cur_prev
     return T;
 }
 
+int tvo_map_predict_pose(const tvo_map *m, int64_t t_ns, int64_t prev_t_ns, tvo_pose *T)
+{
+    tvo_pose step = m->vel;
+    double ratio, v[3];
+    if (!m->active || !m->has_vel || m->last_t_ns != prev_t_ns || t_ns <= prev_t_ns || m->vel_dt_ns <= 0)
+        return 0;
+    /* the last step scaled to this interval, its rotation too (after a new map the step spans the
+       initial pair, many frames) */
+    ratio = (double)dt_ns(t_ns, m->last_t_ns) / (double)m->vel_dt_ns;
+    if (!(ratio > 0.0 && ratio < 4.0))
+        return 0;
+    tvo_rot_to_rotvec(m->vel.R, v);
+    for (int c = 0; c < 3; ++c) {
+        v[c] *= ratio;
+        step.t[c] *= ratio;
+    }
+    tvo_rotvec_to_rot(v, step.R);
+    *T = tvo_pose_compose(&step, &m->last_T_c_w);
+    return tvo_pose_is_finite(T);
+}
+
 /* The prior's weight for a rotation-only two-view rotation. Such an estimate cannot see a translation
  * whose flow is below its parallax bound, and absorbs up to b = |t| / Z of it (rad; t: the motion
  * model's translation for this frame, Z: the landmarks' median depth, both in map units): as a

@@ -136,6 +136,11 @@ tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks 
                            const double *R_cur_prev, int prior_flags, const tvo_pose *T_c_w_prior,
                            void *scratch, size_t scratch_size, tvo_map_frame *out);
 
+/* The motion model's pose (world -> camera) of a frame at t_ns: the last posed frame's pose moved by the
+ * last velocity, its rotation and translation scaled to the interval. 1 when the map is tracking, posed
+ * the frame at prev_t_ns (the VO's previous frame) and has a velocity; else 0 and *T untouched. */
+int tvo_map_predict_pose(const tvo_map *m, int64_t t_ns, int64_t prev_t_ns, tvo_pose *T);
+
 /* Tracks added after tvo_map_process (re-detection) start their wait for triangulation in this frame. */
 void tvo_map_new_tracks(const tvo_map *m, tvo_map_tracks *tr, int32_t first);
 

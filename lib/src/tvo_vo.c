@@ -119,6 +119,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->keyframe_max_rot_deg = 10.0;
     cfg->keyframe_translation = 1;
     cfg->track_prediction = 0; /* on: larger motion per frame tracked, but the EuRoC renders got worse */
+    cfg->map_prediction = 0;
     cfg->map = 1;
     cfg->map_window = 6;
     cfg->map_max_landmarks = 0; /* 2 x max_tracks */
@@ -165,6 +166,8 @@ static int config_valid(const tvo_vo_config *cfg)
     if (cfg->keyframe_translation != 0 && cfg->keyframe_translation != 1)
         return 0;
     if (cfg->track_prediction != 0 && cfg->track_prediction != 1)
+        return 0;
+    if (cfg->map_prediction < 0 || cfg->map_prediction > 2)
         return 0;
     if (cfg->lk.max_level < 0 || cfg->lk.max_level + 1 > TVO_MAX_PYR_LEVELS)
         return 0;
@@ -720,43 +723,138 @@ static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
     return m;
 }
 
-/* LK's initial guesses (cfg.track_prediction): each track moved by the last frame's rotation, scaled to
- * this frame's interval (constant angular velocity; points at infinity, so no depth is needed), in
- * vo->next; a track whose prediction leaves the camera's domain keeps its position as guess. The tracks'
- * undistorted positions stay in x1 / ok1 (step 2 of tvo_vo_process uses them). 0 when no prediction
- * applies (no last rotation, or an interval outside [1/2, 2] x the last one). */
-static int predict_tracks(tvo_vo *vo, int64_t dt)
+/* Track i's guess from its predicted camera point (d0, d1, d2), distorted back to pixels, when it lies
+ * in front of the camera and inside the camera's domain; pred[i] = from then. */
+static void predict_store(tvo_vo *vo, int32_t i, double d0, double d1, double d2, int from, uint8_t *pred)
 {
-    double v[3], R[9], ratio;
-    if (!vo->cfg.track_prediction || !vo->has_pred || vo->dt_pred <= 0 || dt <= 0)
+    tvo_point2d q;
+    double u, w;
+    if (!(d2 > 1e-3 * (from ? fabs(d0) + fabs(d1) + fabs(d2) : 1.0)))
+        return;
+    q.x = d0 / d2;
+    q.y = d1 / d2;
+    if (q.x * q.x + q.y * q.y <= vo->r2_max &&
+        tvo_camera_distort_point(&vo->cfg.camera, &q, &u, &w) == TVO_OK) {
+        vo->next[i].x = (float)u;
+        vo->next[i].y = (float)w;
+        pred[i] = (uint8_t)from;
+    }
+}
+
+/* Neighbours whose landmark depths give a track without a landmark its depth (map_prediction 2). */
+#define TVO_VO_PRED_NEIGHBOURS 4
+
+/* map_prediction 2: a track without a predicted landmark gets the median depth (in the previous frame)
+ * of the TVO_VO_PRED_NEIGHBOURS landmark tracks nearest to it in the previous image (vo->x2[j].x > 0),
+ * and its guess where that point moves with the map's predicted pose T (pred 2). */
+static void predict_by_neighbours(tvo_vo *vo, const tvo_pose *T, uint8_t *pred)
+{
+    const double *Rl = vo->map.last_T_c_w.R, *tl = vo->map.last_T_c_w.t;
+    for (int32_t i = 0; i < vo->n; ++i) {
+        float bd[TVO_VO_PRED_NEIGHBOURS];
+        double bz[TVO_VO_PRED_NEIGHBOURS], z, c[3], X[3], d[3];
+        int k = 0;
+        if (pred[i] || vo->x2[i].x > 0.0 || !vo->ok1[i])
+            continue;
+        for (int32_t j = 0; j < vo->n; ++j) {
+            float dx, dy, dd;
+            int p;
+            if (!(vo->x2[j].x > 0.0))
+                continue;
+            dx = vo->pts[j].x - vo->pts[i].x;
+            dy = vo->pts[j].y - vo->pts[i].y;
+            dd = dx * dx + dy * dy;
+            if (k == TVO_VO_PRED_NEIGHBOURS && !(dd < bd[k - 1]))
+                continue;
+            p = k < TVO_VO_PRED_NEIGHBOURS ? k++ : k - 1;
+            while (p > 0 && bd[p - 1] > dd) {
+                bd[p] = bd[p - 1];
+                bz[p] = bz[p - 1];
+                --p;
+            }
+            bd[p] = dd;
+            bz[p] = vo->x2[j].x;
+        }
+        if (k < TVO_VO_PRED_NEIGHBOURS)
+            continue;
+        /* the median of the depths (the mean of the middle two) */
+        for (int a = 1; a < k; ++a)
+            for (int b = a; b > 0 && bz[b - 1] > bz[b]; --b) {
+                const double t = bz[b];
+                bz[b] = bz[b - 1];
+                bz[b - 1] = t;
+            }
+        z = 0.5 * (bz[k / 2 - 1] + bz[k / 2]);
+        /* the point in the previous camera, in the world, then in this frame's predicted camera */
+        c[0] = vo->x1[i].x * z - tl[0];
+        c[1] = vo->x1[i].y * z - tl[1];
+        c[2] = z - tl[2];
+        for (int r = 0; r < 3; ++r)
+            X[r] = Rl[r] * c[0] + Rl[3 + r] * c[1] + Rl[6 + r] * c[2];
+        for (int r = 0; r < 3; ++r)
+            d[r] = T->R[3 * r] * X[0] + T->R[3 * r + 1] * X[1] + T->R[3 * r + 2] * X[2] + T->t[r];
+        predict_store(vo, i, d[0], d[1], d[2], 2, pred);
+    }
+}
+
+/* LK's initial guesses, in vo->next, and which of them LK may trust (pred[i], for tvo_lk_track_pred):
+ *  - cfg.map_prediction: a track carrying a landmark that was an inlier of the previous frame's map pose
+ *    starts where the landmark projects with the map's constant-velocity pose of this frame (pred 1);
+ *  - cfg.track_prediction: the other tracks move by the last frame's rotation, scaled to this frame's
+ *    interval (constant angular velocity; points at infinity, so no depth is needed), when the intervals
+ *    are within [1/2, 2] of each other (pred 0);
+ *  - any other track, or one whose prediction leaves the camera's domain, keeps its position as guess.
+ * The tracks' undistorted positions stay in x1 / ok1 (step 2 of tvo_vo_process uses them). 0 when no
+ * prediction applies. */
+static int predict_tracks(tvo_vo *vo, int64_t dt, uint8_t *pred)
+{
+    double v[3], R[9], ratio = 1.0;
+    tvo_pose T;
+    int rot = vo->cfg.track_prediction && vo->has_pred && vo->dt_pred > 0 && dt > 0;
+    const int mp = vo->cfg.map_prediction && vo->cfg.map && dt > 0 &&
+            tvo_map_predict_pose(&vo->map, vo->t_prev + dt, vo->t_prev, &T);
+    if (rot) {
+        ratio = (double)dt / (double)vo->dt_pred;
+        rot = ratio >= 0.5 && ratio <= 2.0;
+    }
+    memset(pred, 0, (size_t)vo->n);
+    if (!rot && !mp)
         return 0;
-    ratio = (double)dt / (double)vo->dt_pred;
-    if (!(ratio >= 0.5 && ratio <= 2.0))
-        return 0;
-    tvo_rot_to_rotvec(vo->R_pred, v);
-    v[0] *= ratio;
-    v[1] *= ratio;
-    v[2] *= ratio;
     if (tvo_camera_undistort(&vo->cfg.camera, vo->pts, vo->x1, vo->ok1, vo->n) != TVO_OK)
         return 0;
-    tvo_rotvec_to_rot(v, R);
+    if (rot) {
+        tvo_rot_to_rotvec(vo->R_pred, v);
+        v[0] *= ratio;
+        v[1] *= ratio;
+        v[2] *= ratio;
+        tvo_rotvec_to_rot(v, R);
+    }
     for (int32_t i = 0; i < vo->n; ++i) {
         const double x = vo->x1[i].x, y = vo->x1[i].y;
-        const double d0 = R[0] * x + R[1] * y + R[2], d1 = R[3] * x + R[4] * y + R[5],
-                     d2 = R[6] * x + R[7] * y + R[8];
-        tvo_point2d q;
-        double u, w;
+        double d0, d1, d2;
+        int from = 0; /* 1: its landmark, 2: its neighbours' depth */
         vo->next[i] = vo->pts[i];
-        if (!vo->ok1[i] || !(d2 > 1e-3))
+        vo->x2[i].x = 0.0; /* the landmark's depth in the previous frame (0: none); x2 is free here */
+        if (mp && vo->lm[i] >= 0 && vo->minl[i] && vo->map.lm[vo->lm[i]].alive) {
+            const double *X = vo->map.lm[vo->lm[i]].X;
+            const double *Rl = vo->map.last_T_c_w.R, *tl = vo->map.last_T_c_w.t;
+            const double z = Rl[6] * X[0] + Rl[7] * X[1] + Rl[8] * X[2] + tl[2];
+            d0 = T.R[0] * X[0] + T.R[1] * X[1] + T.R[2] * X[2] + T.t[0];
+            d1 = T.R[3] * X[0] + T.R[4] * X[1] + T.R[5] * X[2] + T.t[1];
+            d2 = T.R[6] * X[0] + T.R[7] * X[1] + T.R[8] * X[2] + T.t[2];
+            if (z > 0.0)
+                vo->x2[i].x = z;
+            from = 1;
+        } else if (rot && vo->ok1[i]) {
+            d0 = R[0] * x + R[1] * y + R[2];
+            d1 = R[3] * x + R[4] * y + R[5];
+            d2 = R[6] * x + R[7] * y + R[8];
+        } else
             continue;
-        q.x = d0 / d2;
-        q.y = d1 / d2;
-        if (q.x * q.x + q.y * q.y <= vo->r2_max &&
-            tvo_camera_distort_point(&vo->cfg.camera, &q, &u, &w) == TVO_OK) {
-            vo->next[i].x = (float)u;
-            vo->next[i].y = (float)w;
-        }
+        predict_store(vo, i, d0, d1, d2, from, pred);
     }
+    if (mp && vo->cfg.map_prediction == 2)
+        predict_by_neighbours(vo, &T, pred);
     return 1;
 }
 
@@ -874,11 +972,12 @@ static void stage_track(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
     const int32_t w = vo->cfg.camera.width, h = vo->cfg.camera.height;
     tvo_lk_config lkc = vo->cfg.lk;
     tvo_status st;
-    fc->predicted = predict_tracks(vo, res->dt_ns);
+    /* ok2 holds nothing between frames: it carries the predicted flags to LK here */
+    fc->predicted = predict_tracks(vo, res->dt_ns, vo->ok2);
     if (fc->predicted)
         lkc.use_initial_flow = 1;
-    st = tvo_lk_track(&lkc, fc->pp, fc->pc, vo->pts, vo->next, vo->st, NULL, vo->n, vo->scratch,
-                      vo->scratch_size);
+    st = tvo_lk_track_pred(&lkc, fc->pp, fc->pc, vo->pts, vo->next, vo->ok2, vo->st, NULL, vo->n, vo->scratch,
+                           vo->scratch_size);
     if (st != TVO_OK)
         memset(vo->st, 0, (size_t)vo->n);
     for (int32_t i = 0; i < vo->n; ++i) {

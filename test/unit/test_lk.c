@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* Pyramidal Lucas-Kanade: known shifts, forward-backward check, points outside, bad inputs. */
 #include <math.h>
+#include <string.h>
 
 #include "tvo_test.h"
 #include "tinyvo/lk.h"
@@ -266,6 +267,94 @@ static void test_fb_levels(void **state)
     assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, q0, q1, st, NULL, 2, F.scratch, sizeof(F.scratch)),
                      TVO_OK);
     assert_int_equal(st[0], TVO_LK_TRACKED);
+}
+
+/* Predicted points (tvo_lk_track_pred, pred_* fields): with pred == NULL or the pred_* fields at 0 the
+ * results are tvo_lk_track()'s, bit for bit; a point flagged with a good guess is tracked on level 0 alone
+ * with a smaller window and the short way back, and lands where the full track does (within 0.05 px); the
+ * same guess without the flag, or an unflagged point in the same call, is tracked as by tvo_lk_track(). */
+static void test_predicted_points(void **state)
+{
+    tvo_point2f p0[64], g[64], ref[64], out[64];
+    uint8_t st_ref[64], st[64], pred[64];
+    float e_ref[64], e[64];
+    int n;
+    (void)state;
+    build(3, 7.4, -5.2);
+    grid_points(p0, &n);
+    F.cfg.fb_check = 1;
+    F.cfg.use_initial_flow = 1;
+    for (int i = 0; i < n; ++i) {
+        g[i] = (tvo_point2f){p0[i].x + 6.9f, p0[i].y - 4.6f}; /* within 1 px of the motion */
+        pred[i] = (uint8_t)(i & 1);
+    }
+    memcpy(ref, g, sizeof(ref));
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, ref, st_ref, e_ref, n, F.scratch,
+                                  sizeof(F.scratch)),
+                     TVO_OK);
+    /* the pred_* fields at 0: the flags change nothing */
+    memcpy(out, g, sizeof(out));
+    assert_int_equal(tvo_lk_track_pred(&F.cfg, &F.pa, &F.pb, p0, out, pred, st, e, n, F.scratch,
+                                       sizeof(F.scratch)),
+                     TVO_OK);
+    assert_memory_equal(out, ref, (size_t)n * sizeof(tvo_point2f));
+    assert_memory_equal(st, st_ref, (size_t)n);
+    assert_memory_equal(e, e_ref, (size_t)n * sizeof(float));
+    /* pred == NULL with pred_* set: tvo_lk_track() */
+    F.cfg.pred_levels = 1;
+    F.cfg.pred_win_size = 13;
+    F.cfg.pred_fb_levels = 1;
+    assert_true(tvo_lk_scratch_size(&F.cfg) <= sizeof(F.scratch));
+    memcpy(out, g, sizeof(out));
+    assert_int_equal(tvo_lk_track_pred(&F.cfg, &F.pa, &F.pb, p0, out, NULL, st, e, n, F.scratch,
+                                       sizeof(F.scratch)),
+                     TVO_OK);
+    assert_memory_equal(out, ref, (size_t)n * sizeof(tvo_point2f));
+    assert_memory_equal(st, st_ref, (size_t)n);
+    /* flagged points: level 0, 13x13, the short way back; the others exactly as before */
+    memcpy(out, g, sizeof(out));
+    assert_int_equal(tvo_lk_track_pred(&F.cfg, &F.pa, &F.pb, p0, out, pred, st, e, n, F.scratch,
+                                       sizeof(F.scratch)),
+                     TVO_OK);
+    for (int i = 0; i < n; ++i) {
+        assert_int_equal(st_ref[i], TVO_LK_TRACKED);
+        assert_int_equal(st[i], TVO_LK_TRACKED);
+        if (pred[i]) {
+            assert_true(fabs(out[i].x - ref[i].x) < 0.05 && fabs(out[i].y - ref[i].y) < 0.05);
+        } else {
+            assert_memory_equal(&out[i], &ref[i], sizeof(tvo_point2f));
+            assert_memory_equal(&e[i], &e_ref[i], sizeof(float));
+        }
+    }
+    /* a window larger than win_size for the flagged points needs more scratch */
+    F.cfg.pred_win_size = 31;
+    {
+        tvo_lk_config c = F.cfg;
+        c.pred_win_size = 0;
+        assert_true(tvo_lk_scratch_size(&F.cfg) > tvo_lk_scratch_size(&c));
+    }
+    /* bad values */
+    {
+        tvo_lk_config c = F.cfg;
+        c.pred_win_size = 14;
+        assert_int_equal(tvo_lk_config_check(&c), TVO_ERR_ARG);
+        c.pred_win_size = 1;
+        assert_int_equal(tvo_lk_config_check(&c), TVO_ERR_ARG);
+        c.pred_win_size = TVO_LK_MAX_WIN_SIZE + 2;
+        assert_int_equal(tvo_lk_config_check(&c), TVO_ERR_ARG);
+        c = F.cfg;
+        c.pred_levels = -1;
+        assert_int_equal(tvo_lk_config_check(&c), TVO_ERR_ARG);
+        c.pred_levels = TVO_MAX_PYR_LEVELS + 1;
+        assert_int_equal(tvo_lk_config_check(&c), TVO_ERR_ARG);
+        c = F.cfg;
+        c.pred_fb_levels = -1;
+        assert_int_equal(tvo_lk_config_check(&c), TVO_ERR_ARG);
+        c.pred_fb_levels = TVO_MAX_PYR_LEVELS + 1;
+        assert_int_equal(tvo_lk_config_check(&c), TVO_ERR_ARG);
+        c.pred_fb_levels = TVO_MAX_PYR_LEVELS;
+        assert_int_equal(tvo_lk_config_check(&c), TVO_OK);
+    }
 }
 
 static void test_points_outside_and_at_borders(void **state)
@@ -674,6 +763,7 @@ int main(void)
             cmocka_unit_test(test_fb_check_and_periodic_guess),
             cmocka_unit_test(test_fb_check_with_guess),
             cmocka_unit_test(test_fb_levels),
+            cmocka_unit_test(test_predicted_points),
             cmocka_unit_test(test_points_outside_and_at_borders),
             cmocka_unit_test(test_random_points_everywhere),
             cmocka_unit_test(test_small_image_skips_small_levels),

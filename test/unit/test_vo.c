@@ -754,10 +754,10 @@ static void test_bad_input(void **state)
         bad.redetect_coverage = 0.0; /* off is valid */
         assert_int_equal(tvo_vo_required_size(&bad), tvo_vo_required_size(&f->cfg));
     }
-    /* keyframe rotation and track prediction settings out of their documented ranges (vo.h) */
+    /* keyframe rotation, track and map prediction settings out of their documented ranges (vo.h) */
     {
-        tvo_vo_config kb[9];
-        for (int i = 0; i < 9; ++i)
+        tvo_vo_config kb[11];
+        for (int i = 0; i < 11; ++i)
             kb[i] = f->cfg;
         kb[0].keyframe = 2;
         kb[1].keyframe = -1;
@@ -768,7 +768,9 @@ static void test_bad_input(void **state)
         kb[6].keyframe_translation = 3;
         kb[7].track_prediction = 2;
         kb[8].track_prediction = -1;
-        for (int i = 0; i < 9; ++i) {
+        kb[9].map_prediction = 3;
+        kb[10].map_prediction = -1;
+        for (int i = 0; i < 11; ++i) {
             assert_int_equal(tvo_vo_required_size(&kb[i]), 0);
             assert_int_equal(tvo_vo_init(&vo2, &kb[i], f->mem, 10), TVO_ERR_ARG);
         }
@@ -776,6 +778,10 @@ static void test_bad_input(void **state)
         bad.keyframe = 0; /* off is valid and needs the same memory (the buffers are there either way) */
         assert_int_equal(tvo_vo_required_size(&bad), tvo_vo_required_size(&f->cfg));
         bad.track_prediction = 0; /* likewise */
+        assert_int_equal(tvo_vo_required_size(&bad), tvo_vo_required_size(&f->cfg));
+        bad.map_prediction = 2; /* the map prediction uses the same buffers */
+        bad.lk.pred_levels = 2;
+        bad.lk.pred_win_size = 13;
         assert_int_equal(tvo_vo_required_size(&bad), tvo_vo_required_size(&f->cfg));
     }
 

@@ -66,6 +66,16 @@ typedef struct tvo_lk_config {
                                 (max_level + 1) of a full backward track. A point that drifted fails it
                                 as the full check; one that jumped onto a repeated pattern may pass it;
                                 default 0 */
+    /* Predicted points (tvo_lk_track_pred() with pred[i] nonzero: the caller's guess in next_pts is a
+       prediction it trusts, e.g. a map point projected with a motion model) can be tracked with less work.
+       All three at 0 (the defaults), and always in tvo_lk_track(), every point is tracked as above. */
+    int32_t pred_levels;    /* 0..TVO_MAX_PYR_LEVELS; 0: as the other points; k > 0: the predicted points
+                               use levels min(k-1, max_level)..0 only, starting at the guess; default 0 */
+    int32_t pred_win_size;  /* 0: win_size; else their odd window side, TVO_LK_MIN_WIN_SIZE..
+                               TVO_LK_MAX_WIN_SIZE (below 8: the portable kernels for them); default 0 */
+    int32_t pred_fb_levels; /* with fb_check: 0: as fb_levels (fb_levels 0: the way back on the levels of
+                               their forward track); k > 0: their way back on levels k-1..0, from the start
+                               point; default 0 */
 } tvo_lk_config;
 
 /* The defaults above (OpenCV's defaults for win 21, 3 levels, fb check off). */
@@ -82,7 +92,7 @@ const char *tvo_lk_kernel_name(const tvo_lk_config *cfg);
 tvo_status tvo_lk_config_check(const tvo_lk_config *cfg);
 
 /* Bytes of scratch tvo_lk_track() needs (independent of image size and point count; about
- * 8 * (win_size + 3)^2 bytes: 3.9 KB for win 21). 0 for an invalid cfg. */
+ * 8 * (w + 3)^2 bytes, w the larger of win_size and pred_win_size: 3.9 KB for 21). 0 for an invalid cfg. */
 size_t tvo_lk_scratch_size(const tvo_lk_config *cfg);
 
 /* Track n points from prev to next.
@@ -103,6 +113,13 @@ size_t tvo_lk_scratch_size(const tvo_lk_config *cfg);
 tvo_status tvo_lk_track(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,
                         const tvo_point2f *prev_pts, tvo_point2f *next_pts, uint8_t *status, float *err,
                         int32_t n, void *scratch, size_t scratch_size);
+
+/* tvo_lk_track() with a per-point flag: pred[n] nonzero marks a point whose guess (next_pts, with
+ * use_initial_flow) is a trusted prediction; those points are tracked with the pred_* fields of cfg, the
+ * others as by tvo_lk_track(). pred == NULL, or all pred_* fields 0: exactly tvo_lk_track(). */
+tvo_status tvo_lk_track_pred(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,
+                             const tvo_point2f *prev_pts, tvo_point2f *next_pts, const uint8_t *pred,
+                             uint8_t *status, float *err, int32_t n, void *scratch, size_t scratch_size);
 
 #ifdef __cplusplus
 }

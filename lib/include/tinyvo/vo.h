@@ -146,6 +146,14 @@ typedef struct tvo_vo_config {
                                    within 2x; 0: at its previous position. For cameras whose frames move
                                    further than LK reaches (low frame rates, vehicles, fast pans);
                                    default 0 (docs/geometry.md, "Track prediction") */
+    int32_t map_prediction;       /* 1 (with map): each track carrying a map landmark that was an inlier of
+                                   the previous frame's map pose starts where the landmark projects with
+                                   the map's constant-velocity pose of this frame (when the map posed the
+                                   previous frame), and is tracked with the lk.pred_* settings
+                                   (tvo_lk_track_pred); 2: also each other track, as a point at the
+                                   median depth of the 4 landmark tracks nearest to it in the previous
+                                   image; the tracks left over as track_prediction says; 0: off;
+                                   default 0 */
     /* local map (vo.h header comment, "The local map"): keyframes in a sliding window, landmarks
        triangulated between them, every frame posed by PnP on the landmarks its tracks carry, and a
        windowed bundle adjustment at each new keyframe */
