@@ -791,8 +791,7 @@ static void predict_by_neighbours(tvo_vo *vo, const tvo_pose *T, uint8_t *pred)
         c[2] = z - tl[2];
         for (int r = 0; r < 3; ++r)
             X[r] = Rl[r] * c[0] + Rl[3 + r] * c[1] + Rl[6 + r] * c[2];
-        for (int r = 0; r < 3; ++r)
-            d[r] = T->R[3 * r] * X[0] + T->R[3 * r + 1] * X[1] + T->R[3 * r + 2] * X[2] + T->t[r];
+        tvo_pose_transform_point(T, X, d);
         predict_store(vo, i, d[0], d[1], d[2], 2, pred);
     }
 }
@@ -837,13 +836,14 @@ static int predict_tracks(tvo_vo *vo, int64_t dt, uint8_t *pred)
         vo->x2[i].x = 0.0; /* the landmark's depth in the previous frame (0: none); x2 is free here */
         if (mp && vo->lm[i] >= 0 && vo->minl[i] && vo->map.lm[vo->lm[i]].alive) {
             const double *X = vo->map.lm[vo->lm[i]].X;
-            const double *Rl = vo->map.last_T_c_w.R, *tl = vo->map.last_T_c_w.t;
-            const double z = Rl[6] * X[0] + Rl[7] * X[1] + Rl[8] * X[2] + tl[2];
-            d0 = T.R[0] * X[0] + T.R[1] * X[1] + T.R[2] * X[2] + T.t[0];
-            d1 = T.R[3] * X[0] + T.R[4] * X[1] + T.R[5] * X[2] + T.t[1];
-            d2 = T.R[6] * X[0] + T.R[7] * X[1] + T.R[8] * X[2] + T.t[2];
-            if (z > 0.0)
-                vo->x2[i].x = z;
+            double p[3], q[3];
+            tvo_pose_transform_point(&vo->map.last_T_c_w, X, p);
+            tvo_pose_transform_point(&T, X, q);
+            d0 = q[0];
+            d1 = q[1];
+            d2 = q[2];
+            if (p[2] > 0.0)
+                vo->x2[i].x = p[2];
             from = 1;
         } else if (rot && vo->ok1[i]) {
             d0 = R[0] * x + R[1] * y + R[2];
