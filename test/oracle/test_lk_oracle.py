@@ -37,7 +37,9 @@ class LKConfig(ctypes.Structure):
                 ("max_iters", ctypes.c_int32), ("epsilon", ctypes.c_float),
                 ("min_eig_threshold", ctypes.c_float), ("use_initial_flow", ctypes.c_int32),
                 ("fb_check", ctypes.c_int32), ("fb_max_error", ctypes.c_float),
-                ("force_portable", ctypes.c_int32), ("fb_levels", ctypes.c_int32)]
+                ("force_portable", ctypes.c_int32), ("fb_levels", ctypes.c_int32),
+                ("pred_levels", ctypes.c_int32), ("pred_win_size", ctypes.c_int32),
+                ("pred_fb_levels", ctypes.c_int32)]
 
 
 def _image(arr):
