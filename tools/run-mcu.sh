@@ -21,7 +21,7 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
 BUILD="${BUILD:-build/mcu}"
-MCU_TESTS="${MCU_TESTS:-test_dmath test_se3 test_core test_camera test_pyramid test_nn test_corners test_lk test_relpose test_determinism}"
+MCU_TESTS="${MCU_TESTS:-test_dmath test_se3 test_core test_camera test_pyramid test_nn test_corners test_lk test_affine test_relpose test_determinism}"
 MEM="${TVO_MCU_MEM:-262144}"
 PY="${PYTHON:-$ROOT/.venv/bin/python}"
 DATA="${TVO_DATA_DIR:-$ROOT/../shared/data}"

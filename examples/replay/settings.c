@@ -53,6 +53,7 @@ static const setting settings[] = {
         S_I(keyframe_translation),
         S_I(track_prediction),
         S_I(map_prediction),
+        S_I(affine_win_size),
         S_I(map),
         S_I(map_window),
         S_I(map_max_landmarks),

@@ -10,6 +10,7 @@
 #include "tinyvo/linalg.h"
 #include "tinyvo/pyramid.h"
 #include "tvo_map.h"
+#include "tvo_affine.h"
 
 struct tvo_vo {
     tvo_vo_config cfg;
@@ -63,12 +64,26 @@ struct tvo_vo {
     tvo_map map;
     tvo_pose T_c_w;    /* the last frame's pose in the VO's world (world -> camera) */
     int32_t cover_ref; /* cells of the coverage grid the tracks covered after the last detection */
+    /* affine refinement (cfg.affine_win_size > 0, else all NULL): each track's template, its model
+       and warp, valid where hast[i] */
+    uint8_t *tpl;      /* [max_tracks x tvo_aff_template_bytes(affine_win_size)] */
+    tvo_aff_warp *aw;  /* [max_tracks] */
+    tvo_aff_model *am; /* [max_tracks] */
+    uint8_t *hast;     /* [max_tracks] */
     void *scratch;
     size_t scratch_size;
 };
 
 /* A translation direction older than this many frames is not used to resolve an ambiguous pose. */
 #define TVO_VO_PRIOR_FRAMES 3
+/* The affine refinement (cfg.affine_win_size): at most this many Gauss-Newton steps, stopping when a
+ * step moves no window corner by more than TVO_VO_AFF_EPS px; the result is taken when the patch
+ * correlates with the template by at least TVO_VO_AFF_MIN_NCC and lies within TVO_VO_AFF_MAX_MOVE px
+ * of LK's position. */
+#define TVO_VO_AFF_ITERS 10
+#define TVO_VO_AFF_EPS 0.02f
+#define TVO_VO_AFF_MIN_NCC 0.8f
+#define TVO_VO_AFF_MAX_MOVE 2.0f
 /* ...and an ambiguous pose is resolved only when the chosen candidate is within this angle of it. */
 #define TVO_VO_PRIOR_COS 0.7071067811865476 /* cos 45 deg */
 /* A pose with a translation whose rotation is further than this many times the rotation-compensated
@@ -120,6 +135,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->keyframe_translation = 1;
     cfg->track_prediction = 0; /* on: larger motion per frame tracked, but the EuRoC renders got worse */
     cfg->map_prediction = 0;
+    cfg->affine_win_size = 0; /* on (21): better on the whole, but not by the second rule of docs/budget.md */
     cfg->map = 1;
     cfg->map_window = 6;
     cfg->map_max_landmarks = 0; /* 2 x max_tracks */
@@ -167,6 +183,10 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (cfg->track_prediction != 0 && cfg->track_prediction != 1)
         return 0;
+    if (cfg->affine_win_size != 0 &&
+        (cfg->affine_win_size < 3 || cfg->affine_win_size > TVO_AFF_MAX_SIDE ||
+         (cfg->affine_win_size & 1) == 0))
+        return 0;
     if (cfg->map_prediction < 0 || cfg->map_prediction > 2)
         return 0;
     if (cfg->lk.max_level < 0 || cfg->lk.max_level + 1 > TVO_MAX_PYR_LEVELS)
@@ -205,6 +225,10 @@ static size_t scratch_need(const tvo_vo_config *cfg)
     size_t d = tvo_size_mul((size_t)cfg->max_tracks, sizeof(double)); /* depth ratios (rel_scale) */
     size_t e = cfg->map ? tvo_map_scratch_size(cfg) : 0;
     size_t m = a > b ? a : b;
+    if (cfg->affine_win_size > 0) {
+        const size_t f = tvo_aff_scratch_size(cfg->affine_win_size);
+        m = m > f ? m : f;
+    }
     m = m > c ? m : c;
     m = m > d ? m : d;
     return m > e ? m : e;
@@ -234,6 +258,12 @@ static size_t layout_size(const tvo_vo_config *cfg)
     s = tvo_size_add(s, tvo_arena_round(n));                                        /* minl */
     if (cfg->map)
         s = tvo_size_add(s, tvo_map_layout_size(cfg));
+    if (cfg->affine_win_size > 0) {
+        s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, tvo_aff_template_bytes(cfg->affine_win_size))));
+        s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_aff_warp))));
+        s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_aff_model))));
+        s = tvo_size_add(s, tvo_arena_round(n));
+    }
     s = tvo_size_add(s, tvo_arena_round(scratch_need(cfg)));
     return tvo_size_add(s, TVO_ARENA_ALIGN); /* slack for an unaligned block */
 }
@@ -322,6 +352,15 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
         tvo_status ms = tvo_map_init(&vo->map, cfg, &a);
         if (ms != TVO_OK)
             return ms;
+    }
+    if (cfg->affine_win_size > 0) {
+        vo->tpl = (uint8_t *)tvo_arena_alloc(&a, n * tvo_aff_template_bytes(cfg->affine_win_size));
+        vo->aw = (tvo_aff_warp *)tvo_arena_alloc(&a, n * sizeof(tvo_aff_warp));
+        vo->am = (tvo_aff_model *)tvo_arena_alloc(&a, n * sizeof(tvo_aff_model));
+        vo->hast = (uint8_t *)tvo_arena_alloc(&a, n);
+        if (vo->tpl == NULL || vo->aw == NULL || vo->am == NULL || vo->hast == NULL)
+            return TVO_ERR_NO_MEMORY;
+        memset(vo->hast, 0, n);
     }
     vo->T_c_w = tvo_pose_identity();
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
@@ -718,6 +757,15 @@ static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
         vo->tri_fr[m] = vo->tri_fr[i];
         vo->tri_x[m] = vo->tri_x[i];
         vo->minl[m] = vo->minl[i];
+        if (vo->hast != NULL) {
+            if (m != i) {
+                const size_t tb = tvo_aff_template_bytes(vo->cfg.affine_win_size);
+                memcpy(vo->tpl + (size_t)m * tb, vo->tpl + (size_t)i * tb, tb);
+                vo->aw[m] = vo->aw[i];
+                vo->am[m] = vo->am[i];
+            }
+            vo->hast[m] = vo->hast[i];
+        }
         ++m;
     }
     return m;
@@ -966,6 +1014,56 @@ typedef struct frame_ctx {
     int has_R2v;
 } frame_ctx;
 
+/* 1b. The affine refinement (cfg.affine_win_size > 0): each tracked point that has a template moves to
+ * where its template aligns under an affine warp, starting from LK's position with the last frame's
+ * warp; a point whose refinement fails keeps LK's position and takes a new template in finish_frame. */
+static void affine_refine(tvo_vo *vo, const frame_ctx *fc)
+{
+    const int32_t side = vo->cfg.affine_win_size;
+    if (vo->hast == NULL)
+        return;
+    const tvo_image l0 = tvo_pyramid_level(fc->pc, 0);
+    const size_t tb = tvo_aff_template_bytes(side);
+    for (int32_t i = 0; i < vo->n; ++i) {
+        tvo_aff_warp aw;
+        float ox, oy, px, py, ncc = 0.0f;
+        if (!vo->st[i] || !vo->hast[i])
+            continue;
+        aw = vo->aw[i];
+        tvo_aff_point(&aw, &ox, &oy);
+        aw.t[0] += vo->next[i].x - ox;
+        aw.t[1] += vo->next[i].y - oy;
+        vo->hast[i] = 0;
+        if (!tvo_aff_refine(vo->tpl + (size_t)i * tb, &vo->am[i], side, &l0, &aw, TVO_VO_AFF_ITERS,
+                            TVO_VO_AFF_EPS, vo->scratch, vo->scratch_size, &ncc) ||
+            !(ncc >= TVO_VO_AFF_MIN_NCC))
+            continue;
+        tvo_aff_point(&aw, &px, &py);
+        if (!((px - vo->next[i].x) * (px - vo->next[i].x) + (py - vo->next[i].y) * (py - vo->next[i].y) <
+              TVO_VO_AFF_MAX_MOVE * TVO_VO_AFF_MAX_MOVE))
+            continue;
+        vo->next[i].x = px;
+        vo->next[i].y = py;
+        vo->aw[i] = aw;
+        vo->hast[i] = 1;
+    }
+}
+
+/* The end of a frame with the affine refinement: every track without a template (new, or whose
+ * refinement failed) takes one from this frame, where it lies now. */
+static void affine_take(tvo_vo *vo, const frame_ctx *fc)
+{
+    const int32_t side = vo->cfg.affine_win_size;
+    if (vo->hast == NULL)
+        return;
+    const tvo_image l0 = tvo_pyramid_level(fc->pc, 0);
+    const size_t tb = tvo_aff_template_bytes(side);
+    for (int32_t i = 0; i < vo->n; ++i)
+        if (!vo->hast[i])
+            vo->hast[i] = (uint8_t)tvo_aff_take(&l0, vo->pts[i].x, vo->pts[i].y, side,
+                                                vo->tpl + (size_t)i * tb, &vo->am[i], &vo->aw[i]);
+}
+
 /* 1. LK tracking of the tracks into this frame; the tracks that leave the image are dropped. */
 static void stage_track(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
 {
@@ -985,6 +1083,7 @@ static void stage_track(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
         if (vo->st[i] && !(q.x >= 0.0f && q.y >= 0.0f && q.x <= (float)(w - 1) && q.y <= (float)(h - 1)))
             vo->st[i] = 0;
     }
+    affine_refine(vo, fc);
     fc->m = compact(vo, vo->n, vo->st);
     for (int32_t i = 0; i < fc->m; ++i)
         vo->age[i]++;
@@ -1161,6 +1260,9 @@ static void stage_redetect(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
         (vo->n < vo->cfg.max_tracks &&
          (double)track_coverage(vo) < vo->cfg.redetect_coverage * (double)vo->cover_ref))
         res->new_corners = redetect(vo, fc->pc);
+    if (vo->hast != NULL)
+        for (int32_t i = before; i < vo->n; ++i)
+            vo->hast[i] = 0;
     res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
     t1 = now_ns(vo);
     map_new_tracks(vo, before);
@@ -1203,6 +1305,7 @@ static void finish_frame(tvo_vo *vo, const frame_ctx *fc, int64_t t_ns, tvo_vo_r
         res->map_landmarks = vo->map.n_lm;
         res->map_losses = vo->map.losses;
     }
+    affine_take(vo, fc);
     vo->has_prev = 1;
     vo->t_prev = t_ns;
     /* the frame becomes the previous one: its level 0 moves into our memory (the caller's image may
@@ -1222,6 +1325,8 @@ static void first_frame(tvo_vo *vo, frame_ctx *fc, int64_t t_ns, tvo_vo_result *
     res->stage_ns[TVO_STAGE_MAP] = now_ns(vo) - t1;
     t1 = now_ns(vo);
     res->new_corners = redetect(vo, fc->pc);
+    if (vo->hast != NULL)
+        memset(vo->hast, 0, (size_t)vo->n);
     res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
     t1 = now_ns(vo);
     map_new_tracks(vo, 0);

@@ -492,6 +492,106 @@ static void test_track_prediction(void **state)
     assert_true(off < 6);
 }
 
+/* The room point a pixel of camera T_w_c sees (tvo_room_render's geometry), and the pixel a world point
+ * projects to. */
+static void room_point(const tvo_pose *T_w_c, double x, double y, double X[3])
+{
+    static const double lo[3] = {-3.0, -1.5, -2.0}, hi[3] = {3.0, 1.5, 6.0};
+    const double dc[3] = {(x - (W - 1) / 2.0) / FOCAL, (y - (H - 1) / 2.0) / FOCAL, 1.0};
+    double d[3], best = 1e30;
+    for (int i = 0; i < 3; ++i)
+        d[i] = T_w_c->R[3 * i] * dc[0] + T_w_c->R[3 * i + 1] * dc[1] + T_w_c->R[3 * i + 2] * dc[2];
+    for (int ax = 0; ax < 3; ++ax)
+        for (int side = 0; side < 2; ++side) {
+            const double tt = fabs(d[ax]) < 1e-12 ? -1.0 : ((side ? hi[ax] : lo[ax]) - T_w_c->t[ax]) / d[ax];
+            if (tt > 0 && tt < best)
+                best = tt;
+        }
+    for (int i = 0; i < 3; ++i)
+        X[i] = T_w_c->t[i] + best * d[i];
+}
+
+static void room_project(const tvo_pose *T_w_c, const double X[3], double *x, double *y)
+{
+    double p[3], q[3];
+    for (int i = 0; i < 3; ++i)
+        p[i] = X[i] - T_w_c->t[i];
+    for (int i = 0; i < 3; ++i) /* R^T p */
+        q[i] = T_w_c->R[i] * p[0] + T_w_c->R[3 + i] * p[1] + T_w_c->R[6 + i] * p[2];
+    *x = FOCAL * q[0] / q[2] + (W - 1) / 2.0;
+    *y = FOCAL * q[1] / q[2] + (H - 1) / 2.0;
+}
+
+/* A walk towards the far wall (2 cm a frame, 60 frames, a slow sway): each track's distance from where
+ * the room point it was detected on projects, for the tracks at least 20 frames old at the end. Returns
+ * the median of those distances and their count. */
+#define AFF_FRAMES 60
+#define AFF_MAX_IDS 4096
+static double run_walk_tracks(int32_t affine, int *count)
+{
+    static double X0[AFF_MAX_IDS][3];
+    static uint8_t have[AFF_MAX_IDS];
+    double err[300];
+    int ne = 0;
+    fixture f;
+    tvo_camera cam = test_camera();
+    tvo_vo_track t[300];
+    int32_t n = 0;
+    tvo_pose T = tvo_pose_identity();
+    memset(have, 0, sizeof(have));
+    tvo_vo_config_default(&f.cfg, &cam);
+    f.cfg.affine_win_size = affine;
+    open_vo(&f);
+    for (int k = 0; k < AFF_FRAMES; ++k) {
+        const double dir[3] = {0.1, 0.05, 1.0};
+        tvo_vo_result res;
+        tvo_image img = tvo_image_make(W, H, W, f.img);
+        T = motion(k, dir, 0.02, 0.2);
+        render(&T, f.img);
+        assert_int_equal(tvo_vo_process(f.vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
+        assert_int_equal(tvo_vo_tracks(f.vo, t, 300, &n), TVO_OK);
+        for (int32_t i = 0; i < n && i < 300; ++i)
+            if (t[i].age == 0 && t[i].id < AFF_MAX_IDS) {
+                room_point(&T, t[i].x, t[i].y, X0[t[i].id]);
+                have[t[i].id] = 1;
+            }
+    }
+    for (int32_t i = 0; i < n && i < 300; ++i) {
+        double x, y;
+        if (t[i].age < 20 || t[i].id >= AFF_MAX_IDS || !have[t[i].id])
+            continue;
+        room_project(&T, X0[t[i].id], &x, &y);
+        err[ne++] = hypot(t[i].x - x, t[i].y - y);
+    }
+    free(f.mem);
+    *count = ne;
+    if (ne == 0)
+        return 1e9;
+    for (int i = 1; i < ne; ++i) /* insertion sort: a few hundred values */
+        for (int j = i; j > 0 && err[j] < err[j - 1]; --j) {
+            const double e = err[j];
+            err[j] = err[j - 1];
+            err[j - 1] = e;
+        }
+    return err[ne / 2];
+}
+
+/* The affine refinement (cfg.affine_win_size) keeps tracks on the points they were detected on while the
+ * camera walks towards a wall (the patches grow by 30 % over the walk); translation-only LK drifts. */
+static void test_affine_refinement(void **state)
+{
+    int n_on, n_off;
+    const double on = run_walk_tracks(21, &n_on), off = run_walk_tracks(0, &n_off);
+    (void)state;
+    fprintf(stderr,
+            "walk, tracks at least 20 frames old: median error %.3f px (%d tracks) with the affine "
+            "refinement, %.3f px (%d) without\n",
+            on, n_on, off, n_off);
+    assert_true(n_on >= 50 && n_off >= 50);
+    assert_true(on < 0.15);
+    assert_true(on < 0.5 * off);
+}
+
 /* Cells of an 8 x 6 grid over the frame that hold one of the VO's tracks. */
 static int covered_cells(const tvo_vo *vo)
 {
@@ -784,6 +884,27 @@ static void test_bad_input(void **state)
         bad.lk.pred_win_size = 13;
         assert_int_equal(tvo_vo_required_size(&bad), tvo_vo_required_size(&f->cfg));
     }
+    /* affine refinement window: odd in [3, TVO_AFF_MAX_SIDE = 31], or 0 (off, the default, and without
+       its memory: (w + 2)^2 + 313 bytes a track) */
+    {
+        const int32_t ws[5] = {-1, 1, 2, 20, 33};
+        assert_int_equal(f->cfg.affine_win_size, 0);
+        for (int i = 0; i < 5; ++i) {
+            bad = f->cfg;
+            bad.affine_win_size = ws[i];
+            assert_int_equal(tvo_vo_required_size(&bad), 0);
+            assert_int_equal(tvo_vo_init(&vo2, &bad, f->mem, 10), TVO_ERR_ARG);
+        }
+        bad = f->cfg;
+        bad.affine_win_size = 21;
+        assert_true(tvo_vo_required_size(&bad) >=
+                    tvo_vo_required_size(&f->cfg) + (size_t)bad.max_tracks * (23 * 23 + 313));
+        assert_true(tvo_vo_required_size(&bad) <=
+                    tvo_vo_required_size(&f->cfg) + (size_t)bad.max_tracks * (23 * 23 + 313) + 4 * 64);
+        bad.affine_win_size = 31;
+        assert_true(tvo_vo_required_size(&bad) >
+                    tvo_vo_required_size(&f->cfg) + (size_t)bad.max_tracks * (33 * 33 + 313));
+    }
 
     /* trajectory integration refuses non-finite input and keeps its state */
     {
@@ -814,6 +935,7 @@ int main(void)
             cmocka_unit_test(test_keyframe_rotation),
             cmocka_unit_test(test_track_prediction),
             cmocka_unit_test(test_redetect_coverage),
+            cmocka_unit_test(test_affine_refinement),
             cmocka_unit_test(test_scale_filter),
             cmocka_unit_test(test_refine_step_length),
             cmocka_unit_test_setup_teardown(test_bad_input, setup, teardown),

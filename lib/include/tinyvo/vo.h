@@ -154,6 +154,18 @@ typedef struct tvo_vo_config {
                                    median depth of the 4 landmark tracks nearest to it in the previous
                                    image; the tracks left over as track_prediction says; 0: off;
                                    default 0 */
+    int32_t affine_win_size;      /* affine track refinement: each track keeps the affine_win_size^2 pixels
+                                   around where it was detected (its template), and every frame the
+                                   position LK found is refined by aligning the template under an affine
+                                   warp (zoom, rotation, shear and shift, the patch's mean and contrast
+                                   matched to the template's). Translation-only LK drifts with the patch's
+                                   deformation since detection (docs/evaluation.md, "Track accuracy on
+                                   the renders"). A track whose alignment fails (no convergence, a
+                                   correlation below 0.8, more than 2 px from LK's position, the window
+                                   out of the image) keeps LK's position and takes a new template there.
+                                   Odd, [3, 31], or 0: off; default 0 (21 is the tested value; its
+                                   accuracy and cost: docs/budget.md). Memory: (w + 2)^2 + 313 bytes a
+                                   track (w = affine_win_size) */
     /* local map (vo.h header comment, "The local map"): keyframes in a sliding window, landmarks
        triangulated between them, every frame posed by PnP on the landmarks its tracks carry, and a
        windowed bundle adjustment at each new keyframe */

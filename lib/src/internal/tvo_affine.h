@@ -1,0 +1,69 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* tinyvo: affine refinement of a track against the patch it was detected on (internal to the VO).
+ *
+ * Translation-only LK follows a patch's gradient energy, and a corner holds that energy off its centre:
+ * as the camera moves, the patch scales and shears, and the tracked point drifts with the deformation
+ * since detection (docs/evaluation.md, "Track accuracy on the renders"). Here each track keeps the
+ * (side + 2)^2 pixels around the integer pixel nearest to where it was detected (its template), and
+ * every frame the translation LK found is refined by aligning that template to the frame under an
+ * affine warp: inverse-compositional Gauss-Newton (Baker and Matthews), whose 6x6 matrix depends on
+ * the template alone and is factored once, when the template is taken; the patch's mean and contrast
+ * are normalised so that a change of exposure does not move the point.
+ *
+ * Arithmetic is float with the steps in double, in a fixed order, without libm beyond sqrt: the results
+ * are the same on every target built with -ffp-contract=off. No allocation; the caller's scratch holds
+ * the per-window arrays. */
+#ifndef TVO_AFFINE_H
+#define TVO_AFFINE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "tinyvo/image.h"
+
+/* The warp of one track: image position = A (x - 0) + t for template coordinates x (pixels, relative
+ * to the template's centre pixel); the track's point is at template coordinates d. */
+typedef struct tvo_aff_warp {
+    float A[4]; /* row-major 2x2 */
+    float t[2];
+    float d[2];
+} tvo_aff_warp;
+
+/* What the steps need of a template, computed once when it is taken: the Cholesky factor of the 6x6
+ * Gauss-Newton matrix H = sum sd sd^T (sd: the steepest-descent row [gx x, gx y, gy x, gy y, gx, gy] of
+ * each pixel), sum sd T, sum sd, and the template's sum and centred sum of squares. */
+typedef struct tvo_aff_model {
+    double L[21]; /* packed lower triangle, row by row */
+    double sdt[6], sd1[6];
+    double sum_t, var_t;
+} tvo_aff_model;
+
+/* Largest accepted window side (odd), and the bytes of one template of side `side`. */
+#define TVO_AFF_MAX_SIDE 31
+static inline size_t tvo_aff_template_bytes(int32_t side)
+{
+    return (size_t)(side + 2) * (size_t)(side + 2);
+}
+
+/* Bytes of scratch tvo_aff_refine needs for side. */
+size_t tvo_aff_scratch_size(int32_t side);
+
+/* Copy the template of a point at (x, y) in img and compute its model: 1 and w set (A = identity) when
+ * the (side + 2)^2 pixels around the nearest integer pixel lie inside the image and have texture in two
+ * directions, else 0. */
+int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, uint8_t *tpl, tvo_aff_model *model,
+                 tvo_aff_warp *w);
+
+/* The track's point under w. */
+void tvo_aff_point(const tvo_aff_warp *w, float *x, float *y);
+
+/* Refine w so that the template matches img, starting from w as given (its t moved by the caller to
+ * where translation LK put the point). At most max_iters steps, stopping when a step moves no window
+ * corner by more than eps pixels. 1 on success with w updated and *ncc the normalised correlation of
+ * the final patch with the template; 0 (w unchanged) when the template is flat, the warp leaves the
+ * image, degenerates (determinant outside [1/4, 4]) or does not converge. */
+int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, const tvo_image *img,
+                   tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch, size_t scratch_size,
+                   float *ncc);
+
+#endif

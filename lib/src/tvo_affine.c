@@ -1,0 +1,254 @@
+/* SPDX-License-Identifier: Apache-2.0 */
+/* tinyvo: affine refinement of a track against its template. See tvo_affine.h. */
+#include "tvo_affine.h"
+
+#include <math.h>
+#include <string.h>
+
+/* packed lower-triangle index of (i, j), j <= i */
+#define TRI(i, j) ((i) * ((i) + 1) / 2 + (j))
+
+static int side_ok(int32_t side)
+{
+    return side >= 3 && side <= TVO_AFF_MAX_SIDE && (side & 1) == 1;
+}
+
+size_t tvo_aff_scratch_size(int32_t side)
+{
+    if (!side_ok(side))
+        return 0;
+    return (size_t)side * (size_t)side * 2 * sizeof(float);
+}
+
+/* The template's central-difference gradients, row by row over the side x side window. */
+static void gradients(const uint8_t *tpl, int32_t side, float *gx, float *gy)
+{
+    const int32_t s = side + 2;
+    for (int32_t r = 0, k = 0; r < side; ++r) {
+        const uint8_t *p = tpl + (size_t)(r + 1) * (size_t)s + 1;
+        for (int32_t c = 0; c < side; ++c, ++k) {
+            gx[k] = 0.5f * (float)((int)p[c + 1] - (int)p[c - 1]);
+            gy[k] = 0.5f * (float)((int)p[c + s] - (int)p[c - s]);
+        }
+    }
+}
+
+/* In-place Cholesky of a packed symmetric 6x6 matrix. 0 when it is not clearly positive definite (a
+ * flat template, or texture in one direction only). */
+static int chol6(double L[21])
+{
+    for (int j = 0; j < 6; ++j) {
+        double d = L[TRI(j, j)];
+        const double d0 = d;
+        for (int k = 0; k < j; ++k)
+            d -= L[TRI(j, k)] * L[TRI(j, k)];
+        if (!(d > 1e-9 * d0) || !(d0 > 0.0))
+            return 0;
+        d = sqrt(d);
+        L[TRI(j, j)] = d;
+        for (int i = j + 1; i < 6; ++i) {
+            double v = L[TRI(i, j)];
+            for (int k = 0; k < j; ++k)
+                v -= L[TRI(i, k)] * L[TRI(j, k)];
+            L[TRI(i, j)] = v / d;
+        }
+    }
+    return 1;
+}
+
+static void chol6_solve(const double L[21], const double b[6], double x[6])
+{
+    double y[6] = {0, 0, 0, 0, 0, 0};
+    for (int i = 0; i < 6; ++i) {
+        double v = b[i];
+        for (int k = 0; k < i; ++k)
+            v -= L[TRI(i, k)] * y[k];
+        y[i] = v / L[TRI(i, i)];
+    }
+    for (int i = 5; i >= 0; --i) {
+        double v = y[i];
+        for (int k = i + 1; k < 6; ++k)
+            v -= L[TRI(k, i)] * x[k];
+        x[i] = v / L[TRI(i, i)];
+    }
+}
+
+int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, uint8_t *tpl, tvo_aff_model *model,
+                 tvo_aff_warp *w)
+{
+    const int32_t h = side / 2, s = side + 2;
+    int32_t cx, cy;
+    double H[21];
+    if (img == NULL || img->data == NULL || tpl == NULL || model == NULL || w == NULL || !side_ok(side))
+        return 0;
+    if (!(x >= 0.0f && y >= 0.0f && x <= (float)(img->width - 1) && y <= (float)(img->height - 1)))
+        return 0;
+    cx = (int32_t)floorf(x + 0.5f);
+    cy = (int32_t)floorf(y + 0.5f);
+    if (cx - h - 1 < 0 || cy - h - 1 < 0 || cx + h + 1 > img->width - 1 || cy + h + 1 > img->height - 1)
+        return 0;
+    for (int32_t r = 0; r < s; ++r)
+        memcpy(tpl + (size_t)r * (size_t)s,
+               img->data + (size_t)(cy - h - 1 + r) * (size_t)img->stride + (cx - h - 1), (size_t)s);
+    memset(H, 0, sizeof(H));
+    memset(model, 0, sizeof(*model));
+    for (int32_t yy = -h; yy <= h; ++yy) {
+        const uint8_t *p = tpl + (size_t)(yy + h + 1) * (size_t)s + 1;
+        for (int32_t xx = -h; xx <= h; ++xx) {
+            const int32_t c = xx + h;
+            const double gx = 0.5 * (double)((int)p[c + 1] - (int)p[c - 1]);
+            const double gy = 0.5 * (double)((int)p[c + s] - (int)p[c - s]);
+            const double tv = (double)p[c];
+            const double sd[6] = {gx * xx, gx * yy, gy * xx, gy * yy, gx, gy};
+            for (int i = 0; i < 6; ++i) {
+                for (int j = 0; j <= i; ++j)
+                    H[TRI(i, j)] += sd[i] * sd[j];
+                model->sdt[i] += sd[i] * tv;
+                model->sd1[i] += sd[i];
+            }
+            model->sum_t += tv;
+            model->var_t += tv * tv;
+        }
+    }
+    model->var_t -= model->sum_t * model->sum_t / (double)(side * side);
+    if (!(model->var_t > (double)(side * side))) /* contrast below 1 grey level */
+        return 0;
+    if (!chol6(H))
+        return 0;
+    memcpy(model->L, H, sizeof(H));
+    w->A[0] = 1.0f;
+    w->A[1] = 0.0f;
+    w->A[2] = 0.0f;
+    w->A[3] = 1.0f;
+    w->t[0] = (float)cx;
+    w->t[1] = (float)cy;
+    w->d[0] = x - (float)cx;
+    w->d[1] = y - (float)cy;
+    return 1;
+}
+
+void tvo_aff_point(const tvo_aff_warp *w, float *x, float *y)
+{
+    *x = w->A[0] * w->d[0] + w->A[1] * w->d[1] + w->t[0];
+    *y = w->A[2] * w->d[0] + w->A[3] * w->d[1] + w->t[1];
+}
+
+/* 1 when the warped window (a parallelogram) lies where bilinear sampling has its 4 taps: its corners
+ * in [0, width - 1) x [0, height - 1). */
+static int window_inside(const double A[4], const double t[2], int32_t h, const tvo_image *img)
+{
+    const double xmax = (double)(img->width - 1), ymax = (double)(img->height - 1);
+    for (int c = 0; c < 4; ++c) {
+        const double cx = (c & 1) ? h : -h, cy = (c & 2) ? h : -h;
+        const double px = A[0] * cx + A[1] * cy + t[0], py = A[2] * cx + A[3] * cy + t[1];
+        if (!(px >= 0.0 && py >= 0.0 && px < xmax && py < ymax))
+            return 0;
+    }
+    return 1;
+}
+
+int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, const tvo_image *img,
+                   tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch, size_t scratch_size,
+                   float *ncc)
+{
+    const int32_t h = side / 2, s = side + 2, n = side * side;
+    const size_t stride = img != NULL ? (size_t)img->stride : 0;
+    float *gx, *gy;
+    double A[4], t[2], det, corr = 0.0, mean_t;
+    int converged = 0;
+    if (tpl == NULL || model == NULL || img == NULL || img->data == NULL || w == NULL || scratch == NULL ||
+        !side_ok(side) || scratch_size < tvo_aff_scratch_size(side) || max_iters < 1 || !(eps > 0.0f))
+        return 0;
+    gx = (float *)scratch;
+    gy = gx + n;
+    gradients(tpl, side, gx, gy);
+    mean_t = model->sum_t / (double)n;
+    for (int i = 0; i < 4; ++i)
+        A[i] = (double)w->A[i];
+    t[0] = (double)w->t[0];
+    t[1] = (double)w->t[1];
+    for (int32_t it = 0; it < max_iters && !converged; ++it) {
+        double sum_i = 0.0, sum_i2 = 0.0, sum_it = 0.0, sdi[6] = {0, 0, 0, 0, 0, 0}, b[6], dp[6], g, mean_i,
+               var_i, Mi[4], ti[2], An[4];
+        if (!window_inside(A, t, h, img))
+            return 0;
+        /* one pass over the warped window: the patch's sums, its correlation with the template and
+           sum sd I, row by row (the row's sums in float, the window's in double) */
+        for (int32_t yy = -h, k = 0; yy <= h; ++yy) {
+            float px = (float)(A[0] * -h + A[1] * yy + t[0]), py = (float)(A[2] * -h + A[3] * yy + t[1]);
+            const float ax = (float)A[0], ay = (float)A[2];
+            const uint8_t *trow = tpl + (size_t)(yy + h + 1) * (size_t)s + 1;
+            float ra = 0.0f, rax = 0.0f, rb = 0.0f, rbx = 0.0f, ri = 0.0f, ri2 = 0.0f, rit = 0.0f;
+            for (int32_t xx = -h; xx <= h; ++xx, ++k, px += ax, py += ay) {
+                const int32_t ix = (int32_t)px, iy = (int32_t)py;
+                const float fx = px - (float)ix, fy = py - (float)iy;
+                const uint8_t *p = img->data + (size_t)iy * stride + (size_t)ix;
+                const float top = (float)p[0] + fx * (float)((int)p[1] - (int)p[0]);
+                const float bot = (float)p[stride] + fx * (float)((int)p[stride + 1] - (int)p[stride]);
+                const float v = top + fy * (bot - top);
+                const float a = gx[k] * v, bb = gy[k] * v;
+                ra += a;
+                rax += a * (float)xx;
+                rb += bb;
+                rbx += bb * (float)xx;
+                ri += v;
+                ri2 += v * v;
+                rit += v * (float)trow[xx + h];
+            }
+            sdi[0] += (double)rax;
+            sdi[1] += (double)ra * yy;
+            sdi[2] += (double)rbx;
+            sdi[3] += (double)rb * yy;
+            sdi[4] += (double)ra;
+            sdi[5] += (double)rb;
+            sum_i += (double)ri;
+            sum_i2 += (double)ri2;
+            sum_it += (double)rit;
+        }
+        mean_i = sum_i / (double)n;
+        var_i = sum_i2 - sum_i * mean_i;
+        if (!(var_i > 1e-6 * model->var_t))
+            return 0;
+        corr = (sum_it - sum_i * mean_t) / sqrt(var_i * model->var_t);
+        g = sqrt(model->var_t / var_i);
+        /* b = sum sd e, e = (I - mean_i) g - (T - mean_t): the patch's mean and contrast matched to the
+           template's */
+        for (int i = 0; i < 6; ++i)
+            b[i] = g * (sdi[i] - mean_i * model->sd1[i]) - (model->sdt[i] - mean_t * model->sd1[i]);
+        chol6_solve(model->L, b, dp);
+        /* W <- W o W(dp)^-1, W(dp) = [1+dp0 dp1 dp4; dp2 1+dp3 dp5] */
+        det = (1.0 + dp[0]) * (1.0 + dp[3]) - dp[1] * dp[2];
+        if (!(det > 0.25 && det < 4.0))
+            return 0;
+        Mi[0] = (1.0 + dp[3]) / det;
+        Mi[1] = -dp[1] / det;
+        Mi[2] = -dp[2] / det;
+        Mi[3] = (1.0 + dp[0]) / det;
+        ti[0] = -(Mi[0] * dp[4] + Mi[1] * dp[5]);
+        ti[1] = -(Mi[2] * dp[4] + Mi[3] * dp[5]);
+        An[0] = A[0] * Mi[0] + A[1] * Mi[2];
+        An[1] = A[0] * Mi[1] + A[1] * Mi[3];
+        An[2] = A[2] * Mi[0] + A[3] * Mi[2];
+        An[3] = A[2] * Mi[1] + A[3] * Mi[3];
+        t[0] += A[0] * ti[0] + A[1] * ti[1];
+        t[1] += A[2] * ti[0] + A[3] * ti[1];
+        memcpy(A, An, sizeof(A));
+        if (!(isfinite(A[0]) && isfinite(A[1]) && isfinite(A[2]) && isfinite(A[3]) && isfinite(t[0]) &&
+              isfinite(t[1])))
+            return 0;
+        /* the largest move of a window corner, bounded above */
+        converged = sqrt(dp[4] * dp[4] + dp[5] * dp[5]) +
+                        (double)h * (fabs(dp[0]) + fabs(dp[1]) + fabs(dp[2]) + fabs(dp[3])) <=
+                (double)eps;
+    }
+    det = A[0] * A[3] - A[1] * A[2];
+    if (!converged || !(det > 0.25 && det < 4.0) || !window_inside(A, t, h, img))
+        return 0;
+    if (ncc != NULL)
+        *ncc = (float)corr; /* of the patch before the last step, which moved no corner by more than eps */
+    for (int i = 0; i < 4; ++i)
+        w->A[i] = (float)A[i];
+    w->t[0] = (float)t[0];
+    w->t[1] = (float)t[1];
+    return 1;
+}
