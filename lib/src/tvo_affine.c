@@ -147,6 +147,31 @@ static int window_inside(const double A[4], const double t[2], int32_t h, const 
     return 1;
 }
 
+/* W <- W o W(dp)^-1 for the warp (A, t) and the step W(dp) = [1+dp0 dp1 dp4; dp2 1+dp3 dp5]; 0 when the
+ * step degenerates (determinant outside [1/4, 4]) or the result is not finite. */
+static int compose_inverse(double A[4], double t[2], const double dp[6])
+{
+    double Mi[4], ti[2], An[4];
+    const double det = (1.0 + dp[0]) * (1.0 + dp[3]) - dp[1] * dp[2];
+    if (!(det > 0.25 && det < 4.0))
+        return 0;
+    Mi[0] = (1.0 + dp[3]) / det;
+    Mi[1] = -dp[1] / det;
+    Mi[2] = -dp[2] / det;
+    Mi[3] = (1.0 + dp[0]) / det;
+    ti[0] = -(Mi[0] * dp[4] + Mi[1] * dp[5]);
+    ti[1] = -(Mi[2] * dp[4] + Mi[3] * dp[5]);
+    An[0] = A[0] * Mi[0] + A[1] * Mi[2];
+    An[1] = A[0] * Mi[1] + A[1] * Mi[3];
+    An[2] = A[2] * Mi[0] + A[3] * Mi[2];
+    An[3] = A[2] * Mi[1] + A[3] * Mi[3];
+    t[0] += A[0] * ti[0] + A[1] * ti[1];
+    t[1] += A[2] * ti[0] + A[3] * ti[1];
+    memcpy(A, An, sizeof(An));
+    return isfinite(A[0]) && isfinite(A[1]) && isfinite(A[2]) && isfinite(A[3]) && isfinite(t[0]) &&
+            isfinite(t[1]);
+}
+
 int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, const tvo_image *img,
                    tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch, size_t scratch_size,
                    float *ncc)
@@ -169,7 +194,7 @@ int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side,
     t[1] = (double)w->t[1];
     for (int32_t it = 0; it < max_iters && !converged; ++it) {
         double sum_i = 0.0, sum_i2 = 0.0, sum_it = 0.0, sdi[6] = {0, 0, 0, 0, 0, 0}, b[6], dp[6], g, mean_i,
-               var_i, Mi[4], ti[2], An[4];
+               var_i;
         if (!window_inside(A, t, h, img))
             return 0;
         /* one pass over the warped window: the patch's sums, its correlation with the template and
@@ -216,25 +241,7 @@ int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side,
         for (int i = 0; i < 6; ++i)
             b[i] = g * (sdi[i] - mean_i * model->sd1[i]) - (model->sdt[i] - mean_t * model->sd1[i]);
         chol6_solve(model->L, b, dp);
-        /* W <- W o W(dp)^-1, W(dp) = [1+dp0 dp1 dp4; dp2 1+dp3 dp5] */
-        det = (1.0 + dp[0]) * (1.0 + dp[3]) - dp[1] * dp[2];
-        if (!(det > 0.25 && det < 4.0))
-            return 0;
-        Mi[0] = (1.0 + dp[3]) / det;
-        Mi[1] = -dp[1] / det;
-        Mi[2] = -dp[2] / det;
-        Mi[3] = (1.0 + dp[0]) / det;
-        ti[0] = -(Mi[0] * dp[4] + Mi[1] * dp[5]);
-        ti[1] = -(Mi[2] * dp[4] + Mi[3] * dp[5]);
-        An[0] = A[0] * Mi[0] + A[1] * Mi[2];
-        An[1] = A[0] * Mi[1] + A[1] * Mi[3];
-        An[2] = A[2] * Mi[0] + A[3] * Mi[2];
-        An[3] = A[2] * Mi[1] + A[3] * Mi[3];
-        t[0] += A[0] * ti[0] + A[1] * ti[1];
-        t[1] += A[2] * ti[0] + A[3] * ti[1];
-        memcpy(A, An, sizeof(A));
-        if (!(isfinite(A[0]) && isfinite(A[1]) && isfinite(A[2]) && isfinite(A[3]) && isfinite(t[0]) &&
-              isfinite(t[1])))
+        if (!compose_inverse(A, t, dp))
             return 0;
         /* the largest move of a window corner, bounded above */
         converged = sqrt(dp[4] * dp[4] + dp[5] * dp[5]) +

@@ -985,10 +985,10 @@ static void kf_remove_obs(tvo_map *m, tvo_map_kf *k, int32_t o)
 }
 
 /* Windowed bundle adjustment over the window's keyframes and the landmarks with >= 2 observations; the
- * two oldest keyframes are fixed (they hold the gauge and the scale), all of them when the window has
- * two. Observations that end with a large error are removed, and with them the landmarks that are left
- * with fewer than two observations and no track. */
-/* The bundle adjustment's problem over the window, in scratch: the window's poses (the two oldest fixed),
+ * cfg.map_ba_fixed oldest keyframes are fixed (they hold the gauge and the scale; while the window fills,
+ * all but the newest, and at least two). Observations that end with a large error are removed, and with
+ * them the landmarks that are left with fewer than two observations and no track. */
+/* The bundle adjustment's problem over the window, in scratch: the window's poses (the oldest fixed),
  * the landmarks with >= 2 observations (lm2pt / pt2lm map between landmark slots and problem points) and
  * their observations, in keyframe order. */
 typedef struct ba_work {
@@ -1007,6 +1007,8 @@ typedef struct ba_work {
 static int ba_build(tvo_map *m, const tvo_vo_config *cfg, void *scratch, size_t scratch_size, ba_work *b)
 {
     const int32_t w = m->n_kf, cap_obs = m->window * m->max_tracks;
+    /* the cfg.map_ba_fixed oldest keyframes are fixed, fewer while the window fills (the newest free) */
+    const int32_t nfix = cfg->map_ba_fixed < w - 1 ? cfg->map_ba_fixed : (w - 1 > 2 ? w - 1 : 2);
     int32_t np = 0, no = 0;
     carve c;
     ba_config(cfg, &b->bc);
@@ -1035,7 +1037,7 @@ static int ba_build(tvo_map *m, const tvo_vo_config *cfg, void *scratch, size_t 
     for (int32_t i = 0; i < w; ++i) {
         const tvo_map_kf *k = kf_at(m, i);
         b->poses[i] = k->T_c_w;
-        b->fixed[i] = (uint8_t)(i < 2);
+        b->fixed[i] = (uint8_t)(i < nfix);
         for (int32_t o = 0; o < k->n_obs; ++o) {
             const int32_t pt = b->lm2pt[k->obs_lm[o]];
             if (pt < 0 || no >= cap_obs)

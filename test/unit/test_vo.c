@@ -884,6 +884,23 @@ static void test_bad_input(void **state)
         bad.lk.pred_win_size = 13;
         assert_int_equal(tvo_vo_required_size(&bad), tvo_vo_required_size(&f->cfg));
     }
+    /* fixed keyframes of the bundle adjustment: [2, map_window - 1] */
+    {
+        const int32_t nf[4] = {1, 0, -1, 6};
+        assert_int_equal(f->cfg.map_ba_fixed, 2);
+        assert_int_equal(f->cfg.map_window, 6);
+        for (int i = 0; i < 4; ++i) {
+            bad = f->cfg;
+            bad.map_ba_fixed = nf[i];
+            assert_int_equal(tvo_vo_required_size(&bad), 0);
+            assert_int_equal(tvo_vo_init(&vo2, &bad, f->mem, 10), TVO_ERR_ARG);
+        }
+        bad = f->cfg;
+        bad.map_ba_fixed = 5;
+        assert_int_equal(tvo_vo_required_size(&bad), tvo_vo_required_size(&f->cfg));
+        bad.map_window = 4; /* the limit follows the window */
+        assert_int_equal(tvo_vo_required_size(&bad), 0);
+    }
     /* affine refinement window: odd in [3, TVO_AFF_MAX_SIDE = 31], or 0 (off, the default, and without
        its memory: (w + 2)^2 + 313 bytes a track) */
     {

@@ -21,8 +21,9 @@
  * cfg.map_kf_max_frames frames, and never when it barely moved (a turn on the spot adds no structure).
  * At each keyframe: new landmarks, then a bundle adjustment of the window (ba.h: Huber reprojection error
  * in normalised coordinates, Levenberg-Marquardt with the Schur complement on the poses, at most
- * cfg.map_ba_iterations iterations, the two oldest keyframes fixed to hold the gauge and the scale: they
- * are fixed, not marginalised), after which observations above 2.5 px are dropped.
+ * cfg.map_ba_iterations iterations, the cfg.map_ba_fixed (default 2) oldest keyframes fixed to hold the
+ * gauge and the scale: they are fixed, not marginalised), after which observations above 2.5 px are
+ * dropped.
  * The map starts from two frames with cfg.map_init_parallax_deg of median parallax (5-point pose,
  * triangulated inliers: at least max(40, cfg.max_tracks / 3) landmarks). Until then, and after a loss, T_w_c continues the two-view chain: its rotation,
  * and its translation direction times the last map's speed (one unit per frame before the first map).
@@ -176,7 +177,7 @@ typedef struct tvo_vo_config {
                                    max_tracks: the map never tracks); default 20 */
     double map_init_parallax_deg; /* the initial pair needs this median parallax, (0, 30]; default 1 */
     double map_tri_parallax_deg;  /* a track is triangulated when its rays are this far apart, (0, 30];
-                                   default 1 */
+                                   default 0.5 */
     double map_kf_baseline;       /* a new keyframe when the camera moved more than this x the median depth
                                    of its landmarks since the last keyframe, (0, 10]; default 0.1 */
     double map_kf_points_ratio;   /* ...or when fewer than this share of the last keyframe's landmarks
@@ -185,6 +186,10 @@ typedef struct tvo_vo_config {
                                    keyframe_max_rot_deg of rotation) */
     int32_t map_ba_iterations;    /* Levenberg-Marquardt iterations of the bundle adjustment, [1, 100];
                                    default 5 */
+    int32_t map_ba_fixed;         /* the bundle adjustment holds this many of the window's oldest keyframes
+                                   fixed (the gauge and the scale; a longer fixed tail ties the scale to
+                                   older keyframes, as ORB-SLAM's local bundle adjustment holds the
+                                   keyframes outside its local set), [2, map_window - 1]; default 2 */
     double map_rot_prior;         /* weight of this frame's two-view rotation (turning the last pose) as a
                                    prior on its map pose (pnp.h, rot_prior_weight), [0, 1e12]; 0: none;
                                    default 100 (as much as 100 points' reprojection errors: the
