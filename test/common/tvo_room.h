@@ -42,36 +42,48 @@ static double tvo_room_texture(double u, double v, uint32_t wall)
     return s;
 }
 
+/* The wall the ray of camera direction dc (z = 1) of camera pose T_w_c hits: the ray in the world (d),
+ * its length to the wall in units of d (returned), the wall's texture coordinates (u, v) and its index. */
+static double tvo_room_cast(const tvo_pose *T_w_c, const double dc[3], double d[3], double *u, double *v,
+                            uint32_t *wall)
+{
+    /* room: x in [-3, 3], y in [-1.5, 1.5], z in [-2, 6] (metres) */
+    static const double lo[3] = {-3.0, -1.5, -2.0}, hi[3] = {3.0, 1.5, 6.0};
+    double best = 1e30;
+    *u = *v = 0;
+    *wall = 0;
+    for (int i = 0; i < 3; ++i)
+        d[i] = T_w_c->R[3 * i] * dc[0] + T_w_c->R[3 * i + 1] * dc[1] + T_w_c->R[3 * i + 2] * dc[2];
+    for (int ax = 0; ax < 3; ++ax) {
+        for (int side = 0; side < 2; ++side) {
+            const double plane = side ? hi[ax] : lo[ax];
+            double tt;
+            if (fabs(d[ax]) < 1e-12)
+                continue;
+            tt = (plane - T_w_c->t[ax]) / d[ax];
+            if (tt > 0 && tt < best) {
+                const int a1 = (ax + 1) % 3, a2 = (ax + 2) % 3;
+                best = tt;
+                *u = T_w_c->t[a1] + tt * d[a1];
+                *v = T_w_c->t[a2] + tt * d[a2];
+                *wall = (uint32_t)(ax * 2 + side);
+            }
+        }
+    }
+    return best;
+}
+
 /* Render the room seen from camera pose T_w_c (camera -> world; camera looks along +z, x right,
  * y down) into img (w x h, stride w) with focal length `focal` px and the principal point at the
  * image centre. */
 static void tvo_room_render(const tvo_pose *T_w_c, int w, int h, double focal, uint8_t *img)
 {
-    /* room: x in [-3, 3], y in [-1.5, 1.5], z in [-2, 6] (metres) */
-    static const double lo[3] = {-3.0, -1.5, -2.0}, hi[3] = {3.0, 1.5, 6.0};
     for (int y = 0; y < h; ++y) {
         for (int x = 0; x < w; ++x) {
             const double dc[3] = {(x - (w - 1) / 2.0) / focal, (y - (h - 1) / 2.0) / focal, 1.0};
-            double d[3], best = 1e30, u = 0, v = 0;
-            uint32_t wall = 0;
-            for (int i = 0; i < 3; ++i)
-                d[i] = T_w_c->R[3 * i] * dc[0] + T_w_c->R[3 * i + 1] * dc[1] + T_w_c->R[3 * i + 2] * dc[2];
-            for (int ax = 0; ax < 3; ++ax) {
-                for (int side = 0; side < 2; ++side) {
-                    const double plane = side ? hi[ax] : lo[ax];
-                    double tt;
-                    if (fabs(d[ax]) < 1e-12)
-                        continue;
-                    tt = (plane - T_w_c->t[ax]) / d[ax];
-                    if (tt > 0 && tt < best) {
-                        const int a1 = (ax + 1) % 3, a2 = (ax + 2) % 3;
-                        best = tt;
-                        u = T_w_c->t[a1] + tt * d[a1];
-                        v = T_w_c->t[a2] + tt * d[a2];
-                        wall = (uint32_t)(ax * 2 + side);
-                    }
-                }
-            }
+            double d[3], u, v;
+            uint32_t wall;
+            (void)tvo_room_cast(T_w_c, dc, d, &u, &v, &wall);
             {
                 const double g = 128.0 + 420.0 * (tvo_room_texture(u, v, wall) - 0.47);
                 img[y * w + x] = (uint8_t)(g < 0.0 ? 0.0 : (g > 255.0 ? 255.0 : g));
