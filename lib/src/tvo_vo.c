@@ -442,6 +442,8 @@ static int32_t detect_append(tvo_vo *vo, const tvo_pyramid *pyr, int32_t thresho
         vo->lm[vo->n + i] = -1;
         vo->tri_fr[vo->n + i] = -1;
         vo->minl[vo->n + i] = 0;
+        if (vo->hast != NULL)
+            vo->hast[vo->n + i] = 0; /* its template is taken at the end of the frame */
     }
     vo->n += got;
     return got;
@@ -1263,9 +1265,6 @@ static void stage_redetect(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
         (vo->n < vo->cfg.max_tracks &&
          (double)track_coverage(vo) < vo->cfg.redetect_coverage * (double)vo->cover_ref))
         res->new_corners = redetect(vo, fc->pc);
-    if (vo->hast != NULL)
-        for (int32_t i = before; i < vo->n; ++i)
-            vo->hast[i] = 0;
     res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
     t1 = now_ns(vo);
     map_new_tracks(vo, before);
@@ -1328,8 +1327,6 @@ static void first_frame(tvo_vo *vo, frame_ctx *fc, int64_t t_ns, tvo_vo_result *
     res->stage_ns[TVO_STAGE_MAP] = now_ns(vo) - t1;
     t1 = now_ns(vo);
     res->new_corners = redetect(vo, fc->pc);
-    if (vo->hast != NULL)
-        memset(vo->hast, 0, (size_t)vo->n);
     res->stage_ns[TVO_STAGE_DETECT] = now_ns(vo) - t1;
     t1 = now_ns(vo);
     map_new_tracks(vo, 0);
