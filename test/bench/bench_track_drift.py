@@ -95,9 +95,11 @@ class Render:
 
 
 def track_errors(render, tracks_csv, max_frames):
-    rows = np.loadtxt(tracks_csv, delimiter=",", skiprows=1, ndmin=2)
-    t_ns = np.loadtxt(tracks_csv, delimiter=",", skiprows=1, usecols=0, dtype=np.int64, ndmin=1)
-    frames = np.array([render.frame_of[int(t)] for t in t_ns])
+    with open(tracks_csv, encoding="utf-8") as f:
+        cells = [line.split(",") for line in f.read().splitlines()[1:] if line]
+    # t_ns,id,x,y,age,flags: the timestamp as an integer (a float loses its nanoseconds), the rest as floats
+    frames = np.array([render.frame_of[int(c[0])] for c in cells])
+    rows = np.array([[0.0] + [float(v) for v in c[1:]] for c in cells]).reshape(-1, 6)
     births = defaultdict(list)
     for r, f in zip(rows, frames):
         if r[4] == 0 and f < max_frames:
