@@ -7,7 +7,8 @@
 #      non-default prefix, static and shared libraries); pip install of the tools into a fresh venv
 #      and every console script's --help (tools/check-pip-install.sh)
 #   3. an ASan+UBSan build running the ctest tests again
-#   4. a -Os (MinSizeRel) build running the ctest tests again, and the Cortex-M size report
+#   4. a -Os (MinSizeRel) build running the ctest tests again, a build without the affine track
+#      refinement (-DTVO_WITH_AFFINE=OFF) running them again, and the Cortex-M size report
 #      (tools/size-report.sh: arm-none-eabi core builds, link check, Cortex-M7 .text <= 96 KiB)
 #   5. cppcheck + clang-tidy with the checked-in configuration (tools/run-static.sh)
 #   6. aarch64 / armhf cross builds, their tests under qemu-user (tools/run-cross.sh)
@@ -47,6 +48,12 @@ echo "== -Os build (the Cortex-M optimisation level) + unit tests: same digests 
 cmake -S . -B build/minsize -G Ninja -DCMAKE_BUILD_TYPE=MinSizeRel -DTVO_WERROR=ON -DTVO_BUILD_BENCH=OFF >/dev/null
 cmake --build build/minsize -j$JOBS
 ctest --test-dir build/minsize -j$JOBS --output-on-failure
+
+echo "== a build without the affine track refinement (-DTVO_WITH_AFFINE=OFF) + unit tests"
+cmake -S . -B build/noaffine -G Ninja -DCMAKE_BUILD_TYPE=Release -DTVO_WITH_AFFINE=OFF -DTVO_WERROR=ON \
+      -DTVO_BUILD_BENCH=OFF >/dev/null
+cmake --build build/noaffine -j$JOBS
+ctest --test-dir build/noaffine -j$JOBS --output-on-failure
 
 echo "== Cortex-M7 / M4 core builds, link check, M7 .text <= 96 KiB (tools/size-report.sh)"
 TVO_WERROR=ON bash tools/size-report.sh

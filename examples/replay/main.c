@@ -522,6 +522,14 @@ int main(int argc, char **argv)
         (void)tvo_replay_setting_apply(&cfg, o.sets[k]); /* checked by parse_args */
     vo_size = tvo_vo_required_size(&cfg);
     if (vo_size == 0) {
+        tvo_vo *probe = NULL;
+        uint8_t probe_mem[1];
+        if (tvo_vo_init(&probe, &cfg, probe_mem, sizeof(probe_mem)) == TVO_ERR_UNSUPPORTED) {
+            fprintf(stderr,
+                    "tvo_replay: this build of the library leaves out the affine refinement "
+                    "(TVO_WITH_AFFINE off): affine_win_size must be 0\n");
+            goto cleanup;
+        }
         fprintf(stderr,
                 "tvo_replay: the configuration is not usable for %s (check the calibration and the --set "
                 "values: vo.h gives each field's range)\n",

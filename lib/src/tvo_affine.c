@@ -5,6 +5,10 @@
 #include <math.h>
 #include <string.h>
 
+#include "tinyvo/options.h"
+
+#if TVO_WITH_AFFINE
+
 /* packed lower-triangle index of (i, j), j <= i */
 #define TRI(i, j) ((i) * ((i) + 1) / 2 + (j))
 
@@ -259,3 +263,7 @@ int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side,
     w->t[1] = (float)t[1];
     return 1;
 }
+#else
+/* left out of this build (TVO_WITH_AFFINE 0); ISO C wants a declaration in every translation unit */
+typedef int tvo_affine_left_out;
+#endif

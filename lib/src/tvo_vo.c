@@ -10,6 +10,7 @@
 #include "tinyvo/linalg.h"
 #include "tinyvo/pyramid.h"
 #include "tvo_map.h"
+#include "tinyvo/options.h"
 #include "tvo_affine.h"
 
 struct tvo_vo {
@@ -185,7 +186,7 @@ static int config_valid(const tvo_vo_config *cfg)
     if (cfg->track_prediction != 0 && cfg->track_prediction != 1)
         return 0;
     if (cfg->affine_win_size != 0 &&
-        (cfg->affine_win_size < 3 || cfg->affine_win_size > TVO_AFF_MAX_SIDE ||
+        (!TVO_WITH_AFFINE || cfg->affine_win_size < 3 || cfg->affine_win_size > TVO_AFF_MAX_SIDE ||
          (cfg->affine_win_size & 1) == 0))
         return 0;
     if (cfg->map_prediction < 0 || cfg->map_prediction > 2)
@@ -228,10 +229,12 @@ static size_t scratch_need(const tvo_vo_config *cfg)
     size_t d = tvo_size_mul((size_t)cfg->max_tracks, sizeof(double)); /* depth ratios (rel_scale) */
     size_t e = cfg->map ? tvo_map_scratch_size(cfg) : 0;
     size_t m = a > b ? a : b;
+#if TVO_WITH_AFFINE
     if (cfg->affine_win_size > 0) {
         const size_t f = tvo_aff_scratch_size(cfg->affine_win_size);
         m = m > f ? m : f;
     }
+#endif
     m = m > c ? m : c;
     m = m > d ? m : d;
     return m > e ? m : e;
@@ -261,12 +264,14 @@ static size_t layout_size(const tvo_vo_config *cfg)
     s = tvo_size_add(s, tvo_arena_round(n));                                        /* minl */
     if (cfg->map)
         s = tvo_size_add(s, tvo_map_layout_size(cfg));
+#if TVO_WITH_AFFINE
     if (cfg->affine_win_size > 0) {
         s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, tvo_aff_template_bytes(cfg->affine_win_size))));
         s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_aff_warp))));
         s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_aff_model))));
         s = tvo_size_add(s, tvo_arena_round(n));
     }
+#endif
     s = tvo_size_add(s, tvo_arena_round(scratch_need(cfg)));
     return tvo_size_add(s, TVO_ARENA_ALIGN); /* slack for an unaligned block */
 }
@@ -301,7 +306,7 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
         return TVO_ERR_NULL;
     *out = NULL;
     if (!config_valid(cfg_in))
-        return TVO_ERR_ARG;
+        return !TVO_WITH_AFFINE && cfg_in->affine_win_size != 0 ? TVO_ERR_UNSUPPORTED : TVO_ERR_ARG;
     cfg_r = resolved(cfg_in);
     if (mem_size < layout_size(cfg))
         return TVO_ERR_NO_MEMORY;
@@ -356,6 +361,7 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
         if (ms != TVO_OK)
             return ms;
     }
+#if TVO_WITH_AFFINE
     if (cfg->affine_win_size > 0) {
         vo->tpl = (uint8_t *)tvo_arena_alloc(&a, n * tvo_aff_template_bytes(cfg->affine_win_size));
         vo->aw = (tvo_aff_warp *)tvo_arena_alloc(&a, n * sizeof(tvo_aff_warp));
@@ -365,6 +371,7 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
             return TVO_ERR_NO_MEMORY;
         memset(vo->hast, 0, n);
     }
+#endif
     vo->T_c_w = tvo_pose_identity();
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
     for (int i = 0; i < 4; ++i) {
@@ -762,6 +769,7 @@ static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
         vo->tri_fr[m] = vo->tri_fr[i];
         vo->tri_x[m] = vo->tri_x[i];
         vo->minl[m] = vo->minl[i];
+#if TVO_WITH_AFFINE
         if (vo->hast != NULL) {
             if (m != i) {
                 const size_t tb = tvo_aff_template_bytes(vo->cfg.affine_win_size);
@@ -771,6 +779,7 @@ static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
             }
             vo->hast[m] = vo->hast[i];
         }
+#endif
         ++m;
     }
     return m;
@@ -1022,6 +1031,7 @@ typedef struct frame_ctx {
 /* 1b. The affine refinement (cfg.affine_win_size > 0): each tracked point that has a template moves to
  * where its template aligns under an affine warp, starting from LK's position with the last frame's
  * warp; a point whose refinement fails keeps LK's position and takes a new template in finish_frame. */
+#if TVO_WITH_AFFINE
 static void affine_refine(tvo_vo *vo, const frame_ctx *fc)
 {
     const int32_t side = vo->cfg.affine_win_size;
@@ -1068,6 +1078,20 @@ static void affine_take(tvo_vo *vo, const frame_ctx *fc)
             vo->hast[i] = (uint8_t)tvo_aff_take(&l0, vo->pts[i].x, vo->pts[i].y, side,
                                                 vo->tpl + (size_t)i * tb, &vo->am[i], &vo->aw[i]);
 }
+#else
+/* left out of this build (TVO_WITH_AFFINE 0): config_valid() refuses affine_win_size > 0 */
+static void affine_refine(tvo_vo *vo, const frame_ctx *fc)
+{
+    (void)vo;
+    (void)fc;
+}
+
+static void affine_take(tvo_vo *vo, const frame_ctx *fc)
+{
+    (void)vo;
+    (void)fc;
+}
+#endif
 
 /* 1. LK tracking of the tracks into this frame; the tracks that leave the image are dropped. */
 static void stage_track(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)

@@ -152,7 +152,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     tvo_vo_config_default(&cfg, &cam);
     cfg.track_prediction = (hdr[0] / 81) & 1; /* hdr[0]'s bits above the width's */
     /* the affine refinement for half the inputs (hdr[1]'s bits above the height's), windows 3..17 */
-    cfg.affine_win_size = ((hdr[1] / 81) & 1) ? 3 + 2 * (int32_t)(hdr[3] & 7u) : 0;
+    cfg.affine_win_size = TVO_WITH_AFFINE && ((hdr[1] / 81) & 1) ? 3 + 2 * (int32_t)(hdr[3] & 7u) : 0;
     cfg.max_tracks = 16 + hdr[4];
     cfg.min_tracks = cfg.max_tracks * 2 / 3;
     cfg.min_pose_tracks = 8 + hdr[4] % 23;

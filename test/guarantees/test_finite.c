@@ -38,8 +38,10 @@ static int runner_open(runner *r, int32_t w, int32_t h)
     tvo_vo_config_default(&cfg, &cam);
     static int opened = 0;
     const int k = opened++;
-    cfg.track_prediction = k & 1;           /* every other VO opened with the track prediction on */
-    cfg.affine_win_size = (k & 2) ? 21 : 0; /* and every other pair with the affine refinement */
+    cfg.track_prediction = k & 1; /* every other VO opened with the track prediction on */
+    cfg.affine_win_size = TVO_WITH_AFFINE && (k & 2)
+            ? 21
+            : 0; /* and every other pair with the affine refinement */
     while (cfg.lk.max_level >= 0 && (need = tvo_vo_required_size(&cfg)) == 0)
         cfg.lk.max_level--;
     if (need == 0)

@@ -109,7 +109,9 @@ static void vo_open(vo_box *b, const tvo_camera *cam)
     tvo_vo_config cfg;
     size_t need;
     tvo_vo_config_default(&cfg, cam);
-    cfg.affine_win_size = 21; /* the affine refinement's path too (it adds to LK's, it replaces nothing) */
+    cfg.affine_win_size = TVO_WITH_AFFINE
+            ? 21
+            : 0; /* the affine refinement's path too (it adds to LK's, it replaces nothing) */
     need = tvo_vo_required_size(&cfg);
     assert_true(need > 0);
     b->mem = malloc(need);

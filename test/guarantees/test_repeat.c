@@ -32,7 +32,9 @@ static void run(const tvo_camera *cam, const uint8_t *frames, const int64_t *t, 
     tvo_traj traj;
     const size_t fsz = (size_t)cam->width * (size_t)cam->height;
     tvo_vo_config_default(&cfg, cam);
-    cfg.affine_win_size = 21; /* its templates live in the block too: garbage there must not matter */
+    cfg.affine_win_size = TVO_WITH_AFFINE
+            ? 21
+            : 0; /* its templates live in the block too: garbage there must not matter */
     need = tvo_vo_required_size(&cfg);
     assert_true(need > 0);
     block = malloc(need + 64);

@@ -44,7 +44,9 @@ static size_t config_for(const tvo_camera *cam, tvo_vo_config *cfg)
 {
     size_t need = 0;
     tvo_vo_config_default(cfg, cam);
-    cfg->affine_win_size = 21; /* the affine refinement's path too (called after LK, not inside it) */
+    cfg->affine_win_size = TVO_WITH_AFFINE
+            ? 21
+            : 0; /* the affine refinement's path too (called after LK, not inside it) */
     while (cfg->lk.max_level >= 0 && (need = tvo_vo_required_size(cfg)) == 0)
         cfg->lk.max_level--;
     return need;

@@ -5,6 +5,7 @@
 
 #include <math.h>
 
+#include "tinyvo/options.h"
 #include "tinyvo/vo.h"
 #include "tvo_room.h"
 
@@ -492,6 +493,7 @@ static void test_track_prediction(void **state)
     assert_true(off < 6);
 }
 
+#if TVO_WITH_AFFINE
 /* The room point a pixel of camera T_w_c sees (tvo_room_cast, the renderer's geometry), and the pixel a
  * world point projects to. */
 static void room_point(const tvo_pose *T_w_c, double x, double y, double X[3])
@@ -582,6 +584,25 @@ static void test_affine_refinement(void **state)
     assert_true(on < 0.15);
     assert_true(on < 0.5 * off);
 }
+#else
+/* A build without the affine refinement (TVO_WITH_AFFINE 0) refuses a configuration that asks for it,
+ * with its own status, and runs without it. */
+static void test_affine_refinement(void **state)
+{
+    tvo_camera cam = test_camera();
+    tvo_vo_config cfg;
+    tvo_vo *vo = NULL;
+    uint8_t mem[64];
+    (void)state;
+    tvo_vo_config_default(&cfg, &cam);
+    assert_int_equal(cfg.affine_win_size, 0);
+    assert_true(tvo_vo_required_size(&cfg) > 0);
+    cfg.affine_win_size = 21;
+    assert_int_equal(tvo_vo_required_size(&cfg), 0);
+    assert_int_equal(tvo_vo_init(&vo, &cfg, mem, sizeof(mem)), TVO_ERR_UNSUPPORTED);
+    assert_null(vo);
+}
+#endif
 
 /* Cells of an 8 x 6 grid over the frame that hold one of the VO's tracks. */
 static int covered_cells(const tvo_vo *vo)
@@ -904,8 +925,17 @@ static void test_bad_input(void **state)
         for (int i = 0; i < 5; ++i) {
             bad = f->cfg;
             bad.affine_win_size = ws[i];
+#if TVO_WITH_AFFINE
             assert_refused(&bad, f->mem);
+#else
+            {
+                tvo_vo *vo = NULL; /* left out of the build: refused as unsupported, whatever the size */
+                assert_int_equal(tvo_vo_required_size(&bad), 0);
+                assert_int_equal(tvo_vo_init(&vo, &bad, f->mem, 10), TVO_ERR_UNSUPPORTED);
+            }
+#endif
         }
+#if TVO_WITH_AFFINE
         bad = f->cfg;
         bad.affine_win_size = 21;
         assert_true(tvo_vo_required_size(&bad) >=
@@ -915,6 +945,7 @@ static void test_bad_input(void **state)
         bad.affine_win_size = 31;
         assert_true(tvo_vo_required_size(&bad) >
                     tvo_vo_required_size(&f->cfg) + (size_t)bad.max_tracks * (33 * 33 + 313));
+#endif
     }
 
     /* trajectory integration refuses non-finite input and keeps its state */
