@@ -9,15 +9,16 @@
  * positions, the difference is what the tracks' errors cost (test/bench/bench_map_tracks.py makes both
  * files from a render and compares them).
  *
- *   bench_map_tracks GT.tum TRACKS.txt OUT.tum [--set NAME=VALUE]...
+ *   bench_map_tracks GT.tum TRACKS.txt OUT.tum [--camera W H FX FY CX CY] [--set NAME=VALUE]...
  *
  * GT.tum: the camera poses (t tx ty tz qx qy qz qw, camera to world), one line per frame, in the
  * order of TRACKS' frames. TRACKS.txt: lines "t_ns id age x y", x y normalised and undistorted, grouped
  * by frame in time order; age 0 marks a track detected in that frame (it joins after the frame's map
  * step, as in tvo_vo_process), a track missing from a frame has ended; a line with id -1 only marks a
  * frame (a frame with no track at all). --set: map_window, map_ba_fixed, map_kf_baseline,
- * map_tri_parallax_deg, map_ba_iterations, map_min_points, max_tracks (the VO's defaults otherwise, for a
- * 752x480 camera with a 458.654 px focal length, the EuRoC cam0's). Prints frames, keyframes, losses.
+ * map_tri_parallax_deg, map_ba_iterations, map_min_points, max_tracks (the VO's defaults otherwise).
+ * --camera: the pinhole camera the map's pixel thresholds refer to (default: 752x480, 458.654 / 457.296 px,
+ * the EuRoC cam0's). Prints frames, frames posed, keyframes, losses.
  * Exit 0, 1 on bad input. */
 #include <math.h>
 #include <stdio.h>
@@ -193,8 +194,22 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: bench_map_tracks GT.tum TRACKS.txt OUT.tum [--set NAME=VALUE]...\n");
         return 1;
     }
+    for (int a = 4; a + 6 < argc; ++a)
+        if (strcmp(argv[a], "--camera") == 0) {
+            const double v[6] = {atof(argv[a + 1]), atof(argv[a + 2]), atof(argv[a + 3]),
+                                 atof(argv[a + 4]), atof(argv[a + 5]), atof(argv[a + 6])};
+            if (!(v[0] >= 16 && v[1] >= 16 && v[2] > 0 && v[3] > 0)) {
+                fprintf(stderr, "bench_map_tracks: bad --camera\n");
+                return 1;
+            }
+            cam = tvo_camera_make_pinhole((int32_t)v[0], (int32_t)v[1], v[2], v[3], v[4], v[5]);
+        }
     tvo_vo_config_default(&cfg, &cam);
     for (int a = 4; a < argc; ++a) {
+        if (strcmp(argv[a], "--camera") == 0 && a + 6 < argc) {
+            a += 6;
+            continue;
+        }
         if (strcmp(argv[a], "--set") != 0 || a + 1 >= argc || !set_option(&cfg, argv[a + 1])) {
             fprintf(stderr, "bench_map_tracks: bad option %s\n", argv[a]);
             return 1;

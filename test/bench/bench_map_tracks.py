@@ -12,11 +12,16 @@ keyframes, triangulation, PnP, windowed bundle adjustment; ground-truth two-view
   - real, ended above E px: the tracker's positions, each track ended at the first frame where it is
     more than E px from the truth (an oracle: what a perfect check of that size would leave).
 
-For each it prints the Sim(3)-aligned ATE (m), the per-frame rotation RPE (deg) and the scale of the last
-quarter of the run relative to the first (each quarter Sim(3)-aligned on its own; 1 is no drift).
+With --no-truth (any EuRoC/ASL sequence with ground-truth poses, e.g. the real KITTI ones) only the
+tracker's positions are fed, which tells whether the two-view rotations matter: compare with the VO's own
+figures, printed beside them.
+
+For each it prints the frames the map posed (the others are left out of the figures: a run that keeps too
+few tracks loses its map), the Sim(3)-aligned ATE (m), the per-frame rotation RPE (deg) and the scale of
+the last quarter of the run relative to the first (each quarter Sim(3)-aligned on its own; 1 is no drift).
 
 Usage: .venv/bin/python test/bench/bench_map_tracks.py --seq RENDER --replay BUILD/examples/replay/tvo_replay
-           --map-bench BUILD/test/bench_map_tracks [--seed S] [--ends 0.5,1,2] [-- REPLAY ARGS]
+           --map-bench BUILD/test/bench_map_tracks [--seed S] [--ends 0.5,1,2] [--no-truth] [-- REPLAY ARGS]
 RENDER is a folder written by tinyvo-synth with scene seed S (default 0).
 """
 import argparse
@@ -33,6 +38,7 @@ sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(ROOT, "tools"))
 from bench_track_drift import Render  # noqa: E402
 from tinyvo_tools import eval as tvo_eval  # noqa: E402
+from tinyvo_tools import synth, trajio  # noqa: E402
 
 
 def read_tracks(csv):
@@ -94,6 +100,65 @@ def ended_above(t, ids, err_px, limit):
     return keep
 
 
+def write_tum(path, t_s, poses):
+    """Camera poses (4x4, camera to world) at times t_s (s) in TUM format."""
+    with open(path, "w", encoding="utf-8") as f:
+        for ts, T in zip(t_s, poses):
+            R = T[:3, :3]
+            q = [np.copysign(np.sqrt(max(0.0, 1 + R[0, 0] - R[1, 1] - R[2, 2])) / 2, R[2, 1] - R[1, 2]),
+                 np.copysign(np.sqrt(max(0.0, 1 - R[0, 0] + R[1, 1] - R[2, 2])) / 2, R[0, 2] - R[2, 0]),
+                 np.copysign(np.sqrt(max(0.0, 1 - R[0, 0] - R[1, 1] + R[2, 2])) / 2, R[1, 0] - R[0, 1]),
+                 np.sqrt(max(0.0, 1 + np.trace(R))) / 2]
+            f.write(f"{ts:.9f} " + " ".join(f"{v:.10f}" for v in list(T[:3, 3]) + q) + "\n")
+
+
+def normalised(cam, xy):
+    """Undistorted normalised coordinates of pixel positions (N,2) of an ASL camera."""
+    fu, fv, cu, cv = cam.intrinsics
+    x, y = (xy[:, 0] - cu) / fu, (xy[:, 1] - cv) / fv
+    if cam.distortion_model.startswith("radial") and any(cam.distortion):
+        x, y = synth.undistort_radtan(x, y, cam.distortion)
+    return np.stack([x, y], axis=1)
+
+
+def run_map(a, cam, gt, tf, est):
+    """The bench binary on one track file; (frames posed text, ATE, rot RPE, scale drift)."""
+    fu, fv, cu, cv = cam.intrinsics
+    out = subprocess.run([a.map_bench, gt, tf, est, "--camera", str(cam.width), str(cam.height), str(fu), str(fv),
+                          str(cu), str(cv)], check=True, capture_output=True, text=True).stdout
+    words = out.split()
+    posed = f"{words[words.index('posed') + 1]} of {words[words.index('frames') + 1]}"
+    ev = tvo_eval.evaluate_files(est, gt, gt_format="tum")
+    r = ev.result["standard"]
+    return posed, r["ate_m"]["rmse"], r["rpe_frame"]["rotation_deg"]["rmse"], quarter_scale_drift(ev)
+
+
+def no_truth(a, extra, tmp):
+    """The map fed with the VO's tracks of a real sequence, beside the VO's own figures."""
+    cam = trajio.read_sensor_yaml(os.path.join(a.seq, "mav0", "cam0", "sensor.yaml"))
+    csv, vo = os.path.join(tmp, "tracks.csv"), os.path.join(tmp, "vo.txt")
+    subprocess.run([a.replay, "--euroc", a.seq, "--scale", "none", "--out", vo, "--tracks", csv, "--quiet"] + extra,
+                   check=True)
+    t, ids, xy, age = read_tracks(csv)
+    ev = tvo_eval.evaluate_files(vo, a.seq)
+    gt = os.path.join(tmp, "gt.tum")
+    write_tum(gt, ev.t_s, ev.gt)
+    if len(ev.t_s) != len(np.unique(t)):
+        raise SystemExit("bench_map_tracks: the ground truth does not cover every frame of the replay")
+    tf, est = os.path.join(tmp, "t.txt"), os.path.join(tmp, "est.tum")
+    write_tracks(tf, t, ids, age, normalised(cam, xy), np.ones(len(t), dtype=bool))
+    posed, ate, rot, drift = run_map(a, cam, gt, tf, est)
+    r = ev.result["standard"]
+    print(f"{a.seq}: {len(np.unique(ids))} tracks")
+    print("| run | frames posed | ATE, m | rot RPE, deg | scale drift, last / first quarter |")
+    print("|---|---|---|---|---|")
+    print(f"| the VO | {len(ev.t_s)} of {len(ev.t_s)} | {r['ate_m']['rmse']:.4f} | "
+          f"{r['rpe_frame']['rotation_deg']['rmse']:.4f} | {quarter_scale_drift(ev):.4f} |")
+    print(f"| its map fed with its tracks and the true two-view rotations | {posed} | {ate:.4f} | {rot:.4f} | "
+          f"{drift:.4f} |")
+    return 0
+
+
 def quarter_scale_drift(ev):
     g, e = ev.gt[:, :3, 3], ev.est_aligned[:, :3, 3]
     n, s = len(g), []
@@ -119,7 +184,12 @@ def main(argv=None):
     ap.add_argument("--map-bench", required=True, help="the bench_map_tracks binary")
     ap.add_argument("--seed", type=int, default=0, help="the render's scene seed (tinyvo-synth --seed)")
     ap.add_argument("--ends", default="0.5,1,2", help="error limits (px) of the oracle runs")
+    ap.add_argument("--no-truth", action="store_true",
+                    help="a sequence that is not a render: feed the tracker's positions only")
     a = ap.parse_args(argv)
+    if a.no_truth:
+        with tempfile.TemporaryDirectory() as tmp:
+            return no_truth(a, extra, tmp)
     render = Render(a.seq, a.seed)
     fu = render.cam.intrinsics[0]
     with tempfile.TemporaryDirectory() as tmp:
@@ -130,30 +200,20 @@ def main(argv=None):
         frame, real, true = true_positions(render, t, ids, xy, age)
         err_px = np.hypot(*(real - true).T) * fu
         gt = os.path.join(tmp, "gt.tum")
-        with open(gt, "w", encoding="utf-8") as f:
-            for ts in np.unique(t):
-                T = render.traj.poses[render.frame_of[int(ts)]]
-                w = np.sqrt(max(0.0, 1 + np.trace(T[:3, :3]))) / 2
-                R = T[:3, :3]
-                q = [np.copysign(np.sqrt(max(0.0, 1 + R[0, 0] - R[1, 1] - R[2, 2])) / 2, R[2, 1] - R[1, 2]),
-                     np.copysign(np.sqrt(max(0.0, 1 - R[0, 0] + R[1, 1] - R[2, 2])) / 2, R[0, 2] - R[2, 0]),
-                     np.copysign(np.sqrt(max(0.0, 1 - R[0, 0] - R[1, 1] + R[2, 2])) / 2, R[1, 0] - R[0, 1]), w]
-                f.write(f"{ts * 1e-9:.9f} " + " ".join(f"{v:.10f}" for v in list(T[:3, 3]) + q) + "\n")
+        ts = np.unique(t)
+        write_tum(gt, ts * 1e-9, [render.traj.poses[render.frame_of[int(v)]] for v in ts])
         runs = [("true", true, np.isfinite(true[:, 0])), ("real", real, np.ones(len(t), dtype=bool))]
         for e in [float(v) for v in a.ends.split(",") if v]:
             runs.append((f"real, ended above {e:g} px", real, ended_above(t, ids, err_px, e)))
         print(f"{a.seq}: {len(np.unique(ids))} tracks; tracker error median {np.nanmedian(err_px):.3f} px, "
               f"p90 {np.nanpercentile(err_px, 90):.3f} px over all rows")
-        print("| tracks | ATE, m | rot RPE, deg | scale drift, last / first quarter | rows kept |")
-        print("|---|---|---|---|---|")
+        print("| tracks | frames posed | ATE, m | rot RPE, deg | scale drift, last / first quarter | rows kept |")
+        print("|---|---|---|---|---|---|")
         for name, pos, keep in runs:
             tf, est = os.path.join(tmp, "t.txt"), os.path.join(tmp, "est.tum")
             write_tracks(tf, t, ids, age, pos, keep)
-            subprocess.run([a.map_bench, gt, tf, est], check=True, stdout=subprocess.DEVNULL)
-            ev = tvo_eval.evaluate_files(est, gt, gt_format="tum")
-            r = ev.result["standard"]
-            print(f"| {name} | {r['ate_m']['rmse']:.4f} | {r['rpe_frame']['rotation_deg']['rmse']:.4f} | "
-                  f"{quarter_scale_drift(ev):.4f} | {keep.mean():.3f} |")
+            posed, ate, rot, drift = run_map(a, render.cam, gt, tf, est)
+            print(f"| {name} | {posed} | {ate:.4f} | {rot:.4f} | {drift:.4f} | {keep.mean():.3f} |")
     return 0
 
 
