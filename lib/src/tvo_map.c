@@ -1128,6 +1128,15 @@ static void bundle_adjust(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *
     for (int32_t q = 0; q < b.p.n_points; ++q)
         if (!(isfinite(b.X[q][0]) && isfinite(b.X[q][1]) && isfinite(b.X[q][2])))
             return;
+    {
+        /* the newest keyframe's rotation as its tracking gave it (its two-view rotation held it there)
+           against the adjusted one (cfg.map_ba_max_turn_deg) */
+        const double turn = tvo_la_rot_dist(b.poses[b.p.n_poses - 1].R, kf_at(m, b.p.n_poses - 1)->T_c_w.R);
+        if (!(turn <= deg2rad(cfg->map_ba_max_turn_deg))) {
+            out->ba_flags |= TVO_VO_BA_TURN_REFUSED;
+            return;
+        }
+    }
     for (int32_t i = 0; i < b.p.n_poses; ++i)
         kf_at(m, i)->T_c_w = b.poses[i];
     for (int32_t q = 0; q < b.p.n_points; ++q)

@@ -148,6 +148,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->map_kf_max_frames = 30;
     cfg->map_ba_iterations = 5;
     cfg->map_ba_fixed = 2;
+    cfg->map_ba_max_turn_deg = 0.5;
     cfg->map_rot_prior = 100.0;
     cfg->clock = NULL;
     cfg->clock_user = NULL;
@@ -209,6 +210,8 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (cfg->map_kf_max_frames < 1 || cfg->map_kf_max_frames > 100000 || cfg->map_ba_iterations < 1 ||
         cfg->map_ba_iterations > 100)
+        return 0;
+    if (!(cfg->map_ba_max_turn_deg > 0.0 && cfg->map_ba_max_turn_deg <= 180.0))
         return 0;
     if (cfg->map_ba_fixed < 2 || cfg->map_ba_fixed > cfg->map_window - 1)
         return 0;

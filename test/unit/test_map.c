@@ -165,6 +165,67 @@ static void test_map_consistent_scale(void **state)
     close_vo(f);
 }
 
+/* The bundle adjustment's turn check (cfg.map_ba_max_turn_deg): on the walk the adjustments turn the
+ * newest keyframe by hundredths of a degree and the default bound (0.5 deg) refuses none; a bound of
+ * 1e-9 deg refuses every adjustment that moved it, flags those frames, and the map still poses every
+ * frame (from the windows as tracked), finite, within 2 % of the path. */
+static void test_map_ba_turn_check(void **state)
+{
+    for (int pass = 0; pass < 2; ++pass) {
+        fixture *f = calloc(1, sizeof(fixture));
+        tvo_camera cam = test_camera();
+        static tvo_pose gt[LONG_RUN], est[LONG_RUN];
+        int refused = 0, adjusted = 0, tracking = 0, init_frame = -1;
+        size_t need;
+        double err2 = 0.0, path = 0.0, s;
+        (void)state;
+        assert_non_null(f);
+        tvo_vo_config_default(&f->cfg, &cam);
+        assert_true(f->cfg.map_ba_max_turn_deg == 0.5);
+        if (pass == 1)
+            f->cfg.map_ba_max_turn_deg = 1e-9;
+        need = tvo_vo_required_size(&f->cfg);
+        f->mem = malloc(need);
+        assert_non_null(f->mem);
+        assert_int_equal(tvo_vo_init(&f->vo, &f->cfg, f->mem, need), TVO_OK);
+        for (int k = 0; k < LONG_RUN; ++k) {
+            tvo_vo_result res;
+            gt[k] = walk(k);
+            assert_int_equal(step(f, &gt[k], k, &res), TVO_OK);
+            assert_true(tvo_pose_is_finite(&res.T_w_c));
+            est[k] = res.T_w_c;
+            refused += (res.ba_flags & TVO_VO_BA_TURN_REFUSED) != 0;
+            adjusted += res.ba_iterations > 0;
+            tracking += res.map_state == TVO_MAP_TRACKING;
+            if (res.map_state == TVO_MAP_INITIALISED && init_frame < 0)
+                init_frame = k;
+            if (k > 0) {
+                tvo_pose d = tvo_pose_relative(&gt[k - 1], &gt[k]);
+                path += sqrt(d.t[0] * d.t[0] + d.t[1] * d.t[1] + d.t[2] * d.t[2]);
+            }
+        }
+        s = best_scale(gt, est, init_frame, LONG_RUN);
+        for (int k = init_frame; k < LONG_RUN; ++k)
+            for (int c = 0; c < 3; ++c) {
+                const double e = gt[k].t[c] - s * est[k].t[c];
+                err2 += e * e;
+            }
+        err2 = sqrt(err2 / (LONG_RUN - init_frame));
+        fprintf(stderr, "map walk, turn bound %g deg: %d of %d adjustments refused, ATE %.4f m (%.2f %%)\n",
+                f->cfg.map_ba_max_turn_deg, refused, adjusted, err2, 100.0 * err2 / path);
+        assert_true(init_frame > 0 && init_frame < 30);
+        assert_int_equal(tracking, LONG_RUN - 1 - init_frame);
+        assert_true(adjusted >= 3);
+        if (pass == 0)
+            assert_int_equal(refused, 0);
+        else
+            assert_true(refused >= adjusted - 1); /* all but one that left the newest keyframe as it was */
+        assert_true(err2 < 0.02 * path);
+        free(f->mem);
+        free(f);
+    }
+}
+
 /* The map off: T_w_c is the two-view chain with unit steps, and the map fields stay empty. */
 static void test_map_off(void **state)
 {
@@ -498,6 +559,10 @@ static void test_map_config(void **state)
     REFUSED(map_kf_max_frames, 0);
     REFUSED(map_ba_iterations, 0);
     REFUSED(map_ba_iterations, 101);
+    REFUSED(map_ba_max_turn_deg, 0.0);
+    REFUSED(map_ba_max_turn_deg, -1.0);
+    REFUSED(map_ba_max_turn_deg, 180.5);
+    REFUSED(map_ba_max_turn_deg, NAN);
 #undef REFUSED
 }
 
@@ -508,6 +573,7 @@ int main(void)
             cmocka_unit_test(test_map_pure_rotation),    cmocka_unit_test(test_map_rotation_after_map),
             cmocka_unit_test(test_map_loss_and_new_map), cmocka_unit_test(test_tracks_view),
             cmocka_unit_test(test_map_config),           cmocka_unit_test(test_map_hover),
+            cmocka_unit_test(test_map_ba_turn_check),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -192,6 +192,14 @@ typedef struct tvo_vo_config {
                                    fixed (the gauge and the scale; a longer fixed tail ties the scale to
                                    older keyframes, as ORB-SLAM's local bundle adjustment holds the
                                    keyframes outside its local set), [2, map_window - 1]; default 2 */
+    double map_ba_max_turn_deg;   /* the bundle adjustment's result is not taken (the window keeps its poses
+                                   and points from before it; ba_flags gets TVO_VO_BA_TURN_REFUSED) when
+                                   it turns the newest keyframe by more than this from the pose its
+                                   tracking gave it (there the frame's two-view rotation held the
+                                   rotation): a window that trades the newest keyframe's rotation for a
+                                   lower reprojection cost has followed landmarks that are wrong
+                                   together (docs/design.md, "Windowed bundle adjustment"). (0, 180];
+                                   default 0.5 */
     double map_rot_prior;         /* weight of this frame's two-view rotation (turning the last pose) as a
                                    prior on its map pose (pnp.h, rot_prior_weight), [0, 1e12]; 0: none;
                                    default 100 (as much as 100 points' reprojection errors: the
@@ -246,9 +254,13 @@ typedef struct tvo_vo_result {
     int32_t map_landmarks;  /* landmarks in the map after this frame */
     int32_t map_losses;     /* map losses since init (TVO_MAP_LOST frames) */
     int32_t ba_iterations;  /* bundle adjustment iterations in this frame (0: none ran) */
-    int32_t ba_flags;       /* its TVO_BA_FLAG_* (ba.h) */
+    int32_t ba_flags;       /* its TVO_BA_FLAG_* (ba.h), and TVO_VO_BA_TURN_REFUSED */
     int64_t stage_ns[TVO_STAGE_COUNT];
 } tvo_vo_result;
+
+/* tvo_vo_result.ba_flags: the bundle adjustment's result was not taken, since it turned the newest
+ * keyframe by more than cfg.map_ba_max_turn_deg (a bit beside the TVO_BA_FLAG_* of ba.h). */
+#define TVO_VO_BA_TURN_REFUSED 256
 
 /* Largest map window (keyframes). */
 #define TVO_VO_MAX_WINDOW 16
