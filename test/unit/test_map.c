@@ -31,19 +31,31 @@ typedef struct fixture {
     uint8_t img[W * H];
 } fixture;
 
-static fixture *open_vo(int map)
+/* A fixture with the default configuration (map on or off); the VO is not made yet, so that a test can
+ * change f->cfg before start_vo(). */
+static fixture *new_fixture(int map)
 {
     fixture *f = calloc(1, sizeof(fixture));
     tvo_camera cam = test_camera();
-    size_t need;
     assert_non_null(f);
     tvo_vo_config_default(&f->cfg, &cam);
     f->cfg.map = map;
-    need = tvo_vo_required_size(&f->cfg);
+    return f;
+}
+
+static void start_vo(fixture *f)
+{
+    const size_t need = tvo_vo_required_size(&f->cfg);
     assert_true(need > 0);
     f->mem = malloc(need);
     assert_non_null(f->mem);
     assert_int_equal(tvo_vo_init(&f->vo, &f->cfg, f->mem, need), TVO_OK);
+}
+
+static fixture *open_vo(int map)
+{
+    fixture *f = new_fixture(map);
+    start_vo(f);
     return f;
 }
 
@@ -104,6 +116,29 @@ static double best_scale(const tvo_pose *gt, const tvo_pose *est, int a, int b)
     return den > 0.0 ? num / den : 0.0;
 }
 
+/* the length of the ground-truth path over frames [0, n) */
+static double path_length(const tvo_pose *gt, int n)
+{
+    double path = 0.0;
+    for (int k = 1; k < n; ++k) {
+        const tvo_pose d = tvo_pose_relative(&gt[k - 1], &gt[k]);
+        path += sqrt(d.t[0] * d.t[0] + d.t[1] * d.t[1] + d.t[2] * d.t[2]);
+    }
+    return path;
+}
+
+/* the RMS position error over frames [a, b) of est scaled by s against gt */
+static double scaled_ate(const tvo_pose *gt, const tvo_pose *est, int a, int b, double s)
+{
+    double err2 = 0.0;
+    for (int k = a; k < b; ++k)
+        for (int c = 0; c < 3; ++c) {
+            const double e = gt[k].t[c] - s * est[k].t[c];
+            err2 += e * e;
+        }
+    return sqrt(err2 / (b - a));
+}
+
 #define LONG_RUN 160
 
 /* One scale for the whole run: the position error after one scale factor stays within 2 % of the path,
@@ -115,7 +150,7 @@ static void test_map_consistent_scale(void **state)
     fixture *f = open_vo(1);
     static tvo_pose gt[LONG_RUN], est[LONG_RUN];
     int tracking = 0, keyframes = 0, init_frame = -1, losses = 0;
-    double path = 0.0, err2 = 0.0, max_rot = 0.0, s, s1, s3;
+    double path, err2, max_rot = 0.0, s, s1, s3;
     (void)state;
     for (int k = 0; k < LONG_RUN; ++k) {
         tvo_vo_result res;
@@ -128,10 +163,6 @@ static void test_map_consistent_scale(void **state)
         losses = res.map_losses;
         if (res.map_state == TVO_MAP_INITIALISED && init_frame < 0)
             init_frame = k;
-        if (k > 0) {
-            tvo_pose d = tvo_pose_relative(&gt[k - 1], &gt[k]);
-            path += sqrt(d.t[0] * d.t[0] + d.t[1] * d.t[1] + d.t[2] * d.t[2]);
-        }
         if (res.map_state == TVO_MAP_TRACKING) {
             assert_true(res.map_points >= f->cfg.map_min_points);
             assert_true(res.map_landmarks >= res.map_points);
@@ -144,17 +175,12 @@ static void test_map_consistent_scale(void **state)
     s = best_scale(gt, est, init_frame, LONG_RUN);
     s1 = best_scale(gt, est, init_frame, LONG_RUN / 3);
     s3 = best_scale(gt, est, 2 * LONG_RUN / 3, LONG_RUN);
+    path = path_length(gt, LONG_RUN);
+    err2 = scaled_ate(gt, est, init_frame, LONG_RUN, s);
     for (int k = init_frame; k < LONG_RUN; ++k) {
-        for (int c = 0; c < 3; ++c) {
-            const double e = gt[k].t[c] - s * est[k].t[c];
-            err2 += e * e;
-        }
-        {
-            const double r = rot_err_deg(&est[k], &gt[k]);
-            max_rot = r > max_rot ? r : max_rot;
-        }
+        const double r = rot_err_deg(&est[k], &gt[k]);
+        max_rot = r > max_rot ? r : max_rot;
     }
-    err2 = sqrt(err2 / (LONG_RUN - init_frame));
     fprintf(stderr,
             "map walk: init at frame %d, %d keyframes, path %.2f m, ATE %.4f m (%.2f %%), scale %.4f "
             "first third %.4f last third %.4f, max rotation error %.3f deg\n",
@@ -172,22 +198,15 @@ static void test_map_consistent_scale(void **state)
 static void test_map_ba_turn_check(void **state)
 {
     for (int pass = 0; pass < 2; ++pass) {
-        fixture *f = calloc(1, sizeof(fixture));
-        tvo_camera cam = test_camera();
+        fixture *f = new_fixture(1);
         static tvo_pose gt[LONG_RUN], est[LONG_RUN];
         int refused = 0, adjusted = 0, tracking = 0, init_frame = -1;
-        size_t need;
-        double err2 = 0.0, path = 0.0, s;
+        double err2, path;
         (void)state;
-        assert_non_null(f);
-        tvo_vo_config_default(&f->cfg, &cam);
         assert_true(f->cfg.map_ba_max_turn_deg == 0.5);
         if (pass == 1)
             f->cfg.map_ba_max_turn_deg = 1e-9;
-        need = tvo_vo_required_size(&f->cfg);
-        f->mem = malloc(need);
-        assert_non_null(f->mem);
-        assert_int_equal(tvo_vo_init(&f->vo, &f->cfg, f->mem, need), TVO_OK);
+        start_vo(f);
         for (int k = 0; k < LONG_RUN; ++k) {
             tvo_vo_result res;
             gt[k] = walk(k);
@@ -199,21 +218,12 @@ static void test_map_ba_turn_check(void **state)
             tracking += res.map_state == TVO_MAP_TRACKING;
             if (res.map_state == TVO_MAP_INITIALISED && init_frame < 0)
                 init_frame = k;
-            if (k > 0) {
-                tvo_pose d = tvo_pose_relative(&gt[k - 1], &gt[k]);
-                path += sqrt(d.t[0] * d.t[0] + d.t[1] * d.t[1] + d.t[2] * d.t[2]);
-            }
         }
-        s = best_scale(gt, est, init_frame, LONG_RUN);
-        for (int k = init_frame; k < LONG_RUN; ++k)
-            for (int c = 0; c < 3; ++c) {
-                const double e = gt[k].t[c] - s * est[k].t[c];
-                err2 += e * e;
-            }
-        err2 = sqrt(err2 / (LONG_RUN - init_frame));
+        assert_true(init_frame > 0 && init_frame < 30);
+        path = path_length(gt, LONG_RUN);
+        err2 = scaled_ate(gt, est, init_frame, LONG_RUN, best_scale(gt, est, init_frame, LONG_RUN));
         fprintf(stderr, "map walk, turn bound %g deg: %d of %d adjustments refused, ATE %.4f m (%.2f %%)\n",
                 f->cfg.map_ba_max_turn_deg, refused, adjusted, err2, 100.0 * err2 / path);
-        assert_true(init_frame > 0 && init_frame < 30);
         assert_int_equal(tracking, LONG_RUN - 1 - init_frame);
         assert_true(adjusted >= 3);
         if (pass == 0)
@@ -221,8 +231,7 @@ static void test_map_ba_turn_check(void **state)
         else
             assert_true(refused >= adjusted - 1); /* all but one that left the newest keyframe as it was */
         assert_true(err2 < 0.02 * path);
-        free(f->mem);
-        free(f);
+        close_vo(f);
     }
 }
 

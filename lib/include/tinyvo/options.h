@@ -16,7 +16,7 @@
 
 /* 1: the affine track refinement (tvo_vo_config.affine_win_size) is built in; 0: it is left out (about
  * 3.9 KB less code on a Cortex-M7), and tvo_vo_init() refuses a configuration that asks for it with
- * TVO_ERR_INVALID_ARG. CMake: -DTVO_WITH_AFFINE=OFF. */
+ * TVO_ERR_UNSUPPORTED. CMake: -DTVO_WITH_AFFINE=OFF. */
 #ifndef TVO_WITH_AFFINE
 #define TVO_WITH_AFFINE 1
 #endif
