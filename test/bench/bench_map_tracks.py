@@ -36,19 +36,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(ROOT, "tools"))
-from bench_track_drift import Render  # noqa: E402
+from bench_track_drift import Render, normalised, read_tracks  # noqa: E402
 from tinyvo_tools import eval as tvo_eval  # noqa: E402
-from tinyvo_tools import synth, trajio  # noqa: E402
-
-
-def read_tracks(csv):
-    with open(csv, encoding="utf-8") as f:
-        cells = [line.split(",") for line in f.read().splitlines()[1:] if line]
-    t = np.array([int(c[0]) for c in cells], dtype=np.int64)
-    ids = np.array([int(c[1]) for c in cells])
-    xy = np.array([[float(c[2]), float(c[3])] for c in cells]).reshape(-1, 2)
-    age = np.array([int(c[4]) for c in cells])
-    return t, ids, xy, age
+from tinyvo_tools import trajio  # noqa: E402
 
 
 def true_positions(render, t, ids, xy, age):
@@ -63,8 +53,7 @@ def true_positions(render, t, ids, xy, age):
         for k, i in enumerate(sel):
             x, y = np.rint(xy[i]).astype(int)
             origin[ids[i]] = T[:3, 3] + rng[y, x] * (T[:3, :3] @ rays[k])
-    real = render.ray(xy)
-    real = real[:, :2] / real[:, 2:3]
+    real = normalised(render.cam, xy)
     true = np.full_like(real, np.nan)
     for i in range(len(t)):
         X = origin.get(ids[i])
@@ -110,15 +99,6 @@ def write_tum(path, t_s, poses):
                  np.copysign(np.sqrt(max(0.0, 1 - R[0, 0] - R[1, 1] + R[2, 2])) / 2, R[1, 0] - R[0, 1]),
                  np.sqrt(max(0.0, 1 + np.trace(R))) / 2]
             f.write(f"{ts:.9f} " + " ".join(f"{v:.10f}" for v in list(T[:3, 3]) + q) + "\n")
-
-
-def normalised(cam, xy):
-    """Undistorted normalised coordinates of pixel positions (N,2) of an ASL camera."""
-    fu, fv, cu, cv = cam.intrinsics
-    x, y = (xy[:, 0] - cu) / fu, (xy[:, 1] - cv) / fv
-    if cam.distortion_model.startswith("radial") and any(cam.distortion):
-        x, y = synth.undistort_radtan(x, y, cam.distortion)
-    return np.stack([x, y], axis=1)
 
 
 def run_map(a, cam, gt, tf, est):

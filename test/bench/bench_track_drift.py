@@ -39,6 +39,27 @@ HALF = 10  # LK's 21x21 window
 AGES = (1, 2, 3, 5, 8, 12, 20, 30, 50, 80)
 
 
+def normalised(cam, px):
+    """Undistorted normalised coordinates (N,2) of pixel positions px (N,2) of an ASL camera."""
+    fu, fv, cu, cv = cam.intrinsics
+    x, y = (px[:, 0] - cu) / fu, (px[:, 1] - cv) / fv
+    if cam.distortion_model.startswith("radial") and any(cam.distortion):
+        x, y = synth.undistort_radtan(x, y, cam.distortion)
+    return np.stack([x, y], axis=1)
+
+
+def read_tracks(path):
+    """A `tvo_replay --tracks` CSV (t_ns,id,x,y,age,flags) as arrays: t_ns (int64: a float loses its
+    nanoseconds), id, pixel positions (N,2), age."""
+    with open(path, encoding="utf-8") as f:
+        cells = [line.split(",") for line in f.read().splitlines()[1:] if line]
+    t = np.array([int(c[0]) for c in cells], dtype=np.int64)
+    ids = np.array([int(c[1]) for c in cells])
+    xy = np.array([[float(c[2]), float(c[3])] for c in cells]).reshape(-1, 2)
+    age = np.array([int(c[4]) for c in cells])
+    return t, ids, xy, age
+
+
 class Render:
     """The render's camera, camera poses (by frame and timestamp) and scene."""
 
@@ -64,11 +85,8 @@ class Render:
 
     def ray(self, px):
         """Unit camera rays (N,3) of distorted pixel positions (N,2)."""
-        fu, fv, cu, cv = self.cam.intrinsics
-        x, y = (px[:, 0] - cu) / fu, (px[:, 1] - cv) / fv
-        if self.cam.distortion_model.startswith("radial") and any(self.cam.distortion):
-            x, y = synth.undistort_radtan(x, y, self.cam.distortion)
-        r = np.stack([x, y, np.ones_like(x)], axis=1)
+        xy = normalised(self.cam, px)
+        r = np.stack([xy[:, 0], xy[:, 1], np.ones(len(xy))], axis=1)
         return r / np.linalg.norm(r, axis=1, keepdims=True)
 
     def surface_points(self, f, px):
@@ -95,15 +113,12 @@ class Render:
 
 
 def track_errors(render, tracks_csv, max_frames):
-    with open(tracks_csv, encoding="utf-8") as f:
-        cells = [line.split(",") for line in f.read().splitlines()[1:] if line]
-    # t_ns,id,x,y,age,flags: the timestamp as an integer (a float loses its nanoseconds), the rest as floats
-    frames = np.array([render.frame_of[int(c[0])] for c in cells])
-    rows = np.array([[0.0] + [float(v) for v in c[1:]] for c in cells]).reshape(-1, 6)
+    t, ids, xy, ages = read_tracks(tracks_csv)
+    frames = np.array([render.frame_of[int(v)] for v in t])
     births = defaultdict(list)
-    for r, f in zip(rows, frames):
-        if r[4] == 0 and f < max_frames:
-            births[f].append((int(r[1]), r[2], r[3]))
+    for tid, p, age, f in zip(ids, xy, ages, frames):
+        if age == 0 and f < max_frames:
+            births[f].append((int(tid), p[0], p[1]))
     origin = {}
     for f, lst in births.items():
         px = np.array([[x, y] for _, x, y in lst])
@@ -112,13 +127,13 @@ def track_errors(render, tracks_csv, max_frames):
             if np.all(np.isfinite(Xi)):
                 origin[tid] = (Xi, np.array([x, y]))
     err, along = defaultdict(list), defaultdict(list)
-    for r, f in zip(rows, frames):
-        tid, age = int(r[1]), int(r[4])
+    for tid, p, age, f in zip(ids, xy, ages, frames):
+        tid, age = int(tid), int(age)
         if age == 0 or tid not in origin or f >= max_frames:
             continue
         X, p0 = origin[tid]
         u = render.project(f, X[None])[0]
-        e = r[2:4] - u
+        e = p - u
         err[age].append(float(np.hypot(*e)))
         d = u - p0
         if np.hypot(*d) > 2.0:
