@@ -15,8 +15,8 @@
  * order of TRACKS' frames. TRACKS.txt: lines "t_ns id age x y", x y normalised and undistorted, grouped
  * by frame in time order; age 0 marks a track detected in that frame (it joins after the frame's map
  * step, as in tvo_vo_process), a track missing from a frame has ended; a line with id -1 only marks a
- * frame (a frame with no track at all). --set: map_window, map_ba_fixed, map_kf_baseline,
- * map_tri_parallax_deg, map_ba_iterations, map_min_points, max_tracks (the VO's defaults otherwise).
+ * frame (a frame with no track at all). --set: any tvo_vo_config field, as tvo_replay's --set takes it
+ * (examples/replay/settings.c; the VO's defaults otherwise; the map reads its map_* fields and max_tracks).
  * --camera: the pinhole camera the map's pixel thresholds refer to (default: 752x480, 458.654 / 457.296 px,
  * the EuRoC cam0's). Prints frames, frames posed, keyframes, losses.
  * Exit 0, 1 on bad input. */
@@ -25,6 +25,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "settings.h"
 #include "tinyvo/arena.h"
 #include "tinyvo/se3.h"
 #include "tvo_map.h"
@@ -121,28 +122,6 @@ static row *read_rows(const char *path, int *n)
     return r;
 }
 
-static int set_option(tvo_vo_config *cfg, const char *kv)
-{
-    const char *eq = strchr(kv, '=');
-    const double v = eq ? atof(eq + 1) : 0.0;
-    if (eq == NULL)
-        return 0;
-#define OPT(name, expr)                                                              \
-    if ((size_t)(eq - kv) == strlen(name) && strncmp(kv, name, strlen(name)) == 0) { \
-        expr;                                                                        \
-        return 1;                                                                    \
-    }
-    OPT("map_window", cfg->map_window = (int32_t)v)
-    OPT("map_ba_fixed", cfg->map_ba_fixed = (int32_t)v)
-    OPT("map_kf_baseline", cfg->map_kf_baseline = v)
-    OPT("map_tri_parallax_deg", cfg->map_tri_parallax_deg = v)
-    OPT("map_ba_iterations", cfg->map_ba_iterations = (int32_t)v)
-    OPT("map_min_points", cfg->map_min_points = (int32_t)v)
-    OPT("max_tracks", cfg->max_tracks = (int32_t)v)
-#undef OPT
-    return 0;
-}
-
 /* The tracks of frame rows [a, b) that continue: kept in slot order with their map state; the others
  * end. Then the frame's map step; then the tracks born in the frame join. */
 static void carry(tracks *tk, const row *r, int a, int b)
@@ -191,7 +170,9 @@ int main(int argc, char **argv)
     void *mem, *scratch;
     FILE *o;
     if (argc < 4) {
-        fprintf(stderr, "usage: bench_map_tracks GT.tum TRACKS.txt OUT.tum [--set NAME=VALUE]...\n");
+        fprintf(stderr,
+                "usage: bench_map_tracks GT.tum TRACKS.txt OUT.tum [--camera W H FX FY CX CY] [--set "
+                "NAME=VALUE]...\n");
         return 1;
     }
     for (int a = 4; a + 6 < argc; ++a)
@@ -210,11 +191,17 @@ int main(int argc, char **argv)
             a += 6;
             continue;
         }
-        if (strcmp(argv[a], "--set") != 0 || a + 1 >= argc || !set_option(&cfg, argv[a + 1])) {
+        if (strcmp(argv[a], "--set") != 0 || a + 1 >= argc ||
+            tvo_replay_setting_apply(&cfg, argv[a + 1]) != 0) {
             fprintf(stderr, "bench_map_tracks: bad option %s\n", argv[a]);
             return 1;
         }
         ++a;
+    }
+    if (tvo_vo_required_size(&cfg) == 0) {
+        fprintf(stderr,
+                "bench_map_tracks: the --set values make a configuration the VO refuses (vo.h ranges)\n");
+        return 1;
     }
     if (cfg.map_max_landmarks == 0)
         cfg.map_max_landmarks = 2 * cfg.max_tracks;
