@@ -66,15 +66,11 @@ struct tvo_vo {
     tvo_pose T_c_w;    /* the last frame's pose in the VO's world (world -> camera) */
     int32_t cover_ref; /* cells of the coverage grid the tracks covered after the last detection */
     /* affine refinement (cfg.affine_win_size > 0, else all NULL): each track's template, its model
-       and warp, valid where hast[i]; the track's position for the map (apt: pixels, xa: normalised),
-       which moves with LK's step and is then aligned to the template (LK's own positions in pts / next
-       are left as they are) */
+       and warp, valid where hast[i] */
     uint8_t *tpl;      /* [max_tracks x tvo_aff_template_bytes(affine_win_size)] */
     tvo_aff_warp *aw;  /* [max_tracks] */
     tvo_aff_model *am; /* [max_tracks] */
     uint8_t *hast;     /* [max_tracks] */
-    tvo_point2f *apt;  /* [max_tracks] */
-    tvo_point2d *xa;   /* [max_tracks] */
     void *scratch;
     size_t scratch_size;
 };
@@ -277,8 +273,6 @@ static size_t layout_size(const tvo_vo_config *cfg)
         s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_aff_warp))));
         s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_aff_model))));
         s = tvo_size_add(s, tvo_arena_round(n));
-        s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2f)))); /* apt */
-        s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d)))); /* xa */
     }
 #endif
     s = tvo_size_add(s, tvo_arena_round(scratch_need(cfg)));
@@ -376,10 +370,7 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
         vo->aw = (tvo_aff_warp *)tvo_arena_alloc(&a, n * sizeof(tvo_aff_warp));
         vo->am = (tvo_aff_model *)tvo_arena_alloc(&a, n * sizeof(tvo_aff_model));
         vo->hast = (uint8_t *)tvo_arena_alloc(&a, n);
-        vo->apt = (tvo_point2f *)tvo_arena_alloc(&a, n * sizeof(tvo_point2f));
-        vo->xa = (tvo_point2d *)tvo_arena_alloc(&a, n * sizeof(tvo_point2d));
-        if (vo->tpl == NULL || vo->aw == NULL || vo->am == NULL || vo->hast == NULL || vo->apt == NULL ||
-            vo->xa == NULL)
+        if (vo->tpl == NULL || vo->aw == NULL || vo->am == NULL || vo->hast == NULL)
             return TVO_ERR_NO_MEMORY;
         memset(vo->hast, 0, n);
     }
@@ -461,10 +452,8 @@ static int32_t detect_append(tvo_vo *vo, const tvo_pyramid *pyr, int32_t thresho
         vo->lm[vo->n + i] = -1;
         vo->tri_fr[vo->n + i] = -1;
         vo->minl[vo->n + i] = 0;
-        if (vo->hast != NULL) {
+        if (vo->hast != NULL)
             vo->hast[vo->n + i] = 0; /* its template is taken at the end of the frame */
-            vo->apt[vo->n + i] = vo->pts[vo->n + i];
-        }
     }
     vo->n += got;
     return got;
@@ -792,8 +781,6 @@ static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
                 vo->am[m] = vo->am[i];
             }
             vo->hast[m] = vo->hast[i];
-            vo->apt[m] = vo->apt[i];
-            vo->xa[m] = vo->xa[i];
         }
 #endif
         ++m;
@@ -962,7 +949,7 @@ static tvo_map_tracks map_tracks(tvo_vo *vo)
 {
     tvo_map_tracks tr;
     tr.n = vo->n;
-    tr.x = vo->hast != NULL ? vo->xa : vo->x2; /* the affine positions, when refined */
+    tr.x = vo->x2;
     tr.x_ok = vo->ok2;
     tr.lm = vo->lm;
     tr.tri_fr = vo->tri_fr;
@@ -1027,8 +1014,6 @@ static void map_new_tracks(tvo_vo *vo, int32_t first)
     if (tvo_camera_undistort(&vo->cfg.camera, vo->pts + first, vo->x2 + first, vo->ok2 + first,
                              vo->n - first) != TVO_OK)
         memset(vo->ok2 + first, 0, (size_t)(vo->n - first));
-    if (vo->hast != NULL) /* a new track's position for the map is its corner */
-        memcpy(vo->xa + first, vo->x2 + first, (size_t)(vo->n - first) * sizeof(tvo_point2d));
     tr = map_tracks(vo);
     tvo_map_new_tracks(&vo->map, &tr, first);
 }
@@ -1046,11 +1031,9 @@ typedef struct frame_ctx {
     int has_R2v;
 } frame_ctx;
 
-/* 1b. The affine refinement (cfg.affine_win_size > 0): each tracked point's position for the map (apt)
- * moves by LK's step, then to where its template aligns under an affine warp, starting from there with
- * the last frame's warp. A point whose refinement fails keeps the moved position and takes a new template
- * in finish_frame; one that leaves the image starts again from LK's position. LK's positions, and with
- * them the two-view step, the tracks' lives and the re-detection, are not changed. */
+/* 1b. The affine refinement (cfg.affine_win_size > 0): each tracked point that has a template moves to
+ * where its template aligns under an affine warp, starting from LK's position with the last frame's
+ * warp; a point whose refinement fails keeps LK's position and takes a new template in finish_frame. */
 #if TVO_WITH_AFFINE
 static void affine_refine(tvo_vo *vo, const frame_ctx *fc)
 {
@@ -1061,50 +1044,27 @@ static void affine_refine(tvo_vo *vo, const frame_ctx *fc)
     const size_t tb = tvo_aff_template_bytes(side);
     for (int32_t i = 0; i < vo->n; ++i) {
         tvo_aff_warp aw;
-        float ox, oy, px, py, qx, qy, ncc = 0.0f;
-        if (!vo->st[i])
-            continue;
-        qx = vo->apt[i].x + (vo->next[i].x - vo->pts[i].x);
-        qy = vo->apt[i].y + (vo->next[i].y - vo->pts[i].y);
-        if (!(qx >= 0.0f && qy >= 0.0f && qx <= (float)(l0.width - 1) && qy <= (float)(l0.height - 1))) {
-            vo->apt[i] = vo->next[i];
-            vo->hast[i] = 0;
-            continue;
-        }
-        vo->apt[i].x = qx;
-        vo->apt[i].y = qy;
-        if (!vo->hast[i])
+        float ox, oy, px, py, ncc = 0.0f;
+        if (!vo->st[i] || !vo->hast[i])
             continue;
         aw = vo->aw[i];
         tvo_aff_point(&aw, &ox, &oy);
-        aw.t[0] += qx - ox;
-        aw.t[1] += qy - oy;
+        aw.t[0] += vo->next[i].x - ox;
+        aw.t[1] += vo->next[i].y - oy;
         vo->hast[i] = 0;
         if (!tvo_aff_refine(vo->tpl + (size_t)i * tb, &vo->am[i], side, &l0, &aw, TVO_VO_AFF_ITERS,
                             TVO_VO_AFF_EPS, vo->scratch, vo->scratch_size, &ncc) ||
             !(ncc >= TVO_VO_AFF_MIN_NCC))
             continue;
         tvo_aff_point(&aw, &px, &py);
-        if (!((px - qx) * (px - qx) + (py - qy) * (py - qy) < TVO_VO_AFF_MAX_MOVE * TVO_VO_AFF_MAX_MOVE) ||
-            !(px >= 0.0f && py >= 0.0f && px <= (float)(l0.width - 1) && py <= (float)(l0.height - 1)))
+        if (!((px - vo->next[i].x) * (px - vo->next[i].x) + (py - vo->next[i].y) * (py - vo->next[i].y) <
+              TVO_VO_AFF_MAX_MOVE * TVO_VO_AFF_MAX_MOVE))
             continue;
-        vo->apt[i].x = px;
-        vo->apt[i].y = py;
+        vo->next[i].x = px;
+        vo->next[i].y = py;
         vo->aw[i] = aw;
         vo->hast[i] = 1;
     }
-}
-
-/* The map's normalised positions (xa) of the m tracks; where apt cannot be undistorted, LK's (x2). */
-static void affine_undistort(tvo_vo *vo, int32_t m)
-{
-    if (vo->hast == NULL || m <= 0)
-        return;
-    if (tvo_camera_undistort(&vo->cfg.camera, vo->apt, vo->xa, vo->mask, m) != TVO_OK)
-        memset(vo->mask, 0, (size_t)m);
-    for (int32_t i = 0; i < m; ++i)
-        if (!vo->mask[i])
-            vo->xa[i] = vo->x2[i];
 }
 
 /* The end of a frame with the affine refinement: every track without a template (new, or whose
@@ -1118,7 +1078,7 @@ static void affine_take(tvo_vo *vo, const frame_ctx *fc)
     const size_t tb = tvo_aff_template_bytes(side);
     for (int32_t i = 0; i < vo->n; ++i)
         if (!vo->hast[i])
-            vo->hast[i] = (uint8_t)tvo_aff_take(&l0, vo->apt[i].x, vo->apt[i].y, side,
+            vo->hast[i] = (uint8_t)tvo_aff_take(&l0, vo->pts[i].x, vo->pts[i].y, side,
                                                 vo->tpl + (size_t)i * tb, &vo->am[i], &vo->aw[i]);
 }
 #else
@@ -1133,12 +1093,6 @@ static void affine_take(tvo_vo *vo, const frame_ctx *fc)
 {
     (void)vo;
     (void)fc;
-}
-
-static void affine_undistort(tvo_vo *vo, int32_t m)
-{
-    (void)vo;
-    (void)m;
 }
 #endif
 
@@ -1177,7 +1131,6 @@ static void stage_undistort(tvo_vo *vo, frame_ctx *fc)
     if (!fc->predicted) /* else x1 / ok1 are the prediction's, compacted with the tracks */
         tvo_camera_undistort(&vo->cfg.camera, vo->pts, vo->x1, vo->ok1, m);
     tvo_camera_undistort(&vo->cfg.camera, vo->next, vo->x2, vo->ok2, m);
-    affine_undistort(vo, m);
     for (int32_t i = 0; i < m; ++i)
         vo->ok1[i] = (uint8_t)(vo->ok1[i] && vo->ok2[i]);
     fc->m = compact(vo, m, vo->ok1);
@@ -1468,9 +1421,8 @@ tvo_status tvo_vo_tracks(const tvo_vo *vo, tvo_vo_track *out, int32_t capacity, 
         return TVO_ERR_ARG;
     *count = vo->n;
     for (int32_t i = 0; i < vo->n && i < capacity; ++i) {
-        const tvo_point2f p = vo->hast != NULL ? vo->apt[i] : vo->pts[i]; /* the map's position */
-        out[i].x = p.x;
-        out[i].y = p.y;
+        out[i].x = vo->pts[i].x;
+        out[i].y = vo->pts[i].y;
         out[i].id = vo->id[i];
         out[i].age = vo->age[i];
         out[i].landmark = (uint8_t)(vo->cfg.map && vo->lm[i] >= 0);

@@ -165,7 +165,7 @@ typedef struct tvo_vo_config {
                                    correlation below 0.8, more than 2 px from LK's position, the window
                                    out of the image) keeps LK's position and takes a new template there.
                                    Odd, [3, 31], or 0: off; default 0 (21 is the tested value; its
-                                   accuracy and cost: docs/budget.md). Memory: (w + 2)^2 + 337 bytes a
+                                   accuracy and cost: docs/budget.md). Memory: (w + 2)^2 + 313 bytes a
                                    track (w = affine_win_size). A build with TVO_WITH_AFFINE 0
                                    (options.h) leaves the refinement out: tvo_vo_required_size() is 0
                                    and tvo_vo_init() returns TVO_ERR_UNSUPPORTED for any value but 0 */
