@@ -1,0 +1,102 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
+"""Benchmark: the VO on a real sequence whose exposure changes.
+
+Real cameras with automatic exposure change the gain of whole frames: slowly while the exposure control
+hunts, in steps when the scene's light changes, and on every other frame when a light flickers. Neither
+the shared KITTI frames (fixed exposure) nor the renders have that. This program writes copies of an
+EuRoC/ASL sequence with each frame's grey levels multiplied by a gain (rounded, clipped to 0..255):
+
+  - none:    the frames as they are;
+  - sine25:  1 + 0.25 sin(2 pi k / 30) for frame k (exposure hunting, +-25 % over 30 frames);
+  - steps:   0.6 on frames 50-99, 1.4 from frame 130 on (two changes of light, each within one frame);
+  - flicker: 0.9 and 1.1 on alternate frames (+-10 %).
+
+It replays each copy with `tvo_replay --scale none` and the given replay arguments, and prints the
+Sim(3)-aligned ATE (m), the per-frame rotation RPE (deg), the frames without a pose and the map's losses.
+
+Usage: .venv/bin/python test/bench/bench_exposure.py --seq SEQ --replay BUILD/examples/replay/tvo_replay
+           [--work DIR] [-- REPLAY ARGS]
+The copies go to --work (default: a temporary folder, removed at the end).
+"""
+import argparse
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+import cv2
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+from tinyvo_tools import eval as tvo_eval  # noqa: E402
+
+GAINS = {
+    "none": lambda k: 1.0,
+    "sine25": lambda k: 1.0 + 0.25 * math.sin(2.0 * math.pi * k / 30.0),
+    "steps": lambda k: 0.6 if 50 <= k < 100 else (1.4 if k >= 130 else 1.0),
+    "flicker": lambda k: 1.1 if k % 2 else 0.9,
+}
+
+
+def write_copy(seq: str, dst: str, gain) -> None:
+    """seq's mav0/cam0 frames times gain(k), with its ground truth and calibration beside them."""
+    cam = os.path.join(seq, "mav0", "cam0")
+    out = os.path.join(dst, "mav0", "cam0")
+    os.makedirs(os.path.join(out, "data"))
+    for f in ("data.csv", "sensor.yaml"):
+        shutil.copy(os.path.join(cam, f), os.path.join(out, f))
+    gt = os.path.join(seq, "mav0", "state_groundtruth_estimate0")
+    if os.path.isdir(gt):
+        shutil.copytree(gt, os.path.join(dst, "mav0", "state_groundtruth_estimate0"))
+    for k, name in enumerate(sorted(os.listdir(os.path.join(cam, "data")))):
+        img = cv2.imread(os.path.join(cam, "data", name), cv2.IMREAD_GRAYSCALE)
+        if img is None:
+            raise SystemExit(f"bench_exposure: cannot read {name}")
+        g = np.clip(img.astype(np.float32) * gain(k) + 0.5, 0, 255).astype(np.uint8)
+        cv2.imwrite(os.path.join(out, "data", name), g)
+
+
+def run(replay: str, seq: str, args: list, tmp: str) -> dict:
+    traj, stats = os.path.join(tmp, "traj.txt"), os.path.join(tmp, "stats.json")
+    subprocess.run([replay, "--euroc", seq, "--scale", "none", "--out", traj, "--stats", stats, "--quiet"] + args,
+                   check=True)
+    ev = tvo_eval.evaluate_files(traj, seq)
+    with open(stats, encoding="utf-8") as f:
+        st = json.load(f)
+    std = ev.result["standard"]
+    return {"ate": std["ate_m"]["rmse"], "rot": std["rpe_frame"]["rotation_deg"]["rmse"],
+            "lost": st["frames"]["lost"], "losses": st.get("map", {}).get("losses", 0)}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--seq", required=True)
+    ap.add_argument("--replay", required=True)
+    ap.add_argument("--work")
+    ap.add_argument("rest", nargs=argparse.REMAINDER)
+    a = ap.parse_args()
+    args = a.rest[1:] if a.rest[:1] == ["--"] else a.rest
+    work = a.work or tempfile.mkdtemp(prefix="tvo_exposure_")
+    try:
+        print(f"{'gain':<8} {'ATE m':>8} {'rot RPE deg':>12} {'lost':>5} {'map losses':>11}")
+        for name, gain in GAINS.items():
+            dst = os.path.join(work, name)
+            if os.path.exists(dst):
+                shutil.rmtree(dst)
+            write_copy(a.seq, dst, gain)
+            r = run(a.replay, dst, args, work)
+            print(f"{name:<8} {r['ate']:>8.4f} {r['rot']:>12.4f} {r['lost']:>5d} {r['losses']:>11d}")
+    finally:
+        if not a.work:
+            shutil.rmtree(work, ignore_errors=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
