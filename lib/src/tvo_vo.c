@@ -122,6 +122,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->min_tracks = 200;
     cfg->redetect_coverage = 0.75;
     cfg->min_pose_tracks = 30;
+    cfg->gain_retry = 1;
     cfg->fast_min_threshold = 7; /* as ORB-SLAM's second FAST pass (20 then 7) */
     cfg->pose_threshold_px = 1.0;
     cfg->min_scale_points = 20;
@@ -163,6 +164,8 @@ static int config_valid(const tvo_vo_config *cfg)
     if (!(cfg->redetect_coverage >= 0.0 && cfg->redetect_coverage <= 1.0))
         return 0;
     if (cfg->min_tracks < 0 || cfg->min_tracks > cfg->max_tracks)
+        return 0;
+    if ((uint32_t)cfg->gain_retry > 1u)
         return 0;
     if (cfg->min_pose_tracks < 8 || cfg->min_pose_tracks > cfg->max_tracks)
         return 0;
@@ -1096,25 +1099,103 @@ static void affine_take(tvo_vo *vo, const frame_ctx *fc)
 }
 #endif
 
-/* 1. LK tracking of the tracks into this frame; the tracks that leave the image are dropped. */
-static void stage_track(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
+/* LK from the previous pyramid into this one (vo->st, vo->next); the tracks that leave the image are
+ * marked lost. Returns the tracks kept. */
+static int32_t lk_pass(tvo_vo *vo, const frame_ctx *fc, const tvo_lk_config *lkc, const uint8_t *pred)
 {
     const int32_t w = vo->cfg.camera.width, h = vo->cfg.camera.height;
-    tvo_lk_config lkc = vo->cfg.lk;
-    tvo_status st;
-    /* ok2 holds nothing between frames: it carries the predicted flags to LK here */
-    fc->predicted = predict_tracks(vo, res->dt_ns, vo->ok2);
-    if (fc->predicted)
-        lkc.use_initial_flow = 1;
-    st = tvo_lk_track_pred(&lkc, fc->pp, fc->pc, vo->pts, vo->next, vo->ok2, vo->st, NULL, vo->n, vo->scratch,
-                           vo->scratch_size);
-    if (st != TVO_OK)
+    int32_t kept = 0;
+    if (tvo_lk_track_pred(lkc, fc->pp, fc->pc, vo->pts, vo->next, pred, vo->st, NULL, vo->n, vo->scratch,
+                          vo->scratch_size) != TVO_OK)
         memset(vo->st, 0, (size_t)vo->n);
     for (int32_t i = 0; i < vo->n; ++i) {
         const tvo_point2f q = vo->next[i];
         if (vo->st[i] && !(q.x >= 0.0f && q.y >= 0.0f && q.x <= (float)(w - 1) && q.y <= (float)(h - 1)))
             vo->st[i] = 0;
+        kept += vo->st[i];
     }
+    return kept;
+}
+
+/* The median grey level of an image (a 256-bin histogram; the first level at which half of the pixels
+ * are counted, which exists as the image has at least one pixel). */
+static int32_t median_grey(const tvo_image *im)
+{
+    uint32_t hist[256] = {0}, half, acc;
+    int32_t v = 0;
+    for (int32_t y = 0; y < im->height; ++y) {
+        const uint8_t *row = im->data + (size_t)y * (size_t)im->stride;
+        for (int32_t x = 0; x < im->width; ++x)
+            hist[row[x]]++;
+    }
+    half = ((uint32_t)im->width * (uint32_t)im->height + 1u) / 2u;
+    for (acc = hist[0]; acc < half; acc += hist[v])
+        ++v;
+    return v;
+}
+
+/* Scale every level of the previous pyramid by gain g (16.16), rounding, saturating at 255. It is not
+ * used after this frame's tracking. */
+static void scale_previous(const frame_ctx *fc, int32_t g)
+{
+    for (int32_t l = 0; l < fc->pp->levels; ++l) {
+        const tvo_image im = tvo_pyramid_level(fc->pp, l);
+        for (int32_t y = 0; y < im.height; ++y) {
+            uint8_t *row = (uint8_t *)im.data + (size_t)y * (size_t)im.stride;
+            for (int32_t x = 0; x < im.width; ++x) {
+                const int32_t v = (row[x] * g + 32768) >> 16;
+                row[x] = (uint8_t)(v > 255 ? 255 : v);
+            }
+        }
+    }
+}
+
+/* Exposure steps (cfg.gain_retry): the gain g this frame's coarsest level shows over the previous frame's
+ * (16.16 fixed point, the ratio of their median grey levels) is acted on when it is 10 % or more from 1
+ * (the two bounds below) and both medians are at least 8 (so g <= 255 / 8 and v * g fits in int32). */
+#define TVO_VO_GAIN_LOW 58982  /* 0.9 * 65536 */
+#define TVO_VO_GAIN_HIGH 72090 /* 1.1 * 65536 */
+
+/* LK kept `tracked` of the tracks, fewer than half: after an exposure step, track them again from their
+ * previous positions (no prediction) on the previous pyramid scaled by the gain, and keep whichever pass
+ * tracked more. Returns 1 when the second pass is kept. */
+static int32_t gain_retry(tvo_vo *vo, const frame_ctx *fc, int32_t tracked)
+{
+    const int32_t top = fc->pc->levels - 1;
+    const tvo_image a = tvo_pyramid_level(fc->pp, top), b = tvo_pyramid_level(fc->pc, top);
+    const int32_t mp = median_grey(&a), mc = median_grey(&b);
+    tvo_lk_config lkc = vo->cfg.lk;
+    int32_t g;
+    if (mp < 8 || mc < 8) /* too dark to measure a ratio */
+        return 0;
+    g = ((mc << 16) + mp / 2) / mp;
+    if (g > TVO_VO_GAIN_LOW && g < TVO_VO_GAIN_HIGH)
+        return 0;
+    /* the first pass waits in the keyframe rotation's buffers, free until the pose stage (bytes only:
+       kx1 holds more than n points, kmask n flags) */
+    memcpy(vo->kx1, vo->next, (size_t)vo->n * sizeof(tvo_point2f));
+    memcpy(vo->kmask, vo->st, (size_t)vo->n);
+    scale_previous(fc, g);
+    lkc.use_initial_flow = 0;
+    if (lk_pass(vo, fc, &lkc, NULL) > tracked)
+        return 1;
+    memcpy(vo->next, vo->kx1, (size_t)vo->n * sizeof(tvo_point2f));
+    memcpy(vo->st, vo->kmask, (size_t)vo->n);
+    return 0;
+}
+
+/* 1. LK tracking of the tracks into this frame; the tracks that leave the image are dropped. */
+static void stage_track(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
+{
+    tvo_lk_config lkc = vo->cfg.lk;
+    int32_t tracked;
+    /* ok2 holds nothing between frames: it carries the predicted flags to LK here */
+    fc->predicted = predict_tracks(vo, res->dt_ns, vo->ok2);
+    if (fc->predicted)
+        lkc.use_initial_flow = 1;
+    tracked = lk_pass(vo, fc, &lkc, vo->ok2);
+    if (vo->cfg.gain_retry && vo->n >= vo->cfg.min_pose_tracks && 2 * tracked < vo->n)
+        res->gain_retry = gain_retry(vo, fc, tracked);
     affine_refine(vo, fc);
     fc->m = compact(vo, vo->n, vo->st);
     for (int32_t i = 0; i < fc->m; ++i)

@@ -657,6 +657,79 @@ static void run_turn(double coverage, int *redetections, int *min_cells, int *la
     free(f.mem);
 }
 
+/* A walk with an exposure step: from frame 10 on every frame's grey levels are times `gain` (rounded,
+ * saturated). Counts the LOST frames and the frames re-tracked after the step; *step_tracked: the tracks
+ * LK kept into frame 10 of those into frame 9; *rot_err: the largest rotation error of the two-view
+ * steps from frame 8 on (deg). */
+static void run_exposure_step(int32_t retry, double gain, int *lost, int *retried, double *step_tracked,
+                              double *rot_err)
+{
+    int32_t before = 0;
+    fixture f;
+    tvo_camera cam = test_camera();
+    tvo_pose T_prev = tvo_pose_identity();
+    tvo_vo_config_default(&f.cfg, &cam);
+    assert_int_equal(f.cfg.gain_retry, 1);
+    f.cfg.gain_retry = retry;
+    open_vo(&f);
+    *lost = *retried = 0;
+    *rot_err = 0.0;
+    for (int k = 0; k < 20; ++k) {
+        const double dir[3] = {0.1, 0.05, 1.0};
+        tvo_vo_result res;
+        tvo_image img = tvo_image_make(W, H, W, f.img);
+        const tvo_pose T = motion(k, dir, 0.02, 0.3);
+        render(&T, f.img);
+        if (k >= 10)
+            for (int i = 0; i < W * H; ++i) {
+                const double v = floor(f.img[i] * gain + 0.5);
+                f.img[i] = (uint8_t)(v > 255.0 ? 255.0 : v);
+            }
+        assert_int_equal(tvo_vo_process(f.vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
+        assert_true(tvo_pose_is_finite(&res.T_w_c));
+        *lost += k > 0 && res.state == TVO_VO_LOST;
+        *retried += res.gain_retry;
+        if (k == 9)
+            before = res.tracks;
+        if (k == 10)
+            *step_tracked = (double)res.tracked / (double)before;
+        if (k >= 8 && (res.state == TVO_VO_OK || res.state == TVO_VO_ROTATION_ONLY)) {
+            const tvo_pose inv = tvo_pose_inverse(&T_prev), truth = tvo_pose_compose(&inv, &T);
+            const double e = rot_err_deg(&res.T_prev_cur, &truth);
+            *rot_err = e > *rot_err ? e : *rot_err;
+        }
+        T_prev = T;
+    }
+    free(f.mem);
+}
+
+/* An exposure step of 0.6 (a light switched off) makes LK lose most tracks without the gain retry; with
+ * it (the default) the frame is tracked again on the scaled previous pyramid and keeps nearly all. A
+ * step of 1.05 is below the retry's 10 %: nothing is re-tracked. */
+static void test_gain_retry(void **state)
+{
+    int lost_on, lost_off, retried_on, retried_off, lost_small, retried_small;
+    double rot_on, rot_off, rot_small, kept_on = 0.0, kept_off = 0.0, kept_small = 0.0;
+    (void)state;
+    run_exposure_step(1, 0.6, &lost_on, &retried_on, &kept_on, &rot_on);
+    run_exposure_step(0, 0.6, &lost_off, &retried_off, &kept_off, &rot_off);
+    run_exposure_step(1, 1.05, &lost_small, &retried_small, &kept_small, &rot_small);
+    fprintf(stderr,
+            "exposure step 0.6 at frame 10 of 20: %.0f %% of the tracks kept, %d re-tracked, %d LOST, max "
+            "rotation error %.3f deg with the gain retry; %.0f %%, %d, %d, %.3f deg without; step 1.05: "
+            "%.0f %%, %d re-tracked\n",
+            100.0 * kept_on, retried_on, lost_on, rot_on, 100.0 * kept_off, retried_off, lost_off, rot_off,
+            100.0 * kept_small, retried_small);
+    assert_int_equal(retried_off, 0);
+    assert_true(kept_off < 0.5);
+    assert_int_equal(retried_on, 1);
+    assert_true(kept_on > 0.9);
+    assert_int_equal(lost_on, 0);
+    assert_true(rot_on < 0.2);
+    assert_int_equal(retried_small, 0);
+    assert_true(kept_small > 0.9);
+}
+
 static void test_redetect_coverage(void **state)
 {
     int on_det, on_min, on_last, off_det, off_min, off_last;
@@ -977,6 +1050,7 @@ int main(void)
             cmocka_unit_test(test_keyframe_rotation),
             cmocka_unit_test(test_track_prediction),
             cmocka_unit_test(test_redetect_coverage),
+            cmocka_unit_test(test_gain_retry),
             cmocka_unit_test(test_affine_refinement),
             cmocka_unit_test(test_scale_filter),
             cmocka_unit_test(test_refine_step_length),

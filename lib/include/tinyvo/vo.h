@@ -117,6 +117,12 @@ typedef struct tvo_vo_config {
                                    turn leaves the tracks on one side of the frame, and the rotation of a
                                    one-sided set is poorly conditioned); [0, 1], 0 disables; default 0.75 */
     int32_t min_pose_tracks;    /* fewer tracked points than this -> LOST; default 30 */
+    int32_t gain_retry;         /* 1: when LK keeps fewer than half of at least min_pose_tracks tracks and
+                                   the median grey level of the coarsest pyramid level changed by 10 % or
+                                   more since the previous frame (an exposure step), the previous frame's
+                                   pyramid is scaled by that ratio and the tracks are tracked again from
+                                   their previous positions; the second pass is kept when it tracks more
+                                   points (result.gain_retry). 0: off; default 1 */
     int32_t fast_min_threshold; /* low-contrast fallback: when a detection finds fewer than a quarter of the
                                    corners wanted, it is repeated with this FAST threshold (if it is lower
                                    than detect.fast_threshold); [0, 255], 0 disables; default 7 */
@@ -226,6 +232,7 @@ typedef struct tvo_vo_result {
     tvo_status pose_status;         /* status of this frame's relative-pose estimate (TVO_OK when none ran) */
     tvo_pose T_prev_cur;            /* raw relative pose: p_prev = R p_cur + t, |t| = 1 or t = 0 */
     int32_t tracked;                /* tracks that survived LK + forward-backward into this frame */
+    int32_t gain_retry;             /* 1: they were tracked again after an exposure step (cfg.gain_retry) */
     int32_t inliers;                /* pose inliers among them */
     int32_t new_corners;            /* corners added by re-detection in this frame */
     int32_t tracks;                 /* tracks carried to the next frame */
