@@ -705,7 +705,9 @@ static void run_exposure_step(int32_t retry, double gain, int *lost, int *retrie
 
 /* An exposure step of 0.6 (a light switched off) makes LK lose most tracks without the gain retry; with
  * it (the default) the frame is tracked again on the scaled previous pyramid and keeps nearly all. A
- * step of 1.05 is below the retry's 10 %: nothing is re-tracked. */
+ * step of 1.05 LK holds by itself (more than 90 % of the tracks kept), so the retry does not run: this
+ * case checks that a small step leaves the frame alone, not the retry's 10 % bound, which only a frame
+ * where LK lost more than half of the tracks reaches. */
 static void test_gain_retry(void **state)
 {
     int lost_on, lost_off, retried_on, retried_off, lost_small, retried_small;
