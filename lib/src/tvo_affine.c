@@ -17,22 +17,84 @@ static int side_ok(int32_t side)
     return side >= 3 && side <= TVO_AFF_MAX_SIDE && (side & 1) == 1;
 }
 
+/* The samples reach the window's edges: step divides the half side. */
+static int step_ok(int32_t side, int32_t step)
+{
+    return step >= 1 && step <= side / 2 && (side / 2) % step == 0;
+}
+
 size_t tvo_aff_scratch_size(int32_t side)
 {
     if (!side_ok(side))
         return 0;
-    return (size_t)side * (size_t)side * 2 * sizeof(float);
+    return (size_t)side * (size_t)tvo_aff_cols(side) * 3 * sizeof(float);
 }
 
-/* The template's central-difference gradients, row by row over the side x side window. */
-static void gradients(const uint8_t *tpl, int32_t side, float *gx, float *gy)
+/* The template's central-difference gradients and grey values at the window's samples (every step-th
+ * pixel of the side x side window, m = tvo_aff_samples(side, step) per row and column), row by row in
+ * rows of tvo_aff_cols(m) floats (the padding columns 0). */
+static void gradients(const uint8_t *tpl, int32_t side, int32_t step, float *gx, float *gy, float *tf)
 {
-    const int32_t s = side + 2;
-    for (int32_t r = 0, k = 0; r < side; ++r) {
-        const uint8_t *p = tpl + (size_t)(r + 1) * (size_t)s + 1;
-        for (int32_t c = 0; c < side; ++c, ++k) {
-            gx[k] = 0.5f * (float)((int)p[c + 1] - (int)p[c - 1]);
-            gy[k] = 0.5f * (float)((int)p[c + s] - (int)p[c - s]);
+    const int32_t s = side + 2, m = tvo_aff_samples(side, step), cols = tvo_aff_cols(m);
+    for (int32_t r = 0; r < m; ++r) {
+        const uint8_t *p = tpl + (size_t)(r * step + 1) * (size_t)s + 1;
+        float *ox = gx + (size_t)r * (size_t)cols, *oy = gy + (size_t)r * (size_t)cols,
+              *ot = tf + (size_t)r * (size_t)cols;
+        for (int32_t c = 0; c < cols; ++c) {
+            const int32_t x = c * step;
+            ox[c] = c < m ? 0.5f * (float)((int)p[x + 1] - (int)p[x - 1]) : 0.0f;
+            oy[c] = c < m ? 0.5f * (float)((int)p[x + s] - (int)p[x - s]) : 0.0f;
+            ot[c] = c < m ? (float)p[x] : 0.0f;
+        }
+    }
+}
+
+void tvo_aff_sums_portable(const tvo_image *img, const float *gx, const float *gy, const float *tf,
+                           int32_t side, int32_t step, const double A[4], const double t[2], tvo_aff_sums *s)
+{
+    const int32_t h = side / 2, m = tvo_aff_samples(side, step), cols = tvo_aff_cols(m);
+    const size_t stride = (size_t)img->stride;
+    const float ax = (float)A[0], ay = (float)A[2];
+    memset(s, 0, sizeof(*s));
+    for (int32_t r = 0; r < m; ++r) {
+        const int32_t yy = r * step - h;
+        const size_t row = (size_t)r * (size_t)cols;
+        const float bx = (float)(A[0] * -h + A[1] * yy + t[0]), by = (float)(A[2] * -h + A[3] * yy + t[1]);
+        float lane[7][4];
+        for (int32_t l = 0; l < 4; ++l) { /* lane l: the columns j = l (mod 4), in order */
+            float a0 = 0.0f, a1 = 0.0f, a2 = 0.0f, a3 = 0.0f, a4 = 0.0f, a5 = 0.0f, a6 = 0.0f;
+            for (int32_t j = l; j < cols; j += 4) {
+                /* a padding column samples the row's last sample and adds zeros */
+                const float fj = (float)((j < m ? j : m - 1) * step), xf = (float)(j * step - h);
+                const float px = bx + ax * fj, py = by + ay * fj;
+                const int32_t ix = (int32_t)px, iy = (int32_t)py;
+                const float fx = px - (float)ix, fy = py - (float)iy;
+                const uint8_t *p = img->data + (size_t)iy * stride + (size_t)ix;
+                const float top = (float)p[0] + fx * (float)((int)p[1] - (int)p[0]);
+                const float bot = (float)p[stride] + fx * (float)((int)p[stride + 1] - (int)p[stride]);
+                const float v = top + fy * (bot - top), vm = j < m ? v : 0.0f;
+                const float a = gx[row + (size_t)j] * v, b = gy[row + (size_t)j] * v;
+                a0 += a;
+                a1 += a * xf;
+                a2 += b;
+                a3 += b * xf;
+                a4 += vm;
+                a5 += vm * vm;
+                a6 += vm * tf[row + (size_t)j];
+            }
+            lane[0][l] = a0;
+            lane[1][l] = a1;
+            lane[2][l] = a2;
+            lane[3][l] = a3;
+            lane[4][l] = a4;
+            lane[5][l] = a5;
+            lane[6][l] = a6;
+        }
+        {
+            float rs[7];
+            for (int k = 0; k < 7; ++k)
+                rs[k] = (lane[k][0] + lane[k][1]) + (lane[k][2] + lane[k][3]);
+            tvo_aff_add_row(s, rs, yy);
         }
     }
 }
@@ -77,14 +139,17 @@ static void chol6_solve(const double L[21], const double b[6], double x[6])
     }
 }
 
-int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, uint8_t *tpl, tvo_aff_model *model,
-                 tvo_aff_warp *w)
+int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, int32_t step, uint8_t *tpl,
+                 tvo_aff_model *model, tvo_aff_warp *w)
 {
     const int32_t h = side / 2, s = side + 2;
     int32_t cx, cy;
     double H[21];
-    if (img == NULL || img->data == NULL || tpl == NULL || model == NULL || w == NULL || !side_ok(side))
+    int32_t n;
+    if (img == NULL || img->data == NULL || tpl == NULL || model == NULL || w == NULL || !side_ok(side) ||
+        !step_ok(side, step))
         return 0;
+    n = tvo_aff_samples(side, step) * tvo_aff_samples(side, step);
     if (!(x >= 0.0f && y >= 0.0f && x <= (float)(img->width - 1) && y <= (float)(img->height - 1)))
         return 0;
     cx = (int32_t)floorf(x + 0.5f);
@@ -96,9 +161,9 @@ int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, uint8_t *
                img->data + (size_t)(cy - h - 1 + r) * (size_t)img->stride + (cx - h - 1), (size_t)s);
     memset(H, 0, sizeof(H));
     memset(model, 0, sizeof(*model));
-    for (int32_t yy = -h; yy <= h; ++yy) {
+    for (int32_t yy = -h; yy <= h; yy += step) {
         const uint8_t *p = tpl + (size_t)(yy + h + 1) * (size_t)s + 1;
-        for (int32_t xx = -h; xx <= h; ++xx) {
+        for (int32_t xx = -h; xx <= h; xx += step) {
             const int32_t c = xx + h;
             const double gx = 0.5 * (double)((int)p[c + 1] - (int)p[c - 1]);
             const double gy = 0.5 * (double)((int)p[c + s] - (int)p[c - s]);
@@ -114,8 +179,10 @@ int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, uint8_t *
             model->var_t += tv * tv;
         }
     }
-    model->var_t -= model->sum_t * model->sum_t / (double)(side * side);
-    if (!(model->var_t > (double)(side * side))) /* contrast below 1 grey level */
+    model->step = step;
+    model->n = n;
+    model->var_t -= model->sum_t * model->sum_t / (double)n;
+    if (!(model->var_t > (double)n)) /* contrast below 1 grey level */
         return 0;
     if (!chol6(H))
         return 0;
@@ -138,10 +205,11 @@ void tvo_aff_point(const tvo_aff_warp *w, float *x, float *y)
 }
 
 /* 1 when the warped window (a parallelogram) lies where bilinear sampling has its 4 taps: its corners
- * in [0, width - 1) x [0, height - 1). */
+ * in [0, width - 1) x [0, height - 1), with a margin of 1/64 px on the far sides so that no pixel
+ * position rounded in float reaches the last column or row. */
 static int window_inside(const double A[4], const double t[2], int32_t h, const tvo_image *img)
 {
-    const double xmax = (double)(img->width - 1), ymax = (double)(img->height - 1);
+    const double xmax = (double)(img->width - 1) - 1.0 / 64.0, ymax = (double)(img->height - 1) - 1.0 / 64.0;
     for (int c = 0; c < 4; ++c) {
         const double cx = (c & 1) ? h : -h, cy = (c & 2) ? h : -h;
         const double px = A[0] * cx + A[1] * cy + t[0], py = A[2] * cx + A[3] * cy + t[1];
@@ -176,74 +244,55 @@ static int compose_inverse(double A[4], double t[2], const double dp[6])
             isfinite(t[1]);
 }
 
-int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, const tvo_image *img,
-                   tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch, size_t scratch_size,
-                   float *ncc)
+int tvo_aff_refine_kernel(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, const tvo_image *img,
+                          tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch, size_t scratch_size,
+                          float *ncc, int portable)
 {
-    const int32_t h = side / 2, s = side + 2, n = side * side;
-    const size_t stride = img != NULL ? (size_t)img->stride : 0;
-    float *gx, *gy;
+    const int32_t h = side / 2;
+    int32_t step, n, m;
+    float *gx, *gy, *tf;
     double A[4], t[2], det, corr = 0.0, mean_t;
     int converged = 0;
     if (tpl == NULL || model == NULL || img == NULL || img->data == NULL || w == NULL || scratch == NULL ||
-        !side_ok(side) || scratch_size < tvo_aff_scratch_size(side) || max_iters < 1 || !(eps > 0.0f))
+        !side_ok(side) || scratch_size < tvo_aff_scratch_size(side) || max_iters < 1 || !(eps > 0.0f) ||
+        !step_ok(side, model->step))
         return 0;
+    step = model->step;
+    m = tvo_aff_samples(side, step);
+    n = m * m;
     gx = (float *)scratch;
-    gy = gx + n;
-    gradients(tpl, side, gx, gy);
+    gy = gx + (size_t)m * (size_t)tvo_aff_cols(m);
+    tf = gy + (size_t)m * (size_t)tvo_aff_cols(m);
+    gradients(tpl, side, step, gx, gy, tf);
     mean_t = model->sum_t / (double)n;
     for (int i = 0; i < 4; ++i)
         A[i] = (double)w->A[i];
     t[0] = (double)w->t[0];
     t[1] = (double)w->t[1];
+    (void)portable; /* only one kernel without SSE2 */
     for (int32_t it = 0; it < max_iters && !converged; ++it) {
-        double sum_i = 0.0, sum_i2 = 0.0, sum_it = 0.0, sdi[6] = {0, 0, 0, 0, 0, 0}, b[6], dp[6], g, mean_i,
-               var_i;
+        tvo_aff_sums sm;
+        double b[6], dp[6], g, mean_i, var_i;
         if (!window_inside(A, t, h, img))
             return 0;
-        /* one pass over the warped window: the patch's sums, its correlation with the template and
-           sum sd I, row by row (the row's sums in float, the window's in double) */
-        for (int32_t yy = -h, k = 0; yy <= h; ++yy) {
-            float px = (float)(A[0] * -h + A[1] * yy + t[0]), py = (float)(A[2] * -h + A[3] * yy + t[1]);
-            const float ax = (float)A[0], ay = (float)A[2];
-            const uint8_t *trow = tpl + (size_t)(yy + h + 1) * (size_t)s + 1;
-            float ra = 0.0f, rax = 0.0f, rb = 0.0f, rbx = 0.0f, ri = 0.0f, ri2 = 0.0f, rit = 0.0f;
-            for (int32_t xx = -h; xx <= h; ++xx, ++k, px += ax, py += ay) {
-                const int32_t ix = (int32_t)px, iy = (int32_t)py;
-                const float fx = px - (float)ix, fy = py - (float)iy;
-                const uint8_t *p = img->data + (size_t)iy * stride + (size_t)ix;
-                const float top = (float)p[0] + fx * (float)((int)p[1] - (int)p[0]);
-                const float bot = (float)p[stride] + fx * (float)((int)p[stride + 1] - (int)p[stride]);
-                const float v = top + fy * (bot - top);
-                const float a = gx[k] * v, bb = gy[k] * v;
-                ra += a;
-                rax += a * (float)xx;
-                rb += bb;
-                rbx += bb * (float)xx;
-                ri += v;
-                ri2 += v * v;
-                rit += v * (float)trow[xx + h];
-            }
-            sdi[0] += (double)rax;
-            sdi[1] += (double)ra * yy;
-            sdi[2] += (double)rbx;
-            sdi[3] += (double)rb * yy;
-            sdi[4] += (double)ra;
-            sdi[5] += (double)rb;
-            sum_i += (double)ri;
-            sum_i2 += (double)ri2;
-            sum_it += (double)rit;
-        }
-        mean_i = sum_i / (double)n;
-        var_i = sum_i2 - sum_i * mean_i;
+            /* one pass over the warped window: the patch's sums, its correlation with the template and
+           sum sd I */
+#if TVO_AFF_SSE2
+        if (!portable)
+            tvo_aff_sums_sse2(img, gx, gy, tf, side, step, A, t, &sm);
+        else
+#endif
+            tvo_aff_sums_portable(img, gx, gy, tf, side, step, A, t, &sm);
+        mean_i = sm.sum_i / (double)n;
+        var_i = sm.sum_i2 - sm.sum_i * mean_i;
         if (!(var_i > 1e-6 * model->var_t))
             return 0;
-        corr = (sum_it - sum_i * mean_t) / sqrt(var_i * model->var_t);
+        corr = (sm.sum_it - sm.sum_i * mean_t) / sqrt(var_i * model->var_t);
         g = sqrt(model->var_t / var_i);
         /* b = sum sd e, e = (I - mean_i) g - (T - mean_t): the patch's mean and contrast matched to the
            template's */
         for (int i = 0; i < 6; ++i)
-            b[i] = g * (sdi[i] - mean_i * model->sd1[i]) - (model->sdt[i] - mean_t * model->sd1[i]);
+            b[i] = g * (sm.sdi[i] - mean_i * model->sd1[i]) - (model->sdt[i] - mean_t * model->sd1[i]);
         chol6_solve(model->L, b, dp);
         if (!compose_inverse(A, t, dp))
             return 0;
@@ -262,6 +311,13 @@ int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side,
     w->t[0] = (float)t[0];
     w->t[1] = (float)t[1];
     return 1;
+}
+
+int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, const tvo_image *img,
+                   tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch, size_t scratch_size,
+                   float *ncc)
+{
+    return tvo_aff_refine_kernel(tpl, model, side, img, w, max_iters, eps, scratch, scratch_size, ncc, 0);
 }
 #else
 /* left out of this build (TVO_WITH_AFFINE 0); ISO C wants a declaration in every translation unit */

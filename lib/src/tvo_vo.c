@@ -138,6 +138,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->track_prediction = 0; /* on: larger motion per frame tracked, but the EuRoC renders got worse */
     cfg->map_prediction = 0;
     cfg->affine_win_size = 0; /* on (21): better on the whole, but not by the second rule of docs/budget.md */
+    cfg->affine_step = 1;
     cfg->map = 1;
     cfg->map_window = 6;
     cfg->map_max_landmarks = 0; /* 2 x max_tracks */
@@ -192,6 +193,9 @@ static int config_valid(const tvo_vo_config *cfg)
     if (cfg->affine_win_size != 0 &&
         (!TVO_WITH_AFFINE || cfg->affine_win_size < 3 || cfg->affine_win_size > TVO_AFF_MAX_SIDE ||
          (cfg->affine_win_size & 1) == 0))
+        return 0;
+    if (cfg->affine_step < 1 || cfg->affine_step > 15 ||
+        (cfg->affine_win_size != 0 && (cfg->affine_win_size / 2) % cfg->affine_step != 0))
         return 0;
     if (cfg->map_prediction < 0 || cfg->map_prediction > 2)
         return 0;
@@ -1081,7 +1085,7 @@ static void affine_take(tvo_vo *vo, const frame_ctx *fc)
     const size_t tb = tvo_aff_template_bytes(side);
     for (int32_t i = 0; i < vo->n; ++i)
         if (!vo->hast[i])
-            vo->hast[i] = (uint8_t)tvo_aff_take(&l0, vo->pts[i].x, vo->pts[i].y, side,
+            vo->hast[i] = (uint8_t)tvo_aff_take(&l0, vo->pts[i].x, vo->pts[i].y, side, vo->cfg.affine_step,
                                                 vo->tpl + (size_t)i * tb, &vo->am[i], &vo->aw[i]);
 }
 #else

@@ -39,7 +39,8 @@ static void render(uint8_t *img, const double M[4], const double c0[2], const do
         }
 }
 
-static float scratch[SIDE * SIDE * 2];
+static float scratch[SIDE * ((SIDE + 3) & ~3) * 3];
+static int32_t g_step = 1; /* the sampling step run() takes its templates with */
 
 /* Take the template at p0 in the first image, render the second under (M, point p0 -> p1), start the
  * refinement at p1 + off with A = identity, and return the final point's error (or -1 on failure). */
@@ -54,7 +55,7 @@ static double run(const double M[4], const double p1[2], const double off[2], do
     float x, y, ncc = 0.0f;
     render(a, I, p0, p0, 1.0, 0.0);
     render(b, M, p0, p1, gain, bias);
-    assert_int_equal(tvo_aff_take(&ia, (float)p0[0], (float)p0[1], SIDE, tpl, &model, &w), 1);
+    assert_int_equal(tvo_aff_take(&ia, (float)p0[0], (float)p0[1], SIDE, g_step, tpl, &model, &w), 1);
     w.t[0] += (float)(p1[0] + off[0] - p0[0]);
     w.t[1] += (float)(p1[1] + off[1] - p0[1]);
     if (!tvo_aff_refine(tpl, &model, SIDE, &ib, &w, 30, 0.01f, scratch, sizeof(scratch), &ncc))
@@ -80,6 +81,35 @@ static void test_recovers_affine(void **state)
         assert_true(fabs((double)w.A[i] - M[i]) < 0.01);
 }
 
+/* The same with every other pixel of the window (an 11 x 11 grid): as accurate on this texture, and a
+ * step that does not divide the half window, or exceeds it, is refused. */
+static void test_recovers_affine_step2(void **state)
+{
+    const double c = cos(0.07), s = sin(0.07);
+    const double M[4] = {1.08 * c - 0.03 * s, -1.08 * s + 0.03 * c, 1.08 * s, 1.08 * c};
+    const double p1[2] = {83.4, 57.8}, off[2] = {0.6, -0.5};
+    static uint8_t img[W * H], tpl[(SIDE + 2) * (SIDE + 2)];
+    tvo_image im = tvo_image_make(W, H, W, img);
+    tvo_aff_model model;
+    tvo_aff_warp w;
+    double e;
+    (void)state;
+    g_step = 2;
+    e = run(M, p1, off, 1.0, 0.0, &w);
+    g_step = 1;
+    print_message("step 2: error %.4f px\n", e);
+    assert_true(e >= 0.0 && e < 0.05);
+    for (int i = 0; i < 4; ++i)
+        assert_true(fabs((double)w.A[i] - M[i]) < 0.01);
+    memset(img, 128, sizeof(img));
+    for (int i = 0; i < W * H; ++i)
+        img[i] = (uint8_t)((i * 37 + (i / W) * 11) & 0xff);
+    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, SIDE, 5, tpl, &model, &w), 1);
+    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, SIDE, 3, tpl, &model, &w), 0);
+    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, SIDE, 0, tpl, &model, &w), 0);
+    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, SIDE, 20, tpl, &model, &w), 0);
+}
+
 static void test_exposure_change(void **state)
 {
     const double M[4] = {1.05, 0.0, 0.0, 1.05}, p1[2] = {81.0, 61.5}, off[2] = {-0.4, 0.3};
@@ -97,32 +127,32 @@ static void test_refused(void **state)
     (void)state;
     /* flat */
     memset(img, 100, sizeof(img));
-    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, SIDE, tpl, &model, &w), 0);
+    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, SIDE, 1, tpl, &model, &w), 0);
     /* stripes: texture in one direction only (the 6x6 system is singular) */
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x)
             img[y * W + x] = (uint8_t)(128.0 + 100.0 * sin(0.4 * x));
-    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, SIDE, tpl, &model, &w), 0);
+    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, SIDE, 1, tpl, &model, &w), 0);
     /* too near the border, outside, not finite */
     {
         const double I[4] = {1, 0, 0, 1}, p0[2] = {80.0, 60.0};
         render(img, I, p0, p0, 1.0, 0.0);
     }
-    assert_int_equal(tvo_aff_take(&im, 10.4f, 60.0f, SIDE, tpl, &model, &w), 0);
-    assert_int_equal(tvo_aff_take(&im, 80.0f, (float)H + 3.0f, SIDE, tpl, &model, &w), 0);
-    assert_int_equal(tvo_aff_take(&im, NAN, 60.0f, SIDE, tpl, &model, &w), 0);
-    assert_int_equal(tvo_aff_take(&im, 80.0f, INFINITY, SIDE, tpl, &model, &w), 0);
+    assert_int_equal(tvo_aff_take(&im, 10.4f, 60.0f, SIDE, 1, tpl, &model, &w), 0);
+    assert_int_equal(tvo_aff_take(&im, 80.0f, (float)H + 3.0f, SIDE, 1, tpl, &model, &w), 0);
+    assert_int_equal(tvo_aff_take(&im, NAN, 60.0f, SIDE, 1, tpl, &model, &w), 0);
+    assert_int_equal(tvo_aff_take(&im, 80.0f, INFINITY, SIDE, 1, tpl, &model, &w), 0);
     /* sides: even, too small, too large */
-    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, 20, tpl, &model, &w), 0);
-    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, 1, tpl, &model, &w), 0);
-    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, TVO_AFF_MAX_SIDE + 2, tpl, &model, &w), 0);
+    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, 20, 1, tpl, &model, &w), 0);
+    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, 1, 1, tpl, &model, &w), 0);
+    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, TVO_AFF_MAX_SIDE + 2, 1, tpl, &model, &w), 0);
     assert_int_equal(tvo_aff_scratch_size(20), 0);
     assert_true(tvo_aff_scratch_size(SIDE) <= sizeof(scratch));
     /* NULLs */
-    assert_int_equal(tvo_aff_take(NULL, 80.0f, 60.0f, SIDE, tpl, &model, &w), 0);
-    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, SIDE, NULL, &model, &w), 0);
-    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, SIDE, tpl, NULL, &w), 0);
-    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, SIDE, tpl, &model, NULL), 0);
+    assert_int_equal(tvo_aff_take(NULL, 80.0f, 60.0f, SIDE, 1, tpl, &model, &w), 0);
+    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, SIDE, 1, NULL, &model, &w), 0);
+    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, SIDE, 1, tpl, NULL, &w), 0);
+    assert_int_equal(tvo_aff_take(&im, 80.0f, 60.0f, SIDE, 1, tpl, &model, NULL), 0);
 }
 
 static void test_refine_failures_leave_warp(void **state)
@@ -135,7 +165,7 @@ static void test_refine_failures_leave_warp(void **state)
     float ncc = -2.0f;
     (void)state;
     render(img, I, p0, p0, 1.0, 0.0);
-    assert_int_equal(tvo_aff_take(&im, 80.3f, 59.8f, SIDE, tpl, &model, &w), 1);
+    assert_int_equal(tvo_aff_take(&im, 80.3f, 59.8f, SIDE, 1, tpl, &model, &w), 1);
     assert_true(fabsf(w.d[0] - 0.3f) < 1e-4f && fabsf(w.d[1] + 0.2f) < 1e-4f);
     /* the same image: found where it was taken, correlation 1 */
     w0 = w;
@@ -230,6 +260,92 @@ static void test_translation_only_is_worse(void **state)
     }
 }
 
+/* The SSE2 kernel of the window sums gives the portable kernel's bits (on a target without SSE2 both
+ * calls run the portable kernel): every sum over many warps and sub-pixel positions, a whole refinement
+ * from several starts, and a window that ends 1/64 px from the image's last column. */
+static void test_kernels_agree(void **state)
+{
+    static uint8_t a[W * H], b[W * H], tpl[(SIDE + 2) * (SIDE + 2)];
+    const double I[4] = {1, 0, 0, 1}, M[4] = {1.07, 0.05, -0.04, 0.95}, p0[2] = {80.0, 60.0},
+                 p1[2] = {81.3, 58.6};
+    tvo_image ia = tvo_image_make(W, H, W, a), ib = tvo_image_make(W, H, W, b);
+    tvo_aff_model model;
+    tvo_aff_warp w;
+    float *gx = scratch, *gy, *tf;
+    int compared = 0;
+    (void)state;
+    render(a, I, p0, p0, 1.0, 0.0);
+    render(b, M, p0, p1, 1.1, -7.0);
+    assert_int_equal(tvo_aff_take(&ia, (float)p0[0], (float)p0[1], SIDE, 1, tpl, &model, &w), 1);
+    for (int32_t st = 1; st <= 2; ++st) { /* every pixel, every other pixel */
+        const int32_t m = tvo_aff_samples(SIDE, st), cols = tvo_aff_cols(m);
+        gy = gx + m * cols;
+        tf = gy + m * cols;
+        for (int r = 0; r < m; ++r)
+            for (int c = 0; c < cols; ++c) {
+                const uint8_t *q = tpl + (r * st + 1) * (SIDE + 2) + c * st + 1;
+                gx[r * cols + c] = c < m ? 0.5f * (float)(q[1] - q[-1]) : 0.0f;
+                gy[r * cols + c] = c < m ? 0.5f * (float)(q[SIDE + 2] - q[-(SIDE + 2)]) : 0.0f;
+                tf[r * cols + c] = c < m ? (float)q[0] : 0.0f;
+            }
+        for (int k = 0; k < 200; ++k) {
+            const double A[4] = {1.0 + 0.003 * (k % 7) - 0.01, 0.002 * (k % 5) - 0.004,
+                                 0.0015 * (k % 3) - 0.002, 1.0 - 0.002 * (k % 11) + 0.01};
+            double t[2] = {40.0 + 0.37 * k + 0.013 * k * k / 10.0, 30.0 + 0.29 * k};
+            tvo_aff_sums sp, ss;
+            t[0] = fmod(t[0], (double)W - 40.0) + 15.0;
+            t[1] = fmod(t[1], (double)H - 40.0) + 15.0;
+            tvo_aff_sums_portable(&ib, gx, gy, tf, SIDE, st, A, t, &sp);
+#if TVO_AFF_SSE2
+            tvo_aff_sums_sse2(&ib, gx, gy, tf, SIDE, st, A, t, &ss);
+#else
+            tvo_aff_sums_portable(&ib, gx, gy, tf, SIDE, st, A, t, &ss);
+#endif
+            assert_memory_equal(&sp, &ss, sizeof(sp));
+            ++compared;
+        }
+    }
+    gy = gx + SIDE * tvo_aff_cols(SIDE);
+    tf = gy + SIDE * tvo_aff_cols(SIDE);
+    /* whole refinements from several starts, through the public entry and the portable one */
+    for (int k = 0; k < 9; ++k) {
+        tvo_aff_warp wf = w, wp = w;
+        float nf = 0.0f, np = 0.0f;
+        int of, op;
+        wf.t[0] = wp.t[0] = w.t[0] + (float)(p1[0] - p0[0]) + 0.3f * (float)(k % 3 - 1);
+        wf.t[1] = wp.t[1] = w.t[1] + (float)(p1[1] - p0[1]) + 0.3f * (float)(k / 3 - 1);
+        of = tvo_aff_refine_kernel(tpl, &model, SIDE, &ib, &wf, 10, 0.01f, scratch, sizeof(scratch), &nf, 0);
+        op = tvo_aff_refine_kernel(tpl, &model, SIDE, &ib, &wp, 10, 0.01f, scratch, sizeof(scratch), &np, 1);
+        assert_int_equal(of, op);
+        assert_int_equal(of, 1);
+        assert_memory_equal(&wf, &wp, sizeof(wf));
+        assert_memory_equal(&nf, &np, sizeof(nf));
+    }
+    /* a window whose right edge lies 1/64 px or less inside the last column is refused; the kernels agree on
+       one just inside that limit */
+    {
+        const double A[4] = {1, 0, 0, 1}, t[2] = {(double)(W - 1) - 10.0 - 1.0 / 128.0, 60.0},
+                     t2[2] = {(double)(W - 1) - 10.0 - 1.0 / 32.0, 60.0};
+        tvo_aff_warp edge = w;
+        tvo_aff_sums sp, ss;
+        float n = 0.0f;
+        edge.t[0] = (float)t[0];
+        edge.t[1] = (float)t[1];
+        assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, &ib, &edge, 1, 100.0f, scratch, sizeof(scratch),
+                                        &n),
+                         0);
+        tvo_aff_sums_portable(&ib, gx, gy, tf, SIDE, 1, A, t2, &sp);
+#if TVO_AFF_SSE2
+        tvo_aff_sums_sse2(&ib, gx, gy, tf, SIDE, 1, A, t2, &ss);
+#else
+        tvo_aff_sums_portable(&ib, gx, gy, tf, SIDE, 1, A, t2, &ss);
+#endif
+        assert_memory_equal(&sp, &ss, sizeof(sp));
+    }
+    print_message("kernels: %d window sums and 9 refinements identical (%s)\n", compared,
+                  TVO_AFF_SSE2 ? "sse2 against portable" : "portable only");
+}
+
 #endif
 
 int main(void)
@@ -237,10 +353,12 @@ int main(void)
 #if TVO_WITH_AFFINE
     const struct CMUnitTest tests[] = {
             cmocka_unit_test(test_recovers_affine),
+            cmocka_unit_test(test_recovers_affine_step2),
             cmocka_unit_test(test_exposure_change),
             cmocka_unit_test(test_refused),
             cmocka_unit_test(test_refine_failures_leave_warp),
             cmocka_unit_test(test_translation_only_is_worse),
+            cmocka_unit_test(test_kernels_agree),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 #else

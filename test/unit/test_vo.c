@@ -1010,13 +1010,31 @@ static void test_bad_input(void **state)
             }
 #endif
         }
+        /* the refinement's sampling step: [1, 15], and it divides affine_win_size / 2 */
+        {
+            const int32_t steps[3] = {0, -2, 16};
+            for (int i = 0; i < 3; ++i) {
+                bad = f->cfg;
+                bad.affine_step = steps[i];
+                assert_refused(&bad, f->mem);
+            }
+        }
 #if TVO_WITH_AFFINE
         bad = f->cfg;
         bad.affine_win_size = 21;
+        bad.affine_step = 3; /* does not divide 10 */
+        assert_refused(&bad, f->mem);
+        bad.affine_step = 5;
+        assert_true(tvo_vo_required_size(&bad) > 0);
+        bad.affine_step = 2;
+        assert_true(tvo_vo_required_size(&bad) > 0);
+        bad.affine_step = 1;
         assert_true(tvo_vo_required_size(&bad) >=
                     tvo_vo_required_size(&f->cfg) + (size_t)bad.max_tracks * (23 * 23 + 313));
-        assert_true(tvo_vo_required_size(&bad) <=
-                    tvo_vo_required_size(&f->cfg) + (size_t)bad.max_tracks * (23 * 23 + 313) + 4 * 64);
+        /* ... plus at most the refinement's scratch (three float arrays of 21 rows of 24; shared with
+           the other stages' scratch, so it adds only where it is the largest, as in this small camera) */
+        assert_true(tvo_vo_required_size(&bad) <= tvo_vo_required_size(&f->cfg) +
+                            (size_t)bad.max_tracks * (23 * 23 + 313) + 4 * 64 + 3 * 21 * 24 * sizeof(float));
         bad.affine_win_size = 31;
         assert_true(tvo_vo_required_size(&bad) >
                     tvo_vo_required_size(&f->cfg) + (size_t)bad.max_tracks * (33 * 33 + 313));

@@ -175,6 +175,10 @@ typedef struct tvo_vo_config {
                                    track (w = affine_win_size). A build with TVO_WITH_AFFINE 0
                                    (options.h) leaves the refinement out: tvo_vo_required_size() is 0
                                    and tvo_vo_init() returns TVO_ERR_UNSUPPORTED for any value but 0 */
+    int32_t affine_step;          /* the affine refinement aligns every affine_step-th pixel of the window
+                                   in each direction (2: an 11 x 11 grid of a 21 x 21 window, a quarter
+                                   of the work of 1); it must divide affine_win_size / 2. [1, 15];
+                                   default 1 */
     /* local map (vo.h header comment, "The local map"): keyframes in a sliding window, landmarks
        triangulated between them, every frame posed by PnP on the landmarks its tracks carry, and a
        windowed bundle adjustment at each new keyframe */

@@ -11,7 +11,8 @@
  * are normalised so that a change of exposure does not move the point.
  *
  * Arithmetic is float with the steps in double, in a fixed order, without libm beyond sqrt: the results
- * are the same on every target built with -ffp-contract=off. No allocation; the caller's scratch holds
+ * are the same on every target built with -ffp-contract=off, and the SSE2 kernel gives the portable
+ * kernel's bits. No allocation; the caller's scratch holds
  * the per-window arrays. */
 #ifndef TVO_AFFINE_H
 #define TVO_AFFINE_H
@@ -36,6 +37,7 @@ typedef struct tvo_aff_model {
     double L[21]; /* packed lower triangle, row by row */
     double sdt[6], sd1[6];
     double sum_t, var_t;
+    int32_t step, n; /* the sampling step and the number of samples */
 } tvo_aff_model;
 
 /* Largest accepted window side (odd), and the bytes of one template of side `side`. */
@@ -45,14 +47,65 @@ static inline size_t tvo_aff_template_bytes(int32_t side)
     return (size_t)(side + 2) * (size_t)(side + 2);
 }
 
+/* Samples per row and column of a window of side `side` sampled every `step` pixels (step divides
+ * side / 2, so the samples reach the window's edges). */
+static inline int32_t tvo_aff_samples(int32_t side, int32_t step)
+{
+    return 2 * ((side / 2) / step) + 1;
+}
+
+/* Columns of the per-window float arrays: side rounded up to a multiple of 4 (the sums run over lanes of
+ * 4 pixels; the padding columns hold zeros and add nothing). */
+static inline int32_t tvo_aff_cols(int32_t side)
+{
+    return (side + 3) & ~3;
+}
+
+/* The sums one Gauss-Newton step needs over the warped window: sum sd I (the steepest-descent rows
+ * times the patch), sum I, sum I^2 and sum I T. */
+typedef struct tvo_aff_sums {
+    double sdi[6];
+    double sum_i, sum_i2, sum_it;
+} tvo_aff_sums;
+
+/* Adds one row's sums r (sum gx I, sum gx I x, sum gy I, sum gy I x, sum I, sum I^2, sum I T; x, y the
+ * template coordinates, y = yy for this row) to the window's, in double. */
+static inline void tvo_aff_add_row(tvo_aff_sums *s, const float r[7], int32_t yy)
+{
+    s->sdi[0] += (double)r[1];
+    s->sdi[1] += (double)r[0] * yy;
+    s->sdi[2] += (double)r[3];
+    s->sdi[3] += (double)r[2] * yy;
+    s->sdi[4] += (double)r[0];
+    s->sdi[5] += (double)r[2];
+    s->sum_i += (double)r[4];
+    s->sum_i2 += (double)r[5];
+    s->sum_it += (double)r[6];
+}
+
+/* The window's sums for the warp (A, t), which window_inside() accepted: gx, gy and tf are the
+ * template's gradients and grey values, side rows of tvo_aff_cols(side) floats. Each row is summed in
+ * 4 float lanes (pixel column j in lane j % 4), the lanes added as (0 + 1) + (2 + 3), the rows in double:
+ * tvo_affine.c holds the portable kernel, tvo_affine_sse2.c the SSE2 one, which gives the same bits
+ * (test_affine checks it). */
+void tvo_aff_sums_portable(const tvo_image *img, const float *gx, const float *gy, const float *tf,
+                           int32_t side, int32_t step, const double A[4], const double t[2], tvo_aff_sums *s);
+#if defined(__SSE2__) && !defined(TVO_LK_NO_SIMD)
+#define TVO_AFF_SSE2 1
+void tvo_aff_sums_sse2(const tvo_image *img, const float *gx, const float *gy, const float *tf, int32_t side,
+                       int32_t step, const double A[4], const double t[2], tvo_aff_sums *s);
+#else
+#define TVO_AFF_SSE2 0
+#endif
+
 /* Bytes of scratch tvo_aff_refine needs for side. */
 size_t tvo_aff_scratch_size(int32_t side);
 
 /* Copy the template of a point at (x, y) in img and compute its model: 1 and w set (A = identity) when
  * the (side + 2)^2 pixels around the nearest integer pixel lie inside the image and have texture in two
  * directions, else 0. */
-int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, uint8_t *tpl, tvo_aff_model *model,
-                 tvo_aff_warp *w);
+int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, int32_t step, uint8_t *tpl,
+                 tvo_aff_model *model, tvo_aff_warp *w);
 
 /* The track's point under w. */
 void tvo_aff_point(const tvo_aff_warp *w, float *x, float *y);
@@ -65,5 +118,11 @@ void tvo_aff_point(const tvo_aff_warp *w, float *x, float *y);
 int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, const tvo_image *img,
                    tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch, size_t scratch_size,
                    float *ncc);
+
+/* tvo_aff_refine with the portable kernel for the sums (portable != 0) or the fastest one built in
+ * (0): the same results either way. */
+int tvo_aff_refine_kernel(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, const tvo_image *img,
+                          tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch, size_t scratch_size,
+                          float *ncc, int portable);
 
 #endif
