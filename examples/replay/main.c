@@ -61,6 +61,7 @@ typedef struct options {
     int keyframe;         /* --keyframe 0|1 (< 0: the library's default) */
     int track_prediction; /* --track-prediction 0|1 (< 0: the library's default) */
     int map;              /* --map 0|1 (< 0: the library's default) */
+    tvo_vo_preset preset; /* --preset */
     long max_frames;
     const char *sets[TVO_REPLAY_MAX_SETS]; /* --set NAME=VALUE, in order */
     int n_sets, list_settings;
@@ -102,6 +103,10 @@ static void usage(FILE *f)
             "                       the dataset builder: t_ns,state,relpose_flags,\n"
             "                       pose_status,inliers,<feature names>,rel_scale,\n"
             "                       rel_scale_points\n"
+            "  --preset NAME        default, accurate (the affine refinement and a longer fixed\n"
+            "                       tail in the bundle adjustment: more accurate, 1.5-1.7x the\n"
+            "                       time) or small (a QVGA microcontroller's configuration);\n"
+            "                       the switches below and --set apply on top (vo.h)\n"
             "  --map 0|1            local map (keyframes, landmarks, bundle adjustment) on or\n"
             "                       off (vo.h; default: the library's, on)\n"
             "  --tracks FILE        CSV of the tracks after every frame: t_ns,id,x,y,age,flags\n"
@@ -145,6 +150,7 @@ static int parse_args(int argc, char **argv, options *o)
     o->keyframe = -1;
     o->track_prediction = -1;
     o->map = -1;
+    o->preset = TVO_VO_PRESET_DEFAULT;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -242,6 +248,26 @@ static int parse_args(int argc, char **argv, options *o)
             o->max_frames = strtol(v, &end, 10);
             if (end == v || *end != '\0' || o->max_frames < 0) {
                 fprintf(stderr, "tvo_replay: --max-frames needs a non-negative integer (got '%s')\n", v);
+                return -1;
+            }
+        } else if (!strcmp(a, "--preset")) {
+            tvo_vo_config check;
+            NEED_VALUE();
+            if (!strcmp(v, "default"))
+                o->preset = TVO_VO_PRESET_DEFAULT;
+            else if (!strcmp(v, "accurate"))
+                o->preset = TVO_VO_PRESET_ACCURATE;
+            else if (!strcmp(v, "small"))
+                o->preset = TVO_VO_PRESET_SMALL;
+            else {
+                fprintf(stderr, "tvo_replay: --preset must be default, accurate or small (got '%s')\n", v);
+                return -1;
+            }
+            if (tvo_vo_config_preset(&check, NULL, o->preset) == TVO_ERR_UNSUPPORTED) {
+                fprintf(stderr,
+                        "tvo_replay: --preset %s needs the affine refinement, which this build of the "
+                        "library leaves out (TVO_WITH_AFFINE off)\n",
+                        v);
                 return -1;
             }
         } else if (!strcmp(a, "--map")) {
@@ -510,7 +536,7 @@ int main(int argc, char **argv)
     T_sb = tvo_pose_inverse(&T_bs);
     period_ns = (int64_t)llround(1e9 / (tvo_euroc_rate_hz(seq) > 0 ? tvo_euroc_rate_hz(seq) : 20.0));
 
-    tvo_vo_config_default(&cfg, &camera);
+    (void)tvo_vo_config_preset(&cfg, &camera, o.preset); /* checked by parse_args */
     cfg.clock = clock_cb;
     if (o.keyframe >= 0)
         cfg.keyframe = o.keyframe;

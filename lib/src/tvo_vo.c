@@ -156,6 +156,35 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->clock_user = NULL;
 }
 
+tvo_status tvo_vo_config_preset(tvo_vo_config *cfg, const tvo_camera *camera, tvo_vo_preset preset)
+{
+    if (cfg == NULL)
+        return TVO_ERR_NULL;
+    tvo_vo_config_default(cfg, camera);
+    switch (preset) {
+    case TVO_VO_PRESET_DEFAULT:
+        return TVO_OK;
+    case TVO_VO_PRESET_ACCURATE:
+        if (!TVO_WITH_AFFINE)
+            return TVO_ERR_UNSUPPORTED;
+        cfg->affine_win_size = 21;
+        cfg->map_window = 8;
+        cfg->map_ba_fixed = 4;
+        return TVO_OK;
+    case TVO_VO_PRESET_SMALL:
+        cfg->max_tracks = 120;
+        cfg->min_tracks = 80;
+        cfg->keyframe_min_tracks = 40;
+        cfg->detect.max_corners = cfg->max_tracks; /* the scratch is sized for this many */
+        cfg->lk.max_level = 2;
+        cfg->map_window = 5;
+        cfg->map_max_landmarks = 160;
+        return TVO_OK;
+    default:
+        return TVO_ERR_ARG;
+    }
+}
+
 static int config_valid(const tvo_vo_config *cfg)
 {
     if (cfg == NULL || tvo_camera_check(&cfg->camera) != TVO_OK)

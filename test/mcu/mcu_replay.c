@@ -78,18 +78,11 @@ static double rd_f64(const uint8_t *p)
     return d;
 }
 
-/* The QVGA configuration: the library defaults with a track list, detection and pyramid sized for
- * 320x240 and the 256 KiB block (docs/budget.md). */
+/* The QVGA configuration: the library's preset for a microcontroller (vo.h, TVO_VO_PRESET_SMALL: a
+ * track list, detection, pyramid and map sized for 320x240 and the 256 KiB block; docs/budget.md). */
 static void mcu_config(tvo_vo_config *cfg, const tvo_camera *cam)
 {
-    tvo_vo_config_default(cfg, cam);
-    cfg->max_tracks = 120;
-    cfg->min_tracks = 80;
-    cfg->keyframe_min_tracks = 40;
-    cfg->detect.max_corners = cfg->max_tracks; /* the scratch is sized for this many (vo.h) */
-    cfg->lk.max_level = 2;
-    cfg->map_window = 5; /* the local map: 5 keyframes, 160 landmarks */
-    cfg->map_max_landmarks = 160;
+    (void)tvo_vo_config_preset(cfg, cam, TVO_VO_PRESET_SMALL);
 }
 
 /* A pinhole camera without distortion. */

@@ -226,6 +226,36 @@ def test_replay_set_settings(replayed, tmp_path):
     assert r.returncode == 1 and "not usable" in r.stderr and "--set" in r.stderr and not bad.exists()
 
 
+def test_replay_presets(tmp_path):
+    """--preset NAME selects a named configuration: an unknown name is a usage error naming the three, the
+    accurate preset is the three --set fields it stands for byte for byte, and --set applies on top."""
+    replay = program("tvo_replay")
+    r = run([replay, "--euroc", "a", "--out", "x", "--preset", "fastest"])
+    assert r.returncode == 2 and "default, accurate or small" in r.stderr and r.stderr.count("\n") == 1, r.stderr
+    seq = tmp_path / "seq"
+    subprocess.run([sys.executable, "-m", "tinyvo_tools.synth", "--out", str(seq), "--builtin", "handheld",
+                    "--frames", "40", "--seed", "2", "--quiet"], check=True)
+    outs = {}
+    for tag, args in (("default", []), ("preset_default", ["--preset", "default"]),
+                      ("accurate", ["--preset", "accurate"]),
+                      ("fields", ["--set", "affine_win_size=21", "--set", "map_window=8", "--set", "map_ba_fixed=4"]),
+                      ("accurate_off", ["--preset", "accurate", "--set", "affine_win_size=0", "--set", "map_window=6",
+                                        "--set", "map_ba_fixed=2"])):
+        outs[tag] = tmp_path / f"{tag}.txt"
+        r = run([replay, "--euroc", str(seq), "--out", str(outs[tag]), "--quiet"] + args)
+        assert r.returncode == 0, r.stderr
+    assert outs["preset_default"].read_bytes() == outs["default"].read_bytes()
+    assert outs["accurate"].read_bytes() == outs["fields"].read_bytes()
+    assert outs["accurate"].read_bytes() != outs["default"].read_bytes()
+    assert outs["accurate_off"].read_bytes() == outs["default"].read_bytes()
+    mem = {}
+    for name in ("default", "accurate", "small"):
+        r = run([replay, "--euroc", str(seq), "--preset", name, "--print-memory"])
+        assert r.returncode == 0, r.stderr
+        mem[name] = int(r.stdout.split()[-2])
+    assert mem["small"] < mem["default"] < mem["accurate"]
+
+
 def test_live_checks_before_the_camera(tmp_path):
     live = program("tvo_live")
     missing_dev = ["--device", "/nonexistent/video9"]

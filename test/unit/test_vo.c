@@ -1057,6 +1057,59 @@ static void test_bad_input(void **state)
     }
 }
 
+/* The presets (vo.h): each the defaults with its own fields changed, a configuration the VO accepts; an
+ * unknown preset, and the accurate one in a build without the affine refinement, leave the defaults. */
+static void test_presets(void **state)
+{
+    const tvo_camera cam = tvo_camera_make_pinhole(320, 240, 260.0, 260.0, 159.5, 119.5);
+    tvo_vo_config def, c;
+    (void)state;
+    tvo_vo_config_default(&def, &cam);
+    assert_int_equal(tvo_vo_config_preset(&c, &cam, TVO_VO_PRESET_DEFAULT), TVO_OK);
+    assert_memory_equal(&c, &def, sizeof(c));
+
+    assert_int_equal(tvo_vo_config_preset(&c, &cam, TVO_VO_PRESET_SMALL), TVO_OK);
+    assert_int_equal(c.max_tracks, 120);
+    assert_int_equal(c.min_tracks, 80);
+    assert_int_equal(c.keyframe_min_tracks, 40);
+    assert_int_equal(c.detect.max_corners, 120);
+    assert_int_equal(c.lk.max_level, 2);
+    assert_int_equal(c.map_window, 5);
+    assert_int_equal(c.map_max_landmarks, 160);
+    assert_true(tvo_vo_required_size(&c) > 0);
+    assert_true(tvo_vo_required_size(&c) < tvo_vo_required_size(&def));
+    print_message("320x240: %lu bytes small, %lu default\n", (unsigned long)tvo_vo_required_size(&c),
+                  (unsigned long)tvo_vo_required_size(&def));
+    c.max_tracks = def.max_tracks; /* the rest is the defaults */
+    c.min_tracks = def.min_tracks;
+    c.keyframe_min_tracks = def.keyframe_min_tracks;
+    c.detect.max_corners = def.detect.max_corners;
+    c.lk.max_level = def.lk.max_level;
+    c.map_window = def.map_window;
+    c.map_max_landmarks = def.map_max_landmarks;
+    assert_memory_equal(&c, &def, sizeof(c));
+
+#if TVO_WITH_AFFINE
+    assert_int_equal(tvo_vo_config_preset(&c, &cam, TVO_VO_PRESET_ACCURATE), TVO_OK);
+    assert_int_equal(c.affine_win_size, 21);
+    assert_int_equal(c.map_window, 8);
+    assert_int_equal(c.map_ba_fixed, 4);
+    assert_true(tvo_vo_required_size(&c) > tvo_vo_required_size(&def));
+    c.affine_win_size = def.affine_win_size;
+    c.map_window = def.map_window;
+    c.map_ba_fixed = def.map_ba_fixed;
+    assert_memory_equal(&c, &def, sizeof(c));
+#else
+    memset(&c, 0xa5, sizeof(c));
+    assert_int_equal(tvo_vo_config_preset(&c, &cam, TVO_VO_PRESET_ACCURATE), TVO_ERR_UNSUPPORTED);
+    assert_memory_equal(&c, &def, sizeof(c));
+#endif
+    memset(&c, 0xa5, sizeof(c));
+    assert_int_equal(tvo_vo_config_preset(&c, &cam, (tvo_vo_preset)7), TVO_ERR_ARG);
+    assert_memory_equal(&c, &def, sizeof(c));
+    assert_int_equal(tvo_vo_config_preset(NULL, &cam, TVO_VO_PRESET_SMALL), TVO_ERR_NULL);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1073,6 +1126,7 @@ int main(void)
             cmocka_unit_test(test_gain_retry),
             cmocka_unit_test(test_affine_refinement),
             cmocka_unit_test(test_scale_filter),
+            cmocka_unit_test(test_presets),
             cmocka_unit_test(test_refine_step_length),
             cmocka_unit_test_setup_teardown(test_bad_input, setup, teardown),
     };

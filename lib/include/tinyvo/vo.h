@@ -227,6 +227,29 @@ typedef struct tvo_vo_config {
 /* Fill cfg with defaults for `camera` (copied). */
 void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
 
+/* Named configurations, each the defaults with a few fields changed (docs/camera.md, "Presets"):
+ * TVO_VO_PRESET_DEFAULT    the defaults (tvo_vo_config_default).
+ * TVO_VO_PRESET_ACCURATE   the affine track refinement and a longer fixed tail in the bundle adjustment:
+ *                          affine_win_size 21, map_window 8, map_ba_fixed 4. On the sequences of
+ *                          docs/budget.md about 0.6 times the default's ATE and 0.7 times its rotation
+ *                          error, for 1.3-1.4 times the instructions and 1.5-1.7 times the time per frame
+ *                          and about 840 more bytes a track. Needs a build with the affine refinement
+ *                          (TVO_WITH_AFFINE, options.h).
+ * TVO_VO_PRESET_SMALL      sized for a QVGA (320x240) camera on a microcontroller: 120 tracks
+ *                          (min_tracks 80, keyframe_min_tracks 40, detect.max_corners 120), 3 pyramid
+ *                          levels (lk.max_level 2), a map of 5 keyframes and 160 landmarks. At 320x240 the
+ *                          VO needs 228,592 bytes on a Cortex-M7 (tools/run-mcu.sh runs it there). */
+typedef enum tvo_vo_preset {
+    TVO_VO_PRESET_DEFAULT = 0,
+    TVO_VO_PRESET_ACCURATE = 1,
+    TVO_VO_PRESET_SMALL = 2
+} tvo_vo_preset;
+
+/* Fill cfg with the preset's configuration for `camera` (copied). TVO_OK; TVO_ERR_NULL when cfg is NULL;
+ * TVO_ERR_ARG for an unknown preset and TVO_ERR_UNSUPPORTED for TVO_VO_PRESET_ACCURATE in a build
+ * without the affine refinement, both leaving cfg filled with the defaults. */
+tvo_status tvo_vo_config_preset(tvo_vo_config *cfg, const tvo_camera *camera, tvo_vo_preset preset);
+
 /* tvo_vo_result.rel_scale when the relative scale is not available. */
 #define TVO_VO_REL_SCALE_NONE 0.0
 
