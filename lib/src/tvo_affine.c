@@ -278,9 +278,9 @@ int tvo_aff_refine_kernel(const uint8_t *tpl, const tvo_aff_model *model, int32_
             return 0;
             /* one pass over the warped window: the patch's sums, its correlation with the template and
            sum sd I */
-#if TVO_AFF_SSE2
+#if TVO_AFF_SIMD
         if (!portable)
-            tvo_aff_sums_sse2(img, gx, gy, tf, side, step, A, t, &sm);
+            tvo_aff_sums_simd(img, gx, gy, tf, side, step, A, t, &sm);
         else
 #endif
             tvo_aff_sums_portable(img, gx, gy, tf, side, step, A, t, &sm);

@@ -30,9 +30,9 @@ static inline int load16(const uint8_t *p)
  * columns, template x and inside masks); the four lane sums of the seven products into acc. offs says how
  * the four pixels' byte offsets are found: in float (exact when every offset is below 2^24), or in
  * integers. */
-static inline void row_sums(const tvo_image *img, const float *gx, const float *gy, const float *tf, int32_t cols,
-                            __m128 bx, __m128 by, __m128 ax, __m128 ay, const __m128 *fjs, const __m128 *xfs,
-                            const __m128 *ins, int in_float, __m128 acc[7])
+static inline void row_sums(const tvo_image *img, const float *gx, const float *gy, const float *tf,
+                            int32_t cols, __m128 bx, __m128 by, __m128 ax, __m128 ay, const __m128 *fjs,
+                            const __m128 *xfs, const __m128 *ins, int in_float, __m128 acc[7])
 {
     const size_t stride = (size_t)img->stride;
     const __m128 fstride = _mm_set1_ps((float)img->stride);
@@ -91,7 +91,7 @@ static inline void row_sums(const tvo_image *img, const float *gx, const float *
     }
 }
 
-void tvo_aff_sums_sse2(const tvo_image *img, const float *gx, const float *gy, const float *tf, int32_t side,
+void tvo_aff_sums_simd(const tvo_image *img, const float *gx, const float *gy, const float *tf, int32_t side,
                        int32_t step, const double A[4], const double t[2], tvo_aff_sums *s)
 {
     const int32_t h = side / 2, m = tvo_aff_samples(side, step), cols = tvo_aff_cols(m);

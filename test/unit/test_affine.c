@@ -296,8 +296,8 @@ static void test_kernels_agree(void **state)
             t[0] = fmod(t[0], (double)W - 40.0) + 15.0;
             t[1] = fmod(t[1], (double)H - 40.0) + 15.0;
             tvo_aff_sums_portable(&ib, gx, gy, tf, SIDE, st, A, t, &sp);
-#if TVO_AFF_SSE2
-            tvo_aff_sums_sse2(&ib, gx, gy, tf, SIDE, st, A, t, &ss);
+#if TVO_AFF_SIMD
+            tvo_aff_sums_simd(&ib, gx, gy, tf, SIDE, st, A, t, &ss);
 #else
             tvo_aff_sums_portable(&ib, gx, gy, tf, SIDE, st, A, t, &ss);
 #endif
@@ -335,15 +335,15 @@ static void test_kernels_agree(void **state)
                                         &n),
                          0);
         tvo_aff_sums_portable(&ib, gx, gy, tf, SIDE, 1, A, t2, &sp);
-#if TVO_AFF_SSE2
-        tvo_aff_sums_sse2(&ib, gx, gy, tf, SIDE, 1, A, t2, &ss);
+#if TVO_AFF_SIMD
+        tvo_aff_sums_simd(&ib, gx, gy, tf, SIDE, 1, A, t2, &ss);
 #else
         tvo_aff_sums_portable(&ib, gx, gy, tf, SIDE, 1, A, t2, &ss);
 #endif
         assert_memory_equal(&sp, &ss, sizeof(sp));
     }
     print_message("kernels: %d window sums and 9 refinements identical (%s)\n", compared,
-                  TVO_AFF_SSE2 ? "sse2 against portable" : "portable only");
+                  TVO_AFF_SIMD ? "simd against portable" : "portable only");
 }
 
 #endif

@@ -86,16 +86,25 @@ static inline void tvo_aff_add_row(tvo_aff_sums *s, const float r[7], int32_t yy
 /* The window's sums for the warp (A, t), which window_inside() accepted: gx, gy and tf are the
  * template's gradients and grey values, side rows of tvo_aff_cols(side) floats. Each row is summed in
  * 4 float lanes (pixel column j in lane j % 4), the lanes added as (0 + 1) + (2 + 3), the rows in double:
- * tvo_affine.c holds the portable kernel, tvo_affine_sse2.c the SSE2 one, which gives the same bits
- * (test_affine checks it). */
+ * tvo_affine.c holds the portable kernel, tvo_affine_sse2.c (x86) and tvo_affine_neon.c (aarch64) the
+ * SIMD ones, which give the same bits (test_affine checks it). */
 void tvo_aff_sums_portable(const tvo_image *img, const float *gx, const float *gy, const float *tf,
                            int32_t side, int32_t step, const double A[4], const double t[2], tvo_aff_sums *s);
 #if defined(__SSE2__) && !defined(TVO_LK_NO_SIMD)
 #define TVO_AFF_SSE2 1
-void tvo_aff_sums_sse2(const tvo_image *img, const float *gx, const float *gy, const float *tf, int32_t side,
-                       int32_t step, const double A[4], const double t[2], tvo_aff_sums *s);
 #else
 #define TVO_AFF_SSE2 0
+#endif
+#if !TVO_AFF_SSE2 && defined(__aarch64__) && !defined(TVO_LK_NO_SIMD)
+#define TVO_AFF_NEON 1 /* aarch64 only: its NEON float arithmetic is IEEE's, armv7's flushes denormals */
+#else
+#define TVO_AFF_NEON 0
+#endif
+#define TVO_AFF_SIMD (TVO_AFF_SSE2 || TVO_AFF_NEON)
+#if TVO_AFF_SIMD
+/* The SIMD kernel of the target (tvo_affine_sse2.c or tvo_affine_neon.c): the portable kernel's bits. */
+void tvo_aff_sums_simd(const tvo_image *img, const float *gx, const float *gy, const float *tf, int32_t side,
+                       int32_t step, const double A[4], const double t[2], tvo_aff_sums *s);
 #endif
 
 /* Bytes of scratch tvo_aff_refine needs for side. */
