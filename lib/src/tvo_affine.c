@@ -180,8 +180,6 @@ int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, int32_t s
             model->var_t += tv * tv;
         }
     }
-    model->step = step;
-    model->n = n;
     model->var_t -= model->sum_t * model->sum_t / (double)n;
     if (!(model->var_t > (double)n)) /* contrast below 1 grey level */
         return 0;
@@ -245,20 +243,19 @@ static int compose_inverse(double A[4], double t[2], const double dp[6])
             isfinite(t[1]);
 }
 
-int tvo_aff_refine_kernel(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, const tvo_image *img,
-                          tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch, size_t scratch_size,
-                          float *ncc, int portable)
+int tvo_aff_refine_kernel(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, int32_t step,
+                          const tvo_image *img, tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch,
+                          size_t scratch_size, float *ncc, int portable)
 {
     const int32_t h = side / 2;
-    int32_t step, n, m;
+    int32_t n, m;
     float *gx, *gy, *tf;
     double A[4], t[2], det, corr = 0.0, mean_t;
     int converged = 0;
     if (tpl == NULL || model == NULL || img == NULL || img->data == NULL || w == NULL || scratch == NULL ||
         !side_ok(side) || scratch_size < tvo_aff_scratch_size(side) || max_iters < 1 || !(eps > 0.0f) ||
-        !step_ok(side, model->step))
+        !step_ok(side, step))
         return 0;
-    step = model->step;
     m = tvo_aff_samples(side, step);
     n = m * m;
     gx = (float *)scratch;
@@ -314,11 +311,12 @@ int tvo_aff_refine_kernel(const uint8_t *tpl, const tvo_aff_model *model, int32_
     return 1;
 }
 
-int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, const tvo_image *img,
-                   tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch, size_t scratch_size,
-                   float *ncc)
+int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, int32_t step,
+                   const tvo_image *img, tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch,
+                   size_t scratch_size, float *ncc)
 {
-    return tvo_aff_refine_kernel(tpl, model, side, img, w, max_iters, eps, scratch, scratch_size, ncc, 0);
+    return tvo_aff_refine_kernel(tpl, model, side, step, img, w, max_iters, eps, scratch, scratch_size, ncc,
+                                 0);
 }
 #else
 /* left out of this build (TVO_WITH_AFFINE 0); ISO C wants a declaration in every translation unit */

@@ -1088,8 +1088,8 @@ static void affine_refine(tvo_vo *vo, const frame_ctx *fc)
         aw.t[0] += vo->next[i].x - ox;
         aw.t[1] += vo->next[i].y - oy;
         vo->hast[i] = 0;
-        if (!tvo_aff_refine(vo->tpl + (size_t)i * tb, &vo->am[i], side, &l0, &aw, TVO_VO_AFF_ITERS,
-                            TVO_VO_AFF_EPS, vo->scratch, vo->scratch_size, &ncc) ||
+        if (!tvo_aff_refine(vo->tpl + (size_t)i * tb, &vo->am[i], side, vo->cfg.affine_step, &l0, &aw,
+                            TVO_VO_AFF_ITERS, TVO_VO_AFF_EPS, vo->scratch, vo->scratch_size, &ncc) ||
             !(ncc >= TVO_VO_AFF_MIN_NCC))
             continue;
         tvo_aff_point(&aw, &px, &py);

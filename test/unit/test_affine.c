@@ -58,7 +58,7 @@ static double run(const double M[4], const double p1[2], const double off[2], do
     assert_int_equal(tvo_aff_take(&ia, (float)p0[0], (float)p0[1], SIDE, g_step, tpl, &model, &w), 1);
     w.t[0] += (float)(p1[0] + off[0] - p0[0]);
     w.t[1] += (float)(p1[1] + off[1] - p0[1]);
-    if (!tvo_aff_refine(tpl, &model, SIDE, &ib, &w, 30, 0.01f, scratch, sizeof(scratch), &ncc))
+    if (!tvo_aff_refine(tpl, &model, SIDE, g_step, &ib, &w, 30, 0.01f, scratch, sizeof(scratch), &ncc))
         return -1.0;
     assert_true(ncc > 0.95f);
     tvo_aff_point(&w, &x, &y);
@@ -169,7 +169,7 @@ static void test_refine_failures_leave_warp(void **state)
     assert_true(fabsf(w.d[0] - 0.3f) < 1e-4f && fabsf(w.d[1] + 0.2f) < 1e-4f);
     /* the same image: found where it was taken, correlation 1 */
     w0 = w;
-    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, &im, &w, 10, 0.01f, scratch, sizeof(scratch), &ncc),
+    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, 1, &im, &w, 10, 0.01f, scratch, sizeof(scratch), &ncc),
                      1);
     assert_true(ncc > 0.999f);
     assert_true(fabsf(w.t[0] - w0.t[0]) < 0.01f && fabsf(w.t[1] - w0.t[1]) < 0.01f);
@@ -177,25 +177,33 @@ static void test_refine_failures_leave_warp(void **state)
     w0 = w;
     w.t[0] = 5.0f;
     w0.t[0] = 5.0f;
-    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, &im, &w, 10, 0.01f, scratch, sizeof(scratch), &ncc),
+    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, 1, &im, &w, 10, 0.01f, scratch, sizeof(scratch), &ncc),
                      0);
     assert_memory_equal(&w, &w0, sizeof(w));
     /* no convergence in one step from 3 px away */
     w.t[0] = 83.0f;
     w0 = w;
-    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, &im, &w, 1, 0.01f, scratch, sizeof(scratch), &ncc), 0);
+    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, 1, &im, &w, 1, 0.01f, scratch, sizeof(scratch), &ncc),
+                     0);
     assert_memory_equal(&w, &w0, sizeof(w));
     /* bad arguments */
-    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, &im, &w, 10, 0.01f, scratch, 16, &ncc), 0);
-    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, &im, &w, 0, 0.01f, scratch, sizeof(scratch), &ncc), 0);
-    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, &im, &w, 10, 0.0f, scratch, sizeof(scratch), &ncc), 0);
-    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, &im, &w, 10, NAN, scratch, sizeof(scratch), &ncc), 0);
-    assert_int_equal(tvo_aff_refine(NULL, &model, SIDE, &im, &w, 10, 0.01f, scratch, sizeof(scratch), &ncc),
+    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, 1, &im, &w, 10, 0.01f, scratch, 16, &ncc), 0);
+    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, 1, &im, &w, 0, 0.01f, scratch, sizeof(scratch), &ncc),
                      0);
-    assert_int_equal(tvo_aff_refine(tpl, NULL, SIDE, &im, &w, 10, 0.01f, scratch, sizeof(scratch), &ncc), 0);
-    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, NULL, &w, 10, 0.01f, scratch, sizeof(scratch), &ncc),
+    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, 1, &im, &w, 10, 0.0f, scratch, sizeof(scratch), &ncc),
                      0);
-    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, &im, NULL, 10, 0.01f, scratch, sizeof(scratch), &ncc),
+    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, 1, &im, &w, 10, NAN, scratch, sizeof(scratch), &ncc),
+                     0);
+    assert_int_equal(tvo_aff_refine(NULL, &model, SIDE, 1, &im, &w, 10, 0.01f, scratch, sizeof(scratch),
+                                    &ncc),
+                     0);
+    assert_int_equal(tvo_aff_refine(tpl, NULL, SIDE, 1, &im, &w, 10, 0.01f, scratch, sizeof(scratch), &ncc),
+                     0);
+    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, 1, NULL, &w, 10, 0.01f, scratch, sizeof(scratch),
+                                    &ncc),
+                     0);
+    assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, 1, &im, NULL, 10, 0.01f, scratch, sizeof(scratch),
+                                    &ncc),
                      0);
     assert_memory_equal(&w, &w0, sizeof(w));
 }
@@ -314,8 +322,10 @@ static void test_kernels_agree(void **state)
         int of, op;
         wf.t[0] = wp.t[0] = w.t[0] + (float)(p1[0] - p0[0]) + 0.3f * (float)(k % 3 - 1);
         wf.t[1] = wp.t[1] = w.t[1] + (float)(p1[1] - p0[1]) + 0.3f * (float)(k / 3 - 1);
-        of = tvo_aff_refine_kernel(tpl, &model, SIDE, &ib, &wf, 10, 0.01f, scratch, sizeof(scratch), &nf, 0);
-        op = tvo_aff_refine_kernel(tpl, &model, SIDE, &ib, &wp, 10, 0.01f, scratch, sizeof(scratch), &np, 1);
+        of = tvo_aff_refine_kernel(tpl, &model, SIDE, 1, &ib, &wf, 10, 0.01f, scratch, sizeof(scratch), &nf,
+                                   0);
+        op = tvo_aff_refine_kernel(tpl, &model, SIDE, 1, &ib, &wp, 10, 0.01f, scratch, sizeof(scratch), &np,
+                                   1);
         assert_int_equal(of, op);
         assert_int_equal(of, 1);
         assert_memory_equal(&wf, &wp, sizeof(wf));
@@ -331,7 +341,7 @@ static void test_kernels_agree(void **state)
         float n = 0.0f;
         edge.t[0] = (float)t[0];
         edge.t[1] = (float)t[1];
-        assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, &ib, &edge, 1, 100.0f, scratch, sizeof(scratch),
+        assert_int_equal(tvo_aff_refine(tpl, &model, SIDE, 1, &ib, &edge, 1, 100.0f, scratch, sizeof(scratch),
                                         &n),
                          0);
         tvo_aff_sums_portable(&ib, gx, gy, tf, SIDE, 1, A, t2, &sp);

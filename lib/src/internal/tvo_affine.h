@@ -37,7 +37,6 @@ typedef struct tvo_aff_model {
     double L[21]; /* packed lower triangle, row by row */
     double sdt[6], sd1[6];
     double sum_t, var_t;
-    int32_t step, n; /* the sampling step and the number of samples */
 } tvo_aff_model;
 
 /* Largest accepted window side (odd), and the bytes of one template of side `side`. */
@@ -110,9 +109,9 @@ void tvo_aff_sums_simd(const tvo_image *img, const float *gx, const float *gy, c
 /* Bytes of scratch tvo_aff_refine needs for side. */
 size_t tvo_aff_scratch_size(int32_t side);
 
-/* Copy the template of a point at (x, y) in img and compute its model: 1 and w set (A = identity) when
- * the (side + 2)^2 pixels around the nearest integer pixel lie inside the image and have texture in two
- * directions, else 0. */
+/* Copy the template of a point at (x, y) in img and compute its model over every step-th pixel of the
+ * window (step divides side / 2): 1 and w set (A = identity) when the (side + 2)^2 pixels around the
+ * nearest integer pixel lie inside the image and have texture in two directions, else 0. */
 int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, int32_t step, uint8_t *tpl,
                  tvo_aff_model *model, tvo_aff_warp *w);
 
@@ -120,18 +119,18 @@ int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, int32_t s
 void tvo_aff_point(const tvo_aff_warp *w, float *x, float *y);
 
 /* Refine w so that the template matches img, starting from w as given (its t moved by the caller to
- * where translation LK put the point). At most max_iters steps, stopping when a step moves no window
+ * where translation LK put the point); side and step as the model was taken with. At most max_iters steps, stopping when a step moves no window
  * corner by more than eps pixels. 1 on success with w updated and *ncc the normalised correlation of
  * the final patch with the template; 0 (w unchanged) when the template is flat, the warp leaves the
  * image, degenerates (determinant outside [1/4, 4]) or does not converge. */
-int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, const tvo_image *img,
-                   tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch, size_t scratch_size,
-                   float *ncc);
+int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, int32_t step,
+                   const tvo_image *img, tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch,
+                   size_t scratch_size, float *ncc);
 
 /* tvo_aff_refine with the portable kernel for the sums (portable != 0) or the fastest one built in
  * (0): the same results either way. */
-int tvo_aff_refine_kernel(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, const tvo_image *img,
-                          tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch, size_t scratch_size,
-                          float *ncc, int portable);
+int tvo_aff_refine_kernel(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, int32_t step,
+                          const tvo_image *img, tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch,
+                          size_t scratch_size, float *ncc, int portable);
 
 #endif
