@@ -17,12 +17,6 @@ static int side_ok(int32_t side)
     return side >= 3 && side <= TVO_AFF_MAX_SIDE && (side & 1) == 1;
 }
 
-/* The samples reach the window's edges: step divides the half side. */
-static int step_ok(int32_t side, int32_t step)
-{
-    return step >= 1 && step <= side / 2 && (side / 2) % step == 0;
-}
-
 size_t tvo_aff_scratch_size(int32_t side)
 {
     if (!side_ok(side))
@@ -148,7 +142,7 @@ int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, int32_t s
     double H[21];
     int32_t n;
     if (img == NULL || img->data == NULL || tpl == NULL || model == NULL || w == NULL || !side_ok(side) ||
-        !step_ok(side, step))
+        !tvo_aff_step_ok(side, step))
         return 0;
     n = tvo_aff_samples(side, step) * tvo_aff_samples(side, step);
     if (!(x >= 0.0f && y >= 0.0f && x <= (float)(img->width - 1) && y <= (float)(img->height - 1)))
@@ -254,7 +248,7 @@ int tvo_aff_refine_kernel(const uint8_t *tpl, const tvo_aff_model *model, int32_
     int converged = 0;
     if (tpl == NULL || model == NULL || img == NULL || img->data == NULL || w == NULL || scratch == NULL ||
         !side_ok(side) || scratch_size < tvo_aff_scratch_size(side) || max_iters < 1 || !(eps > 0.0f) ||
-        !step_ok(side, step))
+        !tvo_aff_step_ok(side, step))
         return 0;
     m = tvo_aff_samples(side, step);
     n = m * m;

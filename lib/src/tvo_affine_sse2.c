@@ -27,9 +27,9 @@ static inline int load16(const uint8_t *p)
 }
 
 /* One row of the window: column positions bx + ax fj, by + ay fj (fj, xf, in: the chunks' sample
- * columns, template x and inside masks); the four lane sums of the seven products into acc. offs says how
- * the four pixels' byte offsets are found: in float (exact when every offset is below 2^24), or in
- * integers. */
+ * columns, template x and inside masks); the four lane sums of the seven products into acc. in_float
+ * says how the four pixels' byte offsets are found: in float (exact when every offset is below 2^24),
+ * or in integers. */
 static inline void row_sums(const tvo_image *img, const float *gx, const float *gy, const float *tf,
                             int32_t cols, __m128 bx, __m128 by, __m128 ax, __m128 ay, const __m128 *fjs,
                             const __m128 *xfs, const __m128 *ins, int in_float, __m128 acc[7])

@@ -11,9 +11,8 @@
  * are normalised so that a change of exposure does not move the point.
  *
  * Arithmetic is float with the steps in double, in a fixed order, without libm beyond sqrt: the results
- * are the same on every target built with -ffp-contract=off, and the SSE2 kernel gives the portable
- * kernel's bits. No allocation; the caller's scratch holds
- * the per-window arrays. */
+ * are the same on every target built with -ffp-contract=off, and the SIMD kernels (SSE2, aarch64 NEON)
+ * give the portable kernel's bits. No allocation; the caller's scratch holds the per-window arrays. */
 #ifndef TVO_AFFINE_H
 #define TVO_AFFINE_H
 
@@ -46,18 +45,24 @@ static inline size_t tvo_aff_template_bytes(int32_t side)
     return (size_t)(side + 2) * (size_t)(side + 2);
 }
 
-/* Samples per row and column of a window of side `side` sampled every `step` pixels (step divides
- * side / 2, so the samples reach the window's edges). */
+/* 1 when a window of side `side` can be sampled every `step` pixels: step divides side / 2, so the
+ * samples reach the window's edges (tvo_aff_take, tvo_aff_refine and the VO's configuration check). */
+static inline int tvo_aff_step_ok(int32_t side, int32_t step)
+{
+    return step >= 1 && step <= side / 2 && (side / 2) % step == 0;
+}
+
+/* Samples per row and column of a window of side `side` sampled every `step` pixels. */
 static inline int32_t tvo_aff_samples(int32_t side, int32_t step)
 {
     return 2 * ((side / 2) / step) + 1;
 }
 
-/* Columns of the per-window float arrays: side rounded up to a multiple of 4 (the sums run over lanes of
- * 4 pixels; the padding columns hold zeros and add nothing). */
-static inline int32_t tvo_aff_cols(int32_t side)
+/* Columns of the per-window float arrays: n samples rounded up to a multiple of 4 (the sums run over
+ * lanes of 4 pixels; the padding columns hold zeros and add nothing). */
+static inline int32_t tvo_aff_cols(int32_t n)
 {
-    return (side + 3) & ~3;
+    return (n + 3) & ~3;
 }
 
 /* The sums one Gauss-Newton step needs over the warped window: sum sd I (the steepest-descent rows
@@ -83,7 +88,8 @@ static inline void tvo_aff_add_row(tvo_aff_sums *s, const float r[7], int32_t yy
 }
 
 /* The window's sums for the warp (A, t), which window_inside() accepted: gx, gy and tf are the
- * template's gradients and grey values, side rows of tvo_aff_cols(side) floats. Each row is summed in
+ * template's gradients and grey values at the samples, m = tvo_aff_samples(side, step) rows of
+ * tvo_aff_cols(m) floats. Each row is summed in
  * 4 float lanes (pixel column j in lane j % 4), the lanes added as (0 + 1) + (2 + 3), the rows in double:
  * tvo_affine.c holds the portable kernel, tvo_affine_sse2.c (x86) and tvo_affine_neon.c (aarch64) the
  * SIMD ones, which give the same bits (test_affine checks it). */
@@ -119,8 +125,8 @@ int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, int32_t s
 void tvo_aff_point(const tvo_aff_warp *w, float *x, float *y);
 
 /* Refine w so that the template matches img, starting from w as given (its t moved by the caller to
- * where translation LK put the point); side and step as the model was taken with. At most max_iters steps, stopping when a step moves no window
- * corner by more than eps pixels. 1 on success with w updated and *ncc the normalised correlation of
+ * where translation LK put the point); side and step as the model was taken with. At most max_iters
+ * steps, stopping when a step moves no window corner by more than eps pixels. 1 on success with w updated and *ncc the normalised correlation of
  * the final patch with the template; 0 (w unchanged) when the template is flat, the warp leaves the
  * image, degenerates (determinant outside [1/4, 4]) or does not converge. */
 int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, int32_t step,
