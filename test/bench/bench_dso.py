@@ -47,16 +47,8 @@ from tinyvo_tools import trajio  # noqa: E402
 def read_frames(seq: str):
     """(timestamps in ns, absolute image paths) of mav0/cam0, in data.csv's order."""
     cam = os.path.join(seq, "mav0", "cam0")
-    t_ns, paths = [], []
-    with open(os.path.join(cam, "data.csv"), encoding="utf-8") as f:
-        for line in f:
-            line = line.strip()
-            if not line or line.startswith("#"):
-                continue
-            t, name = [s.strip() for s in line.split(",")[:2]]
-            t_ns.append(int(t))
-            paths.append(os.path.abspath(os.path.join(cam, "data", name)))
-    return np.array(t_ns, dtype=np.int64), paths
+    t_ns, names = trajio.read_cam_frames(cam)
+    return t_ns, [os.path.abspath(os.path.join(cam, "data", name)) for name in names]
 
 
 def camera_txt(cam: trajio.CameraInfo, size) -> tuple:

@@ -248,6 +248,21 @@ def test_euroc_csv_detected(tmp_path):
     assert fmt == "euroc" and np.allclose(tr.poses, g.poses, atol=1e-8)
 
 
+def test_cam_frames_read_in_order_and_bad_rows_refused(tmp_path):
+    cam = tmp_path / "cam0"
+    cam.mkdir()
+    (cam / "data.csv").write_text("#timestamp [ns],filename\n\n1403715273262142976,a.png\n"
+                                  "1403715273312143104, b.png \n# a comment\n1403715273362142976,c.png\n")
+    t, names = trajio.read_cam_frames(str(cam))
+    assert t.dtype == np.int64 and t.tolist() == [1403715273262142976, 1403715273312143104,
+                                                  1403715273362142976]
+    assert names == ["a.png", "b.png", "c.png"]
+    for bad in ("1403715273262142976\n", "1.5e18,a.png\n", "x,a.png\n", "1403715273262142976,\n"):
+        (cam / "data.csv").write_text("#timestamp [ns],filename\n" + bad)
+        with pytest.raises(ValueError, match="data.csv:2"):
+            trajio.read_cam_frames(str(cam))
+
+
 def test_ambiguous_files_are_refused(tmp_path):
     g = gt_body(60)
     p, q = trajio.pq_from_pose(g.poses)

@@ -47,12 +47,11 @@ def opencv_pipeline(seq_dir, cam="cam0", max_frames=None, max_corners=300, min_t
     fx, fy, cx, cy = info.intrinsics
     K = np.array([[fx, 0, cx], [0, fy, cy], [0, 0, 1]], dtype=np.float64)
     D = np.array(list(info.distortion) + [0.0] * (5 - len(info.distortion)), dtype=np.float64)
-    rows = [ln.split(",") for ln in open(os.path.join(camdir, "data.csv")) if ln[:1].isdigit()]
+    t_ns, names = trajio.read_cam_frames(camdir)
     if max_frames:
-        rows = rows[:max_frames]
+        t_ns, names = t_ns[:max_frames], names[:max_frames]
     gt = trajio.read_euroc_groundtruth(os.path.join(seq_dir, "mav0", "state_groundtruth_estimate0",
                                                     "data.csv")).to_camera(info.T_BS)
-    t_ns = np.array([int(r[0]) for r in rows], dtype=np.int64)
     gt_at = trajio.interpolate_poses(gt.t_ns, gt.poses, t_ns)
     lk = dict(winSize=(21, 21), maxLevel=3,
               criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 30, 0.01))
@@ -60,8 +59,8 @@ def opencv_pipeline(seq_dir, cam="cam0", max_frames=None, max_corners=300, min_t
     poses, times = [], []
     T = gt_at[0].copy()
     prev, pts = None, None
-    for i, r in enumerate(rows):
-        img = cv2.imread(os.path.join(camdir, "data", r[1].strip()), cv2.IMREAD_GRAYSCALE)
+    for i, name in enumerate(names):
+        img = cv2.imread(os.path.join(camdir, "data", name), cv2.IMREAD_GRAYSCALE)
         t0 = time.perf_counter()
         if prev is not None and pts is not None and len(pts) >= 8:
             nxt, st, _ = cv2.calcOpticalFlowPyrLK(prev, img, pts, None, **lk)

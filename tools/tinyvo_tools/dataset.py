@@ -144,14 +144,8 @@ def speedup_sequence(src: str, dst: str, factor: int) -> str:
         raise ValueError("speed-up factor must be >= 2")
     gt_path, yml = sequence_paths(src)
     cam_src = os.path.dirname(yml) if yml else os.path.join(src, "mav0", "cam0")
-    rows = []
-    with open(os.path.join(cam_src, "data.csv"), "r", encoding="utf-8") as f:
-        for line in f:
-            line = line.strip()
-            if line and not line.startswith("#"):
-                t, name = line.split(",")
-                rows.append((int(t), name.strip()))
-    rows = rows[::factor]
+    t_src, names = trajio.read_cam_frames(cam_src)
+    rows = list(zip((int(t) for t in t_src), names))[::factor]
     if len(rows) < 2:
         raise ValueError(f"{src}: too few frames for a x{factor} speed-up")
     t0 = rows[0][0]

@@ -47,14 +47,7 @@ _RESERVED = ("--euroc", "--out", "--stats", "--scale", "--cam")
 
 
 def _frame_times(seq_dir: str):
-    path = os.path.join(seq_dir, "mav0", "cam0", "data.csv")
-    t = []
-    with open(path, "r", encoding="utf-8") as f:
-        for line in f:
-            s = line.strip()
-            if s and s[0].isdigit():
-                t.append(int(s.split(",")[0]))
-    return np.array(t, dtype=np.int64)
+    return trajio.read_cam_frames(os.path.join(seq_dir, "mav0", "cam0"))[0]
 
 
 def is_sequence_dir(path: str) -> bool:

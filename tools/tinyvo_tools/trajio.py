@@ -189,6 +189,26 @@ def read_euroc_groundtruth(path: str) -> Trajectory:
     return Trajectory(t_ns[order], T[order], "body", path)
 
 
+def read_cam_frames(cam_dir: str):
+    """(timestamps in ns (int64 array), image file names) of an ASL camera folder (``mav0/cam0``), from
+    its ``data.csv`` (``timestamp_ns,filename``), in the file's order. Blank lines and ``#`` comments are
+    skipped; a row without two fields or with a timestamp that is not an integer raises ValueError with
+    its line number."""
+    path = os.path.join(cam_dir, "data.csv")
+    t_ns, names = [], []
+    with open(path, "r", encoding="utf-8") as f:
+        for lineno, line in enumerate(f, 1):
+            line = line.strip()
+            if not line or line.startswith("#"):
+                continue
+            parts = [p.strip() for p in line.split(",")]
+            if len(parts) < 2 or not parts[1] or not parts[0].isdigit():
+                raise ValueError(f"{path}:{lineno}: expected 'timestamp_ns,filename', got {line!r}")
+            t_ns.append(int(parts[0]))
+            names.append(parts[1])
+    return np.array(t_ns, dtype=np.int64), names
+
+
 def write_euroc_groundtruth(path: str, traj: Trajectory) -> None:
     """Write body poses as an EuRoC ``state_groundtruth_estimate0/data.csv`` (8 columns)."""
     p, q = pq_from_pose(traj.poses)
