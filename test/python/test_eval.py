@@ -154,6 +154,31 @@ def test_tbs_is_applied():
     assert body["ate_m"]["rmse"] < 1e-9
 
 
+def test_scale_parts_see_a_drifting_scale_and_not_a_constant_one():
+    g = gt_body(400)
+    c = cam(g)
+    # one scale for the whole run (and a rotated, shifted world): every part's scale is the whole run's
+    P = c.poses.copy()
+    P[:, :3, 3] = c.poses[:, :3, 3] * 0.25 + np.array([1.0, 2.0, 3.0])
+    sp = tev.evaluate(Trajectory(g.t_ns, P), g).result["standard"]["scale_parts"]
+    assert len(sp) == 4 and all(v == pytest.approx(1.0, abs=1e-9) for v in sp)
+    # the estimate's steps shrink from 1x to 0.5x over the run: metres per estimate unit grow part by part
+    steps = np.diff(c.poses[:, :3, 3], axis=0) * np.linspace(1.0, 0.5, len(g) - 1)[:, None]
+    P = c.poses.copy()
+    P[1:, :3, 3] = c.poses[0, :3, 3] + np.cumsum(steps, axis=0)
+    ev = tev.evaluate(Trajectory(g.t_ns, P), g, parts=5).result["standard"]
+    sp = ev["scale_parts"]
+    assert len(sp) == 5 and all(b > a for a, b in zip(sp, sp[1:]))
+    assert sp[0] < 1.0 < sp[-1] and sp[-1] / sp[0] == pytest.approx(0.95 / 0.55, rel=0.1)
+    # a part standing still has no scale; SE(3) alignment has no scale to compare
+    P = c.poses.copy()
+    P[300:, :3, 3] = P[300, :3, 3]
+    assert tev.evaluate(Trajectory(g.t_ns, P), g).result["standard"]["scale_parts"][3] is None
+    assert "scale_parts" not in tev.evaluate(Trajectory(g.t_ns, P), g, metric_scale=True).result["standard"]
+    with pytest.raises(ValueError, match="parts"):
+        tev.evaluate(Trajectory(g.t_ns, c.poses), g, parts=0)
+
+
 def test_bad_inputs():
     g = gt_body(50)
     far = Trajectory(g.t_ns + 10_000_000_000_000, cam(g).poses)

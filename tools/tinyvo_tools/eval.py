@@ -22,6 +22,9 @@ Metrics (see docs/evaluation.md):
   (``--metric-scale``), by evo's Umeyama alignment and APE; RPE per frame and over 1 m of travelled path
   (evo RPE, translation in m and rotation in deg) on the aligned estimate; per-DoF RPE per frame
   (tx ty tz in m, rx ry rz in deg: components of the relative-pose error, as in the paper's tables).
+- scale drift (Sim(3) only): the run split into ``parts`` (default 4) runs of consecutive frames, each
+  aligned on its own; each part's scale over the whole run's (1 everywhere for an estimate with one
+  consistent scale; a part whose positions do not span enough to align gives null).
 - ``paper_protocol``: the protocol of Boloorchi Tabrizi & Crick, labelled as such: no alignment, the
   estimate's relative motions chained from the first ground-truth pose, mean position error.
 """
@@ -119,8 +122,28 @@ class Evaluation:
         return make_plots(self, out_dir)
 
 
+def part_scales(gt_xyz: np.ndarray, est_xyz: np.ndarray, whole_scale: float, parts: int) -> list:
+    """The Sim(3) scale of each of ``parts`` runs of consecutive poses (as equal as the count allows),
+    aligned on its own, over ``whole_scale`` (the whole run's); None for a part whose positions do not
+    span enough to align (fewer than 3 poses, or standing still or on a line)."""
+    from evo.core.geometry import umeyama_alignment
+    out = []
+    for idx in np.array_split(np.arange(len(gt_xyz)), parts):
+        x, y = est_xyz[idx].T, gt_xyz[idx].T
+        if len(idx) < 3 or np.linalg.matrix_rank(x - x.mean(1, keepdims=True), tol=1e-9) < 2:
+            out.append(None)
+            continue
+        try:
+            _, _, c = umeyama_alignment(x, y, with_scale=True)
+        except GeometryException:
+            out.append(None)
+            continue
+        out.append(float(c / whole_scale) if np.isfinite(c) and c > 0 else None)
+    return out
+
+
 def evaluate(est: Trajectory, gt_body: Trajectory, T_BS=None, metric_scale: bool = False,
-             max_diff_s: float = 0.01, frame: str = "camera") -> Evaluation:
+             max_diff_s: float = 0.01, frame: str = "camera", parts: int = 4) -> Evaluation:
     """Evaluate an estimated trajectory (``frame`` poses in the world) against body ground truth.
     ``T_BS``: 4x4 body-from-camera transform (None: EuRoC cam0); ignored with ``frame='body'``."""
     from evo import EvoException
@@ -129,6 +152,8 @@ def evaluate(est: Trajectory, gt_body: Trajectory, T_BS=None, metric_scale: bool
 
     if frame not in ("camera", "body"):
         raise ValueError("frame must be 'camera' or 'body'")
+    if not 1 <= parts <= 1000:
+        raise ValueError("parts must be in 1..1000")
     if len(est) < 2 or len(gt_body) < 2:
         raise ValueError("need at least 2 poses in both trajectories")
     if not (np.all(np.isfinite(est.poses)) and np.all(np.isfinite(gt_body.poses))):
@@ -196,6 +221,8 @@ def evaluate(est: Trajectory, gt_body: Trajectory, T_BS=None, metric_scale: bool
         },
         "paper_protocol": paper_protocol(gt_poses, est_raw),
     }
+    if not metric_scale:
+        result["standard"]["scale_parts"] = part_scales(gt_poses[:, :3, 3], est_raw[:, :3, 3], float(s), parts)
     return Evaluation(result, t_s, gt_poses, est_al, paper_protocol_poses(gt_poses, est_raw), dof)
 
 
@@ -224,7 +251,7 @@ def restrict_to_frames_of(est: Trajectory, other: Trajectory, max_diff_s: float)
 def evaluate_files(est_path: str, gt_path: str, tbs_yaml: str | None = None, metric_scale: bool = False,
                    max_diff_s: float = 0.01, frame: str = "camera", plots_dir: str | None = None,
                    out_json: str | None = None, gt_format: str = "auto", gt_times: str | None = None,
-                   same_frames_as: str | None = None) -> Evaluation:
+                   same_frames_as: str | None = None, parts: int = 4) -> Evaluation:
     """The command line's work as a function (used by the bench and the README demo)."""
     est = trajio.read_tum(est_path, frame)
     kept = None
@@ -241,7 +268,7 @@ def evaluate_files(est_path: str, gt_path: str, tbs_yaml: str | None = None, met
         T_BS, tbs_src = trajio.read_sensor_yaml(auto_yaml).T_BS, auto_yaml
     else:
         T_BS, tbs_src = EUROC_CAM0_T_BS, "EuRoC cam0 T_BS (built in; pass --tbs to change)"
-    ev = evaluate(est, gt, T_BS, metric_scale, max_diff_s, frame)
+    ev = evaluate(est, gt, T_BS, metric_scale, max_diff_s, frame, parts)
     ev.result["inputs"] = {"estimate": os.path.abspath(est_path), "ground_truth": gt.source,
                            "ground_truth_format": fmt, "ground_truth_format_why": why, "T_BS": tbs_src}
     if kept is not None:
@@ -319,6 +346,9 @@ def format_summary(res: dict) -> str:
         lines.append(f"RPE over 1 m: n/a ({r1.get('note', '')})")
     d = s["rpe_per_dof"]
     lines.append("per-DoF RPE RMSE: " + "  ".join(f"{k} {d[k]['rmse']:.4g}" for k in DOFS) + "  (m / deg)")
+    if s.get("scale_parts") is not None:
+        sp = " ".join("-" if v is None else f"{v:.3f}" for v in s["scale_parts"])
+        lines.append(f"scale of {len(s['scale_parts'])} parts / the whole run's: {sp}")
     pp = res["paper_protocol"]
     lines.append(f"paper protocol (no alignment, chained from first gt pose): mean error "
                  f"{pp['mean_translation_error_m']:.4f} m, {pp['mean_rotation_error_deg']:.3f} deg")
@@ -341,11 +371,14 @@ def main(argv=None) -> int:
     ap.add_argument("--plots", help="write PNG plots into this folder")
     ap.add_argument("--same-frames-as", metavar="TRAJ",
                     help="evaluate only the frames of --est that this TUM trajectory (a peer's) also has")
+    ap.add_argument("--parts", type=int, default=4,
+                    help="scale drift: the Sim(3) scale of this many consecutive parts of the run, each "
+                         "over the whole run's (default 4)")
     a = ap.parse_args(argv)
 
     def body():
         ev = evaluate_files(a.est, a.gt, a.tbs, a.metric_scale, a.max_diff, a.frame, a.plots, a.out,
-                            a.gt_format, a.gt_times, a.same_frames_as)
+                            a.gt_format, a.gt_times, a.same_frames_as, a.parts)
         if not a.quiet:
             inp = ev.result["inputs"]
             print(f"ground truth: {inp['ground_truth_format']} ({inp['ground_truth_format_why']})")
