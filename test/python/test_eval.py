@@ -179,6 +179,34 @@ def test_scale_parts_see_a_drifting_scale_and_not_a_constant_one():
         tev.evaluate(Trajectory(g.t_ns, c.poses), g, parts=0)
 
 
+def test_rpe_over_k_frames_grows_with_a_chained_error_and_not_with_a_fixed_one():
+    g = gt_body(300)
+    c = cam(g)
+    rng = np.random.default_rng(4)
+    # a small random turn added to every step and chained: the error of two poses k apart grows with k
+    steps = [np.linalg.inv(c.poses[i]) @ c.poses[i + 1] for i in range(len(g) - 1)]
+    P = [c.poses[0]]
+    for S in steps:
+        N = np.eye(4)
+        N[:3, :3] = Rotation.from_rotvec(rng.normal(0.0, 1e-3, 3)).as_matrix()
+        P.append(P[-1] @ S @ N)
+    ev = tev.evaluate(Trajectory(g.t_ns, np.array(P)), g, rpe_deltas=(1, 10, 100)).result["standard"]
+    r = [ev["rpe_frames"][k]["rotation_deg"]["rmse"] for k in ("1", "10", "100")]
+    assert r[0] == pytest.approx(ev["rpe_frame"]["rotation_deg"]["rmse"], rel=1e-9)
+    assert r[1] > 2.0 * r[0] and r[2] > 2.0 * r[1]
+    # the same size of error on each pose alone, not chained: no growth
+    Q = c.poses.copy()
+    for i in range(len(Q)):
+        Q[i, :3, :3] = Q[i, :3, :3] @ Rotation.from_rotvec(rng.normal(0.0, 1e-3, 3)).as_matrix()
+    ev = tev.evaluate(Trajectory(g.t_ns, Q), g, rpe_deltas=(1, 100)).result["standard"]
+    assert ev["rpe_frames"]["100"]["rotation_deg"]["rmse"] == pytest.approx(
+        ev["rpe_frames"]["1"]["rotation_deg"]["rmse"], rel=0.2)
+    assert "rpe_frames" not in tev.evaluate(Trajectory(g.t_ns, Q), g).result["standard"]
+    for bad in ((0,), (2.5,)):
+        with pytest.raises(ValueError, match="deltas"):
+            tev.evaluate(Trajectory(g.t_ns, Q), g, rpe_deltas=bad)
+
+
 def test_bad_inputs():
     g = gt_body(50)
     far = Trajectory(g.t_ns + 10_000_000_000_000, cam(g).poses)

@@ -143,7 +143,8 @@ def part_scales(gt_xyz: np.ndarray, est_xyz: np.ndarray, whole_scale: float, par
 
 
 def evaluate(est: Trajectory, gt_body: Trajectory, T_BS=None, metric_scale: bool = False,
-             max_diff_s: float = 0.01, frame: str = "camera", parts: int = 4) -> Evaluation:
+             max_diff_s: float = 0.01, frame: str = "camera", parts: int = 4,
+             rpe_deltas: tuple = ()) -> Evaluation:
     """Evaluate an estimated trajectory (``frame`` poses in the world) against body ground truth.
     ``T_BS``: 4x4 body-from-camera transform (None: EuRoC cam0); ignored with ``frame='body'``."""
     from evo import EvoException
@@ -154,6 +155,8 @@ def evaluate(est: Trajectory, gt_body: Trajectory, T_BS=None, metric_scale: bool
         raise ValueError("frame must be 'camera' or 'body'")
     if not 1 <= parts <= 1000:
         raise ValueError("parts must be in 1..1000")
+    if any(int(k) != k or k < 1 for k in rpe_deltas):
+        raise ValueError("RPE deltas must be whole numbers of frames, at least 1")
     if len(est) < 2 or len(gt_body) < 2:
         raise ValueError("need at least 2 poses in both trajectories")
     if not (np.all(np.isfinite(est.poses)) and np.all(np.isfinite(gt_body.poses))):
@@ -185,11 +188,11 @@ def evaluate(est: Trajectory, gt_body: Trajectory, T_BS=None, metric_scale: bool
     ape_r = metrics.APE(metrics.PoseRelation.rotation_angle_deg)
     ape_r.process_data((ref, aligned))
 
-    def rpe(delta, unit):
+    def rpe(delta, unit, all_pairs=False):
         out = {}
         for name, rel in (("translation_m", metrics.PoseRelation.translation_part),
                           ("rotation_deg", metrics.PoseRelation.rotation_angle_deg)):
-            m = metrics.RPE(rel, delta=delta, delta_unit=unit, all_pairs=False)
+            m = metrics.RPE(rel, delta=delta, delta_unit=unit, all_pairs=all_pairs)
             try:
                 m.process_data((ref, aligned))
                 out[name] = _evo_stats(m)
@@ -221,6 +224,10 @@ def evaluate(est: Trajectory, gt_body: Trajectory, T_BS=None, metric_scale: bool
         },
         "paper_protocol": paper_protocol(gt_poses, est_raw),
     }
+    if rpe_deltas:
+        # every pair k frames apart (overlapping): how the error between two poses grows with their distance
+        result["standard"]["rpe_frames"] = {str(int(k)): rpe(int(k), Unit.frames, all_pairs=True)
+                                            for k in rpe_deltas}
     if not metric_scale:
         result["standard"]["scale_parts"] = part_scales(gt_poses[:, :3, 3], est_raw[:, :3, 3], float(s), parts)
     return Evaluation(result, t_s, gt_poses, est_al, paper_protocol_poses(gt_poses, est_raw), dof)
@@ -251,7 +258,7 @@ def restrict_to_frames_of(est: Trajectory, other: Trajectory, max_diff_s: float)
 def evaluate_files(est_path: str, gt_path: str, tbs_yaml: str | None = None, metric_scale: bool = False,
                    max_diff_s: float = 0.01, frame: str = "camera", plots_dir: str | None = None,
                    out_json: str | None = None, gt_format: str = "auto", gt_times: str | None = None,
-                   same_frames_as: str | None = None, parts: int = 4) -> Evaluation:
+                   same_frames_as: str | None = None, parts: int = 4, rpe_deltas: tuple = ()) -> Evaluation:
     """The command line's work as a function (used by the bench and the README demo)."""
     est = trajio.read_tum(est_path, frame)
     kept = None
@@ -268,7 +275,7 @@ def evaluate_files(est_path: str, gt_path: str, tbs_yaml: str | None = None, met
         T_BS, tbs_src = trajio.read_sensor_yaml(auto_yaml).T_BS, auto_yaml
     else:
         T_BS, tbs_src = EUROC_CAM0_T_BS, "EuRoC cam0 T_BS (built in; pass --tbs to change)"
-    ev = evaluate(est, gt, T_BS, metric_scale, max_diff_s, frame, parts)
+    ev = evaluate(est, gt, T_BS, metric_scale, max_diff_s, frame, parts, rpe_deltas)
     ev.result["inputs"] = {"estimate": os.path.abspath(est_path), "ground_truth": gt.source,
                            "ground_truth_format": fmt, "ground_truth_format_why": why, "T_BS": tbs_src}
     if kept is not None:
@@ -346,6 +353,12 @@ def format_summary(res: dict) -> str:
         lines.append(f"RPE over 1 m: n/a ({r1.get('note', '')})")
     d = s["rpe_per_dof"]
     lines.append("per-DoF RPE RMSE: " + "  ".join(f"{k} {d[k]['rmse']:.4g}" for k in DOFS) + "  (m / deg)")
+    for k, r in s.get("rpe_frames", {}).items():
+        if r.get("rotation_deg"):
+            lines.append(f"RPE over {k} frames: {r['translation_m']['rmse']:.4f} m, "
+                         f"{r['rotation_deg']['rmse']:.4f} deg (RMSE, every pair {k} frames apart)")
+        else:
+            lines.append(f"RPE over {k} frames: n/a ({r.get('note', '')})")
     if s.get("scale_parts") is not None:
         sp = " ".join("-" if v is None else f"{v:.3f}" for v in s["scale_parts"])
         lines.append(f"scale of {len(s['scale_parts'])} parts / the whole run's: {sp}")
@@ -374,11 +387,14 @@ def main(argv=None) -> int:
     ap.add_argument("--parts", type=int, default=4,
                     help="scale drift: the Sim(3) scale of this many consecutive parts of the run, each "
                          "over the whole run's (default 4)")
+    ap.add_argument("--rpe-delta", type=int, action="append", default=[], metavar="K",
+                    help="also the RPE between every pair of frames K apart (repeatable): how the error of "
+                         "two poses grows with their distance")
     a = ap.parse_args(argv)
 
     def body():
         ev = evaluate_files(a.est, a.gt, a.tbs, a.metric_scale, a.max_diff, a.frame, a.plots, a.out,
-                            a.gt_format, a.gt_times, a.same_frames_as, a.parts)
+                            a.gt_format, a.gt_times, a.same_frames_as, a.parts, tuple(a.rpe_delta))
         if not a.quiet:
             inp = ev.result["inputs"]
             print(f"ground truth: {inp['ground_truth_format']} ({inp['ground_truth_format_why']})")
