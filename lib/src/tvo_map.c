@@ -566,6 +566,12 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
     int32_t made;
     if (!init_pair_pose(m, cfg, tr, scratch, scratch_size, &ip))
         return 0;
+    if (tr->refine != NULL) {
+        /* the pair becomes two keyframes: their positions refined, the pair's pose again on them */
+        tr->refine(tr->refine_ctx);
+        if (!init_pair_pose(m, cfg, tr, scratch, scratch_size, &ip))
+            return 0;
+    }
     tn = sqrt(dot3(ip.rp.t, ip.rp.t));
     baseline = init_baseline(m, T_c_w_chain, t_ns);
     memcpy(T_cur_ref.R, ip.rp.R, sizeof(ip.rp.R));
@@ -1153,6 +1159,8 @@ static void add_keyframe(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
 {
     tvo_map_kf *kn;
     int32_t seen = 0;
+    if (tr->refine != NULL)
+        tr->refine(tr->refine_ctx);
     mark_tracked(m, tr);
     kn = kf_push(m, T, t_ns);
     for (int32_t i = 0; i < tr->n; ++i) {

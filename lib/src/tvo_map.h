@@ -56,6 +56,10 @@ typedef struct tvo_map_tracks {
     int32_t *tri_fr;    /* serial of the frame of the track's first observation (to triangulate), or -1 */
     tvo_point2d *tri_x; /* normalised position in that frame */
     uint8_t *inlier;    /* out: 1 when the track's landmark is an inlier of this frame's map pose */
+    /* called, when not NULL, on a frame that becomes a keyframe, before its observations are taken:
+       it may move the tracks' positions x (by less than the PnP threshold) */
+    void (*refine)(void *ctx);
+    void *refine_ctx;
 } tvo_map_tracks;
 
 /* The poses of the last TVO_MAP_RING frames, for triangulating a track from the frame it was first seen

@@ -140,6 +140,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->affine_win_size = 0; /* on (21, TVO_VO_PRESET_ACCURATE): more accurate, but it costs 1.3-1.4 times
                                  the instructions (docs/budget.md, "A third rule") */
     cfg->affine_step = 1;
+    cfg->affine_at_keyframes = 0;
     cfg->map = 1;
     cfg->map_window = 6;
     cfg->map_max_landmarks = 0; /* 2 x max_tracks */
@@ -223,6 +224,8 @@ static int config_valid(const tvo_vo_config *cfg)
     if (cfg->affine_win_size != 0 &&
         (!TVO_WITH_AFFINE || cfg->affine_win_size < 3 || cfg->affine_win_size > TVO_AFF_MAX_SIDE ||
          (cfg->affine_win_size & 1) == 0))
+        return 0;
+    if (cfg->affine_at_keyframes != 0 && cfg->affine_at_keyframes != 1)
         return 0;
     if (cfg->affine_step < 1 || cfg->affine_step > 15 ||
         (cfg->affine_win_size != 0 && !tvo_aff_step_ok(cfg->affine_win_size, cfg->affine_step)))
@@ -982,6 +985,8 @@ static tvo_pose chain_pose(const tvo_vo *vo, const tvo_vo_result *res)
     return tvo_pose_compose(&step, &vo->T_c_w);
 }
 
+static void affine_refine_keyframe(void *ctx);
+
 static tvo_map_tracks map_tracks(tvo_vo *vo)
 {
     tvo_map_tracks tr;
@@ -992,6 +997,8 @@ static tvo_map_tracks map_tracks(tvo_vo *vo)
     tr.tri_fr = vo->tri_fr;
     tr.tri_x = vo->tri_x;
     tr.inlier = vo->minl;
+    tr.refine = NULL;
+    tr.refine_ctx = NULL;
     return tr;
 }
 
@@ -1027,6 +1034,10 @@ static void map_step(tvo_vo *vo, tvo_vo_result *res, int64_t t_ns, const double 
     }
     memset(vo->ok2, 1, (size_t)vo->n);
     tr = map_tracks(vo);
+    if (vo->cfg.affine_win_size > 0 && vo->cfg.affine_at_keyframes) {
+        tr.refine = affine_refine_keyframe;
+        tr.refine_ctx = vo;
+    }
     if (tvo_map_process(&vo->map, &vo->cfg, &tr, t_ns, R_cur_prev, map_prior_flags(res), &prior, vo->scratch,
                         vo->scratch_size, &mf) != TVO_OK ||
         !tvo_pose_is_finite(&mf.T_c_w)) {
@@ -1104,6 +1115,47 @@ static void affine_refine(tvo_vo *vo, const frame_ctx *fc)
     }
 }
 
+/* With affine_at_keyframes: the refinement of a frame that becomes a keyframe (the map's refine hook,
+ * after the frame's map pose): every track with a template moves to where its template aligns, from
+ * where LK left it with the warp of its last refinement; its normalised position (x2, the map's view)
+ * follows. A track whose refinement fails keeps its position and takes a new template in finish_frame. */
+static void affine_refine_keyframe(void *ctx)
+{
+    tvo_vo *vo = (tvo_vo *)ctx;
+    const int32_t side = vo->cfg.affine_win_size;
+    if (vo->hast == NULL)
+        return;
+    const tvo_image l0 = tvo_pyramid_level(&vo->pyr[vo->cur], 0);
+    const size_t tb = tvo_aff_template_bytes(side);
+    for (int32_t i = 0; i < vo->n; ++i) {
+        tvo_aff_warp aw;
+        tvo_point2d xn;
+        float ox, oy, px, py, ncc = 0.0f;
+        if (!vo->hast[i])
+            continue;
+        aw = vo->aw[i];
+        tvo_aff_point(&aw, &ox, &oy);
+        aw.t[0] += vo->pts[i].x - ox;
+        aw.t[1] += vo->pts[i].y - oy;
+        vo->hast[i] = 0;
+        if (!tvo_aff_refine(vo->tpl + (size_t)i * tb, &vo->am[i], side, vo->cfg.affine_step, &l0, &aw,
+                            TVO_VO_AFF_ITERS, TVO_VO_AFF_EPS, vo->scratch, vo->scratch_size, &ncc) ||
+            !(ncc >= TVO_VO_AFF_MIN_NCC))
+            continue;
+        tvo_aff_point(&aw, &px, &py);
+        if (!((px - vo->pts[i].x) * (px - vo->pts[i].x) + (py - vo->pts[i].y) * (py - vo->pts[i].y) <
+              TVO_VO_AFF_MAX_MOVE * TVO_VO_AFF_MAX_MOVE) ||
+            tvo_camera_undistort_point(&vo->cfg.camera, px, py, &xn) != TVO_OK)
+            continue;
+        vo->pts[i].x = px;
+        vo->pts[i].y = py;
+        vo->next[i] = vo->pts[i];
+        vo->x2[i] = xn;
+        vo->aw[i] = aw;
+        vo->hast[i] = 1;
+    }
+}
+
 /* The end of a frame with the affine refinement: every track without a template (new, or whose
  * refinement failed) takes one from this frame, where it lies now. */
 static void affine_take(tvo_vo *vo, const frame_ctx *fc)
@@ -1120,6 +1172,11 @@ static void affine_take(tvo_vo *vo, const frame_ctx *fc)
 }
 #else
 /* left out of this build (TVO_WITH_AFFINE 0): config_valid() refuses affine_win_size > 0 */
+static void affine_refine_keyframe(void *ctx)
+{
+    (void)ctx;
+}
+
 static void affine_refine(tvo_vo *vo, const frame_ctx *fc)
 {
     (void)vo;
@@ -1230,7 +1287,8 @@ static void stage_track(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
     tracked = lk_pass(vo, fc, &lkc, vo->ok2);
     if (vo->cfg.gain_retry && vo->n >= vo->cfg.min_pose_tracks && 2 * tracked < vo->n)
         res->gain_retry = gain_retry(vo, fc, tracked);
-    affine_refine(vo, fc);
+    if (!vo->cfg.affine_at_keyframes)
+        affine_refine(vo, fc);
     fc->m = compact(vo, vo->n, vo->st);
     for (int32_t i = 0; i < fc->m; ++i)
         vo->age[i]++;

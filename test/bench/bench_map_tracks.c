@@ -245,7 +245,7 @@ int main(int argc, char **argv)
             const tvo_pose Twp = tvo_pose_inverse(&Tcw[k - 1]), d = tvo_pose_compose(&Tcw[k], &Twp);
             memcpy(R_cur_prev, d.R, sizeof(R_cur_prev));
         }
-        tr = (tvo_map_tracks){tk.n, tk.x, tk.ok, tk.lm, tk.tri_fr, tk.tri_x, tk.inlier};
+        tr = (tvo_map_tracks){tk.n, tk.x, tk.ok, tk.lm, tk.tri_fr, tk.tri_x, tk.inlier, NULL, NULL};
         (void)tvo_map_process(&m, &cfg, &tr, (int64_t)t_ns, k > 0 ? R_cur_prev : NULL, 0, &Tcw[k], scratch,
                               ss, &mf);
         keyframes += mf.keyframe;
@@ -262,7 +262,7 @@ int main(int argc, char **argv)
             tk.x[tk.n].y = r[j].y;
             ++tk.n;
         }
-        tr = (tvo_map_tracks){tk.n, tk.x, tk.ok, tk.lm, tk.tri_fr, tk.tri_x, tk.inlier};
+        tr = (tvo_map_tracks){tk.n, tk.x, tk.ok, tk.lm, tk.tri_fr, tk.tri_x, tk.inlier, NULL, NULL};
         tvo_map_new_tracks(&m, &tr, first);
         q = q1;
     }

@@ -179,6 +179,11 @@ typedef struct tvo_vo_config {
                                    in each direction (2: an 11 x 11 grid of a 21 x 21 window, a quarter
                                    of the work of 1); it must divide affine_win_size / 2. [1, 15];
                                    default 1 */
+    int32_t affine_at_keyframes;  /* 1: the affine refinement runs only on the frames that become the
+                                   map's keyframes (after the frame's map pose, before the keyframe's
+                                   observations, new landmarks and bundle adjustment), on every track
+                                   with a template; the frames between keep LK's positions, which
+                                   start from the refined ones. 0: on every frame; default 0 */
     /* local map (vo.h header comment, "The local map"): keyframes in a sliding window, landmarks
        triangulated between them, every frame posed by PnP on the landmarks its tracks carry, and a
        windowed bundle adjustment at each new keyframe */
