@@ -520,7 +520,7 @@ static void room_project(const tvo_pose *T_w_c, const double X[3], double *x, do
  * the median of those distances and their count. */
 #define AFF_FRAMES 60
 #define AFF_MAX_IDS 4096
-static double run_walk_tracks(int32_t affine, int *count)
+static double run_walk_tracks(int32_t affine, int32_t at_keyframes, int *count)
 {
     static double X0[AFF_MAX_IDS][3];
     static uint8_t have[AFF_MAX_IDS];
@@ -534,6 +534,7 @@ static double run_walk_tracks(int32_t affine, int *count)
     memset(have, 0, sizeof(have));
     tvo_vo_config_default(&f.cfg, &cam);
     f.cfg.affine_win_size = affine;
+    f.cfg.affine_at_keyframes = at_keyframes;
     open_vo(&f);
     for (int k = 0; k < AFF_FRAMES; ++k) {
         const double dir[3] = {0.1, 0.05, 1.0};
@@ -570,19 +571,23 @@ static double run_walk_tracks(int32_t affine, int *count)
 }
 
 /* The affine refinement (cfg.affine_win_size) keeps tracks on the points they were detected on while the
- * camera walks towards a wall (the patches grow by 30 % over the walk); translation-only LK drifts. */
+ * camera walks towards a wall (the patches grow by 30 % over the walk); translation-only LK drifts. At
+ * keyframes only (cfg.affine_at_keyframes), the drift since the last keyframe is left: less than
+ * without the refinement, more than with it on every frame. */
 static void test_affine_refinement(void **state)
 {
-    int n_on, n_off;
-    const double on = run_walk_tracks(21, &n_on), off = run_walk_tracks(0, &n_off);
+    int n_on, n_off, n_kf;
+    const double on = run_walk_tracks(21, 0, &n_on), off = run_walk_tracks(0, 0, &n_off);
+    const double kf = run_walk_tracks(21, 1, &n_kf);
     (void)state;
     fprintf(stderr,
             "walk, tracks at least 20 frames old: median error %.3f px (%d tracks) with the affine "
-            "refinement, %.3f px (%d) without\n",
-            on, n_on, off, n_off);
-    assert_true(n_on >= 50 && n_off >= 50);
+            "refinement, %.3f px (%d) with it at keyframes only, %.3f px (%d) without\n",
+            on, n_on, kf, n_kf, off, n_off);
+    assert_true(n_on >= 50 && n_off >= 50 && n_kf >= 50);
     assert_true(on < 0.15);
     assert_true(on < 0.5 * off);
+    assert_true(kf < 0.3 * off);
 }
 #else
 /* A build without the affine refinement (TVO_WITH_AFFINE 0) refuses a configuration that asks for it,
@@ -1009,6 +1014,16 @@ static void test_bad_input(void **state)
                 assert_int_equal(tvo_vo_init(&vo, &bad, f->mem, 10), TVO_ERR_UNSUPPORTED);
             }
 #endif
+        }
+        /* the refinement at keyframes only: 0 or 1 */
+        {
+            const int32_t v[3] = {-1, 2, 255};
+            assert_int_equal(f->cfg.affine_at_keyframes, 0);
+            for (int i = 0; i < 3; ++i) {
+                bad = f->cfg;
+                bad.affine_at_keyframes = v[i];
+                assert_refused(&bad, f->mem);
+            }
         }
         /* the refinement's sampling step: [1, 15], and it divides affine_win_size / 2 */
         {
