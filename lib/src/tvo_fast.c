@@ -5,9 +5,14 @@
  * Structure: rows are scanned one at a time. A pixel is first screened with its 4 compass pixels
  * (0, 4, 8, 12 of the circle): any 9-arc contains two neighbouring compass pixels, so a corner needs two
  * neighbouring compass pixels on the same side. Survivors get the exact 16-bit "brighter" / "darker"
- * masks and a branch-free test for a run of 9 set bits. The screening runs on 16 pixels at once with SSE2
- * when available; the exact test and the score are always the portable scalar code, so every path gives
- * the same bits. */
+ * masks and a branch-free test for a run of 9 set bits, then OpenCV's score.
+ *
+ * With SSE2 (x86-64) or NEON (aarch64, and 32-bit ARM built with NEON) 16 pixels are screened at once,
+ * and a block that passes gets the exact test and the score of all 16 lanes from saturating byte
+ * differences and min / max over the arcs (fast_row). That block is written once over the vector helpers
+ * FV_* below, one SSE2 or NEON intrinsic each (two small NEON functions). The row's tail (fewer than 16
+ * pixels), builds without SSE2 or NEON, and builds with TVO_CORNERS_NO_SIMD defined run the portable
+ * per-pixel code. Every path gives the same corners, scores and order (test_corners compares them). */
 #include "tinyvo/corners.h"
 
 #include <string.h>
@@ -17,6 +22,70 @@
 #define TVO_FAST_SSE2 1
 #else
 #define TVO_FAST_SSE2 0
+#endif
+#if !defined(TVO_CORNERS_NO_SIMD) && !TVO_FAST_SSE2 && (defined(__ARM_NEON) || defined(__ARM_NEON__))
+#include <arm_neon.h>
+#define TVO_FAST_NEON 1
+#else
+#define TVO_FAST_NEON 0
+#endif
+#define TVO_FAST_SIMD (TVO_FAST_SSE2 || TVO_FAST_NEON)
+
+/* 16 unsigned bytes: unaligned load / store, broadcast, zero, saturating add / subtract, min / max,
+ * wrapping subtract, (~a) & b, 0xFF where a lane is 0, "all lanes 0", and the 16-bit mask of the lanes
+ * that are 0xFF (FV_MOVEMASK takes compare results only: lanes 0x00 or 0xFF). */
+#if TVO_FAST_SSE2
+typedef __m128i fast_v16;
+#define FV_LOAD(p) _mm_loadu_si128((const __m128i *)(const void *)(p))
+#define FV_STORE(p, v) _mm_storeu_si128((__m128i *)(void *)(p), (v))
+#define FV_SET1(b) _mm_set1_epi8((char)(uint8_t)(b))
+#define FV_ZERO() _mm_setzero_si128()
+#define FV_ADDS(a, b) _mm_adds_epu8((a), (b))
+#define FV_SUBS(a, b) _mm_subs_epu8((a), (b))
+#define FV_MIN(a, b) _mm_min_epu8((a), (b))
+#define FV_MAX(a, b) _mm_max_epu8((a), (b))
+#define FV_SUB(a, b) _mm_sub_epi8((a), (b))
+#define FV_ANDNOT(a, b) _mm_andnot_si128((a), (b))
+#define FV_EQ0(a) _mm_cmpeq_epi8((a), _mm_setzero_si128())
+#define FV_ALL0(a) (_mm_movemask_epi8(_mm_cmpeq_epi8((a), _mm_setzero_si128())) == 0xFFFF)
+#define FV_MOVEMASK(a) ((unsigned)_mm_movemask_epi8(a))
+#elif TVO_FAST_NEON
+typedef uint8x16_t fast_v16;
+#define FV_LOAD(p) vld1q_u8((const uint8_t *)(p))
+#define FV_STORE(p, v) vst1q_u8((uint8_t *)(p), (v))
+#define FV_SET1(b) vdupq_n_u8((uint8_t)(b))
+#define FV_ZERO() vdupq_n_u8(0)
+#define FV_ADDS(a, b) vqaddq_u8((a), (b))
+#define FV_SUBS(a, b) vqsubq_u8((a), (b))
+#define FV_MIN(a, b) vminq_u8((a), (b))
+#define FV_MAX(a, b) vmaxq_u8((a), (b))
+#define FV_SUB(a, b) vsubq_u8((a), (b))
+#define FV_ANDNOT(a, b) vbicq_u8((b), (a))
+#define FV_EQ0(a) vceqq_u8((a), vdupq_n_u8(0))
+#define FV_ALL0(a) fast_neon_all0(a)
+#define FV_MOVEMASK(a) fast_neon_movemask(a)
+
+static inline int fast_neon_all0(uint8x16_t a)
+{
+#if defined(__aarch64__)
+    return vmaxvq_u8(a) == 0;
+#else
+    uint8x8_t o = vorr_u8(vget_low_u8(a), vget_high_u8(a));
+    return vget_lane_u64(vreinterpret_u64_u8(o), 0) == 0u;
+#endif
+}
+
+/* NEON has no movemask: each 0xFF lane keeps its own bit of a byte, then three pairwise adds gather
+ * lanes 0-7 into byte 0 and lanes 8-15 into byte 1 (no carries: the bits are distinct) */
+static inline unsigned fast_neon_movemask(uint8x16_t a)
+{
+    static const uint8_t bit[16] = {1, 2, 4, 8, 16, 32, 64, 128, 1, 2, 4, 8, 16, 32, 64, 128};
+    uint8x16_t t = vandq_u8(a, vld1q_u8(bit));
+    uint8x8_t p = vpadd_u8(vget_low_u8(t), vget_high_u8(t));
+    p = vpadd_u8(p, p);
+    p = vpadd_u8(p, p);
+    return (unsigned)vget_lane_u8(p, 0) | ((unsigned)vget_lane_u8(p, 1) << 8);
+}
 #endif
 
 /* circle offsets (dx, dy), clockwise starting at 12 o'clock... as OpenCV's order: (0,3) first. */
@@ -31,8 +100,8 @@ static void fast_offsets(int32_t ofs[16], int32_t stride)
         ofs[k] = (int32_t)fast_circle[k][0] + (int32_t)fast_circle[k][1] * stride;
 }
 
-#if TVO_FAST_SSE2
-/* index of the lowest set bit of v != 0 (portable de Bruijn multiply); only the SSE2 screen uses it */
+#if TVO_FAST_SIMD
+/* index of the lowest set bit of v != 0 (portable de Bruijn multiply); only the SIMD block uses it */
 static int fast_ctz(uint32_t v)
 {
     static const uint8_t tab[32] = {0,  1,  28, 2,  29, 14, 24, 3, 30, 22, 20, 15, 25, 17, 4,  8,
@@ -102,74 +171,65 @@ static int32_t fast_row(const uint8_t *row, int32_t width, const int32_t ofs[16]
     int32_t n = 0, x = 3;
     const int32_t o0 = ofs[0], o4 = ofs[4], o8 = ofs[8], o12 = ofs[12];
     memset(score_row, 0, (size_t)width);
-    (void)threshold; /* read by the SSE2 screen only; the portable path works from ttab */
-#if TVO_FAST_SSE2
+    (void)threshold; /* read by the SIMD block only; the portable path works from ttab */
+#if TVO_FAST_SIMD
     {
-        const __m128i zero = _mm_setzero_si128();
-        const __m128i thr = _mm_set1_epi8((char)(uint8_t)threshold);
+        const fast_v16 thr = FV_SET1(threshold);
         for (; x + 16 <= width - 3; x += 16) {
             const uint8_t *p = row + x;
-            __m128i c = _mm_loadu_si128((const __m128i *)(const void *)p);
+            fast_v16 c = FV_LOAD(p);
             /* screen: q brighter iff sat(q - sat(c + t)) != 0, darker iff sat(sat(c - t) - q) != 0
              * (exactly q > c + t and q < c - t); a corner needs a neighbouring compass pair on one side */
-            __m128i hi = _mm_adds_epu8(c, thr), lo = _mm_subs_epu8(c, thr);
-            __m128i q0 = _mm_loadu_si128((const __m128i *)(const void *)(p + o0));
-            __m128i q4 = _mm_loadu_si128((const __m128i *)(const void *)(p + o4));
-            __m128i q8 = _mm_loadu_si128((const __m128i *)(const void *)(p + o8));
-            __m128i q12 = _mm_loadu_si128((const __m128i *)(const void *)(p + o12));
-            __m128i b0 = _mm_subs_epu8(q0, hi), b4 = _mm_subs_epu8(q4, hi);
-            __m128i b8 = _mm_subs_epu8(q8, hi), b12 = _mm_subs_epu8(q12, hi);
-            __m128i d0 = _mm_subs_epu8(lo, q0), d4 = _mm_subs_epu8(lo, q4);
-            __m128i d8 = _mm_subs_epu8(lo, q8), d12 = _mm_subs_epu8(lo, q12);
-            __m128i m = _mm_max_epu8(_mm_max_epu8(_mm_max_epu8(_mm_min_epu8(b0, b4), _mm_min_epu8(b4, b8)),
-                                                  _mm_max_epu8(_mm_min_epu8(b8, b12), _mm_min_epu8(b12, b0))),
-                                     _mm_max_epu8(_mm_max_epu8(_mm_min_epu8(d0, d4), _mm_min_epu8(d4, d8)),
-                                                  _mm_max_epu8(_mm_min_epu8(d8, d12),
-                                                               _mm_min_epu8(d12, d0))));
+            fast_v16 hi = FV_ADDS(c, thr), lo = FV_SUBS(c, thr);
+            fast_v16 q0 = FV_LOAD(p + o0), q4 = FV_LOAD(p + o4), q8 = FV_LOAD(p + o8), q12 = FV_LOAD(p + o12);
+            fast_v16 b0 = FV_SUBS(q0, hi), b4 = FV_SUBS(q4, hi), b8 = FV_SUBS(q8, hi), b12 = FV_SUBS(q12, hi);
+            fast_v16 d0 = FV_SUBS(lo, q0), d4 = FV_SUBS(lo, q4), d8 = FV_SUBS(lo, q8), d12 = FV_SUBS(lo, q12);
+            fast_v16 m = FV_MAX(FV_MAX(FV_MAX(FV_MIN(b0, b4), FV_MIN(b4, b8)),
+                                       FV_MAX(FV_MIN(b8, b12), FV_MIN(b12, b0))),
+                                FV_MAX(FV_MAX(FV_MIN(d0, d4), FV_MIN(d4, d8)),
+                                       FV_MAX(FV_MIN(d8, d12), FV_MIN(d12, d0))));
             unsigned bits;
-            if (_mm_movemask_epi8(_mm_cmpeq_epi8(m, zero)) == 0xFFFF)
+            if (FV_ALL0(m))
                 continue;
             {
                 /* exact test and score of all 16 lanes: with bright = sat(q - c), dark = sat(c - q)
                  * (unsigned saturating), best = max over the 16 arcs of 9 of max(min_arc bright,
                  * min_arc dark). Lane is a corner iff best > threshold, and then best - 1 is OpenCV's score
                  * (saturation at 0 cannot change a maximum that is >= threshold + 1 >= 1). */
-                __m128i xb[16], xd[16], r2b[8], r2d[8], r4b[8], r4d[8];
-                __m128i bestb = _mm_setzero_si128(), bestd = _mm_setzero_si128(), best, corner, one;
+                fast_v16 xb[16], xd[16], r2b[8], r2d[8], r4b[8], r4d[8];
+                fast_v16 bestb = FV_ZERO(), bestd = FV_ZERO(), best, notcorner;
                 int k;
                 for (k = 0; k < 16; ++k) {
-                    __m128i q = _mm_loadu_si128((const __m128i *)(const void *)(p + ofs[k]));
-                    xb[k] = _mm_subs_epu8(q, c);
-                    xd[k] = _mm_subs_epu8(c, q);
+                    fast_v16 q = FV_LOAD(p + ofs[k]);
+                    xb[k] = FV_SUBS(q, c);
+                    xd[k] = FV_SUBS(c, q);
                 }
                 /* runs starting at even e: R2_e = min(x_e, x_e+1), R4_e = min(R2_e, R2_e+2),
                  * R8_e = min(R4_e, R4_e+4); the 9-arcs are e..e+8 = min(R8_e, x_e+8) and
                  * e-1..e+7 = min(x_e-1, R8_e), so best = max_e min(R8_e, max(x_e+8, x_e-1)). */
                 for (k = 0; k < 8; ++k) {
-                    r2b[k] = _mm_min_epu8(xb[2 * k], xb[2 * k + 1]);
-                    r2d[k] = _mm_min_epu8(xd[2 * k], xd[2 * k + 1]);
+                    r2b[k] = FV_MIN(xb[2 * k], xb[2 * k + 1]);
+                    r2d[k] = FV_MIN(xd[2 * k], xd[2 * k + 1]);
                 }
                 for (k = 0; k < 8; ++k) {
-                    r4b[k] = _mm_min_epu8(r2b[k], r2b[(k + 1) & 7]);
-                    r4d[k] = _mm_min_epu8(r2d[k], r2d[(k + 1) & 7]);
+                    r4b[k] = FV_MIN(r2b[k], r2b[(k + 1) & 7]);
+                    r4d[k] = FV_MIN(r2d[k], r2d[(k + 1) & 7]);
                 }
                 for (k = 0; k < 8; ++k) {
                     int e = 2 * k;
-                    __m128i r8b = _mm_min_epu8(r4b[k], r4b[(k + 2) & 7]);
-                    __m128i r8d = _mm_min_epu8(r4d[k], r4d[(k + 2) & 7]);
-                    __m128i endb = _mm_max_epu8(xb[(e + 8) & 15], xb[(e + 15) & 15]);
-                    __m128i endd = _mm_max_epu8(xd[(e + 8) & 15], xd[(e + 15) & 15]);
-                    bestb = _mm_max_epu8(bestb, _mm_min_epu8(r8b, endb));
-                    bestd = _mm_max_epu8(bestd, _mm_min_epu8(r8d, endd));
+                    fast_v16 r8b = FV_MIN(r4b[k], r4b[(k + 2) & 7]);
+                    fast_v16 r8d = FV_MIN(r4d[k], r4d[(k + 2) & 7]);
+                    fast_v16 endb = FV_MAX(xb[(e + 8) & 15], xb[(e + 15) & 15]);
+                    fast_v16 endd = FV_MAX(xd[(e + 8) & 15], xd[(e + 15) & 15]);
+                    bestb = FV_MAX(bestb, FV_MIN(r8b, endb));
+                    bestd = FV_MAX(bestd, FV_MIN(r8d, endd));
                 }
-                best = _mm_max_epu8(bestb, bestd);
-                corner = _mm_cmpeq_epi8(_mm_subs_epu8(best, thr), _mm_setzero_si128()); /* NOT corner */
-                bits = (unsigned)_mm_movemask_epi8(corner) ^ 0xFFFFu;
+                best = FV_MAX(bestb, bestd);
+                notcorner = FV_EQ0(FV_SUBS(best, thr));
+                bits = FV_MOVEMASK(notcorner) ^ 0xFFFFu;
                 if (bits == 0u)
                     continue;
-                one = _mm_set1_epi8(1);
-                _mm_storeu_si128((__m128i *)(void *)(score_row + x),
-                                 _mm_andnot_si128(corner, _mm_sub_epi8(best, one)));
+                FV_STORE(score_row + x, FV_ANDNOT(notcorner, FV_SUB(best, FV_SET1(1))));
                 while (bits != 0u) {
                     pos[n++] = x + fast_ctz(bits);
                     bits &= bits - 1u;

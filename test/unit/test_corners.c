@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/* Corner module: FAST-9 (vs the simple reference, synthetic known corners, bands, capacity),
+/* Corner module: FAST-9 (vs the simple reference, SIMD vs portable path, synthetic known corners, bands,
+ * capacity),
  * Harris / Shi-Tomasi responses, bucketed detection (spread, spacing, existing points, determinism),
  * and bad input. The OpenCV comparison lives in test/oracle/test_corners_oracle.py. */
 #include "tvo_test.h"
@@ -8,6 +9,24 @@
 
 #include "tinyvo/corners.h"
 #include "tvo_fast_ref.h"
+#include "tvo_room.h"
+
+/* the portable FAST-9 path, built into this test from lib/src/tvo_fast.c (fast_portable.c) */
+size_t tvo_fast_scratch_size_portable(int32_t width);
+tvo_status tvo_fast9_detect_rows_portable(const tvo_image *img, int32_t threshold, int nonmax,
+                                          int32_t y_begin, int32_t y_end, tvo_corner *out, int32_t capacity,
+                                          int32_t *count, void *scratch, size_t scratch_size);
+
+/* the FAST kernel the library has under this test's compiler flags (as lib/src/tvo_fast.c chooses it) */
+#if defined(TVO_CORNERS_NO_SIMD)
+#define FAST_KERNEL "portable"
+#elif defined(__SSE2__) || defined(_M_X64)
+#define FAST_KERNEL "sse2"
+#elif defined(__ARM_NEON) || defined(__ARM_NEON__)
+#define FAST_KERNEL "neon"
+#else
+#define FAST_KERNEL "portable"
+#endif
 
 /* ---- helpers ------------------------------------------------------------------------------------- */
 
@@ -184,6 +203,80 @@ static void test_fast_matches_reference(void **state)
         free(b);
         img_free(&t);
     }
+}
+
+/* The library's FAST-9 (SSE2 / NEON block of 16 pixels, then the portable tail) against the portable path
+ * alone on the same view, whole image and one band: same corners, scores and order. */
+static void assert_simd_is_portable(const tvo_image *img, int32_t thr, int nonmax, tvo_corner *a,
+                                    tvo_corner *b, int32_t cap)
+{
+    size_t ss = tvo_fast_scratch_size(img->width);
+    uint8_t *s = (uint8_t *)malloc(ss + 1);
+    int32_t na = -1, nb = -1, y0 = img->height / 3, y1 = img->height / 3 + 3;
+    assert_non_null(s);
+    assert_true(ss == tvo_fast_scratch_size_portable(img->width));
+    assert_int_equal(tvo_fast9_detect(img, thr, nonmax, a, cap, &na, s + 1, ss), TVO_OK);
+    assert_int_equal(tvo_fast9_detect_rows_portable(img, thr, nonmax, 0, img->height, b, cap, &nb, s + 1, ss),
+                     TVO_OK);
+    assert_same_corners(a, na, b, nb);
+    assert_int_equal(tvo_fast9_detect_rows(img, thr, nonmax, y0, y1, a, cap, &na, s, ss), TVO_OK);
+    assert_int_equal(tvo_fast9_detect_rows_portable(img, thr, nonmax, y0, y1, b, cap, &nb, s, ss), TVO_OK);
+    assert_same_corners(a, na, b, nb);
+    free(s);
+}
+
+static void test_fast_simd_matches_portable(void **state)
+{
+    /* widths: tiny (no 16-pixel block: x in [3, w-3) holds fewer than 16 pixels up to w = 21), one block
+     * exactly (22) or with tails of 1 and 15 pixels (23, 37), two blocks (38), and wider ones with tails;
+     * views inside a larger buffer, so rows are unaligned and the stride exceeds the width */
+    const int32_t widths[] = {7, 8, 16, 21, 22, 23, 24, 37, 38, 39, 53, 64, 101, 190};
+    const int32_t BW = 200, BH = 150;
+    test_img src = img_new(BW, BH, BW, 0);
+    tvo_corner *a = (tvo_corner *)malloc(sizeof(tvo_corner) * (size_t)(BW * BH));
+    tvo_corner *b = (tvo_corner *)malloc(sizeof(tvo_corner) * (size_t)(BW * BH));
+    tvo_pose T = tvo_pose_identity();
+    uint64_t seed = 77u;
+    int kind, nonmax;
+    size_t wi;
+    int32_t thr, i, total = 0;
+    (void)state;
+    assert_non_null(a);
+    assert_non_null(b);
+    print_message("FAST kernel compared with the portable path: %s\n", FAST_KERNEL);
+    for (kind = 0; kind < 5; ++kind) {
+        /* raw noise, smoothed noise, blocks, the rendered room, and 0 / 255 noise (saturated differences) */
+        if (kind == 0 || kind == 1)
+            img_random(&src, 4321u + (uint64_t)kind, kind);
+        else if (kind == 2)
+            img_blocks(&src, 5u);
+        else if (kind == 3) {
+            T.t[0] = 0.1;
+            T.t[1] = -0.05;
+            tvo_room_render(&T, BW, BH, 120.0, src.buf);
+        } else
+            for (i = 0; i < BW * BH; ++i)
+                src.buf[i] = (uint8_t)(tvo_test_rand(&seed) >> 63 ? 255 : 0);
+        for (wi = 0; wi < sizeof widths / sizeof widths[0]; ++wi) {
+            int32_t w = widths[wi], h = wi % 2 ? 9 : 20, x0 = (int32_t)(wi % 5), y0 = (int32_t)(wi * 7 % 40);
+            tvo_image v = tvo_image_make(w, h, BW, src.buf + (size_t)y0 * (size_t)BW + (size_t)x0);
+            for (thr = 0; thr <= 255; ++thr)
+                for (nonmax = 0; nonmax <= 1; ++nonmax)
+                    assert_simd_is_portable(&v, thr, nonmax, a, b, BW * BH);
+        }
+        /* the whole buffer, every 3rd threshold and the extremes */
+        for (thr = 0; thr <= 255; thr += thr < 3 || thr >= 252 ? 1 : 3)
+            for (nonmax = 0; nonmax <= 1; ++nonmax) {
+                int32_t n = -1;
+                assert_simd_is_portable(&src.img, thr, nonmax, a, b, BW * BH);
+                assert_int_equal(run_fast(&src.img, thr, nonmax, a, BW * BH, &n), TVO_OK);
+                total += n;
+            }
+    }
+    assert_true(total > 10000); /* the comparisons had corners to compare */
+    free(a);
+    free(b);
+    img_free(&src);
 }
 
 static void test_fast_rows_and_capacity(void **state)
@@ -658,12 +751,19 @@ static void test_detect_scores_and_options(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-            cmocka_unit_test(test_fast_square_corners),     cmocka_unit_test(test_fast_matches_reference),
-            cmocka_unit_test(test_fast_rows_and_capacity),  cmocka_unit_test(test_fast_bad_input),
-            cmocka_unit_test(test_response_dense_vs_point), cmocka_unit_test(test_response_known_structures),
-            cmocka_unit_test(test_response_bad_input),      cmocka_unit_test(test_detect_spreads),
-            cmocka_unit_test(test_detect_empty_cells),      cmocka_unit_test(test_detect_existing),
-            cmocka_unit_test(test_detect_bad_input),        cmocka_unit_test(test_detect_scores_and_options),
+            cmocka_unit_test(test_fast_square_corners),
+            cmocka_unit_test(test_fast_matches_reference),
+            cmocka_unit_test(test_fast_simd_matches_portable),
+            cmocka_unit_test(test_fast_rows_and_capacity),
+            cmocka_unit_test(test_fast_bad_input),
+            cmocka_unit_test(test_response_dense_vs_point),
+            cmocka_unit_test(test_response_known_structures),
+            cmocka_unit_test(test_response_bad_input),
+            cmocka_unit_test(test_detect_spreads),
+            cmocka_unit_test(test_detect_empty_cells),
+            cmocka_unit_test(test_detect_existing),
+            cmocka_unit_test(test_detect_bad_input),
+            cmocka_unit_test(test_detect_scores_and_options),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
