@@ -158,11 +158,134 @@ static tvo_status lk_work_init(lk_work *wk, int32_t win, void *scratch, size_t s
     wk->iwin = (int16_t *)b[5];
     wk->ixwin = (int16_t *)b[6];
     wk->iywin = (int16_t *)b[7];
+    wk->siwin = wk->iwin;
+    wk->sixwin = wk->ixwin;
+    wk->siywin = wk->iywin;
     wk->jpatch = (uint8_t *)b[8];
     wk->jp_data = NULL; /* the images may have changed since the last call */
     wk->jp_x0 = wk->jp_y0 = 0;
     return TVO_OK;
 }
+
+/* ---- window store (tvo_lk_track_store) ----------------------------------------------------------
+ * Layout: a header, then `slots` entries; an entry holds one record per level 0..levels-1, each a key
+ * and the window's three int16 arrays of wmax^2 values (a window of side win uses the first win^2).
+ * A record is used only when every field of its key equals what the window would be built from: the
+ * caller's generation of the pyramid, the level, the window side, the integer corner (ix, iy) and the
+ * four bilinear weights. These determine the window's integers and A exactly (lk_prev_window() is a
+ * function of the level's pixels and of them alone), so a used record gives the same bits as a rebuilt
+ * window. */
+#define LK_STORE_MAGIC 0x744b5753u /* "tKWS" */
+
+typedef struct lk_store_head {
+    uint32_t magic;
+    int32_t levels; /* max_level + 1 of the configuration it was laid out for */
+    int32_t wmax;   /* the larger window side of that configuration */
+    int32_t slots;
+} lk_store_head;
+
+typedef struct lk_rec {
+    uint32_t gen;  /* the pyramid's generation (the caller's tag of its pixels) */
+    int32_t win;   /* window side; 0: empty */
+    int32_t level; /* the level it was built on */
+    int32_t ix, iy;
+    int32_t wt[4];
+    int64_t A[3];
+} lk_rec;
+
+#define LK_REC_HEAD ((sizeof(lk_rec) + 15u) & ~(size_t)15u)
+
+/* Bytes of one level's record for windows up to wmax (a multiple of 16). */
+static size_t lk_rec_size(int32_t wmax)
+{
+    return LK_REC_HEAD + ((3u * (size_t)wmax * (size_t)wmax * sizeof(int16_t) + 15u) & ~(size_t)15u);
+}
+
+static int16_t *lk_rec_win(lk_rec *r, int32_t wmax, int32_t k)
+{
+    return (int16_t *)((uint8_t *)r + LK_REC_HEAD) + (size_t)k * (size_t)wmax * (size_t)wmax;
+}
+
+/* The store's header at the first 16-byte boundary of mem. */
+static lk_store_head *lk_store_head_of(void *mem)
+{
+    const uintptr_t a = ((uintptr_t)mem + 15u) & ~(uintptr_t)15u;
+    return (lk_store_head *)a;
+}
+
+static lk_rec *lk_store_rec(lk_store_head *h, int32_t slot, int32_t level)
+{
+    const size_t rs = lk_rec_size(h->wmax);
+    uint8_t *base = (uint8_t *)h + ((sizeof(lk_store_head) + 15u) & ~(size_t)15u);
+    return (lk_rec *)(base + ((size_t)slot * (size_t)h->levels + (size_t)level) * rs);
+}
+
+size_t tvo_lk_store_point_size(const tvo_lk_config *cfg)
+{
+    if (tvo_lk_config_check(cfg) != TVO_OK)
+        return 0;
+    return tvo_size_mul((size_t)cfg->max_level + 1u, lk_rec_size(lk_max_win(cfg)));
+}
+
+size_t tvo_lk_store_size(const tvo_lk_config *cfg, int32_t slots)
+{
+    const size_t p = tvo_lk_store_point_size(cfg);
+    if (p == 0 || slots < 1)
+        return 0;
+    return tvo_size_add(15u + ((sizeof(lk_store_head) + 15u) & ~(size_t)15u), tvo_size_mul(p, (size_t)slots));
+}
+
+static void lk_entry_forget(lk_store_head *h, int32_t slot)
+{
+    int32_t l;
+    for (l = 0; l < h->levels; ++l)
+        lk_store_rec(h, slot, l)->win = 0;
+}
+
+tvo_status tvo_lk_store_init(const tvo_lk_config *cfg, int32_t slots, void *mem, size_t mem_size)
+{
+    lk_store_head *h;
+    int32_t i;
+    if (cfg == NULL || mem == NULL)
+        return TVO_ERR_NULL;
+    if (tvo_lk_config_check(cfg) != TVO_OK)
+        return tvo_lk_config_check(cfg);
+    if (slots < 1)
+        return TVO_ERR_SIZE;
+    if (mem_size < tvo_lk_store_size(cfg, slots))
+        return TVO_ERR_NO_MEMORY;
+    h = lk_store_head_of(mem);
+    h->magic = LK_STORE_MAGIC;
+    h->levels = cfg->max_level + 1;
+    h->wmax = lk_max_win(cfg);
+    h->slots = slots;
+    for (i = 0; i < slots; ++i)
+        lk_entry_forget(h, i);
+    return TVO_OK;
+}
+
+tvo_status tvo_lk_store_forget(void *store, int32_t slot)
+{
+    lk_store_head *h;
+    if (store == NULL)
+        return TVO_ERR_NULL;
+    h = lk_store_head_of(store);
+    if (h->magic != LK_STORE_MAGIC)
+        return TVO_ERR_ARG;
+    if (slot < 0 || slot >= h->slots)
+        return TVO_ERR_ARG;
+    lk_entry_forget(h, slot);
+    return TVO_OK;
+}
+
+/* What one point's track does with the store: read the records of prev_pts (forward) or write those of
+ * next_pts (the way back); recs NULL: no store. */
+typedef struct lk_keep {
+    lk_store_head *h;
+    int32_t slot;
+    uint32_t gen;
+    int write;
+} lk_keep;
 
 /* Largest block lk_gather() copies: the (win+3)^2 patch or the (win+1+2*margin)^2 jpatch. */
 #define LK_GATHER_MAX (TVO_LK_MAX_WIN_SIZE + 3 + 2 * LK_JPATCH_MARGIN)
@@ -401,7 +524,7 @@ static const uint8_t *lk_next_block(const lk_level *lv, int32_t jx, int32_t jy, 
  * estimate (OpenCV's nextPts). Returns 1, or 0 when the point is lost at this level. When err is not
  * NULL (level 0), the final error is stored there. */
 static int lk_track_level(const lk_params *prm, const lk_level *I, const lk_level *J, float px, float py,
-                          float *nx, float *ny, lk_work *wk, float *err)
+                          float *nx, float *ny, lk_work *wk, float *err, const lk_keep *kp, int32_t level)
 {
     const int32_t win = prm->win;
     const float half = (float)(win - 1) * 0.5f;
@@ -412,6 +535,9 @@ static int lk_track_level(const lk_params *prm, const lk_level *I, const lk_leve
     const uint8_t *blk;
     int ok = 1;
 
+    wk->iwin = wk->siwin; /* a stored window of the last call is not this one's */
+    wk->ixwin = wk->sixwin;
+    wk->iywin = wk->siywin;
     px -= half;
     py -= half;
     if (!lk_corner_ok(px, win, I->w) || !lk_corner_ok(py, win, I->h))
@@ -419,7 +545,32 @@ static int lk_track_level(const lk_params *prm, const lk_level *I, const lk_leve
     ix = lk_floor_i(px);
     iy = lk_floor_i(py);
     lk_weights(px - (float)ix, py - (float)iy, wt);
-    lk_prev_window(I, ix, iy, wt, wk, A, prm->simd);
+    if (kp == NULL) {
+        lk_prev_window(I, ix, iy, wt, wk, A, prm->simd);
+    } else {
+        lk_rec *r = lk_store_rec(kp->h, kp->slot, level);
+        const int32_t wmax = kp->h->wmax;
+        if (kp->write) { /* build the window into the record, and key it */
+            wk->iwin = lk_rec_win(r, wmax, 0);
+            wk->ixwin = lk_rec_win(r, wmax, 1);
+            wk->iywin = lk_rec_win(r, wmax, 2);
+            lk_prev_window(I, ix, iy, wt, wk, A, prm->simd);
+            r->gen = kp->gen;
+            r->win = win;
+            r->level = level;
+            r->ix = ix;
+            r->iy = iy;
+            memcpy(r->wt, wt, sizeof(r->wt));
+            memcpy(r->A, A, sizeof(r->A));
+        } else if (r->win == win && r->gen == kp->gen && r->level == level && r->ix == ix && r->iy == iy &&
+                   r->wt[0] == wt[0] && r->wt[1] == wt[1] && r->wt[2] == wt[2] && r->wt[3] == wt[3]) {
+            wk->iwin = lk_rec_win(r, wmax, 0); /* the same window, built on the same pixels */
+            wk->ixwin = lk_rec_win(r, wmax, 1);
+            wk->iywin = lk_rec_win(r, wmax, 2);
+            memcpy(A, r->A, sizeof(A));
+        } else
+            lk_prev_window(I, ix, iy, wt, wk, A, prm->simd);
+    }
 
     a11 = (float)A[0] * LK_FLT_SCALE;
     a12 = (float)A[1] * LK_FLT_SCALE;
@@ -487,7 +638,8 @@ static int lk_track_level(const lk_params *prm, const lk_level *I, const lk_leve
 /* Track one point through the levels top..0 from pyramid I to J. (*nx, *ny): in = level-0 guess
  * (used when use_guess), out = level-0 estimate. Returns 1 tracked, 0 lost. */
 static int lk_track_point(const lk_params *prm, const tvo_pyramid *I, const tvo_pyramid *J, int32_t top,
-                          float x0, float y0, int use_guess, float *nx, float *ny, lk_work *wk, float *err)
+                          float x0, float y0, int use_guess, float *nx, float *ny, lk_work *wk, float *err,
+                          const lk_keep *kp)
 {
     /* err != NULL: compute the level-0 error into *err (0 when lost) */
     int32_t l;
@@ -517,7 +669,7 @@ static int lk_track_point(const lk_params *prm, const tvo_pyramid *I, const tvo_
             gx *= 2.f;
             gy *= 2.f;
         }
-        st = lk_track_level(prm, &li, &lj, px, py, &gx, &gy, wk, (l == 0 && err != NULL) ? &e : NULL);
+        st = lk_track_level(prm, &li, &lj, px, py, &gx, &gy, wk, (l == 0 && err != NULL) ? &e : NULL, kp, l);
     }
     *nx = gx;
     *ny = gy;
@@ -608,18 +760,45 @@ static void lk_mode_init(lk_mode *md, const tvo_lk_config *cfg, const tvo_pyrami
     md->fb_top = fb_levels - 1 < md->top ? fb_levels - 1 : md->top;
 }
 
-tvo_status tvo_lk_track_pred(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,
-                             const tvo_point2f *prev_pts, tvo_point2f *next_pts, const uint8_t *pred,
-                             uint8_t *status, float *err, int32_t n, void *scratch, size_t scratch_size)
+/* The store's checks (tvo_lk_track_store): its header is the one tvo_lk_store_init() wrote for this
+ * configuration's layout, and every slot is -1 or an entry. */
+static tvo_status lk_validate_store(const tvo_lk_config *cfg, const tvo_lk_store_use *use, int32_t n)
+{
+    const lk_store_head *h;
+    int32_t i;
+    if (use->store == NULL)
+        return TVO_ERR_NULL;
+    h = lk_store_head_of(use->store);
+    if (h->magic != LK_STORE_MAGIC || h->slots < 1)
+        return TVO_ERR_ARG;
+    if (h->levels != cfg->max_level + 1 || h->wmax != lk_max_win(cfg))
+        return TVO_ERR_MISMATCH;
+    if (use->slot == NULL)
+        return n <= h->slots ? TVO_OK : TVO_ERR_SIZE;
+    for (i = 0; i < n; ++i)
+        if (use->slot[i] < -1 || use->slot[i] >= h->slots)
+            return TVO_ERR_ARG;
+    return TVO_OK;
+}
+
+static tvo_status lk_track_all(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,
+                               const tvo_point2f *prev_pts, tvo_point2f *next_pts, const uint8_t *pred,
+                               uint8_t *status, float *err, int32_t n, const tvo_lk_store_use *use,
+                               void *scratch, size_t scratch_size)
 {
     lk_mode mode[2];
     int32_t i, last = -1;
     int two;
     tvo_status st;
+    lk_keep kin, kout;
 
+    memset(&kin, 0, sizeof(kin));
+    memset(&kout, 0, sizeof(kout));
     if (status == NULL)
         return TVO_ERR_NULL;
     st = lk_validate(cfg, prev, next, prev_pts, next_pts, n, scratch, scratch_size);
+    if (st == TVO_OK && use != NULL)
+        st = lk_validate_store(cfg, use, n);
     if (st == TVO_OK)
         st = lk_work_init(&mode[0].wk, cfg->win_size, scratch, scratch_size);
     /* the predicted points' way differs from the others' only with some pred_* field set */
@@ -637,8 +816,17 @@ tvo_status tvo_lk_track_pred(const tvo_lk_config *cfg, const tvo_pyramid *prev, 
         lk_mode_init(&mode[1], cfg, prev, cfg->pred_win_size > 0 ? cfg->pred_win_size : cfg->win_size,
                      cfg->pred_levels, cfg->pred_fb_levels > 0 ? cfg->pred_fb_levels : cfg->fb_levels);
 
+    if (use != NULL) {
+        kin.h = kout.h = lk_store_head_of(use->store);
+        kin.gen = use->prev_gen;
+        kout.gen = use->next_gen;
+        kin.write = 0;
+        kout.write = 1;
+    }
     for (i = 0; i < n; ++i) {
         const int32_t k = two && pred[i] ? 1 : 0;
+        const int32_t slot = use == NULL ? -1 : (use->slot == NULL ? i : use->slot[i]);
+        const lk_keep *ki = slot >= 0 ? &kin : NULL, *ko = slot >= 0 ? &kout : NULL;
         lk_mode *md = &mode[k];
         float x0 = prev_pts[i].x, y0 = prev_pts[i].y;
         float nx = next_pts[i].x, ny = next_pts[i].y;
@@ -649,8 +837,11 @@ tvo_status tvo_lk_track_pred(const tvo_lk_config *cfg, const tvo_pyramid *prev, 
             md->wk.jp_data = NULL;
             last = k;
         }
+        kin.slot = kout.slot = slot;
         ok = lk_track_point(&md->prm, prev, next, md->top, x0, y0, cfg->use_initial_flow != 0, &nx, &ny,
-                            &md->wk, err != NULL ? &e : NULL);
+                            &md->wk, err != NULL ? &e : NULL, ki);
+        if (ko != NULL) /* the entry now holds the way back's windows (of next_pts in next), or none */
+            lk_entry_forget(kout.h, slot);
         if (ok && cfg->fb_check) {
             /* the way back starts at the guess's displacement reversed (no displacement without a guess) */
             float bx = cfg->use_initial_flow ? nx - gx : nx, by = cfg->use_initial_flow ? ny - gy : ny, ddx,
@@ -659,10 +850,11 @@ tvo_status tvo_lk_track_pred(const tvo_lk_config *cfg, const tvo_pyramid *prev, 
             if (md->fb_levels > 0) { /* the short way back: from the start point, on the finest levels */
                 bx = x0;
                 by = y0;
-                back = lk_track_point(&md->prm, next, prev, md->fb_top, nx, ny, 1, &bx, &by, &md->wk, NULL);
+                back = lk_track_point(&md->prm, next, prev, md->fb_top, nx, ny, 1, &bx, &by, &md->wk, NULL,
+                                      ko);
             } else
                 back = lk_track_point(&md->prm, next, prev, md->top, nx, ny, cfg->use_initial_flow != 0, &bx,
-                                      &by, &md->wk, NULL);
+                                      &by, &md->wk, NULL, ko);
             ddx = bx - x0;
             ddy = by - y0;
             if (!back ||
@@ -679,6 +871,28 @@ tvo_status tvo_lk_track_pred(const tvo_lk_config *cfg, const tvo_pyramid *prev, 
             err[i] = e;
     }
     return TVO_OK;
+}
+
+tvo_status tvo_lk_track_pred(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,
+                             const tvo_point2f *prev_pts, tvo_point2f *next_pts, const uint8_t *pred,
+                             uint8_t *status, float *err, int32_t n, void *scratch, size_t scratch_size)
+{
+    return lk_track_all(cfg, prev, next, prev_pts, next_pts, pred, status, err, n, NULL, scratch,
+                        scratch_size);
+}
+
+tvo_status tvo_lk_track_store(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,
+                              const tvo_point2f *prev_pts, tvo_point2f *next_pts, const uint8_t *pred,
+                              uint8_t *status, float *err, int32_t n, const tvo_lk_store_use *use,
+                              void *scratch, size_t scratch_size)
+{
+    if (use == NULL) {
+        if (status != NULL && n > 0)
+            memset(status, TVO_LK_LOST, (size_t)n);
+        return TVO_ERR_NULL;
+    }
+    return lk_track_all(cfg, prev, next, prev_pts, next_pts, pred, status, err, n, use, scratch,
+                        scratch_size);
 }
 
 tvo_status tvo_lk_track(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,

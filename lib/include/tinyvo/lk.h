@@ -121,6 +121,67 @@ tvo_status tvo_lk_track_pred(const tvo_lk_config *cfg, const tvo_pyramid *prev, 
                              const tvo_point2f *prev_pts, tvo_point2f *next_pts, const uint8_t *pred,
                              uint8_t *status, float *err, int32_t n, void *scratch, size_t scratch_size);
 
+/* ---- window store: the way back's windows reused by the next call's forward track ------------------
+ * With fb_check, the way back of a call builds, for every tracked point and level, the window of `next`
+ * around next_pts[i]; when the caller tracks the same point on from the same pyramid in the next call (as
+ * a VO does: that call's prev is this call's next, its prev_pts this call's next_pts), its forward track
+ * builds the same windows again. A window store keeps them in caller memory between the two calls, so
+ * the forward track uses them instead: with the default configuration about half of the windows are not
+ * built again, and the results are bit-identical to tvo_lk_track_pred()'s.
+ *
+ * A store has `slots` entries; an entry holds, per level 0..max_level, one window (its grey values and
+ * interpolated derivatives, 3 x w^2 int16, w the larger of win_size and pred_win_size) and its key: the
+ * caller's generation tag of the pyramid, the level, the window side, the window's integer corner and
+ * its four bilinear weights. A stored window is used only when its key equals that of the window the
+ * track would build (the same pixels, window and sample positions give the same integers), else the
+ * window is built as without a store: a stale, moved or mismatched entry costs time, never a different
+ * result, as long as the generation tags name the pyramids' pixels (below). */
+
+/* Bytes per point of a window store for cfg: (max_level + 1) x (64 + 6 w^2 rounded up to 16), w the
+ * larger of win_size and pred_win_size (10,880 bytes for 21 and 4 levels). 0 for an invalid cfg. */
+size_t tvo_lk_store_point_size(const tvo_lk_config *cfg);
+
+/* Bytes of a store with `slots` entries (slots x tvo_lk_store_point_size() plus a 16-byte header and
+ * slack for any alignment of the memory). 0 for an invalid cfg or slots < 1. */
+size_t tvo_lk_store_size(const tvo_lk_config *cfg, int32_t slots);
+
+/* Lay out an empty store of `slots` entries for cfg's layout (max_level and the larger window side: a
+ * store serves every configuration with the same two) in [mem, mem + mem_size).
+ * TVO_OK, TVO_ERR_NULL, TVO_ERR_ARG / TVO_ERR_NOT_FINITE (bad cfg), TVO_ERR_SIZE (slots < 1),
+ * TVO_ERR_NO_MEMORY (mem_size < tvo_lk_store_size()). */
+tvo_status tvo_lk_store_init(const tvo_lk_config *cfg, int32_t slots, void *mem, size_t mem_size);
+
+/* Empty entry `slot` of a store (e.g. when the caller gives the slot to a new point). TVO_OK, TVO_ERR_NULL,
+ * TVO_ERR_ARG (not a store laid out by tvo_lk_store_init(), or slot outside 0..slots-1). */
+tvo_status tvo_lk_store_forget(void *store, int32_t slot);
+
+/* How a call uses a store. */
+typedef struct tvo_lk_store_use {
+    void *store;         /* laid out by tvo_lk_store_init() (the memory passed to it) */
+    const int32_t *slot; /* [n]: the entry of each point, 0..slots-1, or -1 for a point without one; NULL:
+                            point i uses entry i (then n <= slots). Two points should not share an entry
+                            (one would only overwrite the other's windows) */
+    uint32_t prev_gen;   /* the caller's generation tag of prev's pixels: windows are taken from entries
+                            written by a call whose next_gen was this tag */
+    uint32_t next_gen;   /* the tag of next's pixels, written into the entries. A tag must name one content
+                            of a pyramid's levels 0..max_level while entries carry it: give a pyramid a new
+                            tag whenever its pixels change (a new frame, or a gain applied in place) */
+} tvo_lk_store_use;
+
+/* tvo_lk_track_pred() with a window store: each point with an entry takes its forward windows from that
+ * entry when their keys match (written by the previous call's way back around this point), and its entry
+ * then holds this call's way back's windows (of next_pts[i] in next, on the levels the way back used),
+ * or nothing when the point had no way back (lost forward, or fb_check off). Results (next_pts, status,
+ * err) are bit-identical to tvo_lk_track_pred()'s with the same arguments. Errors as tvo_lk_track_pred(),
+ * and TVO_ERR_NULL (use or use->store NULL), TVO_ERR_ARG (use->store not laid out by
+ * tvo_lk_store_init(), a slot outside -1..slots-1), TVO_ERR_MISMATCH (the store was laid out for another
+ * max_level or larger window side), TVO_ERR_SIZE (slot NULL and n > slots). Not thread-safe for calls
+ * sharing a store. */
+tvo_status tvo_lk_track_store(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,
+                              const tvo_point2f *prev_pts, tvo_point2f *next_pts, const uint8_t *pred,
+                              uint8_t *status, float *err, int32_t n, const tvo_lk_store_use *use,
+                              void *scratch, size_t scratch_size);
+
 #ifdef __cplusplus
 }
 #endif

@@ -60,7 +60,10 @@ typedef struct lk_work {
     int16_t *iwin;    /* win^2 window grey values, 5 fractional bits */
     int16_t *ixwin;   /* win^2 interpolated d/dx */
     int16_t *iywin;   /* win^2 interpolated d/dy */
-    uint8_t *jpatch;  /* (win+1+2*LK_JPATCH_MARGIN)^2 gathered next-image pixels near borders, kept while
+    /* the scratch's own window arrays: iwin / ixwin / iywin point into a window store's entry while a
+       stored window is used or built (tvo_lk_track_store) */
+    int16_t *siwin, *sixwin, *siywin;
+    uint8_t *jpatch; /* (win+1+2*LK_JPATCH_MARGIN)^2 gathered next-image pixels near borders, kept while
                          the iterations stay inside it (same bytes as gathering each block anew) */
     const uint8_t *jp_data; /* level the jpatch was gathered from (NULL: none) */
     int32_t jp_x0, jp_y0;   /* its top-left in that level */
