@@ -56,6 +56,7 @@ static const setting settings[] = {
         S_I(map_prediction),
         S_I(affine_win_size),
         S_I(affine_step),
+        S_I(lk_window_store),
         S_I(map),
         S_I(map_window),
         S_I(map_max_landmarks),

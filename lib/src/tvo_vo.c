@@ -20,6 +20,8 @@ struct tvo_vo {
     uint8_t *level0;    /* [width x height] */
     int32_t cur;        /* index of the pyramid that receives the next frame */
     int32_t has_prev;   /* a previous frame with tracks exists */
+    struct vo_lkws *ws; /* LK's window store (cfg.lk_window_store), else NULL (here it takes a 32-bit
+                           target's padding before t_prev: the VO's size without it is unchanged there) */
     int64_t t_prev;
     double t_dir[3];           /* unit translation (X_cur = R X_prev + t) of the last frame that had one */
     int32_t t_dir_age;         /* frames since then; > TVO_VO_PRIOR_FRAMES: no motion prior */
@@ -74,6 +76,17 @@ struct tvo_vo {
     void *scratch;
     size_t scratch_size;
 };
+
+/* LK's window store (cfg.lk_window_store): each track's entry (slot[i], distinct, in 0..max_tracks-1,
+ * moving with the track) holds the windows the last frame's way back built around its position; gen[]
+ * tags each pyramid's pixels (a new tag at every build and every gain scaling). */
+typedef struct vo_lkws {
+    void *store;     /* tvo_lk_store_size(&cfg.lk, max_tracks) bytes */
+    int32_t *slot;   /* [max_tracks] */
+    uint8_t *used;   /* [max_tracks]: slots in use (detect_append) */
+    uint32_t gen[2]; /* tags of pyr[0], pyr[1] */
+    uint32_t count;  /* the last tag given */
+} vo_lkws;
 
 /* A translation direction older than this many frames is not used to resolve an ambiguous pose. */
 #define TVO_VO_PRIOR_FRAMES 3
@@ -140,6 +153,8 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->affine_win_size = 0; /* on (21, TVO_VO_PRESET_ACCURATE): more accurate, but it costs 1.3-1.4 times
                                  the instructions (docs/budget.md, "A third rule") */
     cfg->affine_step = 1;
+    cfg->lk_window_store = 0; /* on: the same results for 11-19 % fewer instructions, but 3.2 MB more memory
+                                 at 300 tracks and no measured gain in time (docs/budget.md, "Window store") */
     cfg->map = 1;
     cfg->map_window = 6;
     cfg->map_max_landmarks = 0; /* 2 x max_tracks */
@@ -180,6 +195,7 @@ tvo_status tvo_vo_config_preset(tvo_vo_config *cfg, const tvo_camera *camera, tv
         cfg->lk.max_level = 2;
         cfg->map_window = 5;
         cfg->map_max_landmarks = 160;
+        cfg->lk_window_store = 0; /* (also the default) 8,160 bytes a track with 3 levels */
         return TVO_OK;
     default:
         return TVO_ERR_ARG;
@@ -228,6 +244,8 @@ static int config_valid(const tvo_vo_config *cfg)
         (cfg->affine_win_size != 0 && !tvo_aff_step_ok(cfg->affine_win_size, cfg->affine_step)))
         return 0;
     if (cfg->map_prediction < 0 || cfg->map_prediction > 2)
+        return 0;
+    if (cfg->lk_window_store != 0 && cfg->lk_window_store != 1)
         return 0;
     if (cfg->lk.max_level < 0 || cfg->lk.max_level + 1 > TVO_MAX_PYR_LEVELS)
         return 0;
@@ -312,6 +330,15 @@ static size_t layout_size(const tvo_vo_config *cfg)
         s = tvo_size_add(s, tvo_arena_round(n));
     }
 #endif
+    if (cfg->lk_window_store) {
+        const size_t ws = tvo_lk_store_size(&cfg->lk, cfg->max_tracks);
+        if (ws == 0)
+            return 0;
+        s = tvo_size_add(s, tvo_arena_round(sizeof(vo_lkws)));
+        s = tvo_size_add(s, tvo_arena_round(ws));
+        s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(int32_t)))); /* slot */
+        s = tvo_size_add(s, tvo_arena_round(n));                                /* used */
+    }
     s = tvo_size_add(s, tvo_arena_round(scratch_need(cfg)));
     return tvo_size_add(s, TVO_ARENA_ALIGN); /* slack for an unaligned block */
 }
@@ -412,6 +439,23 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
         memset(vo->hast, 0, n);
     }
 #endif
+    if (cfg->lk_window_store) {
+        const size_t ws = tvo_lk_store_size(&cfg->lk, cfg->max_tracks);
+        tvo_status ss;
+        vo_lkws *w = (vo_lkws *)tvo_arena_alloc(&a, sizeof(vo_lkws));
+        if (w == NULL)
+            return TVO_ERR_NO_MEMORY;
+        memset(w, 0, sizeof(*w));
+        w->store = tvo_arena_alloc(&a, ws);
+        w->slot = (int32_t *)tvo_arena_alloc(&a, n * sizeof(int32_t));
+        w->used = (uint8_t *)tvo_arena_alloc(&a, n);
+        if (w->store == NULL || w->slot == NULL || w->used == NULL)
+            return TVO_ERR_NO_MEMORY;
+        ss = tvo_lk_store_init(&cfg->lk, cfg->max_tracks, w->store, ws);
+        vo->ws = w;
+        if (ss != TVO_OK)
+            return ss;
+    }
     vo->T_c_w = tvo_pose_identity();
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
     for (int i = 0; i < 4; ++i) {
@@ -479,6 +523,20 @@ static int32_t detect_append(tvo_vo *vo, const tvo_pyramid *pyr, int32_t thresho
         return 0; /* a frame without corners is not an error: tracking just stays low */
     if (got > room)
         got = room;
+    if (vo->ws != NULL) { /* each new track gets a free window-store entry, emptied */
+        vo_lkws *w = vo->ws;
+        int32_t s = 0;
+        memset(w->used, 0, (size_t)vo->cfg.max_tracks);
+        for (int32_t i = 0; i < vo->n; ++i)
+            w->used[w->slot[i]] = 1;
+        for (int32_t i = 0; i < got; ++i) {
+            while (w->used[s])
+                ++s;
+            w->used[s] = 1;
+            w->slot[vo->n + i] = s;
+            (void)tvo_lk_store_forget(w->store, s);
+        }
+    }
     for (int32_t i = 0; i < got; ++i) {
         vo->pts[vo->n + i].x = vo->corners[i].x;
         vo->pts[vo->n + i].y = vo->corners[i].y;
@@ -809,6 +867,8 @@ static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
         vo->tri_fr[m] = vo->tri_fr[i];
         vo->tri_x[m] = vo->tri_x[i];
         vo->minl[m] = vo->minl[i];
+        if (vo->ws != NULL)
+            vo->ws->slot[m] = vo->ws->slot[i];
 #if TVO_WITH_AFFINE
         if (vo->hast != NULL) {
             if (m != i) {
@@ -1099,6 +1159,8 @@ static void affine_refine(tvo_vo *vo, const frame_ctx *fc)
             continue;
         vo->next[i].x = px;
         vo->next[i].y = py;
+        if (vo->ws != NULL) /* its stored windows are around LK's position */
+            (void)tvo_lk_store_forget(vo->ws->store, vo->ws->slot[i]);
         vo->aw[i] = aw;
         vo->hast[i] = 1;
     }
@@ -1139,8 +1201,19 @@ static int32_t lk_pass(tvo_vo *vo, const frame_ctx *fc, const tvo_lk_config *lkc
 {
     const int32_t w = vo->cfg.camera.width, h = vo->cfg.camera.height;
     int32_t kept = 0;
-    if (tvo_lk_track_pred(lkc, fc->pp, fc->pc, vo->pts, vo->next, pred, vo->st, NULL, vo->n, vo->scratch,
-                          vo->scratch_size) != TVO_OK)
+    tvo_status st;
+    if (vo->ws != NULL) {
+        tvo_lk_store_use use;
+        use.store = vo->ws->store;
+        use.slot = vo->ws->slot;
+        use.prev_gen = vo->ws->gen[fc->pp == &vo->pyr[0] ? 0 : 1];
+        use.next_gen = vo->ws->gen[fc->pc == &vo->pyr[0] ? 0 : 1];
+        st = tvo_lk_track_store(lkc, fc->pp, fc->pc, vo->pts, vo->next, pred, vo->st, NULL, vo->n, &use,
+                                vo->scratch, vo->scratch_size);
+    } else
+        st = tvo_lk_track_pred(lkc, fc->pp, fc->pc, vo->pts, vo->next, pred, vo->st, NULL, vo->n, vo->scratch,
+                               vo->scratch_size);
+    if (st != TVO_OK)
         memset(vo->st, 0, (size_t)vo->n);
     for (int32_t i = 0; i < vo->n; ++i) {
         const tvo_point2f q = vo->next[i];
@@ -1210,6 +1283,8 @@ static int32_t gain_retry(tvo_vo *vo, const frame_ctx *fc, int32_t tracked)
     memcpy(vo->kx1, vo->next, (size_t)vo->n * sizeof(tvo_point2f));
     memcpy(vo->kmask, vo->st, (size_t)vo->n);
     scale_previous(fc, g);
+    if (vo->ws != NULL) /* its pixels changed: no stored window is of them */
+        vo->ws->gen[vo->cur ^ 1] = ++vo->ws->count;
     lkc.use_initial_flow = 0;
     if (lk_pass(vo, fc, &lkc, NULL) > tracked)
         return 1;
@@ -1497,6 +1572,8 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
     t0 = now_ns(vo);
     fc.pc = &vo->pyr[vo->cur];
     fc.pp = &vo->pyr[vo->cur ^ 1];
+    if (vo->ws != NULL) /* new pixels (tagged before the build, which may fail midway) */
+        vo->ws->gen[vo->cur] = ++vo->ws->count;
     st = tvo_pyramid_build_borrowed(fc.pc,
                                     frame); /* level 0 is the caller's frame until the end of the call */
     if (st != TVO_OK)

@@ -732,6 +732,99 @@ static void test_gain_retry(void **state)
     assert_true(kept_small > 0.9);
 }
 
+/* One frame's results and tracks, for comparing two runs bit for bit. */
+typedef struct frame_out {
+    tvo_vo_result res;
+    int32_t n;
+    tvo_vo_track t[300];
+} frame_out;
+
+/* A walk with a few still frames (the same picture again: every track stays where it is) and an
+ * exposure step (the gain retry scales the previous pyramid in place), with cfg's other settings;
+ * lk_window_store as given. Writes each frame's results into out[40]. */
+static void run_store_walk(const tvo_vo_config *cfg, int32_t store, frame_out *out)
+{
+    fixture f;
+    f.cfg = *cfg;
+    f.cfg.lk_window_store = store;
+    open_vo(&f);
+    for (int k = 0; k < 40; ++k) {
+        const double dir[3] = {0.1, 0.05, 1.0};
+        const int m = k < 12 ? k : (k < 15 ? 12 : k - 3); /* frames 12-15: the same pose */
+        tvo_image img = tvo_image_make(W, H, W, f.img);
+        const tvo_pose T = motion(m, dir, 0.03, 0.4);
+        render(&T, f.img);
+        if (k >= 25)
+            for (int i = 0; i < W * H; ++i)
+                f.img[i] = (uint8_t)((f.img[i] * 3 + 2) / 5);
+        memset(&out[k], 0, sizeof(out[k]));
+        assert_int_equal(tvo_vo_process(f.vo, &img, 1000000000LL + k * 50000000LL, &out[k].res), TVO_OK);
+        assert_int_equal(tvo_vo_tracks(f.vo, out[k].t, 300, &out[k].n), TVO_OK);
+    }
+    free(f.mem);
+}
+
+/* lk_window_store only saves work: the VO gives the same bits with it on and off, with the default
+ * settings, the affine refinement and the map prediction (its predicted points' other window side). */
+static void test_lk_window_store(void **state)
+{
+    static frame_out on[40], off[40];
+    tvo_camera cam = test_camera();
+    tvo_vo_config cfg;
+    int retried = 0;
+    (void)state;
+    tvo_vo_config_default(&cfg, &cam);
+    assert_int_equal(cfg.lk_window_store, 0);
+    for (int c = 0; c < 3; ++c) {
+        tvo_vo_config_default(&cfg, &cam);
+        if (c == 1) {
+#if TVO_WITH_AFFINE
+            assert_int_equal(tvo_vo_config_preset(&cfg, &cam, TVO_VO_PRESET_ACCURATE), TVO_OK);
+#endif
+        } else if (c == 2) {
+            cfg.map_prediction = 2;
+            cfg.lk.pred_levels = 2;
+            cfg.lk.pred_win_size = 11;
+        }
+        assert_true(tvo_vo_required_size(&cfg) > 0);
+        run_store_walk(&cfg, 1, on);
+        run_store_walk(&cfg, 0, off);
+        for (int k = 0; k < 40; ++k) {
+            const tvo_vo_result *a = &on[k].res, *b = &off[k].res;
+            assert_int_equal(a->state, b->state);
+            assert_int_equal(a->tracked, b->tracked);
+            assert_int_equal(a->tracks, b->tracks);
+            assert_int_equal(a->inliers, b->inliers);
+            assert_int_equal(a->new_corners, b->new_corners);
+            assert_int_equal(a->gain_retry, b->gain_retry);
+            assert_int_equal(a->map_state, b->map_state);
+            assert_int_equal(a->map_points, b->map_points);
+            assert_memory_equal(&a->T_prev_cur, &b->T_prev_cur, sizeof(tvo_pose));
+            assert_memory_equal(&a->T_w_c, &b->T_w_c, sizeof(tvo_pose));
+            assert_memory_equal(a->features, b->features, sizeof(a->features));
+            assert_memory_equal(&a->rel_scale, &b->rel_scale, sizeof(double));
+            assert_int_equal(on[k].n, off[k].n);
+            assert_memory_equal(on[k].t, off[k].t, sizeof(on[k].t));
+            assert_true(k == 0 || a->state == TVO_VO_OK || a->state == TVO_VO_ROTATION_ONLY);
+            retried += a->gain_retry;
+        }
+    }
+    assert_true(retried >= 1); /* the exposure step was tracked again (the previous pyramid scaled) */
+    /* the small preset leaves it off; a value other than 0 / 1 is refused */
+    assert_int_equal(tvo_vo_config_preset(&cfg, &cam, TVO_VO_PRESET_SMALL), TVO_OK);
+    assert_int_equal(cfg.lk_window_store, 0);
+    {
+        tvo_vo_config on_cfg = cfg;
+        on_cfg.lk_window_store = 1;
+        assert_true(tvo_vo_required_size(&on_cfg) >=
+                    tvo_vo_required_size(&cfg) + (size_t)cfg.max_tracks * tvo_lk_store_point_size(&cfg.lk));
+        on_cfg.lk_window_store = 2;
+        assert_int_equal(tvo_vo_required_size(&on_cfg), 0u);
+        on_cfg.lk_window_store = -1;
+        assert_int_equal(tvo_vo_required_size(&on_cfg), 0u);
+    }
+}
+
 static void test_redetect_coverage(void **state)
 {
     int on_det, on_min, on_last, off_det, off_min, off_last;
@@ -1076,6 +1169,7 @@ static void test_presets(void **state)
     assert_int_equal(c.lk.max_level, 2);
     assert_int_equal(c.map_window, 5);
     assert_int_equal(c.map_max_landmarks, 160);
+    assert_int_equal(c.lk_window_store, 0);
     assert_true(tvo_vo_required_size(&c) > 0);
     assert_true(tvo_vo_required_size(&c) < tvo_vo_required_size(&def));
     print_message("320x240: %lu bytes small, %lu default\n", (unsigned long)tvo_vo_required_size(&c),
@@ -1087,6 +1181,7 @@ static void test_presets(void **state)
     c.lk.max_level = def.lk.max_level;
     c.map_window = def.map_window;
     c.map_max_landmarks = def.map_max_landmarks;
+    c.lk_window_store = def.lk_window_store;
     assert_memory_equal(&c, &def, sizeof(c));
 
 #if TVO_WITH_AFFINE
@@ -1127,6 +1222,7 @@ int main(void)
             cmocka_unit_test(test_affine_refinement),
             cmocka_unit_test(test_scale_filter),
             cmocka_unit_test(test_presets),
+            cmocka_unit_test(test_lk_window_store),
             cmocka_unit_test(test_refine_step_length),
             cmocka_unit_test_setup_teardown(test_bad_input, setup, teardown),
     };

@@ -179,6 +179,15 @@ typedef struct tvo_vo_config {
                                    in each direction (2: an 11 x 11 grid of a 21 x 21 window, a quarter
                                    of the work of 1); it must divide affine_win_size / 2. [1, 15];
                                    default 1 */
+    int32_t lk_window_store;      /* 1: LK keeps the windows the way back of each track's forward-backward
+                                   check builds (lk.h, "window store"), and the next frame's forward track
+                                   takes them instead of building the same windows again: the same
+                                   results, bit for bit, for 6-19 % fewer instructions, but no time gained
+                                   where measured (the windows' memory traffic; docs/budget.md, "Window
+                                   store"). Saves work only with lk.fb_check. Memory: about
+                                   tvo_lk_store_point_size(&lk) + 5 bytes a track (10,885 with the 21 x 21
+                                   window and 4 levels: 3,265,584 bytes more for 300 tracks). 0 or 1;
+                                   default 0 (and 0 in the small preset) */
     /* local map (vo.h header comment, "The local map"): keyframes in a sliding window, landmarks
        triangulated between them, every frame posed by PnP on the landmarks its tracks carry, and a
        windowed bundle adjustment at each new keyframe */
