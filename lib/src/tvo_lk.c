@@ -18,6 +18,20 @@
 #include "tvo_border.h"
 #include "tvo_lk_impl.h"
 
+/* lk_prev_window(), lk_track_level() and lk_track_point() are compiled twice outside -Os builds, for points
+ * without a window store and with one (lk_track_point_plain / _keep), so that the store costs the points
+ * without it nothing; -Os builds keep one copy. */
+#if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
+#define LK_SPECIAL static inline __attribute__((always_inline))
+#else
+#define LK_SPECIAL static
+#endif
+#if defined(__GNUC__)
+#define LK_NOINLINE __attribute__((noinline))
+#else
+#define LK_NOINLINE
+#endif
+
 typedef struct lk_level {
     const uint8_t *data;
     int32_t w, h, stride;
@@ -345,8 +359,8 @@ static void lk_weights(float a, float b, int32_t w[4])
 
 /* Previous-image window: grey values and interpolated Scharr derivatives at (ix + a, iy + b) + (x, y)
  * for x, y in 0..win-1, into wk->iwin / ixwin / iywin; the gradient sums into A[3]. */
-static void lk_prev_window(const lk_level *lv, int32_t ix, int32_t iy, const int32_t wt[4], lk_work *wk,
-                           int64_t A[3], int simd)
+LK_SPECIAL void lk_prev_window(const lk_level *lv, int32_t ix, int32_t iy, const int32_t wt[4], lk_work *wk,
+                               int64_t A[3], int simd)
 {
     const int32_t win = wk->win, g = win + 1, p = win + 3;
     const uint8_t *src;
@@ -520,11 +534,50 @@ static const uint8_t *lk_next_block(const lk_level *lv, int32_t jx, int32_t jy, 
     }
 }
 
+/* The window step of lk_track_level() with a store: reading it (kp->write 0), a record holding the window
+ * built from (win, ix, iy, wt) on the pyramid tagged kp->gen is used in place (the window arrays of wk
+ * point into it, A gets its sums), else the window is built into the scratch; writing it, the window is
+ * built into the record, which gets its key. Kept out of lk_track_level(), whose iterations then compile
+ * as without a store. */
+static LK_NOINLINE void lk_keep_window(const lk_keep *kp, int32_t level, const lk_level *lv, int32_t ix,
+                                       int32_t iy, const int32_t wt[4], lk_work *wk, int64_t A[3], int simd)
+{
+    lk_rec *r = lk_store_rec(kp->h, kp->slot, level);
+    const int32_t win = wk->win, wmax = kp->h->wmax;
+    if (!kp->write && r->win == win && r->gen == kp->gen && r->level == level && r->ix == ix && r->iy == iy &&
+        r->wt[0] == wt[0] && r->wt[1] == wt[1] && r->wt[2] == wt[2] && r->wt[3] == wt[3]) {
+        wk->iwin = lk_rec_win(r, wmax, 0); /* the same window, built from the same pixels */
+        wk->ixwin = lk_rec_win(r, wmax, 1);
+        wk->iywin = lk_rec_win(r, wmax, 2);
+        memcpy(A, r->A, 3 * sizeof(int64_t));
+        return;
+    }
+    if (kp->write) {
+        wk->iwin = lk_rec_win(r, wmax, 0);
+        wk->ixwin = lk_rec_win(r, wmax, 1);
+        wk->iywin = lk_rec_win(r, wmax, 2);
+    } else { /* into the scratch (the arrays may point into a record since a level above) */
+        wk->iwin = wk->siwin;
+        wk->ixwin = wk->sixwin;
+        wk->iywin = wk->siywin;
+    }
+    lk_prev_window(lv, ix, iy, wt, wk, A, simd);
+    if (kp->write) {
+        r->gen = kp->gen;
+        r->win = win;
+        r->level = level;
+        r->ix = ix;
+        r->iy = iy;
+        memcpy(r->wt, wt, sizeof(r->wt));
+        memcpy(r->A, A, 3 * sizeof(int64_t));
+    }
+}
+
 /* One level of one point. (px, py): point in prev at this level; (*nx, *ny): in = guess, out =
  * estimate (OpenCV's nextPts). Returns 1, or 0 when the point is lost at this level. When err is not
  * NULL (level 0), the final error is stored there. */
-static int lk_track_level(const lk_params *prm, const lk_level *I, const lk_level *J, float px, float py,
-                          float *nx, float *ny, lk_work *wk, float *err, const lk_keep *kp, int32_t level)
+LK_SPECIAL int lk_track_level(const lk_params *prm, const lk_level *I, const lk_level *J, float px, float py,
+                              float *nx, float *ny, lk_work *wk, float *err, const lk_keep *kp, int32_t level)
 {
     const int32_t win = prm->win;
     const float half = (float)(win - 1) * 0.5f;
@@ -535,9 +588,6 @@ static int lk_track_level(const lk_params *prm, const lk_level *I, const lk_leve
     const uint8_t *blk;
     int ok = 1;
 
-    wk->iwin = wk->siwin; /* a stored window of the last call is not this one's */
-    wk->ixwin = wk->sixwin;
-    wk->iywin = wk->siywin;
     px -= half;
     py -= half;
     if (!lk_corner_ok(px, win, I->w) || !lk_corner_ok(py, win, I->h))
@@ -545,33 +595,10 @@ static int lk_track_level(const lk_params *prm, const lk_level *I, const lk_leve
     ix = lk_floor_i(px);
     iy = lk_floor_i(py);
     lk_weights(px - (float)ix, py - (float)iy, wt);
-    if (kp == NULL) {
+    if (kp == NULL)
         lk_prev_window(I, ix, iy, wt, wk, A, prm->simd);
-    } else {
-        lk_rec *r = lk_store_rec(kp->h, kp->slot, level);
-        const int32_t wmax = kp->h->wmax;
-        if (kp->write) { /* build the window into the record, and key it */
-            wk->iwin = lk_rec_win(r, wmax, 0);
-            wk->ixwin = lk_rec_win(r, wmax, 1);
-            wk->iywin = lk_rec_win(r, wmax, 2);
-            lk_prev_window(I, ix, iy, wt, wk, A, prm->simd);
-            r->gen = kp->gen;
-            r->win = win;
-            r->level = level;
-            r->ix = ix;
-            r->iy = iy;
-            memcpy(r->wt, wt, sizeof(r->wt));
-            memcpy(r->A, A, sizeof(r->A));
-        } else if (r->win == win && r->gen == kp->gen && r->level == level && r->ix == ix && r->iy == iy &&
-                   r->wt[0] == wt[0] && r->wt[1] == wt[1] && r->wt[2] == wt[2] && r->wt[3] == wt[3]) {
-            wk->iwin = lk_rec_win(r, wmax, 0); /* the same window, built on the same pixels */
-            wk->ixwin = lk_rec_win(r, wmax, 1);
-            wk->iywin = lk_rec_win(r, wmax, 2);
-            memcpy(A, r->A, sizeof(A));
-        } else
-            lk_prev_window(I, ix, iy, wt, wk, A, prm->simd);
-    }
-
+    else
+        lk_keep_window(kp, level, I, ix, iy, wt, wk, A, prm->simd);
     a11 = (float)A[0] * LK_FLT_SCALE;
     a12 = (float)A[1] * LK_FLT_SCALE;
     a22 = (float)A[2] * LK_FLT_SCALE;
@@ -637,9 +664,9 @@ static int lk_track_level(const lk_params *prm, const lk_level *I, const lk_leve
 
 /* Track one point through the levels top..0 from pyramid I to J. (*nx, *ny): in = level-0 guess
  * (used when use_guess), out = level-0 estimate. Returns 1 tracked, 0 lost. */
-static int lk_track_point(const lk_params *prm, const tvo_pyramid *I, const tvo_pyramid *J, int32_t top,
-                          float x0, float y0, int use_guess, float *nx, float *ny, lk_work *wk, float *err,
-                          const lk_keep *kp)
+LK_SPECIAL int lk_track_point(const lk_params *prm, const tvo_pyramid *I, const tvo_pyramid *J, int32_t top,
+                              float x0, float y0, int use_guess, float *nx, float *ny, lk_work *wk,
+                              float *err, const lk_keep *kp)
 {
     /* err != NULL: compute the level-0 error into *err (0 when lost) */
     int32_t l;
@@ -678,6 +705,30 @@ static int lk_track_point(const lk_params *prm, const tvo_pyramid *I, const tvo_
     if (err != NULL)
         *err = st ? e : 0.f;
     return st;
+}
+
+static int lk_track_point_plain(const lk_params *prm, const tvo_pyramid *I, const tvo_pyramid *J, int32_t top,
+                                float x0, float y0, int use_guess, float *nx, float *ny, lk_work *wk,
+                                float *err)
+{
+    return lk_track_point(prm, I, J, top, x0, y0, use_guess, nx, ny, wk, err, NULL);
+}
+
+static int lk_track_point_keep(const lk_params *prm, const tvo_pyramid *I, const tvo_pyramid *J, int32_t top,
+                               float x0, float y0, int use_guess, float *nx, float *ny, lk_work *wk,
+                               float *err, const lk_keep *kp)
+{
+    return lk_track_point(prm, I, J, top, x0, y0, use_guess, nx, ny, wk, err, kp);
+}
+
+/* Track one point: with kp, through a store (lk_track_point_keep), else without (lk_track_point_plain). */
+static int lk_track_point_any(const lk_params *prm, const tvo_pyramid *I, const tvo_pyramid *J, int32_t top,
+                              float x0, float y0, int use_guess, float *nx, float *ny, lk_work *wk,
+                              float *err, const lk_keep *kp)
+{
+    if (kp == NULL)
+        return lk_track_point_plain(prm, I, J, top, x0, y0, use_guess, nx, ny, wk, err);
+    return lk_track_point_keep(prm, I, J, top, x0, y0, use_guess, nx, ny, wk, err, kp);
 }
 
 static tvo_status lk_check_pyramid(const tvo_pyramid *p, int32_t max_level)
@@ -838,8 +889,13 @@ static tvo_status lk_track_all(const tvo_lk_config *cfg, const tvo_pyramid *prev
             last = k;
         }
         kin.slot = kout.slot = slot;
-        ok = lk_track_point(&md->prm, prev, next, md->top, x0, y0, cfg->use_initial_flow != 0, &nx, &ny,
-                            &md->wk, err != NULL ? &e : NULL, ki);
+        if (use != NULL) { /* the scratch's arrays, not those of a store's record (an earlier point's) */
+            md->wk.iwin = md->wk.siwin;
+            md->wk.ixwin = md->wk.sixwin;
+            md->wk.iywin = md->wk.siywin;
+        }
+        ok = lk_track_point_any(&md->prm, prev, next, md->top, x0, y0, cfg->use_initial_flow != 0, &nx, &ny,
+                                &md->wk, err != NULL ? &e : NULL, ki);
         if (ko != NULL) /* the entry now holds the way back's windows (of next_pts in next), or none */
             lk_entry_forget(kout.h, slot);
         if (ok && cfg->fb_check) {
@@ -850,11 +906,11 @@ static tvo_status lk_track_all(const tvo_lk_config *cfg, const tvo_pyramid *prev
             if (md->fb_levels > 0) { /* the short way back: from the start point, on the finest levels */
                 bx = x0;
                 by = y0;
-                back = lk_track_point(&md->prm, next, prev, md->fb_top, nx, ny, 1, &bx, &by, &md->wk, NULL,
-                                      ko);
+                back = lk_track_point_any(&md->prm, next, prev, md->fb_top, nx, ny, 1, &bx, &by, &md->wk,
+                                          NULL, ko);
             } else
-                back = lk_track_point(&md->prm, next, prev, md->top, nx, ny, cfg->use_initial_flow != 0, &bx,
-                                      &by, &md->wk, NULL, ko);
+                back = lk_track_point_any(&md->prm, next, prev, md->top, nx, ny, cfg->use_initial_flow != 0,
+                                          &bx, &by, &md->wk, NULL, ko);
             ddx = bx - x0;
             ddy = by - y0;
             if (!back ||
