@@ -182,7 +182,7 @@ typedef struct tvo_vo_config {
     int32_t lk_window_store;      /* 1: LK keeps the windows the way back of each track's forward-backward
                                    check builds (lk.h, "window store"), and the next frame's forward track
                                    takes them instead of building the same windows again: the same
-                                   results, bit for bit, for 6-19 % fewer instructions, but no time gained
+                                   results, bit for bit, for 5-19 % fewer instructions, but no time gained
                                    where measured (the windows' memory traffic; docs/budget.md, "Window
                                    store"). Saves work only with lk.fb_check. Memory: about
                                    tvo_lk_store_point_size(&lk) + 5 bytes a track (10,885 with the 21 x 21
@@ -246,8 +246,9 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
  *                          (TVO_WITH_AFFINE, options.h).
  * TVO_VO_PRESET_SMALL      sized for a QVGA (320x240) camera on a microcontroller: 120 tracks
  *                          (min_tracks 80, keyframe_min_tracks 40, detect.max_corners 120), 3 pyramid
- *                          levels (lk.max_level 2), a map of 5 keyframes and 160 landmarks. At 320x240 the
- *                          VO needs 228,592 bytes on a Cortex-M7 (tools/run-mcu.sh runs it there). */
+ *                          levels (lk.max_level 2), a map of 5 keyframes and 160 landmarks, no window
+ *                          store (lk_window_store 0). At 320x240 the VO needs 228,592 bytes on a
+ *                          Cortex-M7 (tools/run-mcu.sh runs it there). */
 typedef enum tvo_vo_preset {
     TVO_VO_PRESET_DEFAULT = 0,
     TVO_VO_PRESET_ACCURATE = 1,
