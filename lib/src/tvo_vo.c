@@ -153,7 +153,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->affine_win_size = 0; /* on (21, TVO_VO_PRESET_ACCURATE): more accurate, but it costs 1.3-1.4 times
                                  the instructions (docs/budget.md, "A third rule") */
     cfg->affine_step = 1;
-    cfg->lk_window_store = 0; /* on: the same results for 11-19 % fewer instructions, but 3.2 MB more memory
+    cfg->lk_window_store = 0; /* on: the same results for 5-19 % fewer instructions, but 3.2 MB more memory
                                  at 300 tracks and no measured gain in time (docs/budget.md, "Window store") */
     cfg->map = 1;
     cfg->map_window = 6;
