@@ -20,7 +20,7 @@
 
 /* lk_prev_window(), lk_track_level() and lk_track_point() are compiled twice outside -Os builds, for points
  * without a window store and with one (lk_track_point_plain / _keep), so that the store costs the points
- * without it nothing; -Os builds keep one copy. */
+ * without it nothing; -Os builds keep one copy (and lk_prev_window() one call site). */
 #if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
 #define LK_SPECIAL static inline __attribute__((always_inline))
 #else
@@ -534,43 +534,46 @@ static const uint8_t *lk_next_block(const lk_level *lv, int32_t jx, int32_t jy, 
     }
 }
 
-/* The window step of lk_track_level() with a store: reading it (kp->write 0), a record holding the window
- * built from (win, ix, iy, wt) on the pyramid tagged kp->gen is used in place (the window arrays of wk
- * point into it, A gets its sums), else the window is built into the scratch; writing it, the window is
- * built into the record, which gets its key. Kept out of lk_track_level(), whose iterations then compile
- * as without a store. */
-static LK_NOINLINE void lk_keep_window(const lk_keep *kp, int32_t level, const lk_level *lv, int32_t ix,
-                                       int32_t iy, const int32_t wt[4], lk_work *wk, int64_t A[3], int simd)
+/* The window step of lk_track_level() with a store, before the window is built. Reading it (kp->write
+ * 0): when the record of this level holds the window built from (wk->win, ix, iy, wt) on the pyramid
+ * tagged kp->gen, the window arrays of wk point into it, A gets its sums and 1 is returned (nothing to
+ * build); else the arrays are the scratch's and 0 is returned. Writing it: the arrays point into the
+ * record, for the window to be built there (lk_keep_key then keys it), and 0 is returned. Out of line,
+ * so that lk_track_level() compiles as without a store. */
+static LK_NOINLINE int lk_keep_take(const lk_keep *kp, int32_t level, int32_t ix, int32_t iy,
+                                    const int32_t wt[4], lk_work *wk, int64_t A[3])
 {
     lk_rec *r = lk_store_rec(kp->h, kp->slot, level);
-    const int32_t win = wk->win, wmax = kp->h->wmax;
-    if (!kp->write && r->win == win && r->gen == kp->gen && r->level == level && r->ix == ix && r->iy == iy &&
-        r->wt[0] == wt[0] && r->wt[1] == wt[1] && r->wt[2] == wt[2] && r->wt[3] == wt[3]) {
-        wk->iwin = lk_rec_win(r, wmax, 0); /* the same window, built from the same pixels */
+    const int32_t wmax = kp->h->wmax;
+    if (kp->write ||
+        (r->win == wk->win && r->gen == kp->gen && r->level == level && r->ix == ix && r->iy == iy &&
+         r->wt[0] == wt[0] && r->wt[1] == wt[1] && r->wt[2] == wt[2] && r->wt[3] == wt[3])) {
+        wk->iwin = lk_rec_win(r, wmax, 0); /* a hit: the same window, built from the same pixels */
         wk->ixwin = lk_rec_win(r, wmax, 1);
         wk->iywin = lk_rec_win(r, wmax, 2);
+        if (kp->write)
+            return 0;
         memcpy(A, r->A, 3 * sizeof(int64_t));
-        return;
+        return 1;
     }
-    if (kp->write) {
-        wk->iwin = lk_rec_win(r, wmax, 0);
-        wk->ixwin = lk_rec_win(r, wmax, 1);
-        wk->iywin = lk_rec_win(r, wmax, 2);
-    } else { /* into the scratch (the arrays may point into a record since a level above) */
-        wk->iwin = wk->siwin;
-        wk->ixwin = wk->sixwin;
-        wk->iywin = wk->siywin;
-    }
-    lk_prev_window(lv, ix, iy, wt, wk, A, simd);
-    if (kp->write) {
-        r->gen = kp->gen;
-        r->win = win;
-        r->level = level;
-        r->ix = ix;
-        r->iy = iy;
-        memcpy(r->wt, wt, sizeof(r->wt));
-        memcpy(r->A, A, 3 * sizeof(int64_t));
-    }
+    wk->iwin = wk->siwin; /* the arrays may point into a record since a level above */
+    wk->ixwin = wk->sixwin;
+    wk->iywin = wk->siywin;
+    return 0;
+}
+
+/* Writing the store: the key and sums of the window just built into this level's record. */
+static LK_NOINLINE void lk_keep_key(const lk_keep *kp, int32_t level, int32_t ix, int32_t iy,
+                                    const int32_t wt[4], const lk_work *wk, const int64_t A[3])
+{
+    lk_rec *r = lk_store_rec(kp->h, kp->slot, level);
+    r->gen = kp->gen;
+    r->win = wk->win;
+    r->level = level;
+    r->ix = ix;
+    r->iy = iy;
+    memcpy(r->wt, wt, sizeof(r->wt));
+    memcpy(r->A, A, 3 * sizeof(int64_t));
 }
 
 /* One level of one point. (px, py): point in prev at this level; (*nx, *ny): in = guess, out =
@@ -595,10 +598,11 @@ LK_SPECIAL int lk_track_level(const lk_params *prm, const lk_level *I, const lk_
     ix = lk_floor_i(px);
     iy = lk_floor_i(py);
     lk_weights(px - (float)ix, py - (float)iy, wt);
-    if (kp == NULL)
+    if (kp == NULL || !lk_keep_take(kp, level, ix, iy, wt, wk, A)) {
         lk_prev_window(I, ix, iy, wt, wk, A, prm->simd);
-    else
-        lk_keep_window(kp, level, I, ix, iy, wt, wk, A, prm->simd);
+        if (kp != NULL && kp->write)
+            lk_keep_key(kp, level, ix, iy, wt, wk, A);
+    }
     a11 = (float)A[0] * LK_FLT_SCALE;
     a12 = (float)A[1] * LK_FLT_SCALE;
     a22 = (float)A[2] * LK_FLT_SCALE;
