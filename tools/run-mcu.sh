@@ -44,10 +44,12 @@ B="$ROOT/$BUILD"
 CFLAGS=(-Os -std=c99 -ffp-contract=off -ffunction-sections -fdata-sections -Wall -Wextra -Werror)
 # shellcheck disable=SC2086
 arm-none-eabi-gcc $CPU "${CFLAGS[@]}" -c test/mcu/startup_m7.c -o "$B/startup_m7.o"
-link() { # link OBJ OUT.elf
+link() { # link OUT.elf OBJ...
+  local out=$1
+  shift
   # shellcheck disable=SC2086
   arm-none-eabi-gcc $CPU -nostartfiles --specs=rdimon.specs -T test/mcu/mps2_an500.ld -Wl,--gc-sections \
-    -Wl,-Map="${2%.elf}.map" "$B/startup_m7.o" "$1" "$B/m7/lib/libtinyvo.a" -lm -o "$2"
+    -Wl,-Map="${out%.elf}.map" "$B/startup_m7.o" "$@" "$B/m7/lib/libtinyvo.a" -lm -o "$out"
 }
 status=0
 
@@ -56,7 +58,14 @@ for t in $MCU_TESTS; do
   # shellcheck disable=SC2086
   arm-none-eabi-gcc $CPU -Os -std=c99 -ffp-contract=off -ffunction-sections -fdata-sections \
     -Itest/mcu/shim -Itest/common -Ilib/include -Ilib/src/internal -c "test/unit/$t.c" -o "$B/$t.o"
-  link "$B/$t.o" "$B/$t.elf"
+  objs=("$B/$t.o")
+  if [ "$t" = test_corners ]; then # the portable FAST-9 it compares the library's with (test/CMakeLists.txt)
+    # shellcheck disable=SC2086
+    arm-none-eabi-gcc $CPU -Os -std=c99 -ffp-contract=off -ffunction-sections -fdata-sections \
+      -Ilib/include -Ilib/src/internal -c test/unit/fast_portable.c -o "$B/fast_portable.o"
+    objs+=("$B/fast_portable.o")
+  fi
+  link "$B/$t.elf" "${objs[@]}"
   start=$(date +%s)
   out=$(timeout 900 "${QEMU[@]}" -kernel "$B/$t.elf" 2>&1) || true
   passed=$(echo "$out" | sed -n 's/^\[  PASSED  \] \([0-9]*\) test.*/\1/p' | tail -1)
@@ -84,7 +93,7 @@ gcc -O2 "${CFLAGS[@]:1}" -DTVO_MCU_MEM="$MEM" -Ilib/include test/mcu/mcu_replay.
   -o "$R/host/mcu_replay"
 # shellcheck disable=SC2086
 arm-none-eabi-gcc $CPU "${CFLAGS[@]}" -DTVO_MCU_MEM="$MEM" -Ilib/include -c test/mcu/mcu_replay.c -o "$B/mcu_replay.o"
-link "$B/mcu_replay.o" "$R/m7/mcu_replay.elf"
+link "$R/m7/mcu_replay.elf" "$B/mcu_replay.o"
 "$R/host/mcu_replay" "$R/frames30.bin" "$MODEL" "$R/host/traj.tum" "$R/host/results.txt" > "$R/host/out.txt"
 declare -A insn
 for n in 10 30; do
