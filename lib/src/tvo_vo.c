@@ -63,7 +63,8 @@ struct tvo_vo {
     uint8_t *minl;        /* [max_tracks] */
     uint32_t next_id;
     tvo_map map;
-    tvo_pose T_c_w;    /* the last frame's pose in the VO's world (world -> camera) */
+    tvo_pose T_c_w;                 /* the last frame's pose in the VO's world (world -> camera) */
+    int32_t aff_tried, aff_refined; /* this frame's affine refinements (tvo_vo_result.affine_*) */
     int32_t cover_ref; /* cells of the coverage grid the tracks covered after the last detection */
     /* affine refinement (cfg.affine_win_size > 0, else all NULL): each track's template, its model
        and warp, valid where hast[i] */
@@ -1096,6 +1097,7 @@ static void affine_refine(tvo_vo *vo, const frame_ctx *fc)
         if (!vo->st[i] || !vo->hast[i])
             continue;
         aw = vo->aw[i];
+        vo->aff_tried++;
         tvo_aff_point(&aw, &ox, &oy);
         aw.t[0] += vo->next[i].x - ox;
         aw.t[1] += vo->next[i].y - oy;
@@ -1112,6 +1114,7 @@ static void affine_refine(tvo_vo *vo, const frame_ctx *fc)
         vo->next[i].y = py;
         vo->aw[i] = aw;
         vo->hast[i] = 1;
+        vo->aff_refined++;
     }
 }
 
@@ -1134,6 +1137,7 @@ static void affine_refine_keyframe(void *ctx)
         if (!vo->hast[i])
             continue;
         aw = vo->aw[i];
+        vo->aff_tried++;
         tvo_aff_point(&aw, &ox, &oy);
         aw.t[0] += vo->pts[i].x - ox;
         aw.t[1] += vo->pts[i].y - oy;
@@ -1153,6 +1157,7 @@ static void affine_refine_keyframe(void *ctx)
         vo->x2[i] = xn;
         vo->aw[i] = aw;
         vo->hast[i] = 1;
+        vo->aff_refined++;
     }
 }
 
@@ -1498,6 +1503,8 @@ static void finish_frame(tvo_vo *vo, const frame_ctx *fc, int64_t t_ns, tvo_vo_r
     else if (vo->t_dir_age <= TVO_VO_PRIOR_FRAMES)
         vo->t_dir_age++;
     res->tracks = vo->n;
+    res->affine_tried = vo->aff_tried;
+    res->affine_refined = vo->aff_refined;
     res->T_w_c = tvo_pose_inverse(&vo->T_c_w);
     if (!tvo_pose_is_finite(&res->T_w_c)) { /* cannot happen: every pose taken is checked; never emit it */
         vo->T_c_w = tvo_pose_identity();
@@ -1552,6 +1559,7 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
         return TVO_ERR_ARG;
     memset(&fc, 0, sizeof(fc));
     fc.kf = KF_NONE;
+    vo->aff_tried = vo->aff_refined = 0;
     t0 = now_ns(vo);
     fc.pc = &vo->pyr[vo->cur];
     fc.pp = &vo->pyr[vo->cur ^ 1];

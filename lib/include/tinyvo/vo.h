@@ -265,6 +265,12 @@ typedef struct tvo_vo_result {
     tvo_pose T_prev_cur;            /* raw relative pose: p_prev = R p_cur + t, |t| = 1 or t = 0 */
     int32_t tracked;                /* tracks that survived LK + forward-backward into this frame */
     int32_t gain_retry;             /* 1: they were tracked again after an exposure step (cfg.gain_retry) */
+    int32_t affine_tried;           /* tracks the affine refinement tried to align to their templates in this
+                                       frame (cfg.affine_win_size; only on keyframes with
+                                       cfg.affine_at_keyframes); 0 without the refinement */
+    int32_t affine_refined;         /* of them, those it moved: the others keep LK's position and take a new
+                                       template (no convergence, a correlation below 0.8, more than 2 px from
+                                       LK's position, the window out of the image) */
     int32_t inliers;                /* pose inliers among them */
     int32_t new_corners;            /* corners added by re-detection in this frame */
     int32_t tracks;                 /* tracks carried to the next frame */
