@@ -158,6 +158,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cfg.affine_win_size = TVO_WITH_AFFINE && ((hdr[1] / 81) & 1) ? 3 + 2 * (int32_t)(hdr[3] & 7u) : 0;
     /* ...sampled every other pixel when the half window allows it, for half of those */
     cfg.affine_step = ((hdr[3] >> 3) & 1) && (cfg.affine_win_size / 2) % 2 == 0 ? 2 : 1;
+    /* ...and at the map's keyframes only (its refine hook) for half of all inputs */
+    cfg.affine_at_keyframes = (hdr[3] >> 4) & 1;
     cfg.max_tracks = 16 + hdr[4];
     cfg.min_tracks = cfg.max_tracks * 2 / 3;
     cfg.min_pose_tracks = 8 + hdr[4] % 23;
