@@ -1084,80 +1084,78 @@ typedef struct frame_ctx {
  * where its template aligns under an affine warp, starting from LK's position with the last frame's
  * warp; a point whose refinement fails keeps LK's position and takes a new template in finish_frame. */
 #if TVO_WITH_AFFINE
-static void affine_refine(tvo_vo *vo, const frame_ctx *fc)
+/* Track i's alignment to its template in l0, from `at` (where LK left it) with the warp of its last
+ * refinement: 1 when it is taken (converged, correlated, within TVO_VO_AFF_MAX_MOVE px of `at`), with
+ * the new warp in *aw and the point in *out; the caller commits it. Either way the track is counted and
+ * left without a template until then (hast[i] 0: a new one is taken in finish_frame). */
+static int affine_align(tvo_vo *vo, int32_t i, const tvo_image *l0, tvo_point2f at, tvo_aff_warp *aw,
+                        tvo_point2f *out)
 {
     const int32_t side = vo->cfg.affine_win_size;
+    float ox, oy, px, py, ncc = 0.0f;
+    *aw = vo->aw[i];
+    vo->aff_tried++;
+    tvo_aff_point(aw, &ox, &oy);
+    aw->t[0] += at.x - ox;
+    aw->t[1] += at.y - oy;
+    vo->hast[i] = 0;
+    if (!tvo_aff_refine(vo->tpl + (size_t)i * tvo_aff_template_bytes(side), &vo->am[i], side,
+                        vo->cfg.affine_step, l0, aw, TVO_VO_AFF_ITERS, TVO_VO_AFF_EPS, vo->scratch,
+                        vo->scratch_size, &ncc) ||
+        !(ncc >= TVO_VO_AFF_MIN_NCC))
+        return 0;
+    tvo_aff_point(aw, &px, &py);
+    if (!((px - at.x) * (px - at.x) + (py - at.y) * (py - at.y) < TVO_VO_AFF_MAX_MOVE * TVO_VO_AFF_MAX_MOVE))
+        return 0;
+    out->x = px;
+    out->y = py;
+    return 1;
+}
+
+/* A taken alignment: the warp kept, the template valid again. */
+static void affine_commit(tvo_vo *vo, int32_t i, const tvo_aff_warp *aw)
+{
+    vo->aw[i] = *aw;
+    vo->hast[i] = 1;
+    vo->aff_refined++;
+}
+
+static void affine_refine(tvo_vo *vo, const frame_ctx *fc)
+{
     if (vo->hast == NULL)
         return;
     const tvo_image l0 = tvo_pyramid_level(fc->pc, 0);
-    const size_t tb = tvo_aff_template_bytes(side);
     for (int32_t i = 0; i < vo->n; ++i) {
         tvo_aff_warp aw;
-        float ox, oy, px, py, ncc = 0.0f;
-        if (!vo->st[i] || !vo->hast[i])
+        tvo_point2f p;
+        if (!vo->st[i] || !vo->hast[i] || !affine_align(vo, i, &l0, vo->next[i], &aw, &p))
             continue;
-        aw = vo->aw[i];
-        vo->aff_tried++;
-        tvo_aff_point(&aw, &ox, &oy);
-        aw.t[0] += vo->next[i].x - ox;
-        aw.t[1] += vo->next[i].y - oy;
-        vo->hast[i] = 0;
-        if (!tvo_aff_refine(vo->tpl + (size_t)i * tb, &vo->am[i], side, vo->cfg.affine_step, &l0, &aw,
-                            TVO_VO_AFF_ITERS, TVO_VO_AFF_EPS, vo->scratch, vo->scratch_size, &ncc) ||
-            !(ncc >= TVO_VO_AFF_MIN_NCC))
-            continue;
-        tvo_aff_point(&aw, &px, &py);
-        if (!((px - vo->next[i].x) * (px - vo->next[i].x) + (py - vo->next[i].y) * (py - vo->next[i].y) <
-              TVO_VO_AFF_MAX_MOVE * TVO_VO_AFF_MAX_MOVE))
-            continue;
-        vo->next[i].x = px;
-        vo->next[i].y = py;
-        vo->aw[i] = aw;
-        vo->hast[i] = 1;
-        vo->aff_refined++;
+        vo->next[i] = p;
+        affine_commit(vo, i, &aw);
     }
 }
 
 /* With affine_at_keyframes: the refinement of a frame that becomes a keyframe (the map's refine hook,
  * after the frame's map pose): every track with a template moves to where its template aligns, from
- * where LK left it with the warp of its last refinement; its normalised position (x2, the map's view)
- * follows. A track whose refinement fails keeps its position and takes a new template in finish_frame. */
+ * where LK left it; its normalised position (x2, the map's view) follows. A track whose refinement fails
+ * keeps its position and takes a new template in finish_frame. */
 static void affine_refine_keyframe(void *ctx)
 {
     tvo_vo *vo = (tvo_vo *)ctx;
-    const int32_t side = vo->cfg.affine_win_size;
     if (vo->hast == NULL)
         return;
     const tvo_image l0 = tvo_pyramid_level(&vo->pyr[vo->cur], 0);
-    const size_t tb = tvo_aff_template_bytes(side);
     for (int32_t i = 0; i < vo->n; ++i) {
         tvo_aff_warp aw;
+        tvo_point2f p;
         tvo_point2d xn;
-        float ox, oy, px, py, ncc = 0.0f;
-        if (!vo->hast[i])
+        if (!vo->hast[i] || !affine_align(vo, i, &l0, vo->pts[i], &aw, &p) ||
+            tvo_camera_undistort_point(&vo->cfg.camera, p.x, p.y, &xn) != TVO_OK)
             continue;
-        aw = vo->aw[i];
-        vo->aff_tried++;
-        tvo_aff_point(&aw, &ox, &oy);
-        aw.t[0] += vo->pts[i].x - ox;
-        aw.t[1] += vo->pts[i].y - oy;
-        vo->hast[i] = 0;
-        if (!tvo_aff_refine(vo->tpl + (size_t)i * tb, &vo->am[i], side, vo->cfg.affine_step, &l0, &aw,
-                            TVO_VO_AFF_ITERS, TVO_VO_AFF_EPS, vo->scratch, vo->scratch_size, &ncc) ||
-            !(ncc >= TVO_VO_AFF_MIN_NCC))
-            continue;
-        tvo_aff_point(&aw, &px, &py);
-        if (!((px - vo->pts[i].x) * (px - vo->pts[i].x) + (py - vo->pts[i].y) * (py - vo->pts[i].y) <
-              TVO_VO_AFF_MAX_MOVE * TVO_VO_AFF_MAX_MOVE) ||
-            tvo_camera_undistort_point(&vo->cfg.camera, px, py, &xn) != TVO_OK)
-            continue;
-        vo->pts[i].x = px;
-        vo->pts[i].y = py;
-        vo->next[i] = vo->pts[i];
+        vo->pts[i] = p;
+        vo->next[i] = p;
         vo->x2[i] = xn;
-        vo->aw[i] = aw;
-        vo->hast[i] = 1;
-        vo->aff_refined++;
+        affine_commit(vo, i, &aw);
     }
 }
 
