@@ -24,12 +24,9 @@ Usage: .venv/bin/python test/bench/bench_degrade.py --seq SEQ --replay BUILD/exa
 The copies go to --work (default: a temporary folder, removed at the end).
 """
 import argparse
-import json
 import os
 import shutil
-import subprocess
 import sys
-import tempfile
 
 import cv2
 import numpy as np
@@ -37,7 +34,7 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, os.path.join(ROOT, "tools"))
-from tinyvo_tools import eval as tvo_eval  # noqa: E402
+import replay_copies  # noqa: E402  (beside this file)
 from tinyvo_tools import trajio  # noqa: E402
 
 # name: (scale, keep every n-th frame, blur sigma px, noise sigma grey levels)
@@ -91,29 +88,6 @@ def write_copy(seq: str, dst: str, scale: float, every: int, blur: float, noise:
     shutil.copytree(gt, os.path.join(dst, "mav0", "state_groundtruth_estimate0"))
 
 
-def run(replay: str, seq: str, args: list, tmp: str) -> dict:
-    traj, stats = os.path.join(tmp, "traj.txt"), os.path.join(tmp, "stats.json")
-    subprocess.run([replay, "--euroc", seq, "--scale", "none", "--out", traj, "--stats", stats, "--quiet"] + args,
-                   check=True)
-    with open(stats, encoding="utf-8") as f:
-        st = json.load(f)
-    std = tvo_eval.evaluate_files(traj, seq).result["standard"]
-    states = st.get("map", {}).get("states", {})
-    init = int(states.get("initialising", 0))
-    # the frames from the map's first pose on (the trajectory holds one row per posed frame, in order)
-    with open(traj, encoding="utf-8") as f:
-        lines = [ln for ln in f if ln.strip() and not ln.startswith("#")]
-    after = os.path.join(tmp, "after.txt")
-    with open(after, "w", encoding="utf-8") as f:
-        f.writelines(lines[init:])
-    try:
-        ate_after = tvo_eval.evaluate_files(after, seq).result["standard"]["ate_m"]["rmse"]
-    except ValueError:
-        ate_after = float("nan")
-    return {"ate": std["ate_m"]["rmse"], "rot": std["rpe_frame"]["rotation_deg"]["rmse"], "init": init,
-            "ate_after": ate_after, "lost": st["frames"]["lost"], "losses": st.get("map", {}).get("losses", 0)}
-
-
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seq", required=True)
@@ -127,21 +101,15 @@ def main() -> int:
     for n in names:
         if n not in VARIANTS:
             raise SystemExit(f"bench_degrade: unknown variant {n} (known: {', '.join(VARIANTS)})")
-    work = a.work or tempfile.mkdtemp(prefix="tvo_degrade_")
-    try:
+    with replay_copies.work_folder(a.work, "tvo_degrade_") as work:
         print(f"{'variant':<9} {'ATE m':>8} {'map from':>9} {'ATE after':>10} {'rot RPE deg':>12} {'lost':>5} "
               f"{'map losses':>11}")
         for name in names:
-            dst = os.path.join(work, name)
-            if os.path.exists(dst):
-                shutil.rmtree(dst)
+            dst = replay_copies.fresh(work, name)
             write_copy(a.seq, dst, *VARIANTS[name])
-            r = run(a.replay, dst, args, work)
+            r = replay_copies.replay(a.replay, dst, args, work, after_map=True)
             print(f"{name:<9} {r['ate']:>8.4f} {r['init']:>9d} {r['ate_after']:>10.4f} {r['rot']:>12.4f} "
                   f"{r['lost']:>5d} {r['losses']:>11d}")
-    finally:
-        if not a.work:
-            shutil.rmtree(work, ignore_errors=True)
     return 0
 
 

@@ -20,21 +20,15 @@ Usage: .venv/bin/python test/bench/bench_exposure.py --seq SEQ --replay BUILD/ex
 The copies go to --work (default: a temporary folder, removed at the end).
 """
 import argparse
-import json
 import math
 import os
 import shutil
-import subprocess
 import sys
-import tempfile
 
 import cv2
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "tools"))
-from tinyvo_tools import eval as tvo_eval  # noqa: E402
+import replay_copies  # beside this file
 
 GAINS = {
     "none": lambda k: 1.0,
@@ -62,18 +56,6 @@ def write_copy(seq: str, dst: str, gain) -> None:
         cv2.imwrite(os.path.join(out, "data", name), g)
 
 
-def run(replay: str, seq: str, args: list, tmp: str) -> dict:
-    traj, stats = os.path.join(tmp, "traj.txt"), os.path.join(tmp, "stats.json")
-    subprocess.run([replay, "--euroc", seq, "--scale", "none", "--out", traj, "--stats", stats, "--quiet"] + args,
-                   check=True)
-    ev = tvo_eval.evaluate_files(traj, seq)
-    with open(stats, encoding="utf-8") as f:
-        st = json.load(f)
-    std = ev.result["standard"]
-    return {"ate": std["ate_m"]["rmse"], "rot": std["rpe_frame"]["rotation_deg"]["rmse"],
-            "lost": st["frames"]["lost"], "losses": st.get("map", {}).get("losses", 0)}
-
-
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seq", required=True)
@@ -82,19 +64,13 @@ def main() -> int:
     ap.add_argument("rest", nargs=argparse.REMAINDER)
     a = ap.parse_args()
     args = a.rest[1:] if a.rest[:1] == ["--"] else a.rest
-    work = a.work or tempfile.mkdtemp(prefix="tvo_exposure_")
-    try:
+    with replay_copies.work_folder(a.work, "tvo_exposure_") as work:
         print(f"{'gain':<8} {'ATE m':>8} {'rot RPE deg':>12} {'lost':>5} {'map losses':>11}")
         for name, gain in GAINS.items():
-            dst = os.path.join(work, name)
-            if os.path.exists(dst):
-                shutil.rmtree(dst)
+            dst = replay_copies.fresh(work, name)
             write_copy(a.seq, dst, gain)
-            r = run(a.replay, dst, args, work)
+            r = replay_copies.replay(a.replay, dst, args, work)
             print(f"{name:<8} {r['ate']:>8.4f} {r['rot']:>12.4f} {r['lost']:>5d} {r['losses']:>11d}")
-    finally:
-        if not a.work:
-            shutil.rmtree(work, ignore_errors=True)
     return 0
 
 
