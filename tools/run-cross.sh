@@ -7,9 +7,9 @@
 # off), builds it, and runs ctest: CMAKE_CROSSCOMPILING_EMULATOR makes ctest start every test under
 # qemu-aarch64 / qemu-arm -L /usr/<triple>. arm-linux-gnueabihf-neon is armhf with -mfpu=neon (the NEON
 # LK and FAST kernels): only test_lk and test_corners (NEON vs portable kernels) and test_determinism
-# (same digests) are built and run there, the rest is the plain armhf code. TVO_EXPECT_LK_KERNEL tells
-# test_lk which LK kernels each build must have compiled in (neon on aarch64 and armhf-neon, portable on
-# plain armhf).
+# (same digests) are built and run there, the rest is the plain armhf code. TVO_EXPECT_LK_KERNEL and
+# TVO_EXPECT_FAST_KERNEL tell test_lk and test_corners which LK and FAST-9 kernels each build must have
+# compiled in (neon on aarch64 and armhf-neon, portable on plain armhf).
 # Installs what it needs when run as root (apt-get update first): the Debian cross compilers,
 # qemu-user, cmocka for the target through Debian multiarch (libcmocka-dev:arm64/armhf), and the
 # target's libspng runtime (libspng0:arm64/armhf). Not libspng-dev:<arch>: it pulls zlib1g-dev and
@@ -68,9 +68,10 @@ for t in "${TARGETS[@]}"; do
   triple="${t%-neon}"
   only=()
   case "$t" in
-    arm-linux-gnueabihf) export TVO_EXPECT_LK_KERNEL=portable ;;
-    arm-linux-gnueabihf-neon) export TVO_EXPECT_LK_KERNEL=neon; only=(test_lk test_corners test_determinism) ;;
-    *) export TVO_EXPECT_LK_KERNEL=neon ;;
+    arm-linux-gnueabihf) export TVO_EXPECT_LK_KERNEL=portable TVO_EXPECT_FAST_KERNEL=portable ;;
+    arm-linux-gnueabihf-neon)
+      export TVO_EXPECT_LK_KERNEL=neon TVO_EXPECT_FAST_KERNEL=neon; only=(test_lk test_corners test_determinism) ;;
+    *) export TVO_EXPECT_LK_KERNEL=neon TVO_EXPECT_FAST_KERNEL=neon ;;
   esac
   echo "== $t: build${only[*]:+ (${only[*]})}"
   cmake -S . -B "build/$t" -G Ninja --toolchain "cmake/toolchains/$t.cmake" \

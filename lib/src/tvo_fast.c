@@ -252,6 +252,17 @@ static int32_t fast_row(const uint8_t *row, int32_t width, const int32_t ofs[16]
     return n;
 }
 
+const char *tvo_fast_kernel_name(void)
+{
+#if TVO_FAST_SSE2
+    return "sse2";
+#elif TVO_FAST_NEON
+    return "neon";
+#else
+    return "portable";
+#endif
+}
+
 size_t tvo_fast_scratch_size(int32_t width)
 {
     size_t w;

@@ -3,6 +3,7 @@
  * (TVO_CORNERS_NO_SIMD) and under other names, and linked into test_corners: that test compares the
  * library's own build (SSE2 on x86-64, NEON on aarch64 and armhf with NEON) with it bit for bit. */
 #define TVO_CORNERS_NO_SIMD 1
+#define tvo_fast_kernel_name tvo_fast_kernel_name_portable
 #define tvo_fast_scratch_size tvo_fast_scratch_size_portable
 #define tvo_fast9_detect tvo_fast9_detect_portable
 #define tvo_fast9_detect_rows tvo_fast9_detect_rows_portable

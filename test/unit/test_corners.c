@@ -12,21 +12,12 @@
 #include "tvo_room.h"
 
 /* the portable FAST-9 path, built into this test from lib/src/tvo_fast.c (fast_portable.c) */
+const char *tvo_fast_kernel_name_portable(void);
 size_t tvo_fast_scratch_size_portable(int32_t width);
 tvo_status tvo_fast9_detect_rows_portable(const tvo_image *img, int32_t threshold, int nonmax,
                                           int32_t y_begin, int32_t y_end, tvo_corner *out, int32_t capacity,
                                           int32_t *count, void *scratch, size_t scratch_size);
 
-/* the FAST kernel the library has under this test's compiler flags (as lib/src/tvo_fast.c chooses it) */
-#if defined(TVO_CORNERS_NO_SIMD)
-#define FAST_KERNEL "portable"
-#elif defined(__SSE2__) || defined(_M_X64)
-#define FAST_KERNEL "sse2"
-#elif defined(__ARM_NEON) || defined(__ARM_NEON__)
-#define FAST_KERNEL "neon"
-#else
-#define FAST_KERNEL "portable"
-#endif
 
 /* ---- helpers ------------------------------------------------------------------------------------- */
 
@@ -243,7 +234,7 @@ static void test_fast_simd_matches_portable(void **state)
     (void)state;
     assert_non_null(a);
     assert_non_null(b);
-    print_message("FAST kernel compared with the portable path: %s\n", FAST_KERNEL);
+    print_message("FAST kernel compared with the portable path: %s\n", tvo_fast_kernel_name());
     for (kind = 0; kind < 5; ++kind) {
         /* raw noise, smoothed noise, blocks, the rendered room, and 0 / 255 noise (saturated differences) */
         if (kind == 0 || kind == 1)
@@ -277,6 +268,20 @@ static void test_fast_simd_matches_portable(void **state)
     free(a);
     free(b);
     img_free(&src);
+}
+
+/* The kernel's name: one of the three, the portable copy's "portable", and the one a cross build expects
+ * (TVO_EXPECT_FAST_KERNEL, set by tools/run-cross.sh) so that a build that silently lost its SIMD block
+ * fails here. */
+static void test_fast_kernel_name(void **state)
+{
+    const char *name = tvo_fast_kernel_name();
+    (void)state;
+    assert_non_null(name);
+    assert_true(strcmp(name, "sse2") == 0 || strcmp(name, "neon") == 0 || strcmp(name, "portable") == 0);
+    assert_string_equal(tvo_fast_kernel_name_portable(), "portable");
+    if (getenv("TVO_EXPECT_FAST_KERNEL") != NULL)
+        assert_string_equal(name, getenv("TVO_EXPECT_FAST_KERNEL"));
 }
 
 static void test_fast_rows_and_capacity(void **state)
@@ -754,6 +759,7 @@ int main(void)
             cmocka_unit_test(test_fast_square_corners),
             cmocka_unit_test(test_fast_matches_reference),
             cmocka_unit_test(test_fast_simd_matches_portable),
+            cmocka_unit_test(test_fast_kernel_name),
             cmocka_unit_test(test_fast_rows_and_capacity),
             cmocka_unit_test(test_fast_bad_input),
             cmocka_unit_test(test_response_dense_vs_point),

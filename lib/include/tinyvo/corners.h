@@ -39,6 +39,11 @@ typedef struct tvo_corner {
  * Cost: one pass over the image, O(width*height) with early rejection; SSE2 / NEON paths when the compiler
  * targets them (define TVO_CORNERS_NO_SIMD to build the portable path only), bit-exact to the portable one. */
 
+/* Which FAST-9 block this build runs: "sse2" (x86), "neon" (aarch64, or 32-bit ARM built with NEON) or
+ * "portable" (no SIMD in this build, or built with TVO_CORNERS_NO_SIMD). All give the same corners.
+ * Never NULL. */
+const char *tvo_fast_kernel_name(void);
+
 /* Bytes of scratch tvo_fast9_detect* needs for images `width` pixels wide (0 when width < 1). */
 size_t tvo_fast_scratch_size(int32_t width);
 
