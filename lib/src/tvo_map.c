@@ -26,7 +26,8 @@
 #define TVO_MAP_PNP_THRESHOLD_PX 2.0
 /* The initial pair needs max(TVO_MAP_INIT_MIN_POINTS, cfg.max_tracks / TVO_MAP_INIT_TRACKS_DIV)
  * triangulated landmarks (100 with the default 300 tracks, as ORB-SLAM's monocular initialisation asks
- * for 100 map points), and half of the reference's tracks still tracked; a reference older than
+ * for 100 map points; twice the divisor, 50, after cfg.map_init_wait_s seconds without a map), and half
+ * of the reference's tracks still tracked; a reference older than
  * TVO_MAP_REF_MAX_FRAMES frames without success, or with fewer of its tracks left, is renewed. */
 #define TVO_MAP_INIT_MIN_POINTS 40
 #define TVO_MAP_INIT_TRACKS_DIV 3
@@ -189,6 +190,9 @@ tvo_status tvo_map_init(tvo_map *m, const tvo_vo_config *cfg, tvo_arena *a)
 void tvo_map_reset(tvo_map *m)
 {
     tvo_map_clear(m);
+    m->waiting = 0;
+    m->wait_t_ns = 0;
+    m->init_need = 0;
     for (int32_t i = 0; i < TVO_MAP_RING; ++i)
         m->ring[i].serial = -1;
     m->next_kf_id = 0;
@@ -218,10 +222,15 @@ void tvo_map_clear(tvo_map *m)
     }
 }
 
-/* The landmarks a new map needs (see TVO_MAP_INIT_MIN_POINTS). */
-static int32_t init_min_points(const tvo_vo_config *cfg)
+/* The landmarks a new map needs at time t_ns (see TVO_MAP_INIT_MIN_POINTS): half as many once the map
+ * has been waited for cfg.map_init_wait_s seconds. */
+static int32_t init_min_points(const tvo_map *m, const tvo_vo_config *cfg, int64_t t_ns)
 {
-    const int32_t k = cfg->max_tracks / TVO_MAP_INIT_TRACKS_DIV;
+    int32_t div = TVO_MAP_INIT_TRACKS_DIV, k;
+    if (cfg->map_init_wait_s > 0.0 && m->waiting &&
+        (double)dt_ns(t_ns, m->wait_t_ns) >= cfg->map_init_wait_s * 1e9)
+        div *= 2;
+    k = cfg->max_tracks / div;
     return k > TVO_MAP_INIT_MIN_POINTS ? k : TVO_MAP_INIT_MIN_POINTS;
 }
 
@@ -491,7 +500,7 @@ static int init_pair_pose(tvo_map *m, const tvo_vo_config *cfg, const tvo_map_tr
             ++ip->k;
         }
     }
-    if (ip->k < init_min_points(cfg))
+    if (ip->k < m->init_need)
         return 0;
     relpose_config(cfg, &rc);
     if (tvo_relpose_estimate(&rc, ip->xa, ip->xb, ip->k, rp, ip->mask, rs, rs_size) != TVO_OK)
@@ -499,7 +508,7 @@ static int init_pair_pose(tvo_map *m, const tvo_vo_config *cfg, const tvo_map_tr
     if (rp->flags &
         (TVO_RELPOSE_FLAG_LOW_CONFIDENCE | TVO_RELPOSE_FLAG_AMBIGUOUS | TVO_RELPOSE_FLAG_ROTATION_ONLY))
         return 0;
-    if (rp->parallax_deg < cfg->map_init_parallax_deg || rp->inliers < init_min_points(cfg) ||
+    if (rp->parallax_deg < cfg->map_init_parallax_deg || rp->inliers < m->init_need ||
         2 * rp->inliers < ip->k)
         return 0;
     {
@@ -579,7 +588,7 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
         T_cur_ref.t[c2] = ip.rp.t[c2] / tn * baseline;
     T1 = tvo_pose_compose(&T_cur_ref, &T0);
     made = init_landmarks(m, cfg, tr, &ip, &T0, t0, &T1, t_ns);
-    if (made < init_min_points(cfg)) {
+    if (made < m->init_need) {
         /* not enough structure yet: back to waiting on the same reference */
         for (int32_t i = 0; i < tr->n; ++i)
             tr->lm[i] = -1;
@@ -609,6 +618,7 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
     m->has_vel = 1;
     update_speed(m);
     out->state = TVO_MAP_INITIALISED;
+    m->waiting = 0;
     out->keyframe = 1;
     out->points = made;
     out->new_points = made;
@@ -1224,6 +1234,11 @@ static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
         tr->inlier[i] = 0;
     if (!m->active) {
         out->state = TVO_MAP_INITIALISING;
+        if (!m->waiting) {
+            m->waiting = 1;
+            m->wait_t_ns = t_ns;
+        }
+        m->init_need = init_min_points(m, cfg, t_ns);
         if (!m->has_ref) {
             start_ref(m, tr, t_ns, T_c_w_prior);
             return;
@@ -1236,7 +1251,7 @@ static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
             int32_t k = 0;
             for (int32_t i = 0; i < tr->n; ++i)
                 k += tr->tri_fr[i] == m->ref_serial && tr->x_ok[i];
-            if (m->ref_frames > TVO_MAP_REF_MAX_FRAMES || k < init_min_points(cfg))
+            if (m->ref_frames > TVO_MAP_REF_MAX_FRAMES || k < m->init_need)
                 start_ref(m, tr, t_ns, T_c_w_prior);
         }
         return;

@@ -147,6 +147,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->map_max_landmarks = 0; /* 2 x max_tracks */
     cfg->map_min_points = 20;
     cfg->map_init_parallax_deg = 1.0;
+    cfg->map_init_wait_s = 0.0;
     cfg->map_tri_parallax_deg = 0.5;
     cfg->map_kf_baseline = 0.1;
     cfg->map_kf_points_ratio = 0.8;
@@ -245,6 +246,8 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (!(cfg->map_init_parallax_deg > 0.0 && cfg->map_init_parallax_deg <= 30.0) ||
         !(cfg->map_tri_parallax_deg > 0.0 && cfg->map_tri_parallax_deg <= 30.0))
+        return 0;
+    if (!(cfg->map_init_wait_s >= 0.0 && cfg->map_init_wait_s <= 86400.0))
         return 0;
     if (!(cfg->map_kf_baseline > 0.0 && cfg->map_kf_baseline <= 10.0) ||
         !(cfg->map_kf_points_ratio >= 0.0 && cfg->map_kf_points_ratio <= 1.0))

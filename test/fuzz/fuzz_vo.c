@@ -160,6 +160,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cfg.affine_step = ((hdr[3] >> 3) & 1) && (cfg.affine_win_size / 2) % 2 == 0 ? 2 : 1;
     /* ...and at the map's keyframes only (its refine hook) for half of all inputs */
     cfg.affine_at_keyframes = (hdr[3] >> 4) & 1;
+    /* the smaller first map after a wait: none, a wait of 0.1 s (a few frames), or of 1 s */
+    cfg.map_init_wait_s = ((hdr[3] >> 5) & 3u) == 1 ? 0.1 : (((hdr[3] >> 5) & 3u) == 2 ? 1.0 : 0.0);
     cfg.max_tracks = 16 + hdr[4];
     cfg.min_tracks = cfg.max_tracks * 2 / 3;
     cfg.min_pose_tracks = 8 + hdr[4] % 23;

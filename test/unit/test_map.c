@@ -526,6 +526,44 @@ static void test_tracks_view(void **state)
 
 /* The map's configuration: each out-of-range field is refused (size 0, init TVO_ERR_ARG); the map's
  * memory is part of tvo_vo_required_size and grows with the window. */
+/* cfg.map_init_wait_s: with a FAST threshold of 52 (and no low-contrast retry) the room gives fewer than
+ * 100 tracks, so no pair of frames gives the 100 landmarks a map needs with 300 tracks, and without the
+ * wait the VO stays on the two-view chain for the whole run; with a wait of 1 s (20 frames) the map
+ * starts after it, on 50, and poses the frames from there on. Every pose finite either way. */
+static void test_map_init_wait(void **state)
+{
+    (void)state;
+    for (int pass = 0; pass < 2; ++pass) {
+        fixture *f = new_fixture(1);
+        int init_frame = -1, tracking = 0, max_tracks = 0;
+        f->cfg.detect.fast_threshold = 52;
+        f->cfg.fast_min_threshold = 0;
+        f->cfg.map_init_wait_s = pass == 0 ? 0.0 : 1.0;
+        start_vo(f);
+        for (int k = 0; k < 60; ++k) {
+            tvo_vo_result res;
+            const tvo_pose T = walk(k);
+            assert_int_equal(step(f, &T, k, &res), TVO_OK);
+            assert_true(tvo_pose_is_finite(&res.T_w_c));
+            max_tracks = res.tracks > max_tracks ? res.tracks : max_tracks;
+            if (res.map_state == TVO_MAP_INITIALISED && init_frame < 0)
+                init_frame = k;
+            tracking += res.map_state == TVO_MAP_TRACKING;
+        }
+        fprintf(stderr, "map_init_wait_s %.1f: at most %d tracks, map from frame %d, %d frames tracked\n",
+                f->cfg.map_init_wait_s, max_tracks, init_frame, tracking);
+        assert_true(max_tracks <= 100);
+        if (pass == 0) {
+            assert_int_equal(init_frame, -1);
+            assert_int_equal(tracking, 0);
+        } else {
+            assert_true(init_frame >= 20 && init_frame < 40);
+            assert_int_equal(tracking, 59 - init_frame);
+        }
+        close_vo(f);
+    }
+}
+
 static void test_map_config(void **state)
 {
     tvo_camera cam = test_camera();
@@ -560,6 +598,9 @@ static void test_map_config(void **state)
     REFUSED(map_min_points, 100001);
     REFUSED(map_init_parallax_deg, 0.0);
     REFUSED(map_init_parallax_deg, NAN);
+    REFUSED(map_init_wait_s, -1.0);
+    REFUSED(map_init_wait_s, 86401.0);
+    REFUSED(map_init_wait_s, NAN);
     REFUSED(map_tri_parallax_deg, 31.0);
     REFUSED(map_kf_baseline, 0.0);
     REFUSED(map_kf_baseline, INFINITY);
@@ -582,7 +623,7 @@ int main(void)
             cmocka_unit_test(test_map_pure_rotation),    cmocka_unit_test(test_map_rotation_after_map),
             cmocka_unit_test(test_map_loss_and_new_map), cmocka_unit_test(test_tracks_view),
             cmocka_unit_test(test_map_config),           cmocka_unit_test(test_map_hover),
-            cmocka_unit_test(test_map_ba_turn_check),
+            cmocka_unit_test(test_map_ba_turn_check),    cmocka_unit_test(test_map_init_wait),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

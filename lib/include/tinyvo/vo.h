@@ -193,6 +193,12 @@ typedef struct tvo_vo_config {
     int32_t map_min_points;       /* a frame with fewer PnP inliers loses the map, [6, 100000] (above
                                    max_tracks: the map never tracks); default 20 */
     double map_init_parallax_deg; /* the initial pair needs this median parallax, (0, 30]; default 1 */
+    double map_init_wait_s;       /* a new map (the first, or after a loss) needs max(40, max_tracks / 3)
+                                   landmarks from its first pair; after this many seconds of frames
+                                   without a map, half as many (max(40, max_tracks / 6)): a camera that
+                                   keeps few tracks from frame to frame (blur, noise, a low frame rate)
+                                   gets a map at all. [0, 86400], 0: never fewer; default 0
+                                   (docs/design.md, "Initialisation") */
     double map_tri_parallax_deg;  /* a track is triangulated when its rays are this far apart, (0, 30];
                                    default 0.5 */
     double map_kf_baseline;       /* a new keyframe when the camera moved more than this x the median depth
@@ -243,7 +249,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
  * TVO_VO_PRESET_SMALL      sized for a QVGA (320x240) camera on a microcontroller: 120 tracks
  *                          (min_tracks 80, keyframe_min_tracks 40, detect.max_corners 120), 3 pyramid
  *                          levels (lk.max_level 2), a map of 5 keyframes and 160 landmarks. At 320x240 the
- *                          VO needs 228,608 bytes on a Cortex-M7 (tools/run-mcu.sh runs it there). */
+ *                          VO needs 228,624 bytes on a Cortex-M7 (tools/run-mcu.sh runs it there). */
 typedef enum tvo_vo_preset {
     TVO_VO_PRESET_DEFAULT = 0,
     TVO_VO_PRESET_ACCURATE = 1,
