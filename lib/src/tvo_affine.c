@@ -134,6 +134,110 @@ static void chol6_solve(const double L[21], const double b[6], double x[6])
     }
 }
 
+/* The model's sums in integers. With dx = q[1] - q[-1] and dy = q[s] - q[-s] (twice the gradients gx,
+ * gy: byte differences, |dx|, |dy| <= 255) and the template coordinates x, y (|x|, |y| <= h <= 15), the
+ * steepest-descent row is sd = S / 2 with the integer row S = [dx x, dx y, dy x, dy y, dx, dy], |S| <=
+ * 255 * 15 = 3825, and the model's sums are H = sum S S^T / 4, sum sd T = sum S T / 2, sum sd = sum S / 2.
+ * These sums were accumulated in double pixel by pixel, and exactly: each term is a multiple of 1/4 (of
+ * 1/2 for sum sd T and sum sd) and so is each partial sum, at most 31^2 * 3825^2 / 4 < 2^32 in magnitude,
+ * which a double holds exactly (34 significant bits). So they were these integers scaled by 1/4 or 1/2,
+ * whatever the order, and (double)k * 0.25 and (double)k * 0.5 (exact: k < 2^53, a power of 2) give their
+ * bits, +0 for a zero sum as the double sums, which started at +0, gave. */
+typedef struct take_sums {
+    int64_t h[21];  /* sum S S^T, packed lower triangle */
+    int64_t sdt[6]; /* sum S T */
+    int64_t sd1[6]; /* sum S */
+    int64_t t, t2;  /* sum T, sum T^2 */
+} take_sums;
+
+/* One row of samples' sums over x, in int32, for the products P = dx dx, dx dy, dy dy (r[0..8]: sum P,
+ * sum P x, sum P x^2 of each), dx T and dy T (r[9..12]: sum, sum x of each), dx and dy (r[13..16]: the
+ * same) and T (r[17], r[18]: sum T, sum T^2). p is the row's first sample, s the template's row stride,
+ * m the samples, x = c step - h at sample c. Bounds (|P| <= 255^2, |x| <= 15, at most 31 samples):
+ * sum |P x^2| <= 255^2 * 2 * (1^2 + ... + 15^2) = 161,262,000 < 2^31, and every other row sum less. */
+static void take_row(const uint8_t *p, int32_t s, int32_t m, int32_t step, int32_t h, int32_t r[19])
+{
+    int32_t a[19] = {0};
+    for (int32_t c = 0; c < m; ++c) {
+        const uint8_t *q = p + c * step;
+        const int32_t x = c * step - h, dx = (int32_t)q[1] - (int32_t)q[-1],
+                      dy = (int32_t)q[s] - (int32_t)q[-s];
+        const int32_t t = q[0], xx = dx * dx, xy = dx * dy, yy = dy * dy, xt = dx * t, yt = dy * t;
+        a[0] += xx;
+        a[1] += xx * x;
+        a[2] += xx * x * x;
+        a[3] += xy;
+        a[4] += xy * x;
+        a[5] += xy * x * x;
+        a[6] += yy;
+        a[7] += yy * x;
+        a[8] += yy * x * x;
+        a[9] += xt;
+        a[10] += xt * x;
+        a[11] += yt;
+        a[12] += yt * x;
+        a[13] += dx;
+        a[14] += dx * x;
+        a[15] += dy;
+        a[16] += dy * x;
+        a[17] += t;
+        a[18] += t * t;
+    }
+    memcpy(r, a, sizeof(a));
+}
+
+/* The window's sums from its rows' (take_row), each row's weighted by its y. Totals (at most 31 rows):
+ * sum S S^T up to 31^2 * 3825^2 < 2^34, in int64; the row sums times y or y^2 stay below 2^31 (15^2 *
+ * 31 * 255^2 for y^2 sum P), so only the additions need 64 bits. */
+static void take_sums_window(const uint8_t *tpl, int32_t side, int32_t step, take_sums *k)
+{
+    const int32_t h = side / 2, s = side + 2, m = tvo_aff_samples(side, step);
+    memset(k, 0, sizeof(*k));
+    for (int32_t yy = -h; yy <= h; yy += step) {
+        const uint8_t *p = tpl + (size_t)(yy + h + 1) * (size_t)s + 1;
+        const int32_t y = yy, y2 = yy * yy;
+        int32_t r[19];
+        take_row(p, s, m, step, h, r);
+        /* S = [dx x, dx y, dy x, dy y, dx, dy]: S_i S_j summed over the row is a row sum of P times
+           x^a y^b, a + b <= 2 */
+        k->h[TRI(0, 0)] += r[2];
+        k->h[TRI(1, 0)] += (int64_t)(y * r[1]);
+        k->h[TRI(1, 1)] += (int64_t)(y2 * r[0]);
+        k->h[TRI(2, 0)] += r[5];
+        k->h[TRI(2, 1)] += (int64_t)(y * r[4]);
+        k->h[TRI(2, 2)] += r[8];
+        k->h[TRI(3, 0)] += (int64_t)(y * r[4]);
+        k->h[TRI(3, 1)] += (int64_t)(y2 * r[3]);
+        k->h[TRI(3, 2)] += (int64_t)(y * r[7]);
+        k->h[TRI(3, 3)] += (int64_t)(y2 * r[6]);
+        k->h[TRI(4, 0)] += r[1];
+        k->h[TRI(4, 1)] += (int64_t)(y * r[0]);
+        k->h[TRI(4, 2)] += r[4];
+        k->h[TRI(4, 3)] += (int64_t)(y * r[3]);
+        k->h[TRI(4, 4)] += r[0];
+        k->h[TRI(5, 0)] += r[4];
+        k->h[TRI(5, 1)] += (int64_t)(y * r[3]);
+        k->h[TRI(5, 2)] += r[7];
+        k->h[TRI(5, 3)] += (int64_t)(y * r[6]);
+        k->h[TRI(5, 4)] += r[3];
+        k->h[TRI(5, 5)] += r[6];
+        k->sdt[0] += r[10];
+        k->sdt[1] += (int64_t)(y * r[9]);
+        k->sdt[2] += r[12];
+        k->sdt[3] += (int64_t)(y * r[11]);
+        k->sdt[4] += r[9];
+        k->sdt[5] += r[11];
+        k->sd1[0] += r[14];
+        k->sd1[1] += (int64_t)(y * r[13]);
+        k->sd1[2] += r[16];
+        k->sd1[3] += (int64_t)(y * r[15]);
+        k->sd1[4] += r[13];
+        k->sd1[5] += r[15];
+        k->t += r[17];
+        k->t2 += r[18];
+    }
+}
+
 int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, int32_t step, uint8_t *tpl,
                  tvo_aff_model *model, tvo_aff_warp *w)
 {
@@ -141,6 +245,7 @@ int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, int32_t s
     int32_t cx, cy;
     double H[21];
     int32_t n;
+    take_sums k;
     if (img == NULL || img->data == NULL || tpl == NULL || model == NULL || w == NULL || !side_ok(side) ||
         !tvo_aff_step_ok(side, step))
         return 0;
@@ -154,26 +259,16 @@ int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, int32_t s
     for (int32_t r = 0; r < s; ++r)
         memcpy(tpl + (size_t)r * (size_t)s,
                img->data + (size_t)(cy - h - 1 + r) * (size_t)img->stride + (cx - h - 1), (size_t)s);
-    memset(H, 0, sizeof(H));
+    take_sums_window(tpl, side, step, &k);
     memset(model, 0, sizeof(*model));
-    for (int32_t yy = -h; yy <= h; yy += step) {
-        const uint8_t *p = tpl + (size_t)(yy + h + 1) * (size_t)s + 1;
-        for (int32_t xx = -h; xx <= h; xx += step) {
-            const int32_t c = xx + h;
-            const double gx = 0.5 * (double)((int)p[c + 1] - (int)p[c - 1]);
-            const double gy = 0.5 * (double)((int)p[c + s] - (int)p[c - s]);
-            const double tv = (double)p[c];
-            const double sd[6] = {gx * xx, gx * yy, gy * xx, gy * yy, gx, gy};
-            for (int i = 0; i < 6; ++i) {
-                for (int j = 0; j <= i; ++j)
-                    H[TRI(i, j)] += sd[i] * sd[j];
-                model->sdt[i] += sd[i] * tv;
-                model->sd1[i] += sd[i];
-            }
-            model->sum_t += tv;
-            model->var_t += tv * tv;
-        }
+    for (int i = 0; i < 21; ++i)
+        H[i] = (double)k.h[i] * 0.25;
+    for (int i = 0; i < 6; ++i) {
+        model->sdt[i] = (double)k.sdt[i] * 0.5;
+        model->sd1[i] = (double)k.sd1[i] * 0.5;
     }
+    model->sum_t = (double)k.t;
+    model->var_t = (double)k.t2;
     model->var_t -= model->sum_t * model->sum_t / (double)n;
     if (!(model->var_t > (double)n)) /* contrast below 1 grey level */
         return 0;
