@@ -26,15 +26,20 @@ size_t tvo_aff_scratch_size(int32_t side)
 
 /* The template's central-difference gradients and grey values at the window's samples (every step-th
  * pixel of the side x side window, m = tvo_aff_samples(side, step) per row and column), row by row in
- * rows of tvo_aff_cols(m) floats (the padding columns 0); gy and tf follow gx in the scratch. */
+ * rows of tvo_aff_cols(m) floats, the padding columns 0 (the kernels read them); gy and tf follow gx in
+ * the scratch. Each row's last 4 columns are zeroed first and its samples written over them: no memset
+ * of the whole arrays. */
 static void gradients(const uint8_t *tpl, int32_t side, int32_t step, float *gx, float *gy, float *tf)
 {
     const int32_t s = side + 2, m = tvo_aff_samples(side, step), cols = tvo_aff_cols(m);
-    const size_t n = (size_t)m * (size_t)cols;
-    memset(gx, 0, 3 * n * sizeof(float)); /* the padding columns; gy and tf follow gx */
     for (int32_t r = 0; r < m; ++r) {
         const uint8_t *p = tpl + (size_t)(r * step + 1) * (size_t)s + 1;
         const size_t o = (size_t)r * (size_t)cols;
+        for (int32_t c = cols - 4; c < cols; ++c) {
+            gx[o + (size_t)c] = 0.0f;
+            gy[o + (size_t)c] = 0.0f;
+            tf[o + (size_t)c] = 0.0f;
+        }
         for (int32_t c = 0; c < m; ++c) {
             const uint8_t *q = p + c * step;
             gx[o + (size_t)c] = 0.5f * (float)((int)q[1] - (int)q[-1]);
