@@ -27,11 +27,14 @@ size_t tvo_aff_scratch_size(int32_t side)
 /* The template's central-difference gradients and grey values at the window's samples (every step-th
  * pixel of the side x side window, m = tvo_aff_samples(side, step) per row and column), row by row in
  * rows of tvo_aff_cols(m) floats, the padding columns 0 (the kernels read them); gy and tf follow gx in
- * the scratch. Each row's last 4 columns are zeroed first and its samples written over them: no memset
- * of the whole arrays. */
-static void gradients(const uint8_t *tpl, int32_t side, int32_t step, float *gx, float *gy, float *tf)
+ * the scratch. Exact values (half-integers and integers), so the SIMD rows (portable 0) give the same.
+ * Each row's last 4 columns are zeroed first and its samples written over them: no memset of the whole
+ * arrays. */
+static void gradients(const uint8_t *tpl, int32_t side, int32_t step, float *gx, float *gy, float *tf,
+                      int portable)
 {
     const int32_t s = side + 2, m = tvo_aff_samples(side, step), cols = tvo_aff_cols(m);
+    (void)portable; /* only the portable rows without SIMD */
     for (int32_t r = 0; r < m; ++r) {
         const uint8_t *p = tpl + (size_t)(r * step + 1) * (size_t)s + 1;
         const size_t o = (size_t)r * (size_t)cols;
@@ -40,6 +43,12 @@ static void gradients(const uint8_t *tpl, int32_t side, int32_t step, float *gx,
             gy[o + (size_t)c] = 0.0f;
             tf[o + (size_t)c] = 0.0f;
         }
+#if TVO_AFF_SIMD
+        if (!portable && step == 1 && m >= TVO_AFF_TPL_SIMD_MIN) {
+            tvo_aff_gradients_row_simd(p, s, m, gx + o, gy + o, tf + o);
+            continue;
+        }
+#endif
         for (int32_t c = 0; c < m; ++c) {
             const uint8_t *q = p + c * step;
             gx[o + (size_t)c] = 0.5f * (float)((int)q[1] - (int)q[-1]);
@@ -139,22 +148,6 @@ static void chol6_solve(const double L[21], const double b[6], double x[6])
     }
 }
 
-/* The model's sums in integers. With dx = q[1] - q[-1] and dy = q[s] - q[-s] (twice the gradients gx,
- * gy: byte differences, |dx|, |dy| <= 255) and the template coordinates x, y (|x|, |y| <= h <= 15), the
- * steepest-descent row is sd = S / 2 with the integer row S = [dx x, dx y, dy x, dy y, dx, dy], |S| <=
- * 255 * 15 = 3825, and the model's sums are H = sum S S^T / 4, sum sd T = sum S T / 2, sum sd = sum S / 2.
- * These sums were accumulated in double pixel by pixel, and exactly: each term is a multiple of 1/4 (of
- * 1/2 for sum sd T and sum sd) and so is each partial sum, at most 31^2 * 3825^2 / 4 < 2^32 in magnitude,
- * which a double holds exactly (34 significant bits). So they were these integers scaled by 1/4 or 1/2,
- * whatever the order, and (double)k * 0.25 and (double)k * 0.5 (exact: k < 2^53, a power of 2) give their
- * bits, +0 for a zero sum as the double sums, which started at +0, gave. */
-typedef struct take_sums {
-    int64_t h[21];  /* sum S S^T, packed lower triangle */
-    int64_t sdt[6]; /* sum S T */
-    int64_t sd1[6]; /* sum S */
-    int64_t t, t2;  /* sum T, sum T^2 */
-} take_sums;
-
 /* One row of samples' sums over x, in int32, for the products P = dx dx, dx dy, dy dy (r[0..8]: sum P,
  * sum P x, sum P x^2 of each), dx T and dy T (r[9..12]: sum, sum x of each), dx and dy (r[13..16]: the
  * same) and T (r[17], r[18]: sum T, sum T^2). p is the row's first sample, s the template's row stride,
@@ -191,56 +184,82 @@ static void take_row(const uint8_t *p, int32_t s, int32_t m, int32_t step, int32
     memcpy(r, a, sizeof(a));
 }
 
-/* The window's sums from its rows' (take_row), each row's weighted by its y. Totals (at most 31 rows):
- * sum S S^T up to 31^2 * 3825^2 < 2^34, in int64; the row sums times y or y^2 stay below 2^31 (15^2 *
- * 31 * 255^2 for y^2 sum P), so only the additions need 64 bits. */
-static void take_sums_window(const uint8_t *tpl, int32_t side, int32_t step, take_sums *k)
+/* tvo_aff_take's sums, in integers. With dx = q[1] - q[-1] and dy = q[s] - q[-s] (twice the gradients gx,
+ * gy: byte differences, |dx|, |dy| <= 255) and the template coordinates x, y (|x|, |y| <= h <= 15), the
+ * steepest-descent row is sd = S / 2 with the integer row S = [dx x, dx y, dy x, dy y, dx, dy], |S| <= 255 *
+ * 15 = 3825, and the model's sums are H = sum S S^T / 4, sum sd T = sum S T / 2, sum sd = sum S / 2. The
+ * double sums pixel by pixel these replace (test_affine keeps them as its reference) were exact: each term
+ * is a multiple of 1/4 (of 1/2 for sum sd T and sum sd) and so is each partial sum, at most 31^2 * 3825^2 /
+ * 4 < 2^32 in magnitude, which a double holds exactly (34 significant bits). So they were these integers
+ * scaled by 1/4 or 1/2, whatever the order, and (double)w * 0.25 and (double)w * 0.5 (exact: |w| < 2^53, a
+ * power of 2) give their bits, +0 for a zero sum as the double sums, which started at +0, gave.
+ * Over the rows of take_row()'s sums r (or tvo_aff_take_row_simd()'s at step 1: the same integers): sum r
+ * (w0), sum y r (w1) for the r[] that y multiplies in S S^T, S T and S (yk), and sum y^2 r (w2) for r[0],
+ * r[3], r[6] (sum P). A row sum times y or y^2 stays below 2^31 (at most 15^2 * 31 * 255^2 = 453,650,625,
+ * y^2 sum P); the sums over the rows need 64 bits (sum S S^T up to 31^2 * 3825^2 < 2^34). H gets sum S S^T /
+ * 4, model its other sums (sum T^2 in var_t). */
+static void take_sums(const uint8_t *tpl, int32_t side, int32_t step, double H[21], tvo_aff_model *model)
 {
+    static const int8_t yk[10] = {0, 1, 3, 4, 6, 7, 9, 11, 13, 15};
     const int32_t h = side / 2, s = side + 2, m = tvo_aff_samples(side, step);
-    memset(k, 0, sizeof(*k));
-    for (int32_t yy = -h; yy <= h; yy += step) {
-        const uint8_t *p = tpl + (size_t)(yy + h + 1) * (size_t)s + 1;
-        const int32_t y = yy, y2 = yy * yy;
+    int64_t w0[19], w1[10], w2[3];
+    memset(w0, 0, sizeof(w0));
+    memset(w1, 0, sizeof(w1));
+    memset(w2, 0, sizeof(w2));
+    for (int32_t y = -h; y <= h; y += step) {
+        const uint8_t *p = tpl + (size_t)(y + h + 1) * (size_t)s + 1;
         int32_t r[19];
-        take_row(p, s, m, step, h, r);
-        /* S = [dx x, dx y, dy x, dy y, dx, dy]: S_i S_j summed over the row is a row sum of P times
-           x^a y^b, a + b <= 2 */
-        k->h[TRI(0, 0)] += r[2];
-        k->h[TRI(1, 0)] += (int64_t)(y * r[1]);
-        k->h[TRI(1, 1)] += (int64_t)(y2 * r[0]);
-        k->h[TRI(2, 0)] += r[5];
-        k->h[TRI(2, 1)] += (int64_t)(y * r[4]);
-        k->h[TRI(2, 2)] += r[8];
-        k->h[TRI(3, 0)] += (int64_t)(y * r[4]);
-        k->h[TRI(3, 1)] += (int64_t)(y2 * r[3]);
-        k->h[TRI(3, 2)] += (int64_t)(y * r[7]);
-        k->h[TRI(3, 3)] += (int64_t)(y2 * r[6]);
-        k->h[TRI(4, 0)] += r[1];
-        k->h[TRI(4, 1)] += (int64_t)(y * r[0]);
-        k->h[TRI(4, 2)] += r[4];
-        k->h[TRI(4, 3)] += (int64_t)(y * r[3]);
-        k->h[TRI(4, 4)] += r[0];
-        k->h[TRI(5, 0)] += r[4];
-        k->h[TRI(5, 1)] += (int64_t)(y * r[3]);
-        k->h[TRI(5, 2)] += r[7];
-        k->h[TRI(5, 3)] += (int64_t)(y * r[6]);
-        k->h[TRI(5, 4)] += r[3];
-        k->h[TRI(5, 5)] += r[6];
-        k->sdt[0] += r[10];
-        k->sdt[1] += (int64_t)(y * r[9]);
-        k->sdt[2] += r[12];
-        k->sdt[3] += (int64_t)(y * r[11]);
-        k->sdt[4] += r[9];
-        k->sdt[5] += r[11];
-        k->sd1[0] += r[14];
-        k->sd1[1] += (int64_t)(y * r[13]);
-        k->sd1[2] += r[16];
-        k->sd1[3] += (int64_t)(y * r[15]);
-        k->sd1[4] += r[13];
-        k->sd1[5] += r[15];
-        k->t += r[17];
-        k->t2 += r[18];
+#if TVO_AFF_SIMD
+        if (step == 1 && m >= TVO_AFF_TPL_SIMD_MIN)
+            tvo_aff_take_row_simd(p, s, m, h, r);
+        else
+#endif
+            take_row(p, s, m, step, h, r);
+        for (int i = 0; i < 19; ++i)
+            w0[i] += r[i];
+        for (int i = 0; i < 10; ++i)
+            w1[i] += y * r[yk[i]];
+        w2[0] += y * y * r[0];
+        w2[1] += y * y * r[3];
+        w2[2] += y * y * r[6];
     }
+    /* S = [dx x, dx y, dy x, dy y, dx, dy]: S_i S_j is P x^a y^b (a + b <= 2), S_i T and S_i are dx T,
+       dy T, dx, dy times x or y or 1 */
+    H[TRI(0, 0)] = (double)w0[2] * 0.25;
+    H[TRI(1, 0)] = (double)w1[1] * 0.25;
+    H[TRI(1, 1)] = (double)w2[0] * 0.25;
+    H[TRI(2, 0)] = (double)w0[5] * 0.25;
+    H[TRI(2, 1)] = (double)w1[3] * 0.25;
+    H[TRI(2, 2)] = (double)w0[8] * 0.25;
+    H[TRI(3, 0)] = (double)w1[3] * 0.25;
+    H[TRI(3, 1)] = (double)w2[1] * 0.25;
+    H[TRI(3, 2)] = (double)w1[5] * 0.25;
+    H[TRI(3, 3)] = (double)w2[2] * 0.25;
+    H[TRI(4, 0)] = (double)w0[1] * 0.25;
+    H[TRI(4, 1)] = (double)w1[0] * 0.25;
+    H[TRI(4, 2)] = (double)w0[4] * 0.25;
+    H[TRI(4, 3)] = (double)w1[2] * 0.25;
+    H[TRI(4, 4)] = (double)w0[0] * 0.25;
+    H[TRI(5, 0)] = (double)w0[4] * 0.25;
+    H[TRI(5, 1)] = (double)w1[2] * 0.25;
+    H[TRI(5, 2)] = (double)w0[7] * 0.25;
+    H[TRI(5, 3)] = (double)w1[4] * 0.25;
+    H[TRI(5, 4)] = (double)w0[3] * 0.25;
+    H[TRI(5, 5)] = (double)w0[6] * 0.25;
+    model->sdt[0] = (double)w0[10] * 0.5;
+    model->sdt[1] = (double)w1[6] * 0.5;
+    model->sdt[2] = (double)w0[12] * 0.5;
+    model->sdt[3] = (double)w1[7] * 0.5;
+    model->sdt[4] = (double)w0[9] * 0.5;
+    model->sdt[5] = (double)w0[11] * 0.5;
+    model->sd1[0] = (double)w0[14] * 0.5;
+    model->sd1[1] = (double)w1[8] * 0.5;
+    model->sd1[2] = (double)w0[16] * 0.5;
+    model->sd1[3] = (double)w1[9] * 0.5;
+    model->sd1[4] = (double)w0[13] * 0.5;
+    model->sd1[5] = (double)w0[15] * 0.5;
+    model->sum_t = (double)w0[17];
+    model->var_t = (double)w0[18];
 }
 
 int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, int32_t step, uint8_t *tpl,
@@ -250,7 +269,6 @@ int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, int32_t s
     int32_t cx, cy;
     double H[21];
     int32_t n;
-    take_sums k;
     if (img == NULL || img->data == NULL || tpl == NULL || model == NULL || w == NULL || !side_ok(side) ||
         !tvo_aff_step_ok(side, step))
         return 0;
@@ -264,16 +282,8 @@ int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, int32_t s
     for (int32_t r = 0; r < s; ++r)
         memcpy(tpl + (size_t)r * (size_t)s,
                img->data + (size_t)(cy - h - 1 + r) * (size_t)img->stride + (cx - h - 1), (size_t)s);
-    take_sums_window(tpl, side, step, &k);
     memset(model, 0, sizeof(*model));
-    for (int i = 0; i < 21; ++i)
-        H[i] = (double)k.h[i] * 0.25;
-    for (int i = 0; i < 6; ++i) {
-        model->sdt[i] = (double)k.sdt[i] * 0.5;
-        model->sd1[i] = (double)k.sd1[i] * 0.5;
-    }
-    model->sum_t = (double)k.t;
-    model->var_t = (double)k.t2;
+    take_sums(tpl, side, step, H, model);
     model->var_t -= model->sum_t * model->sum_t / (double)n;
     if (!(model->var_t > (double)n)) /* contrast below 1 grey level */
         return 0;
@@ -355,13 +365,12 @@ int tvo_aff_refine_kernel(const uint8_t *tpl, const tvo_aff_model *model, int32_
     gx = (float *)scratch;
     gy = gx + (size_t)m * (size_t)tvo_aff_cols(m);
     tf = gy + (size_t)m * (size_t)tvo_aff_cols(m);
-    gradients(tpl, side, step, gx, gy, tf);
+    gradients(tpl, side, step, gx, gy, tf, portable);
     mean_t = model->sum_t / (double)n;
     for (int i = 0; i < 4; ++i)
         A[i] = (double)w->A[i];
     t[0] = (double)w->t[0];
     t[1] = (double)w->t[1];
-    (void)portable; /* only one kernel without SSE2 */
     for (int32_t it = 0; it < max_iters && !converged; ++it) {
         tvo_aff_sums sm;
         double b[6], dp[6], g, mean_i, var_i;
