@@ -26,15 +26,29 @@ size_t tvo_aff_scratch_size(int32_t side)
 
 /* The template's central-difference gradients and grey values at the window's samples (every step-th
  * pixel of the side x side window, m = tvo_aff_samples(side, step) per row and column), row by row in
- * rows of tvo_aff_cols(m) floats (the padding columns 0); gy and tf follow gx in the scratch. */
-static void gradients(const uint8_t *tpl, int32_t side, int32_t step, float *gx, float *gy, float *tf)
+ * rows of tvo_aff_cols(m) floats, the padding columns 0 (the kernels read them); gy and tf follow gx in
+ * the scratch. Exact values (half-integers and integers), so the SIMD rows (portable 0) give the same.
+ * Each row's last 4 columns are zeroed first and its samples written over them: no memset of the whole
+ * arrays. */
+static void gradients(const uint8_t *tpl, int32_t side, int32_t step, float *gx, float *gy, float *tf,
+                      int portable)
 {
     const int32_t s = side + 2, m = tvo_aff_samples(side, step), cols = tvo_aff_cols(m);
-    const size_t n = (size_t)m * (size_t)cols;
-    memset(gx, 0, 3 * n * sizeof(float)); /* the padding columns; gy and tf follow gx */
+    (void)portable; /* only the portable rows without SIMD */
     for (int32_t r = 0; r < m; ++r) {
         const uint8_t *p = tpl + (size_t)(r * step + 1) * (size_t)s + 1;
         const size_t o = (size_t)r * (size_t)cols;
+        for (int32_t c = cols - 4; c < cols; ++c) {
+            gx[o + (size_t)c] = 0.0f;
+            gy[o + (size_t)c] = 0.0f;
+            tf[o + (size_t)c] = 0.0f;
+        }
+#if TVO_AFF_SIMD
+        if (!portable && step == 1 && m >= TVO_AFF_TPL_SIMD_MIN) {
+            tvo_aff_gradients_row_simd(p, s, m, gx + o, gy + o, tf + o);
+            continue;
+        }
+#endif
         for (int32_t c = 0; c < m; ++c) {
             const uint8_t *q = p + c * step;
             gx[o + (size_t)c] = 0.5f * (float)((int)q[1] - (int)q[-1]);
@@ -134,6 +148,120 @@ static void chol6_solve(const double L[21], const double b[6], double x[6])
     }
 }
 
+/* One row of samples' sums over x, in int32, for the products P = dx dx, dx dy, dy dy (r[0..8]: sum P,
+ * sum P x, sum P x^2 of each), dx T and dy T (r[9..12]: sum, sum x of each), dx and dy (r[13..16]: the
+ * same) and T (r[17], r[18]: sum T, sum T^2). p is the row's first sample, s the template's row stride,
+ * m the samples, x = c step - h at sample c. Bounds (|P| <= 255^2, |x| <= 15, at most 31 samples):
+ * sum |P x^2| <= 255^2 * 2 * (1^2 + ... + 15^2) = 161,262,000 < 2^31, and every other row sum less. */
+static void take_row(const uint8_t *p, int32_t s, int32_t m, int32_t step, int32_t h, int32_t r[19])
+{
+    int32_t a[19] = {0};
+    for (int32_t c = 0; c < m; ++c) {
+        const uint8_t *q = p + c * step;
+        const int32_t x = c * step - h, dx = (int32_t)q[1] - (int32_t)q[-1],
+                      dy = (int32_t)q[s] - (int32_t)q[-s];
+        const int32_t t = q[0], xx = dx * dx, xy = dx * dy, yy = dy * dy, xt = dx * t, yt = dy * t;
+        a[0] += xx;
+        a[1] += xx * x;
+        a[2] += xx * x * x;
+        a[3] += xy;
+        a[4] += xy * x;
+        a[5] += xy * x * x;
+        a[6] += yy;
+        a[7] += yy * x;
+        a[8] += yy * x * x;
+        a[9] += xt;
+        a[10] += xt * x;
+        a[11] += yt;
+        a[12] += yt * x;
+        a[13] += dx;
+        a[14] += dx * x;
+        a[15] += dy;
+        a[16] += dy * x;
+        a[17] += t;
+        a[18] += t * t;
+    }
+    memcpy(r, a, sizeof(a));
+}
+
+/* tvo_aff_take's sums, in integers. With dx = q[1] - q[-1] and dy = q[s] - q[-s] (twice the gradients gx,
+ * gy: byte differences, |dx|, |dy| <= 255) and the template coordinates x, y (|x|, |y| <= h <= 15), the
+ * steepest-descent row is sd = S / 2 with the integer row S = [dx x, dx y, dy x, dy y, dx, dy], |S| <= 255 *
+ * 15 = 3825, and the model's sums are H = sum S S^T / 4, sum sd T = sum S T / 2, sum sd = sum S / 2. The
+ * double sums pixel by pixel these replace (test_affine keeps them as its reference) were exact: each term
+ * is a multiple of 1/4 (of 1/2 for sum sd T and sum sd) and so is each partial sum, at most 31^2 * 3825^2 /
+ * 4 < 2^32 in magnitude, which a double holds exactly (34 significant bits). So they were these integers
+ * scaled by 1/4 or 1/2, whatever the order, and (double)w * 0.25 and (double)w * 0.5 (exact: |w| < 2^53, a
+ * power of 2) give their bits, +0 for a zero sum as the double sums, which started at +0, gave.
+ * Over the rows of take_row()'s sums r (or tvo_aff_take_row_simd()'s at step 1: the same integers): sum r
+ * (w0), sum y r (w1) for the r[] that y multiplies in S S^T, S T and S (yk), and sum y^2 r (w2) for r[0],
+ * r[3], r[6] (sum P). A row sum times y or y^2 stays below 2^31 (at most 15^2 * 31 * 255^2 = 453,650,625,
+ * y^2 sum P); the sums over the rows need 64 bits (sum S S^T up to 31^2 * 3825^2 < 2^34). H gets sum S S^T /
+ * 4, model its other sums (sum T^2 in var_t). */
+static void take_sums(const uint8_t *tpl, int32_t side, int32_t step, double H[21], tvo_aff_model *model)
+{
+    static const int8_t yk[10] = {0, 1, 3, 4, 6, 7, 9, 11, 13, 15};
+    const int32_t h = side / 2, s = side + 2, m = tvo_aff_samples(side, step);
+    int64_t w0[19], w1[10], w2[3];
+    memset(w0, 0, sizeof(w0));
+    memset(w1, 0, sizeof(w1));
+    memset(w2, 0, sizeof(w2));
+    for (int32_t y = -h; y <= h; y += step) {
+        const uint8_t *p = tpl + (size_t)(y + h + 1) * (size_t)s + 1;
+        int32_t r[19];
+#if TVO_AFF_SIMD
+        if (step == 1 && m >= TVO_AFF_TPL_SIMD_MIN)
+            tvo_aff_take_row_simd(p, s, m, h, r);
+        else
+#endif
+            take_row(p, s, m, step, h, r);
+        for (int i = 0; i < 19; ++i)
+            w0[i] += r[i];
+        for (int i = 0; i < 10; ++i)
+            w1[i] += y * r[yk[i]];
+        w2[0] += y * y * r[0];
+        w2[1] += y * y * r[3];
+        w2[2] += y * y * r[6];
+    }
+    /* S = [dx x, dx y, dy x, dy y, dx, dy]: S_i S_j is P x^a y^b (a + b <= 2), S_i T and S_i are dx T,
+       dy T, dx, dy times x or y or 1 */
+    H[TRI(0, 0)] = (double)w0[2] * 0.25;
+    H[TRI(1, 0)] = (double)w1[1] * 0.25;
+    H[TRI(1, 1)] = (double)w2[0] * 0.25;
+    H[TRI(2, 0)] = (double)w0[5] * 0.25;
+    H[TRI(2, 1)] = (double)w1[3] * 0.25;
+    H[TRI(2, 2)] = (double)w0[8] * 0.25;
+    H[TRI(3, 0)] = (double)w1[3] * 0.25;
+    H[TRI(3, 1)] = (double)w2[1] * 0.25;
+    H[TRI(3, 2)] = (double)w1[5] * 0.25;
+    H[TRI(3, 3)] = (double)w2[2] * 0.25;
+    H[TRI(4, 0)] = (double)w0[1] * 0.25;
+    H[TRI(4, 1)] = (double)w1[0] * 0.25;
+    H[TRI(4, 2)] = (double)w0[4] * 0.25;
+    H[TRI(4, 3)] = (double)w1[2] * 0.25;
+    H[TRI(4, 4)] = (double)w0[0] * 0.25;
+    H[TRI(5, 0)] = (double)w0[4] * 0.25;
+    H[TRI(5, 1)] = (double)w1[2] * 0.25;
+    H[TRI(5, 2)] = (double)w0[7] * 0.25;
+    H[TRI(5, 3)] = (double)w1[4] * 0.25;
+    H[TRI(5, 4)] = (double)w0[3] * 0.25;
+    H[TRI(5, 5)] = (double)w0[6] * 0.25;
+    model->sdt[0] = (double)w0[10] * 0.5;
+    model->sdt[1] = (double)w1[6] * 0.5;
+    model->sdt[2] = (double)w0[12] * 0.5;
+    model->sdt[3] = (double)w1[7] * 0.5;
+    model->sdt[4] = (double)w0[9] * 0.5;
+    model->sdt[5] = (double)w0[11] * 0.5;
+    model->sd1[0] = (double)w0[14] * 0.5;
+    model->sd1[1] = (double)w1[8] * 0.5;
+    model->sd1[2] = (double)w0[16] * 0.5;
+    model->sd1[3] = (double)w1[9] * 0.5;
+    model->sd1[4] = (double)w0[13] * 0.5;
+    model->sd1[5] = (double)w0[15] * 0.5;
+    model->sum_t = (double)w0[17];
+    model->var_t = (double)w0[18];
+}
+
 int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, int32_t step, uint8_t *tpl,
                  tvo_aff_model *model, tvo_aff_warp *w)
 {
@@ -154,26 +282,8 @@ int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, int32_t s
     for (int32_t r = 0; r < s; ++r)
         memcpy(tpl + (size_t)r * (size_t)s,
                img->data + (size_t)(cy - h - 1 + r) * (size_t)img->stride + (cx - h - 1), (size_t)s);
-    memset(H, 0, sizeof(H));
     memset(model, 0, sizeof(*model));
-    for (int32_t yy = -h; yy <= h; yy += step) {
-        const uint8_t *p = tpl + (size_t)(yy + h + 1) * (size_t)s + 1;
-        for (int32_t xx = -h; xx <= h; xx += step) {
-            const int32_t c = xx + h;
-            const double gx = 0.5 * (double)((int)p[c + 1] - (int)p[c - 1]);
-            const double gy = 0.5 * (double)((int)p[c + s] - (int)p[c - s]);
-            const double tv = (double)p[c];
-            const double sd[6] = {gx * xx, gx * yy, gy * xx, gy * yy, gx, gy};
-            for (int i = 0; i < 6; ++i) {
-                for (int j = 0; j <= i; ++j)
-                    H[TRI(i, j)] += sd[i] * sd[j];
-                model->sdt[i] += sd[i] * tv;
-                model->sd1[i] += sd[i];
-            }
-            model->sum_t += tv;
-            model->var_t += tv * tv;
-        }
-    }
+    take_sums(tpl, side, step, H, model);
     model->var_t -= model->sum_t * model->sum_t / (double)n;
     if (!(model->var_t > (double)n)) /* contrast below 1 grey level */
         return 0;
@@ -255,13 +365,12 @@ int tvo_aff_refine_kernel(const uint8_t *tpl, const tvo_aff_model *model, int32_
     gx = (float *)scratch;
     gy = gx + (size_t)m * (size_t)tvo_aff_cols(m);
     tf = gy + (size_t)m * (size_t)tvo_aff_cols(m);
-    gradients(tpl, side, step, gx, gy, tf);
+    gradients(tpl, side, step, gx, gy, tf, portable);
     mean_t = model->sum_t / (double)n;
     for (int i = 0; i < 4; ++i)
         A[i] = (double)w->A[i];
     t[0] = (double)w->t[0];
     t[1] = (double)w->t[1];
-    (void)portable; /* only one kernel without SSE2 */
     for (int32_t it = 0; it < max_iters && !converged; ++it) {
         tvo_aff_sums sm;
         double b[6], dp[6], g, mean_i, var_i;

@@ -356,6 +356,155 @@ static void test_kernels_agree(void **state)
                   TVO_AFF_SIMD ? "simd against portable" : "portable only");
 }
 
+/* The model as tvo_aff_take computed it before its sums went to integers: every sum in double, pixel by
+ * pixel, then the same Cholesky factorisation. tvo_aff_take must give these bits. */
+static int ref_chol6(double L[21])
+{
+    for (int j = 0; j < 6; ++j) {
+        double d = L[j * (j + 1) / 2 + j];
+        const double d0 = d;
+        for (int k = 0; k < j; ++k)
+            d -= L[j * (j + 1) / 2 + k] * L[j * (j + 1) / 2 + k];
+        if (!(d > 1e-9 * d0) || !(d0 > 0.0))
+            return 0;
+        d = sqrt(d);
+        L[j * (j + 1) / 2 + j] = d;
+        for (int i = j + 1; i < 6; ++i) {
+            double v = L[i * (i + 1) / 2 + j];
+            for (int k = 0; k < j; ++k)
+                v -= L[i * (i + 1) / 2 + k] * L[j * (j + 1) / 2 + k];
+            L[i * (i + 1) / 2 + j] = v / d;
+        }
+    }
+    return 1;
+}
+
+static int ref_model(const uint8_t *tpl, int32_t side, int32_t step, tvo_aff_model *model)
+{
+    const int32_t h = side / 2, s = side + 2, n = tvo_aff_samples(side, step) * tvo_aff_samples(side, step);
+    double hm[21]; /* H, the window height's name here */
+    memset(hm, 0, sizeof(hm));
+    memset(model, 0, sizeof(*model));
+    for (int32_t yy = -h; yy <= h; yy += step) {
+        const uint8_t *p = tpl + (size_t)(yy + h + 1) * (size_t)s + 1;
+        for (int32_t xx = -h; xx <= h; xx += step) {
+            const int32_t c = xx + h;
+            const double gx = 0.5 * (double)((int)p[c + 1] - (int)p[c - 1]);
+            const double gy = 0.5 * (double)((int)p[c + s] - (int)p[c - s]);
+            const double tv = (double)p[c];
+            const double sd[6] = {gx * xx, gx * yy, gy * xx, gy * yy, gx, gy};
+            for (int i = 0; i < 6; ++i) {
+                for (int j = 0; j <= i; ++j)
+                    hm[i * (i + 1) / 2 + j] += sd[i] * sd[j];
+                model->sdt[i] += sd[i] * tv;
+                model->sd1[i] += sd[i];
+            }
+            model->sum_t += tv;
+            model->var_t += tv * tv;
+        }
+    }
+    model->var_t -= model->sum_t * model->sum_t / (double)n;
+    if (!(model->var_t > (double)n) || !ref_chol6(hm))
+        return 0;
+    memcpy(model->L, hm, sizeof(hm));
+    return 1;
+}
+
+/* tvo_aff_take's model (its integer sums, and the SIMD ones where built in) is the double reference's,
+ * bit for bit, for every odd side 3..31 and every step it accepts, on textures that reach the largest
+ * sums: random grey levels, random 0 / 255 pixels, and 2 x 2 blocks of 0 and 255 in a checkerboard, whose
+ * gradients are +-255/2 at every pixel in both directions (the largest |sd| and sum sd sd^T), at several
+ * phases; plus a smooth texture and a flat one. */
+static void test_take_matches_double_sums(void **state)
+{
+    static uint8_t img[W * H], tpl[(TVO_AFF_MAX_SIDE + 2) * (TVO_AFF_MAX_SIDE + 2)];
+    tvo_image im = tvo_image_make(W, H, W, img);
+    uint64_t seed = 0x9e3779b97f4a7c15ULL;
+    int compared = 0, taken = 0;
+    (void)state;
+    for (int pat = 0; pat < 8; ++pat) {
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                uint8_t v;
+                if (pat == 0)
+                    v = (uint8_t)(tvo_test_rand(&seed) >> 56);
+                else if (pat == 1)
+                    v = (tvo_test_rand(&seed) >> 63) ? 255 : 0;
+                else if (pat < 6) /* phases (0, 0), (1, 0), (0, 1), (1, 1) */
+                    v = ((((x + (pat - 2) % 2) >> 1) ^ ((y + (pat - 2) / 2) >> 1)) & 1) ? 255 : 0;
+                else if (pat == 6)
+                    v = (uint8_t)floor(texture(x, y) + 0.5);
+                else
+                    v = 77;
+                img[y * W + x] = v;
+            }
+        for (int32_t side = 3; side <= TVO_AFF_MAX_SIDE; side += 2)
+            for (int32_t step = 1; step <= side / 2; ++step) {
+                if (!tvo_aff_step_ok(side, step))
+                    continue;
+                for (int k = 0; k < 3; ++k) {
+                    const float x = 40.0f + 31.3f * (float)k, y = 30.0f + 27.6f * (float)k;
+                    tvo_aff_model mt, mr;
+                    tvo_aff_warp w;
+                    int ot, orf;
+                    memset(&mt, 0xa5, sizeof(mt));
+                    ot = tvo_aff_take(&im, x, y, side, step, tpl, &mt, &w);
+                    orf = ref_model(tpl, side, step, &mr);
+                    assert_int_equal(ot, orf);
+                    assert_memory_equal(&mt, &mr, sizeof(mt));
+                    ++compared;
+                    taken += ot;
+                }
+            }
+    }
+    print_message("take: %d models identical to the double sums (%d taken)\n", compared, taken);
+    assert_true(taken > compared / 2);
+}
+
+/* tvo_aff_refine's template arrays from the SIMD rows (step 1, sides of 8 samples or more) give the
+ * portable code's results, for every side and step, from a scratch whose floats are all NaN before each
+ * call (so a padding column left unwritten would spoil the sums): the same outcome, warp and correlation,
+ * and a refinement that succeeds on most of them. */
+static void test_refine_kernels_all_sides(void **state)
+{
+    static uint8_t a[W * H], b[W * H], tpl[(TVO_AFF_MAX_SIDE + 2) * (TVO_AFF_MAX_SIDE + 2)];
+    static float big[TVO_AFF_MAX_SIDE * ((TVO_AFF_MAX_SIDE + 3) & ~3) * 3];
+    const double I[4] = {1, 0, 0, 1}, M[4] = {1.04, 0.02, -0.03, 0.98}, p0[2] = {80.0, 60.0},
+                 p1[2] = {80.6, 59.5};
+    tvo_image ia = tvo_image_make(W, H, W, a), ib = tvo_image_make(W, H, W, b);
+    int cases = 0, refined = 0;
+    (void)state;
+    render(a, I, p0, p0, 1.0, 0.0);
+    render(b, M, p0, p1, 0.9, 12.0);
+    for (int32_t side = 3; side <= TVO_AFF_MAX_SIDE; side += 2)
+        for (int32_t step = 1; step <= side / 2; ++step) {
+            tvo_aff_model model;
+            tvo_aff_warp w, ws, wp;
+            float ns = 0.0f, np = 0.0f;
+            int os, op;
+            if (!tvo_aff_step_ok(side, step) ||
+                !tvo_aff_take(&ia, (float)p0[0], (float)p0[1], side, step, tpl, &model, &w))
+                continue;
+            w.t[0] += (float)(p1[0] - p0[0]) + 0.2f;
+            w.t[1] += (float)(p1[1] - p0[1]) - 0.2f;
+            ws = wp = w;
+            memset(big, 0xff, sizeof(big));
+            os = tvo_aff_refine_kernel(tpl, &model, side, step, &ib, &ws, 20, 0.01f, big, sizeof(big), &ns,
+                                       0);
+            memset(big, 0xff, sizeof(big));
+            op = tvo_aff_refine_kernel(tpl, &model, side, step, &ib, &wp, 20, 0.01f, big, sizeof(big), &np,
+                                       1);
+            assert_int_equal(os, op);
+            assert_memory_equal(&ws, &wp, sizeof(ws));
+            assert_memory_equal(&ns, &np, sizeof(ns));
+            ++cases;
+            refined += os;
+        }
+    print_message("refine: %d sides and steps identical (%d refined; %s)\n", cases, refined,
+                  TVO_AFF_SIMD ? "simd rows against portable" : "portable only");
+    assert_true(refined >= cases * 3 / 4);
+}
+
 #endif
 
 int main(void)
@@ -369,6 +518,8 @@ int main(void)
             cmocka_unit_test(test_refine_failures_leave_warp),
             cmocka_unit_test(test_translation_only_is_worse),
             cmocka_unit_test(test_kernels_agree),
+            cmocka_unit_test(test_take_matches_double_sums),
+            cmocka_unit_test(test_refine_kernels_all_sides),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 #else

@@ -112,6 +112,17 @@ void tvo_aff_sums_simd(const tvo_image *img, const float *gx, const float *gy, c
                        int32_t step, const double A[4], const double t[2], tvo_aff_sums *s);
 #endif
 
+/* The template's per-row work at step 1 in SIMD (tvo_affine_tpl_sse2.c, tvo_affine_tpl_neon.c), for rows
+ * of m >= 8 samples (the last 8 columns are read as a block ending at column m - 1); both give the
+ * portable code's values (integers, and floats that are exact): tvo_aff_take's row sums r[19] of the
+ * row whose first sample is at p (take_row() in tvo_affine.c: template stride s, x = c - h at column
+ * c), and tvo_aff_refine's gradients and grey values of that row (columns 0..m-1 of gx, gy, tf). */
+#define TVO_AFF_TPL_SIMD_MIN 8
+#if TVO_AFF_SIMD
+void tvo_aff_take_row_simd(const uint8_t *p, int32_t s, int32_t m, int32_t h, int32_t r[19]);
+void tvo_aff_gradients_row_simd(const uint8_t *p, int32_t s, int32_t m, float *gx, float *gy, float *tf);
+#endif
+
 /* Bytes of scratch tvo_aff_refine needs for side. */
 size_t tvo_aff_scratch_size(int32_t side);
 
@@ -133,8 +144,8 @@ int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side,
                    const tvo_image *img, tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch,
                    size_t scratch_size, float *ncc);
 
-/* tvo_aff_refine with the portable kernel for the sums (portable != 0) or the fastest one built in
- * (0): the same results either way. */
+/* tvo_aff_refine with the portable code for the sums and the template's gradients (portable != 0) or
+ * the fastest built in (0): the same results either way. */
 int tvo_aff_refine_kernel(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, int32_t step,
                           const tvo_image *img, tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch,
                           size_t scratch_size, float *ncc, int portable);
