@@ -3,6 +3,7 @@
  * 0.05 px where a translation-only model is off by tenths of a pixel; exposure changes do not move it;
  * flat, one-directional and out-of-image patches are refused; bad arguments leave the warp unchanged. */
 #include <math.h>
+#include <string.h>
 
 #include "tvo_test.h"
 #include "tinyvo/options.h"
@@ -268,9 +269,24 @@ static void test_translation_only_is_worse(void **state)
     }
 }
 
-/* The SSE2 kernel of the window sums gives the portable kernel's bits (on a target without SSE2 both
+/* The template's gradients and grey values at every st-th pixel of the window, as the refinement's
+ * scratch holds them (rows of tvo_aff_cols(m) floats, the padding columns 0). */
+static void template_arrays(const uint8_t *tpl, int32_t st, float *gx, float *gy, float *tf)
+{
+    const int32_t m = tvo_aff_samples(SIDE, st), cols = tvo_aff_cols(m);
+    for (int r = 0; r < m; ++r)
+        for (int c = 0; c < cols; ++c) {
+            const uint8_t *q = tpl + (r * st + 1) * (SIDE + 2) + c * st + 1;
+            gx[r * cols + c] = c < m ? 0.5f * (float)(q[1] - q[-1]) : 0.0f;
+            gy[r * cols + c] = c < m ? 0.5f * (float)(q[SIDE + 2] - q[-(SIDE + 2)]) : 0.0f;
+            tf[r * cols + c] = c < m ? (float)q[0] : 0.0f;
+        }
+}
+
+/* The SIMD kernel of the window sums gives the portable kernel's bits (on a target without one both
  * calls run the portable kernel): every sum over many warps and sub-pixel positions, a whole refinement
- * from several starts, and a window that ends 1/64 px from the image's last column. */
+ * from several starts, a window that ends 1/64 px from the image's last column, and an image view whose
+ * byte offsets pass 2^24. */
 static void test_kernels_agree(void **state)
 {
     static uint8_t a[W * H], b[W * H], tpl[(SIDE + 2) * (SIDE + 2)];
@@ -289,13 +305,7 @@ static void test_kernels_agree(void **state)
         const int32_t m = tvo_aff_samples(SIDE, st), cols = tvo_aff_cols(m);
         gy = gx + m * cols;
         tf = gy + m * cols;
-        for (int r = 0; r < m; ++r)
-            for (int c = 0; c < cols; ++c) {
-                const uint8_t *q = tpl + (r * st + 1) * (SIDE + 2) + c * st + 1;
-                gx[r * cols + c] = c < m ? 0.5f * (float)(q[1] - q[-1]) : 0.0f;
-                gy[r * cols + c] = c < m ? 0.5f * (float)(q[SIDE + 2] - q[-(SIDE + 2)]) : 0.0f;
-                tf[r * cols + c] = c < m ? (float)q[0] : 0.0f;
-            }
+        template_arrays(tpl, st, gx, gy, tf);
         for (int k = 0; k < 200; ++k) {
             const double A[4] = {1.0 + 0.003 * (k % 7) - 0.01, 0.002 * (k % 5) - 0.004,
                                  0.0015 * (k % 3) - 0.002, 1.0 - 0.002 * (k % 11) + 0.01};
@@ -351,6 +361,39 @@ static void test_kernels_agree(void **state)
         tvo_aff_sums_portable(&ib, gx, gy, tf, SIDE, 1, A, t2, &ss);
 #endif
         assert_memory_equal(&sp, &ss, sizeof(sp));
+    }
+    /* the same image in a view whose byte offsets pass 2^24, where the SIMD kernels find the pixels'
+       offsets in integers instead of float */
+    {
+        const int32_t stride = (1 << 24) / (H - 1) + 1;
+        uint8_t *big = malloc((size_t)(H - 1) * (size_t)stride + W);
+        tvo_image ig = tvo_image_make(W, H, stride, big);
+        assert_non_null(big);
+        assert_true((double)stride * H >= 16777216.0);
+        for (int y = 0; y < H; ++y)
+            memcpy(big + (size_t)y * (size_t)stride, b + y * W, W);
+        for (int32_t st = 1; st <= 2; ++st) {
+            const int32_t m = tvo_aff_samples(SIDE, st), cols = tvo_aff_cols(m);
+            gy = gx + m * cols;
+            tf = gy + m * cols;
+            template_arrays(tpl, st, gx, gy, tf);
+            for (int k = 0; k < 50; ++k) {
+                const double A[4] = {1.0 + 0.003 * (k % 7) - 0.01, 0.002 * (k % 5) - 0.004,
+                                     0.0015 * (k % 3) - 0.002, 1.0 - 0.002 * (k % 11) + 0.01};
+                const double t[2] = {15.0 + fmod(0.37 * k * 7.0, (double)W - 40.0),
+                                     15.0 + fmod(0.29 * k * 5.0, (double)H - 40.0)};
+                tvo_aff_sums sp, ss;
+                tvo_aff_sums_portable(&ig, gx, gy, tf, SIDE, st, A, t, &sp);
+#if TVO_AFF_SIMD
+                tvo_aff_sums_simd(&ig, gx, gy, tf, SIDE, st, A, t, &ss);
+#else
+                tvo_aff_sums_portable(&ig, gx, gy, tf, SIDE, st, A, t, &ss);
+#endif
+                assert_memory_equal(&sp, &ss, sizeof(sp));
+                ++compared;
+            }
+        }
+        free(big);
     }
     print_message("kernels: %d window sums and 9 refinements identical (%s)\n", compared,
                   TVO_AFF_SIMD ? "simd against portable" : "portable only");
