@@ -138,7 +138,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->keyframe_translation = 1;
     cfg->track_prediction = 0; /* on: larger motion per frame tracked, but the EuRoC renders got worse */
     cfg->map_prediction = 0;
-    cfg->affine_win_size = 0; /* on (21, TVO_VO_PRESET_ACCURATE): more accurate, but it costs 1.3-1.4 times
+    cfg->affine_win_size = 0; /* on (21, TVO_VO_PRESET_ACCURATE): more accurate, but it costs 1.2-1.3 times
                                  the instructions (docs/budget.md, "A third rule") */
     cfg->affine_step = 1;
     cfg->affine_at_keyframes = 0;

@@ -243,7 +243,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
  * TVO_VO_PRESET_ACCURATE   the affine track refinement and a longer fixed tail in the bundle adjustment:
  *                          affine_win_size 21, map_window 8, map_ba_fixed 4. On the sequences of
  *                          docs/budget.md about 0.6 times the default's ATE and 0.7 times its rotation
- *                          error, for 1.3-1.4 times the instructions and 1.5-1.7 times the time per frame
+ *                          error, for 1.2-1.3 times the instructions and 1.45-1.6 times the two-view time per frame
  *                          and about 840 more bytes a track. Needs a build with the affine refinement
  *                          (TVO_WITH_AFFINE, options.h).
  * TVO_VO_PRESET_SMALL      sized for a QVGA (320x240) camera on a microcontroller: 120 tracks
