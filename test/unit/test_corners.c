@@ -18,7 +18,6 @@ tvo_status tvo_fast9_detect_rows_portable(const tvo_image *img, int32_t threshol
                                           int32_t y_begin, int32_t y_end, tvo_corner *out, int32_t capacity,
                                           int32_t *count, void *scratch, size_t scratch_size);
 
-
 /* ---- helpers ------------------------------------------------------------------------------------- */
 
 typedef struct test_img {
