@@ -192,7 +192,6 @@ void tvo_map_reset(tvo_map *m)
     tvo_map_clear(m);
     m->waiting = 0;
     m->wait_t_ns = 0;
-    m->init_need = 0;
     for (int32_t i = 0; i < TVO_MAP_RING; ++i)
         m->ring[i].serial = -1;
     m->next_kf_id = 0;
@@ -472,10 +471,10 @@ typedef struct init_pair {
 } init_pair;
 
 /* 1 when the pair's pose is good enough to start a map on: trustworthy (not low-confidence, ambiguous or
- * rotation-only, enough inliers and half of the pairs, its rotation near its own rotation-only model)
- * and with map_init_parallax_deg of median parallax. */
-static int init_pair_pose(tvo_map *m, const tvo_vo_config *cfg, const tvo_map_tracks *tr, void *scratch,
-                          size_t scratch_size, init_pair *ip)
+ * rotation-only, at least need inliers and half of the pairs, its rotation near its own rotation-only
+ * model) and with map_init_parallax_deg of median parallax. */
+static int init_pair_pose(tvo_map *m, const tvo_vo_config *cfg, const tvo_map_tracks *tr, int32_t need,
+                          void *scratch, size_t scratch_size, init_pair *ip)
 {
     const int32_t n = tr->n;
     const size_t rs_size = tvo_relpose_scratch_size(cfg->max_tracks);
@@ -500,7 +499,7 @@ static int init_pair_pose(tvo_map *m, const tvo_vo_config *cfg, const tvo_map_tr
             ++ip->k;
         }
     }
-    if (ip->k < m->init_need)
+    if (ip->k < need)
         return 0;
     relpose_config(cfg, &rc);
     if (tvo_relpose_estimate(&rc, ip->xa, ip->xb, ip->k, rp, ip->mask, rs, rs_size) != TVO_OK)
@@ -508,8 +507,7 @@ static int init_pair_pose(tvo_map *m, const tvo_vo_config *cfg, const tvo_map_tr
     if (rp->flags &
         (TVO_RELPOSE_FLAG_LOW_CONFIDENCE | TVO_RELPOSE_FLAG_AMBIGUOUS | TVO_RELPOSE_FLAG_ROTATION_ONLY))
         return 0;
-    if (rp->parallax_deg < cfg->map_init_parallax_deg || rp->inliers < m->init_need ||
-        2 * rp->inliers < ip->k)
+    if (rp->parallax_deg < cfg->map_init_parallax_deg || rp->inliers < need || 2 * rp->inliers < ip->k)
         return 0;
     {
         /* the pose's rotation must be near its own rotation-only model, as the VO checks every frame */
@@ -563,8 +561,9 @@ static int32_t init_landmarks(tvo_map *m, const tvo_vo_config *cfg, tvo_map_trac
     return made;
 }
 
-/* Try to make the map from the reference frame and this one. 1 when made (two keyframes, landmarks). */
-static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
+/* Try to make the map from the reference frame and this one, on at least need landmarks (init_min_points).
+ * 1 when made (two keyframes, landmarks). */
+static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns, int32_t need,
                     const tvo_pose *T_c_w_chain, void *scratch, size_t scratch_size, tvo_map_frame *out)
 {
     init_pair ip;
@@ -573,12 +572,12 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
     const int64_t t0 = m->ref_t_ns;
     double baseline, tn;
     int32_t made;
-    if (!init_pair_pose(m, cfg, tr, scratch, scratch_size, &ip))
+    if (!init_pair_pose(m, cfg, tr, need, scratch, scratch_size, &ip))
         return 0;
     if (tr->refine != NULL) {
         /* the pair becomes two keyframes: their positions refined, the pair's pose again on them */
         tr->refine(tr->refine_ctx);
-        if (!init_pair_pose(m, cfg, tr, scratch, scratch_size, &ip))
+        if (!init_pair_pose(m, cfg, tr, need, scratch, scratch_size, &ip))
             return 0;
     }
     tn = sqrt(dot3(ip.rp.t, ip.rp.t));
@@ -588,7 +587,7 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
         T_cur_ref.t[c2] = ip.rp.t[c2] / tn * baseline;
     T1 = tvo_pose_compose(&T_cur_ref, &T0);
     made = init_landmarks(m, cfg, tr, &ip, &T0, t0, &T1, t_ns);
-    if (made < m->init_need) {
+    if (made < need) {
         /* not enough structure yet: back to waiting on the same reference */
         for (int32_t i = 0; i < tr->n; ++i)
             tr->lm[i] = -1;
@@ -1233,25 +1232,26 @@ static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
     for (int32_t i = 0; i < tr->n; ++i)
         tr->inlier[i] = 0;
     if (!m->active) {
+        int32_t need;
         out->state = TVO_MAP_INITIALISING;
         if (!m->waiting) {
             m->waiting = 1;
             m->wait_t_ns = t_ns;
         }
-        m->init_need = init_min_points(m, cfg, t_ns);
+        need = init_min_points(m, cfg, t_ns);
         if (!m->has_ref) {
             start_ref(m, tr, t_ns, T_c_w_prior);
             return;
         }
         m->ref_frames++;
-        if (try_init(m, cfg, tr, t_ns, T_c_w_prior, scratch, scratch_size, out))
+        if (try_init(m, cfg, tr, t_ns, need, T_c_w_prior, scratch, scratch_size, out))
             return;
         {
             /* renew the reference when it is too old or most of its tracks are gone */
             int32_t k = 0;
             for (int32_t i = 0; i < tr->n; ++i)
                 k += tr->tri_fr[i] == m->ref_serial && tr->x_ok[i];
-            if (m->ref_frames > TVO_MAP_REF_MAX_FRAMES || k < m->init_need)
+            if (m->ref_frames > TVO_MAP_REF_MAX_FRAMES || k < need)
                 start_ref(m, tr, t_ns, T_c_w_prior);
         }
         return;

@@ -90,7 +90,6 @@ typedef struct tvo_map {
     int32_t ref_frames; /* frames since the reference */
     int32_t waiting;    /* 1 from the first frame without a map (at the start or after a loss)... */
     int64_t wait_t_ns;  /* ...whose time this is, until a map is made (cfg.map_init_wait_s) */
-    int32_t init_need;  /* landmarks (and pair inliers) this frame's new map needs (init_min_points) */
     /* motion: the last frame's pose and its velocity (T_cur_prev of the last two posed frames) */
     tvo_pose last_T_c_w;
     tvo_pose vel; /* T_cur_prev of the last step, in map units */
