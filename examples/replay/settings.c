@@ -92,6 +92,7 @@ static const setting settings[] = {
         S_I(lk.pred_levels),
         S_I(lk.pred_win_size),
         S_I(lk.pred_fb_levels),
+        S_I(lk.pred_retry),
         S_D(relpose.confidence),
         S_I(relpose.max_iters),
         S_D(relpose.min_parallax_deg),

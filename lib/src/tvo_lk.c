@@ -48,6 +48,7 @@ void tvo_lk_config_default(tvo_lk_config *cfg)
     cfg->pred_levels = 0;
     cfg->pred_win_size = 0;
     cfg->pred_fb_levels = 0;
+    cfg->pred_retry = 0;
 }
 
 /* Whether tvo_lk_track() runs the SIMD kernels with this window (they need 8-column strips). */
@@ -638,39 +639,50 @@ tvo_status tvo_lk_track_pred(const tvo_lk_config *cfg, const tvo_pyramid *prev, 
                      cfg->pred_levels, cfg->pred_fb_levels > 0 ? cfg->pred_fb_levels : cfg->fb_levels);
 
     for (i = 0; i < n; ++i) {
-        const int32_t k = two && pred[i] ? 1 : 0;
-        lk_mode *md = &mode[k];
-        float x0 = prev_pts[i].x, y0 = prev_pts[i].y;
-        float nx = next_pts[i].x, ny = next_pts[i].y;
-        const float gx = nx - x0, gy = ny - y0; /* the guess's displacement (use_initial_flow) */
-        float e = 0.f;
-        int ok;
-        if (k != last) { /* the two modes share the scratch: the other one's cached block is gone */
-            md->wk.jp_data = NULL;
-            last = k;
-        }
-        ok = lk_track_point(&md->prm, prev, next, md->top, x0, y0, cfg->use_initial_flow != 0, &nx, &ny,
-                            &md->wk, err != NULL ? &e : NULL);
-        if (ok && cfg->fb_check) {
-            /* the way back starts at the guess's displacement reversed (no displacement without a guess) */
-            float bx = cfg->use_initial_flow ? nx - gx : nx, by = cfg->use_initial_flow ? ny - gy : ny, ddx,
-                  ddy;
-            int back;
-            if (md->fb_levels > 0) { /* the short way back: from the start point, on the finest levels */
-                bx = x0;
-                by = y0;
-                back = lk_track_point(&md->prm, next, prev, md->fb_top, nx, ny, 1, &bx, &by, &md->wk, NULL);
-            } else
-                back = lk_track_point(&md->prm, next, prev, md->top, nx, ny, cfg->use_initial_flow != 0, &bx,
-                                      &by, &md->wk, NULL);
-            ddx = bx - x0;
-            ddy = by - y0;
-            if (!back ||
-                !((double)ddx * ddx + (double)ddy * ddy <=
-                  (double)cfg->fb_max_error * (double)cfg->fb_max_error)) {
-                ok = 0;
-                e = 0.f;
+        const int32_t k0 = two && pred[i] ? 1 : 0;
+        const float x0 = prev_pts[i].x, y0 = prev_pts[i].y;
+        const float gx0 = next_pts[i].x, gy0 = next_pts[i].y;
+        float nx = gx0, ny = gy0, e = 0.f;
+        int ok = 0;
+        for (int32_t k = k0; k >= 0; --k) {
+            lk_mode *md = &mode[k];
+            const float gx = gx0 - x0, gy = gy0 - y0; /* the guess's displacement (use_initial_flow) */
+            if (k != k0 && !cfg->pred_retry)
+                break;
+            nx = gx0;
+            ny = gy0;
+            e = 0.f;
+            if (k != last) { /* the two modes share the scratch: the other one's cached block is gone */
+                md->wk.jp_data = NULL;
+                last = k;
             }
+            ok = lk_track_point(&md->prm, prev, next, md->top, x0, y0, cfg->use_initial_flow != 0, &nx, &ny,
+                                &md->wk, err != NULL ? &e : NULL);
+            if (ok && cfg->fb_check) {
+                /* the way back starts at the guess's displacement reversed (no displacement without a
+                   guess) */
+                float bx = cfg->use_initial_flow ? nx - gx : nx, by = cfg->use_initial_flow ? ny - gy : ny,
+                      ddx, ddy;
+                int back;
+                if (md->fb_levels > 0) { /* the short way back: from the start point, on the finest levels */
+                    bx = x0;
+                    by = y0;
+                    back = lk_track_point(&md->prm, next, prev, md->fb_top, nx, ny, 1, &bx, &by, &md->wk,
+                                          NULL);
+                } else
+                    back = lk_track_point(&md->prm, next, prev, md->top, nx, ny, cfg->use_initial_flow != 0,
+                                          &bx, &by, &md->wk, NULL);
+                ddx = bx - x0;
+                ddy = by - y0;
+                if (!back ||
+                    !((double)ddx * ddx + (double)ddy * ddy <=
+                      (double)cfg->fb_max_error * (double)cfg->fb_max_error)) {
+                    ok = 0;
+                    e = 0.f;
+                }
+            }
+            if (ok)
+                break;
         }
         next_pts[i].x = nx;
         next_pts[i].y = ny;

@@ -39,7 +39,7 @@ class LKConfig(ctypes.Structure):
                 ("fb_check", ctypes.c_int32), ("fb_max_error", ctypes.c_float),
                 ("force_portable", ctypes.c_int32), ("fb_levels", ctypes.c_int32),
                 ("pred_levels", ctypes.c_int32), ("pred_win_size", ctypes.c_int32),
-                ("pred_fb_levels", ctypes.c_int32)]
+                ("pred_fb_levels", ctypes.c_int32), ("pred_retry", ctypes.c_int32)]
 
 
 def _image(arr):

@@ -357,6 +357,57 @@ static void test_predicted_points(void **state)
     }
 }
 
+/* pred_retry: a flagged point whose guess is too far for the short way (level 0, 13x13) is lost without
+ * the retry, and with it is tracked again the configuration's way from the same guess: the result of
+ * tvo_lk_track() from that guess, bit for bit; flagged points the short way tracks are not touched. */
+static void test_predicted_points_retry(void **state)
+{
+    tvo_point2f p0[64], g[64], ref[64], out[64], shrt[64];
+    uint8_t st_ref[64], st[64], st_short[64], pred[64];
+    float e_ref[64], e[64];
+    int n, lost = 0;
+    (void)state;
+    build(3, 7.4, -5.2);
+    grid_points(p0, &n);
+    F.cfg.fb_check = 1;
+    F.cfg.use_initial_flow = 1;
+    for (int i = 0; i < n; ++i) {
+        const int far = (i % 3) == 0; /* 12 px off the motion: beyond a 13x13 window on level 0 */
+        g[i] = (tvo_point2f){p0[i].x + 7.4f + (far ? 12.0f : 0.4f), p0[i].y - 5.2f + (far ? -9.0f : 0.3f)};
+        pred[i] = (uint8_t)(i & 1);
+    }
+    memcpy(ref, g, sizeof(ref));
+    assert_int_equal(tvo_lk_track(&F.cfg, &F.pa, &F.pb, p0, ref, st_ref, e_ref, n, F.scratch,
+                                  sizeof(F.scratch)),
+                     TVO_OK);
+    F.cfg.pred_levels = 1;
+    F.cfg.pred_win_size = 13;
+    memcpy(shrt, g, sizeof(shrt));
+    assert_int_equal(tvo_lk_track_pred(&F.cfg, &F.pa, &F.pb, p0, shrt, pred, st_short, NULL, n, F.scratch,
+                                       sizeof(F.scratch)),
+                     TVO_OK);
+    F.cfg.pred_retry = 1;
+    memcpy(out, g, sizeof(out));
+    assert_int_equal(tvo_lk_track_pred(&F.cfg, &F.pa, &F.pb, p0, out, pred, st, e, n, F.scratch,
+                                       sizeof(F.scratch)),
+                     TVO_OK);
+    for (int i = 0; i < n; ++i) {
+        if (pred[i] && st_short[i] == TVO_LK_TRACKED) { /* the short way's result, untouched */
+            assert_int_equal(st[i], TVO_LK_TRACKED);
+            assert_memory_equal(&out[i], &shrt[i], sizeof(tvo_point2f));
+        } else { /* unflagged, or lost by the short way and tracked again: tvo_lk_track()'s */
+            assert_int_equal(st[i], st_ref[i]);
+            assert_memory_equal(&out[i], &ref[i], sizeof(tvo_point2f));
+            assert_memory_equal(&e[i], &e_ref[i], sizeof(float));
+        }
+        if (pred[i] && (i % 3) != 0)
+            assert_int_equal(st_short[i], TVO_LK_TRACKED);
+        /* rescued: lost the short way, tracked by the retry */
+        lost += pred[i] && st_short[i] == TVO_LK_LOST && st[i] == TVO_LK_TRACKED;
+    }
+    assert_true(lost > 0); /* some far guesses fail the short way and the retry brings them in */
+}
+
 static void test_points_outside_and_at_borders(void **state)
 {
     tvo_point2f p0[12] = {{-100.0f, 10.0f}, {1e30f, 5.0f},        {5.0f, -1e30f},   {W + 50.0f, H / 2.0f},
@@ -764,6 +815,7 @@ int main(void)
             cmocka_unit_test(test_fb_check_with_guess),
             cmocka_unit_test(test_fb_levels),
             cmocka_unit_test(test_predicted_points),
+            cmocka_unit_test(test_predicted_points_retry),
             cmocka_unit_test(test_points_outside_and_at_borders),
             cmocka_unit_test(test_random_points_everywhere),
             cmocka_unit_test(test_small_image_skips_small_levels),

@@ -76,6 +76,9 @@ typedef struct tvo_lk_config {
     int32_t pred_fb_levels; /* with fb_check: 0: as fb_levels (fb_levels 0: the way back on the levels of
                                their forward track); k > 0: their way back on levels k-1..0, from the start
                                point; default 0 */
+    int32_t pred_retry;     /* nonzero: a predicted point that the shorter way loses (or fails the
+                               forward-backward check) is tracked again as the other points are, from the
+                               same guess; default 0 */
 } tvo_lk_config;
 
 /* The defaults above (OpenCV's defaults for win 21, 3 levels, fb check off). */
