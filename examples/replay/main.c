@@ -104,9 +104,13 @@ static void usage(FILE *f)
             "                       pose_status,inliers,<feature names>,rel_scale,\n"
             "                       rel_scale_points\n"
             "  --preset NAME        default, accurate (the affine refinement and a longer fixed\n"
-            "                       tail in the bundle adjustment: more accurate, 1.5-1.7x the\n"
-            "                       time) or small (a QVGA microcontroller's configuration);\n"
-            "                       the switches below and --set apply on top (vo.h)\n"
+            "                       tail in the bundle adjustment: more accurate, 1.2-1.3x the\n"
+            "                       instructions), balanced (accurate with the map's predicted\n"
+            "                       tracks on 2 levels: between the two in accuracy, 0.55-1.05x\n"
+            "                       the default's instructions) or small (a QVGA\n"
+            "                       microcontroller's configuration); the switches below and\n"
+            "                       --set apply on top (vo.h)\n");
+    fprintf(f,
             "  --map 0|1            local map (keyframes, landmarks, bundle adjustment) on or\n"
             "                       off (vo.h; default: the library's, on)\n"
             "  --tracks FILE        CSV of the tracks after every frame: t_ns,id,x,y,age,flags\n"
@@ -257,10 +261,13 @@ static int parse_args(int argc, char **argv, options *o)
                 o->preset = TVO_VO_PRESET_DEFAULT;
             else if (!strcmp(v, "accurate"))
                 o->preset = TVO_VO_PRESET_ACCURATE;
+            else if (!strcmp(v, "balanced"))
+                o->preset = TVO_VO_PRESET_BALANCED;
             else if (!strcmp(v, "small"))
                 o->preset = TVO_VO_PRESET_SMALL;
             else {
-                fprintf(stderr, "tvo_replay: --preset must be default, accurate or small (got '%s')\n", v);
+                fprintf(stderr,
+                        "tvo_replay: --preset must be default, accurate, balanced or small (got '%s')\n", v);
                 return -1;
             }
             if (tvo_vo_config_preset(&check, NULL, o->preset) == TVO_ERR_UNSUPPORTED) {

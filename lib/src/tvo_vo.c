@@ -175,6 +175,16 @@ tvo_status tvo_vo_config_preset(tvo_vo_config *cfg, const tvo_camera *camera, tv
         cfg->map_window = 8;
         cfg->map_ba_fixed = 4;
         return TVO_OK;
+    case TVO_VO_PRESET_BALANCED:
+        if (!TVO_WITH_AFFINE)
+            return TVO_ERR_UNSUPPORTED;
+        cfg->affine_win_size = 21;
+        cfg->map_window = 8;
+        cfg->map_ba_fixed = 4;
+        cfg->map_prediction = 2;
+        cfg->lk.pred_levels = 2;
+        cfg->lk.pred_win_size = 11;
+        return TVO_OK;
     case TVO_VO_PRESET_SMALL:
         cfg->max_tracks = 120;
         cfg->min_tracks = 80;

@@ -231,7 +231,7 @@ def test_replay_presets(tmp_path):
     accurate preset is the three --set fields it stands for byte for byte, and --set applies on top."""
     replay = program("tvo_replay")
     r = run([replay, "--euroc", "a", "--out", "x", "--preset", "fastest"])
-    assert r.returncode == 2 and "default, accurate or small" in r.stderr and r.stderr.count("\n") == 1, r.stderr
+    assert r.returncode == 2 and "default, accurate, balanced or small" in r.stderr and r.stderr.count("\n") == 1, r.stderr
     seq = tmp_path / "seq"
     subprocess.run([sys.executable, "-m", "tinyvo_tools.synth", "--out", str(seq), "--builtin", "handheld",
                     "--frames", "40", "--seed", "2", "--quiet"], check=True)
@@ -240,7 +240,11 @@ def test_replay_presets(tmp_path):
                       ("accurate", ["--preset", "accurate"]),
                       ("fields", ["--set", "affine_win_size=21", "--set", "map_window=8", "--set", "map_ba_fixed=4"]),
                       ("accurate_off", ["--preset", "accurate", "--set", "affine_win_size=0", "--set", "map_window=6",
-                                        "--set", "map_ba_fixed=2"])):
+                                        "--set", "map_ba_fixed=2"]),
+                      ("balanced", ["--preset", "balanced"]),
+                      ("balanced_fields", ["--set", "affine_win_size=21", "--set", "map_window=8", "--set",
+                                           "map_ba_fixed=4", "--set", "map_prediction=2", "--set", "lk.pred_levels=2",
+                                           "--set", "lk.pred_win_size=11"])):
         outs[tag] = tmp_path / f"{tag}.txt"
         r = run([replay, "--euroc", str(seq), "--out", str(outs[tag]), "--quiet"] + args)
         assert r.returncode == 0, r.stderr
@@ -248,12 +252,14 @@ def test_replay_presets(tmp_path):
     assert outs["accurate"].read_bytes() == outs["fields"].read_bytes()
     assert outs["accurate"].read_bytes() != outs["default"].read_bytes()
     assert outs["accurate_off"].read_bytes() == outs["default"].read_bytes()
+    assert outs["balanced"].read_bytes() == outs["balanced_fields"].read_bytes()
+    assert outs["balanced"].read_bytes() not in (outs["default"].read_bytes(), outs["accurate"].read_bytes())
     mem = {}
-    for name in ("default", "accurate", "small"):
+    for name in ("default", "accurate", "balanced", "small"):
         r = run([replay, "--euroc", str(seq), "--preset", name, "--print-memory"])
         assert r.returncode == 0, r.stderr
         mem[name] = int(r.stdout.split()[-2])
-    assert mem["small"] < mem["default"] < mem["accurate"]
+    assert mem["small"] < mem["default"] < mem["accurate"] == mem["balanced"]
 
 
 def test_live_checks_before_the_camera(tmp_path):

@@ -1127,9 +1127,28 @@ static void test_presets(void **state)
     c.map_window = def.map_window;
     c.map_ba_fixed = def.map_ba_fixed;
     assert_memory_equal(&c, &def, sizeof(c));
+
+    assert_int_equal(tvo_vo_config_preset(&c, &cam, TVO_VO_PRESET_BALANCED), TVO_OK);
+    assert_int_equal(c.affine_win_size, 21);
+    assert_int_equal(c.map_window, 8);
+    assert_int_equal(c.map_ba_fixed, 4);
+    assert_int_equal(c.map_prediction, 2);
+    assert_int_equal(c.lk.pred_levels, 2);
+    assert_int_equal(c.lk.pred_win_size, 11);
+    assert_true(tvo_vo_required_size(&c) > tvo_vo_required_size(&def));
+    c.affine_win_size = def.affine_win_size;
+    c.map_window = def.map_window;
+    c.map_ba_fixed = def.map_ba_fixed;
+    c.map_prediction = def.map_prediction;
+    c.lk.pred_levels = def.lk.pred_levels;
+    c.lk.pred_win_size = def.lk.pred_win_size;
+    assert_memory_equal(&c, &def, sizeof(c));
 #else
     memset(&c, 0xa5, sizeof(c));
     assert_int_equal(tvo_vo_config_preset(&c, &cam, TVO_VO_PRESET_ACCURATE), TVO_ERR_UNSUPPORTED);
+    assert_memory_equal(&c, &def, sizeof(c));
+    memset(&c, 0xa5, sizeof(c));
+    assert_int_equal(tvo_vo_config_preset(&c, &cam, TVO_VO_PRESET_BALANCED), TVO_ERR_UNSUPPORTED);
     assert_memory_equal(&c, &def, sizeof(c));
 #endif
     memset(&c, 0xa5, sizeof(c));

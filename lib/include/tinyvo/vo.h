@@ -246,6 +246,13 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
  *                          error, for 1.2-1.3 times the instructions and 1.45-1.6 times the two-view time per frame
  *                          and about 840 more bytes a track. Needs a build with the affine refinement
  *                          (TVO_WITH_AFFINE, options.h).
+ * TVO_VO_PRESET_BALANCED   the accurate preset with the map's predicted tracks: the tracks the local map
+ *                          predicts are tracked on 2 pyramid levels with 11x11 windows (map_prediction 2,
+ *                          lk.pred_levels 2, lk.pred_win_size 11) before the affine refinement re-aligns
+ *                          them. On the sequences of docs/budget.md about 0.5 times the default's ATE and
+ *                          0.7 times its rotation error (KITTI 01 the same), for 0.55-1.05 times its
+ *                          instructions and 0.83-0.98 times the two-view time per frame; less accurate
+ *                          than TVO_VO_PRESET_ACCURATE on real frames. Needs the affine refinement.
  * TVO_VO_PRESET_SMALL      sized for a QVGA (320x240) camera on a microcontroller: 120 tracks
  *                          (min_tracks 80, keyframe_min_tracks 40, detect.max_corners 120), 3 pyramid
  *                          levels (lk.max_level 2), a map of 5 keyframes and 160 landmarks. At 320x240 the
@@ -253,11 +260,12 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
 typedef enum tvo_vo_preset {
     TVO_VO_PRESET_DEFAULT = 0,
     TVO_VO_PRESET_ACCURATE = 1,
-    TVO_VO_PRESET_SMALL = 2
+    TVO_VO_PRESET_SMALL = 2,
+    TVO_VO_PRESET_BALANCED = 3
 } tvo_vo_preset;
 
 /* Fill cfg with the preset's configuration for `camera` (copied). TVO_OK; TVO_ERR_NULL when cfg is NULL;
- * TVO_ERR_ARG for an unknown preset and TVO_ERR_UNSUPPORTED for TVO_VO_PRESET_ACCURATE in a build
+ * TVO_ERR_ARG for an unknown preset and TVO_ERR_UNSUPPORTED for TVO_VO_PRESET_ACCURATE or _BALANCED in a build
  * without the affine refinement, both leaving cfg filled with the defaults. */
 tvo_status tvo_vo_config_preset(tvo_vo_config *cfg, const tvo_camera *camera, tvo_vo_preset preset);
 
