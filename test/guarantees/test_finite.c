@@ -41,8 +41,9 @@ static int runner_open(runner *r, int32_t w, int32_t h)
     cfg.track_prediction = k & 1; /* every other VO opened with the track prediction on */
     cfg.affine_win_size = TVO_WITH_AFFINE && (k & 2)
             ? 21
-            : 0;                          /* and every other pair with the affine refinement */
-    cfg.map_prediction = (k & 4) ? 2 : 0; /* every other quadruple with the map's predicted tracks */
+            : 0; /* and every other pair with the affine refinement */
+    /* every other quadruple with the map's predicted tracks */
+    cfg.map_prediction = (k & 4) ? 2 : 0;
     cfg.lk.pred_levels = 2;
     cfg.lk.pred_win_size = 11;
     cfg.lk.pred_retry = (k >> 3) & 1;
