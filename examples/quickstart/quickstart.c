@@ -57,8 +57,8 @@ int main(void)
             continue; /* a refused frame (size, timestamp) leaves the VO unchanged */
         /* the camera's pose in the world (the first camera), from the local map once it tracks */
         const double *p = res.T_w_c.t;
-        printf("%.3f s  map %d  position %.2f %.2f %.2f m\n", t_ns * 1e-9, (int)res.map_state,
-               p[0] * metres, p[1] * metres, p[2] * metres);
+        printf("%.3f s  map %d  position %.2f %.2f %.2f m\n", t_ns * 1e-9, (int)res.map_state, p[0] * metres,
+               p[1] * metres, p[2] * metres);
         count(&res);
     }
     free(pixels);

@@ -109,9 +109,8 @@ static void vo_open(vo_box *b, const tvo_camera *cam)
     tvo_vo_config cfg;
     size_t need;
     tvo_vo_config_default(&cfg, cam);
-    cfg.affine_win_size = TVO_WITH_AFFINE
-            ? 21
-            : 0; /* the affine refinement's path too (it adds to LK's, it replaces nothing) */
+    /* the affine refinement's path too (it adds to LK's, it replaces nothing) */
+    cfg.affine_win_size = TVO_WITH_AFFINE ? 21 : 0;
     cfg.map_prediction = 2; /* and the map's predicted tracks (the balanced preset's LK) */
     cfg.lk.pred_levels = 2;
     cfg.lk.pred_win_size = 11;

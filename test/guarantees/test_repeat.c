@@ -32,9 +32,8 @@ static void run(const tvo_camera *cam, const uint8_t *frames, const int64_t *t, 
     tvo_traj traj;
     const size_t fsz = (size_t)cam->width * (size_t)cam->height;
     tvo_vo_config_default(&cfg, cam);
-    cfg.affine_win_size = TVO_WITH_AFFINE
-            ? 21
-            : 0; /* its templates live in the block too: garbage there must not matter */
+    /* its templates live in the block too: garbage there must not matter */
+    cfg.affine_win_size = TVO_WITH_AFFINE ? 21 : 0;
     cfg.map_prediction = 2; /* and the map's predicted tracks (the balanced preset's LK) */
     cfg.lk.pred_levels = 2;
     cfg.lk.pred_win_size = 11;

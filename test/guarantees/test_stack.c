@@ -44,9 +44,8 @@ static size_t config_for(const tvo_camera *cam, tvo_vo_config *cfg)
 {
     size_t need = 0;
     tvo_vo_config_default(cfg, cam);
-    cfg->affine_win_size = TVO_WITH_AFFINE
-            ? 21
-            : 0; /* the affine refinement's path too (called after LK, not inside it) */
+    /* the affine refinement's path too (called after LK, not inside it) */
+    cfg->affine_win_size = TVO_WITH_AFFINE ? 21 : 0;
     cfg->map_prediction = 2; /* and the map's predicted tracks (the balanced preset's LK) */
     cfg->lk.pred_levels = 2;
     cfg->lk.pred_win_size = 11;
