@@ -1,13 +1,15 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* tvo_live: visual odometry on a live V4L2 camera.
  *
- *   tvo_live [--device /dev/video0] [--calib FILE [--calib-cam NAME]] [--model FILE] [--size WxH]
- *            [--fps N] [--frames N] [--timeout-ms N] [--out TRAJ.txt] [--quiet]
+ *   tvo_live [--device /dev/video0] [--calib FILE [--calib-cam NAME]] [--model FILE] [--preset NAME]
+ *            [--size WxH] [--fps N] [--frames N] [--timeout-ms N] [--out TRAJ.txt] [--quiet]
  *
  * Prints one line per frame on stdout, at the camera rate:
  *   t_s state tracked inliers tx ty tz qx qy qz qw
- * (t in seconds of CLOCK_MONOTONIC, the camera pose in the world frame of the first frame, TUM order;
- * translation in unit steps, or metres from the per-DoF networks with --model). --out also writes the
+ * (t in seconds of CLOCK_MONOTONIC, the camera pose from the VO's local map in the world frame of the
+ * first frame, TUM order; translation in the map's unit, one unknown factor for the whole run, or in
+ * metres with --model: the map's motion times the networks' path length over the map's, updated at each
+ * keyframe, as tvo_replay --scale model). --out also writes the
  * trajectory in TUM format (t tx ty tz qx qy qz qw). Status and errors go to stderr. --calib takes any
  * calibration of tinyvo/port/calib.h (EuRoC sensor.yaml, Kalibr camchain, OpenCV, ROS camera_info);
  * without it a distortion-free pinhole with a 60 degree horizontal field of view is assumed. The
@@ -42,13 +44,16 @@ static void on_signal(int sig)
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: tvo_live [--device PATH] [--calib FILE] [--model FILE] [--size WxH] [--fps N]\n"
-            "                [--frames N] [--timeout-ms N] [--out TRAJ.txt] [--quiet]\n"
+            "usage: tvo_live [--device PATH] [--calib FILE] [--model FILE] [--preset NAME]\n"
+            "                [--size WxH] [--fps N] [--frames N] [--timeout-ms N] [--out TRAJ.txt]\n"
+            "                [--quiet]\n"
             "  --device PATH     V4L2 capture device (default /dev/video0)\n"
             "  --calib FILE      camera calibration: EuRoC sensor.yaml, Kalibr camchain, OpenCV or\n"
             "                    ROS camera_info YAML (docs/calibration.md)\n"
             "  --calib-cam NAME  camera of a Kalibr camchain (default cam0)\n"
-            "  --model FILE      tinyvo weights file: metric steps from the per-DoF networks\n"
+            "  --model FILE      tinyvo weights file: the map's scale in metres from the per-DoF\n"
+            "                    networks' step lengths, set at every keyframe\n"
+            "  --preset NAME     default, accurate, balanced or small (vo.h, docs/camera.md)\n"
             "  --size WxH        requested size (default: the calibration's, else 640x480)\n"
             "  --fps N           requested frame rate (default 30)\n"
             "  --frames N        stop after N frames (default: until Ctrl-C)\n"
@@ -105,6 +110,9 @@ int main(int argc, char **argv)
     const char *device = "/dev/video0", *calib = NULL, *calib_cam = NULL, *model = NULL, *out_path = NULL;
     FILE *out = NULL;
     int quiet = 0;
+    tvo_vo_preset preset = TVO_VO_PRESET_DEFAULT;
+    double s = 1.0, src_sum = 0.0, vo_sum = 0.0, src_int = 0.0, vo_int = 0.0; /* --model: metres per unit */
+    tvo_pose T_w_c_prev;
     int32_t width = 0, height = 0, fps = 30, timeout_ms = 2000;
     long frames_max = -1;
     tvo_camera cam;
@@ -128,8 +136,9 @@ int main(int argc, char **argv)
     for (i = 1; i < argc; i++) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-        static const char *const with_value[] = {"--device", "--calib",  "--calib-cam",  "--model", "--size",
-                                                 "--fps",    "--frames", "--timeout-ms", "--out"};
+        static const char *const with_value[] = {"--device", "--calib", "--calib-cam", "--model",
+                                                 "--size",   "--fps",   "--frames",    "--timeout-ms",
+                                                 "--out",    "--preset"};
         size_t k;
         int known = 0;
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
@@ -165,6 +174,27 @@ int main(int argc, char **argv)
             model = v;
         } else if (!strcmp(a, "--out")) {
             out_path = v;
+        } else if (!strcmp(a, "--preset")) {
+            tvo_vo_config check;
+            if (!strcmp(v, "default"))
+                preset = TVO_VO_PRESET_DEFAULT;
+            else if (!strcmp(v, "accurate"))
+                preset = TVO_VO_PRESET_ACCURATE;
+            else if (!strcmp(v, "balanced"))
+                preset = TVO_VO_PRESET_BALANCED;
+            else if (!strcmp(v, "small"))
+                preset = TVO_VO_PRESET_SMALL;
+            else {
+                fprintf(stderr,
+                        "tvo_live: --preset must be default, accurate, balanced or small (got '%s')\n", v);
+                return 2;
+            }
+            if (tvo_vo_config_preset(&check, NULL, preset) == TVO_ERR_UNSUPPORTED) {
+                fprintf(stderr,
+                        "tvo_live: --preset %s needs the affine refinement, which this build leaves out\n",
+                        v);
+                return 2;
+            }
         } else if (!strcmp(a, "--size")) {
             char wbuf[16];
             const char *x = strchr(v, 'x');
@@ -298,7 +328,7 @@ int main(int argc, char **argv)
             fprintf(stderr, "tvo_live: no --calib: assuming a pinhole camera, f = %.1f px\n", f);
     }
 
-    tvo_vo_config_default(&cfg, &cam);
+    (void)tvo_vo_config_preset(&cfg, &cam, preset); /* checked with the options */
     cfg.clock = clock_cb;
     {
         size_t need = tvo_vo_required_size(&cfg);
@@ -318,6 +348,9 @@ int main(int argc, char **argv)
         goto done;
     }
     tvo_traj_init(&traj, &I);
+    T_w_c_prev = I;
+    if (nn != NULL)
+        s = 0.0; /* until the first keyframe with a step length from the networks */
 
     while (!g_stop && (frames_max < 0 || n < frames_max)) {
         tvo_v4l2_frame f;
@@ -346,12 +379,29 @@ int main(int argc, char **argv)
             fprintf(stderr, "tvo_live: frame %u: %s\n", (unsigned)f.sequence, tvo_status_str(st));
             continue;
         }
-        if (res.state == TVO_VO_OK || res.state == TVO_VO_ROTATION_ONLY) {
-            tvo_pose step = res.T_prev_cur;
-            double scale = 1.0;
-            if (nn != NULL && tvo_vo_refine(nn, &res, &step) != TVO_OK)
-                scale = 0.0;
-            (void)tvo_traj_step(&traj, &step, scale);
+        {
+            /* the map's motion since the last frame, times metres per map unit (1 without --model) */
+            const tvo_pose rel = tvo_pose_relative(&T_w_c_prev, &res.T_w_c);
+            const double vo_len = sqrt(rel.t[0] * rel.t[0] + rel.t[1] * rel.t[1] + rel.t[2] * rel.t[2]);
+            tvo_pose step;
+            T_w_c_prev = res.T_w_c;
+            if (nn != NULL) {
+                if (vo_len > 0.0 && isfinite(vo_len))
+                    vo_int += vo_len;
+                if (res.state == TVO_VO_OK && tvo_vo_refine(nn, &res, &step) == TVO_OK) {
+                    const double len = sqrt(step.t[0] * step.t[0] + step.t[1] * step.t[1] +
+                                            step.t[2] * step.t[2]);
+                    if (len > 0.0 && isfinite(len))
+                        src_int += len;
+                }
+                if (res.keyframe && vo_int > 0.0 && src_int > 0.0) {
+                    src_sum += src_int;
+                    vo_sum += vo_int;
+                    s = src_sum / vo_sum;
+                    src_int = vo_int = 0.0;
+                }
+            }
+            (void)tvo_traj_step(&traj, &rel, s);
         }
         tvo_rot_to_quat(traj.T_w_c.R, q);
         printf("%.6f %d %d %d %.6f %.6f %.6f %.6f %.6f %.6f %.6f\n", (double)f.timestamp_ns * 1e-9,
