@@ -269,6 +269,10 @@ def test_live_checks_before_the_camera(tmp_path):
     assert r.returncode == 2 and "--calib needs a value" in r.stderr
     r = run([live, "--frames", "-3"])
     assert r.returncode == 2 and "--frames" in r.stderr
+    r = run([live, "--preset", "fastest"])
+    assert r.returncode == 2 and "default, accurate, balanced or small" in r.stderr and r.stderr.count("\n") == 1
+    r = run([live, "--preset", "balanced"] + missing_dev)  # a known preset: now the device is the error
+    assert r.returncode == 1 and "no camera at /nonexistent/video9" in r.stderr
     # a calibration the core cannot represent, a missing model, an unwritable --out: refused before
     # the (missing) device is looked at
     omni = ROOT / "test" / "data" / "calib" / "kalibr_wiki_camchain_radtan_omni.yaml"
