@@ -57,6 +57,40 @@ def test_radtan_inverse_is_exact():
     assert np.abs(uv.reshape(-1, 2) - np.stack([u.ravel(), v.ravel()], 1)).max() < 1e-6
 
 
+def test_equidistant_inverse_and_opencv_fisheye():
+    """The fisheye preset's model: the inverse is exact to 1e-10, the forward model is OpenCV's
+    cv2.fisheye.projectPoints, every pixel's ray stays below 90 degrees, and the sequence's yaml names the
+    model with its coefficients."""
+    cam = synth.CAMERAS["fisheye"]
+    fu, fv, cu, cv = cam.intrinsics
+    u, v = np.meshgrid(np.arange(0, cam.width, 7.5), np.arange(0, cam.height, 7.5))
+    xd, yd = (u - cu) / fu, (v - cv) / fv
+    x, y = synth.undistort_equidistant(xd, yd, cam.distortion)
+    x2, y2 = synth.distort_equidistant(x, y, cam.distortion)
+    assert np.abs(x2 - xd).max() < 1e-10 and np.abs(y2 - yd).max() < 1e-10
+    assert np.degrees(np.arctan(np.hypot(x, y))).max() > 75  # a strong lens: the corners near 80 degrees
+    pts = np.stack([x.ravel(), y.ravel(), np.ones(x.size)], 1).reshape(-1, 1, 3)
+    Kf = np.array([[fu, 0, cu], [0, fv, cv], [0, 0, 1]], float)
+    uv, _ = cv2.fisheye.projectPoints(pts, np.zeros(3), np.zeros(3), Kf, np.array(cam.distortion, float))
+    assert np.abs(uv.reshape(-1, 2) - np.stack([u.ravel(), v.ravel()], 1)).max() < 1e-6
+    uv2 = synth.project_points(cam, np.stack([x.ravel(), y.ravel(), np.ones(x.size)], 1) * 2.0)
+    assert np.abs(uv2 - np.stack([u.ravel(), v.ravel()], 1)).max() < 1e-6
+    px = synth.PixelRays(cam)
+    assert px.rays[2].min() > np.cos(np.radians(85))
+    with pytest.raises(ValueError):  # a lens whose image reaches 90 degrees is refused, not rendered wrong
+        synth.undistort_equidistant(np.array([2.0]), np.array([0.0]), (0.0, 0.0, 0.0, 0.0))
+
+
+def test_fisheye_sequence_yaml(tmp_path):
+    cam = synth.CAMERAS["fisheye"]
+    traj = synth.builtin_trajectory("handheld", 10, rate_hz=cam.rate_hz, seed=1)
+    info = synth.render_sequence(str(tmp_path), traj, 2, seed=1, cam=cam, progress=False, scene_kwargs=SMALL)
+    assert info["frames"] == 2
+    back = trajio.read_sensor_yaml(str(tmp_path / "mav0" / "cam0" / "sensor.yaml"))
+    assert back.distortion_model == "equidistant" and np.allclose(back.distortion, cam.distortion)
+    assert (back.width, back.height) == (cam.width, cam.height) and np.allclose(back.intrinsics, cam.intrinsics)
+
+
 def test_room_depth_matches_analytic_planes():
     sc = room_scene()
     r = synth.Renderer(sc, CAM)

@@ -77,12 +77,45 @@ def undistort_radtan(xd, yd, d, iters: int = 12):
     return x, y
 
 
+def distort_equidistant(x, y, k):
+    """Normalised undistorted (x, y) -> distorted, equidistant (Kannala-Brandt k1..k4, OpenCV's fisheye and
+    Kalibr's "equidistant"): theta_d = theta (1 + k1 theta^2 + k2 theta^4 + k3 theta^6 + k4 theta^8)."""
+    x = np.asarray(x, dtype=np.float64)
+    y = np.asarray(y, dtype=np.float64)
+    r = np.hypot(x, y)
+    th = np.arctan(r)
+    t2 = th * th
+    thd = th * (1.0 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3]))))
+    s = np.where(r > 1e-12, thd / np.maximum(r, 1e-300), 1.0)
+    return x * s, y * s
+
+
+def undistort_equidistant(xd, yd, k, iters: int = 20):
+    """Inverse of :func:`distort_equidistant` by Newton's method on theta (the angle must stay below 90
+    degrees: a ray at or beyond it has no normalised (x, y))."""
+    xd = np.asarray(xd, dtype=np.float64)
+    yd = np.asarray(yd, dtype=np.float64)
+    thd = np.hypot(xd, yd)
+    th = np.array(thd, copy=True)
+    for _ in range(iters):
+        t2 = th * th
+        g = th * (1.0 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3])))) - thd
+        dg = 1.0 + t2 * (3.0 * k[0] + t2 * (5.0 * k[1] + t2 * (7.0 * k[2] + t2 * 9.0 * k[3])))
+        th = th - g / dg
+    if np.any(th >= np.pi / 2):
+        raise ValueError("equidistant camera: a pixel's ray is at or beyond 90 degrees from the axis")
+    s = np.where(thd > 1e-12, np.tan(th) / np.maximum(thd, 1e-300), 1.0)
+    return xd * s, yd * s
+
+
 def project_points(cam: CameraInfo, X_c):
     """Camera-frame points (N,3) -> distorted pixel coordinates (N,2) (pixel centres at integers)."""
     X_c = np.asarray(X_c, dtype=np.float64).reshape(-1, 3)
     x, y = X_c[:, 0] / X_c[:, 2], X_c[:, 1] / X_c[:, 2]
     if cam.distortion_model.startswith("radial") and len(cam.distortion) >= 4:
         x, y = distort_radtan(x, y, cam.distortion)
+    elif cam.distortion_model == "equidistant":
+        x, y = distort_equidistant(x, y, cam.distortion)
     fu, fv, cu, cv = cam.intrinsics
     return np.stack([fu * x + cu, fv * y + cv], axis=1)
 
@@ -100,6 +133,8 @@ class PixelRays:
         xd, yd = (u - cu) / fu, (v - cv) / fv
         if cam.distortion_model.startswith("radial") and len(cam.distortion) >= 4:
             x, y = undistort_radtan(xd, yd, cam.distortion)
+        elif cam.distortion_model == "equidistant":
+            x, y = undistort_equidistant(xd, yd, cam.distortion)
         elif cam.distortion_model in ("none", "") or not any(cam.distortion):
             x, y = xd, yd
         else:
@@ -573,8 +608,9 @@ BUILTINS = ("handheld", "rotation", "line", "drive")
 
 # Camera presets (--camera). euroc: the EuRoC cam0 of the real data (radial-tangential, 20 Hz); kitti: a
 # pinhole with KITTI's cam0 intrinsics (sequences 00-02) and frame size, 10 Hz; tum: a 640x480 pinhole at
-# 30 Hz with the nominal intrinsics of the TUM RGB-D benchmark. All keep EuRoC's T_BS, so that a EuRoC
-# body trajectory moves each of them as it moved cam0.
+# 30 Hz with the nominal intrinsics of the TUM RGB-D benchmark; fisheye: a 640x480 wide-angle lens with the
+# equidistant model (128 degrees across, 159 on the diagonal), 20 Hz. All keep EuRoC's T_BS, so that a
+# EuRoC body trajectory moves each of them as it moved cam0.
 CAMERAS = {
     "euroc": CameraInfo(),
     "kitti": CameraInfo(width=1241, height=376, intrinsics=(718.856, 718.856, 607.1928, 185.2157),
@@ -583,6 +619,9 @@ CAMERAS = {
     "tum": CameraInfo(width=640, height=480, intrinsics=(525.0, 525.0, 319.5, 239.5),
                       distortion_model="none", distortion=(0.0, 0.0, 0.0, 0.0), rate_hz=30.0,
                       comment="TUM RGB-D-like pinhole (nominal intrinsics)"),
+    "fisheye": CameraInfo(width=640, height=480, intrinsics=(280.0, 280.0, 319.5, 239.5),
+                          distortion_model="equidistant", distortion=(0.02, -0.005, 0.001, 0.0), rate_hz=20.0,
+                          comment="wide-angle lens, equidistant (Kannala-Brandt) model"),
 }
 
 
