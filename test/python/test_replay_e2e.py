@@ -118,6 +118,16 @@ def test_bench_alternating_runs(replayed, tmp_path):
         assert math.isfinite(res[name]["eval"]["standard"]["ate_m"]["rmse"])
     plain = sorted(r["ratio_plain"] for r in res["runs"])  # the plain pipeline (no fb check) ran too
     assert res["opencv_plain"]["ratio_median_of_runs"] == pytest.approx(0.5 * (plain[0] + plain[1]))
+    # --preset: tinyvo runs as tvo_replay --preset NAME does (the same trajectory, byte for byte)
+    out_p = tmp_path / "bench_balanced"
+    subprocess.run([sys.executable, "-m", "tinyvo_tools.bench", "--euroc", str(seq), "--frames", "20",
+                    "--replay", str(REPLAY), "--out", str(out_p), "--pipeline", "plain", "--preset", "balanced"],
+                   check=True, stdout=subprocess.DEVNULL)
+    direct = tmp_path / "balanced.txt"
+    subprocess.run([str(REPLAY), "--euroc", str(seq), "--out", str(direct), "--scale", "gt", "--max-frames", "20",
+                    "--preset", "balanced", "--quiet"], check=True)
+    assert (out_p / "tinyvo.txt").read_bytes() == direct.read_bytes()
+    assert json.loads((out_p / "bench.json").read_text())["preset"] == "balanced"
     bad = subprocess.run([sys.executable, "-m", "tinyvo_tools.bench", "--euroc", str(seq), "--repeat", "0",
                           "--replay", str(REPLAY), "--out", str(out)], capture_output=True, text=True)
     assert bad.returncode == 2 and "--repeat must be >= 1" in bad.stderr

@@ -2,10 +2,11 @@
 """Side-by-side benchmark: tinyvo's replay against OpenCV pipelines doing the same job.
 
     python -m tinyvo_tools.bench --euroc DIR [--frames N] [--replay build/release/examples/replay/tvo_replay]
-                                 [--out OUTDIR] [--repeat N] [--pipeline plain|fb|both]
+                                 [--out OUTDIR] [--repeat N] [--pipeline plain|fb|both] [--preset NAME]
 
 All run on the same frames, single thread, in one session, with ground-truth step lengths:
-  tinyvo : tvo_replay --scale gt (its per-stage timings come from --stats: median and p90 per frame)
+  tinyvo : tvo_replay --scale gt (its per-stage timings come from --stats: median and p90 per frame), with
+           --preset NAME when given (default, accurate, balanced, small)
   OpenCV, two pipelines (undistortPoints, findEssentialMat (RANSAC, p = 0.999, 1 px) and recoverPose in both):
     fb    : goodFeaturesToTrack (300 corners, re-detect below 200, min distance 10 px), calcOpticalFlowPyrLK
             (21x21, maxLevel 3, 30 iterations / 0.01) forward and backward, a track kept when it comes back
@@ -122,6 +123,8 @@ def main(argv=None):
                          "ratios (a load change on a shared machine then biases one run, not the figure)")
     ap.add_argument("--pipeline", choices=("plain", "fb", "both"), default="both",
                     help="OpenCV pipeline(s) to compare with (module doc)")
+    ap.add_argument("--preset", choices=("default", "accurate", "balanced", "small"), default=None,
+                    help="tinyvo's configuration (tvo_replay --preset; default: the library's defaults)")
     a = ap.parse_args(argv)
     if a.repeat < 1:
         ap.error("--repeat must be >= 1")
@@ -144,6 +147,8 @@ def _main(a) -> int:
     cmd = [a.replay, "--euroc", a.euroc, "--out", tvo_traj, "--scale", "gt", "--stats", stats_path, "--quiet"]
     if a.frames:
         cmd += ["--max-frames", str(a.frames)]
+    if a.preset:
+        cmd += ["--preset", a.preset]
     runs = []  # per alternation: tinyvo median ms and each pipeline's median ms
     last = {}
     for _ in range(a.repeat):
@@ -162,7 +167,7 @@ def _main(a) -> int:
     ev_t = _eval(tvo_traj, a.euroc, os.path.join(a.out, "tinyvo_eval.json"))
     tv_med = stats["timing_us"]["total"]["median"] / 1e3
     tv_p90 = stats["timing_us"]["total"]["p90"] / 1e3
-    result = {"frames": int(len(last[names[0]][0])),
+    result = {"frames": int(len(last[names[0]][0])), "preset": a.preset or "default",
               "tinyvo": {"median_ms": tv_med, "p90_ms": tv_p90, "eval": ev_t, "stats": stats},
               "runs": runs}
     for name in names:
