@@ -111,7 +111,8 @@ int main(int argc, char **argv)
     FILE *out = NULL;
     int quiet = 0;
     tvo_vo_preset preset = TVO_VO_PRESET_DEFAULT;
-    double s = 1.0, src_sum = 0.0, vo_sum = 0.0, src_int = 0.0, vo_int = 0.0; /* --model: metres per unit */
+    double unit_m = 1.0; /* metres per map unit: 1 (the map's own unit), or from the networks (--model) */
+    double src_sum = 0.0, vo_sum = 0.0, src_int = 0.0, vo_int = 0.0; /* path lengths, --model */
     tvo_pose T_w_c_prev;
     int32_t width = 0, height = 0, fps = 30, timeout_ms = 2000;
     long frames_max = -1;
@@ -350,7 +351,7 @@ int main(int argc, char **argv)
     tvo_traj_init(&traj, &I);
     T_w_c_prev = I;
     if (nn != NULL)
-        s = 0.0; /* until the first keyframe with a step length from the networks */
+        unit_m = 0.0; /* until the first keyframe with a step length from the networks */
 
     while (!g_stop && (frames_max < 0 || n < frames_max)) {
         tvo_v4l2_frame f;
@@ -397,11 +398,11 @@ int main(int argc, char **argv)
                 if (res.keyframe && vo_int > 0.0 && src_int > 0.0) {
                     src_sum += src_int;
                     vo_sum += vo_int;
-                    s = src_sum / vo_sum;
+                    unit_m = src_sum / vo_sum;
                     src_int = vo_int = 0.0;
                 }
             }
-            (void)tvo_traj_step(&traj, &rel, s);
+            (void)tvo_traj_step(&traj, &rel, unit_m);
         }
         tvo_rot_to_quat(traj.T_w_c.R, q);
         printf("%.6f %d %d %d %.6f %.6f %.6f %.6f %.6f %.6f %.6f\n", (double)f.timestamp_ns * 1e-9,
