@@ -251,7 +251,8 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
  *                          lk.pred_levels 2, lk.pred_win_size 11) before the affine refinement re-aligns
  *                          them. On the sequences of docs/budget.md about 0.5 times the default's ATE and
  *                          0.7 times its rotation error (KITTI 01 the same), for 0.55-1.05 times its
- *                          instructions and 0.83-0.98 times the two-view time per frame; less accurate
+ *                          instructions and 0.83-0.98 times the two-view time per frame once the map
+ *                          tracks (before it, the full tracker and the refinement); less accurate
  *                          than TVO_VO_PRESET_ACCURATE on real frames. Needs the affine refinement.
  * TVO_VO_PRESET_SMALL      sized for a QVGA (320x240) camera on a microcontroller: 120 tracks
  *                          (min_tracks 80, keyframe_min_tracks 40, detect.max_corners 120), 3 pyramid
