@@ -640,15 +640,14 @@ tvo_status tvo_lk_track_pred(const tvo_lk_config *cfg, const tvo_pyramid *prev, 
 
     for (i = 0; i < n; ++i) {
         const int32_t k0 = two && pred[i] ? 1 : 0;
+        const int32_t k_last = cfg->pred_retry ? 0 : k0; /* the retry: a lost predicted point, mode 0 */
         const float x0 = prev_pts[i].x, y0 = prev_pts[i].y;
         const float gx0 = next_pts[i].x, gy0 = next_pts[i].y;
+        const float gx = gx0 - x0, gy = gy0 - y0; /* the guess's displacement (use_initial_flow) */
         float nx = gx0, ny = gy0, e = 0.f;
         int ok = 0;
-        for (int32_t k = k0; k >= 0; --k) {
+        for (int32_t k = k0; k >= k_last && !ok; --k) {
             lk_mode *md = &mode[k];
-            const float gx = gx0 - x0, gy = gy0 - y0; /* the guess's displacement (use_initial_flow) */
-            if (k != k0 && !cfg->pred_retry)
-                break;
             nx = gx0;
             ny = gy0;
             e = 0.f;
@@ -681,8 +680,6 @@ tvo_status tvo_lk_track_pred(const tvo_lk_config *cfg, const tvo_pyramid *prev, 
                     e = 0.f;
                 }
             }
-            if (ok)
-                break;
         }
         next_pts[i].x = nx;
         next_pts[i].y = ny;

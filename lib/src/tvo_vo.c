@@ -160,6 +160,14 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->clock_user = NULL;
 }
 
+/* TVO_VO_PRESET_ACCURATE's fields (the balanced preset starts from them). */
+static void preset_accurate(tvo_vo_config *cfg)
+{
+    cfg->affine_win_size = 21;
+    cfg->map_window = 8;
+    cfg->map_ba_fixed = 4;
+}
+
 tvo_status tvo_vo_config_preset(tvo_vo_config *cfg, const tvo_camera *camera, tvo_vo_preset preset)
 {
     if (cfg == NULL)
@@ -171,16 +179,12 @@ tvo_status tvo_vo_config_preset(tvo_vo_config *cfg, const tvo_camera *camera, tv
     case TVO_VO_PRESET_ACCURATE:
         if (!TVO_WITH_AFFINE)
             return TVO_ERR_UNSUPPORTED;
-        cfg->affine_win_size = 21;
-        cfg->map_window = 8;
-        cfg->map_ba_fixed = 4;
+        preset_accurate(cfg);
         return TVO_OK;
     case TVO_VO_PRESET_BALANCED:
         if (!TVO_WITH_AFFINE)
             return TVO_ERR_UNSUPPORTED;
-        cfg->affine_win_size = 21;
-        cfg->map_window = 8;
-        cfg->map_ba_fixed = 4;
+        preset_accurate(cfg);
         cfg->map_prediction = 2;
         cfg->lk.pred_levels = 2;
         cfg->lk.pred_win_size = 11;

@@ -42,11 +42,8 @@ static int runner_open(runner *r, int32_t w, int32_t h)
     cfg.affine_win_size = TVO_WITH_AFFINE && (k & 2)
             ? 21
             : 0; /* and every other pair with the affine refinement */
-    /* every other quadruple with the map's predicted tracks */
-    cfg.map_prediction = (k & 4) ? 2 : 0;
-    cfg.lk.pred_levels = 2;
-    cfg.lk.pred_win_size = 11;
-    cfg.lk.pred_retry = (k >> 3) & 1;
+    if (k & 4)   /* every other quadruple with the map's predicted tracks, half of those with the retry */
+        tvo_g_predicted_tracks(&cfg, (k >> 3) & 1);
     while (cfg.lk.max_level >= 0 && (need = tvo_vo_required_size(&cfg)) == 0)
         cfg.lk.max_level--;
     if (need == 0)

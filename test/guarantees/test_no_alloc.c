@@ -111,10 +111,7 @@ static void vo_open(vo_box *b, const tvo_camera *cam)
     tvo_vo_config_default(&cfg, cam);
     /* the affine refinement's path too (it adds to LK's, it replaces nothing) */
     cfg.affine_win_size = TVO_WITH_AFFINE ? 21 : 0;
-    cfg.map_prediction = 2; /* and the map's predicted tracks (the balanced preset's LK) */
-    cfg.lk.pred_levels = 2;
-    cfg.lk.pred_win_size = 11;
-    cfg.lk.pred_retry = 1;
+    tvo_g_predicted_tracks(&cfg, 1); /* and the map's predicted tracks (the balanced preset's LK) */
     need = tvo_vo_required_size(&cfg);
     assert_true(need > 0);
     b->mem = malloc(need);

@@ -34,9 +34,7 @@ static void run(const tvo_camera *cam, const uint8_t *frames, const int64_t *t, 
     tvo_vo_config_default(&cfg, cam);
     /* its templates live in the block too: garbage there must not matter */
     cfg.affine_win_size = TVO_WITH_AFFINE ? 21 : 0;
-    cfg.map_prediction = 2; /* and the map's predicted tracks (the balanced preset's LK) */
-    cfg.lk.pred_levels = 2;
-    cfg.lk.pred_win_size = 11;
+    tvo_g_predicted_tracks(&cfg, 0); /* and the map's predicted tracks (the balanced preset's LK) */
     need = tvo_vo_required_size(&cfg);
     assert_true(need > 0);
     block = malloc(need + 64);

@@ -46,10 +46,7 @@ static size_t config_for(const tvo_camera *cam, tvo_vo_config *cfg)
     tvo_vo_config_default(cfg, cam);
     /* the affine refinement's path too (called after LK, not inside it) */
     cfg->affine_win_size = TVO_WITH_AFFINE ? 21 : 0;
-    cfg->map_prediction = 2; /* and the map's predicted tracks (the balanced preset's LK) */
-    cfg->lk.pred_levels = 2;
-    cfg->lk.pred_win_size = 11;
-    cfg->lk.pred_retry = 1;
+    tvo_g_predicted_tracks(cfg, 1); /* and the map's predicted tracks (the balanced preset's LK) */
     while (cfg->lk.max_level >= 0 && (need = tvo_vo_required_size(cfg)) == 0)
         cfg->lk.max_level--;
     return need;

@@ -182,6 +182,16 @@ static inline void tvo_g_free_model(tvo_g_model *m)
     memset(m, 0, sizeof *m);
 }
 
+/* The map's predicted tracks as the balanced preset tracks them (neighbours' depths, 2 levels, 11x11
+ * windows), with or without the retry of the lost ones. */
+static inline void tvo_g_predicted_tracks(tvo_vo_config *cfg, int retry)
+{
+    cfg->map_prediction = 2;
+    cfg->lk.pred_levels = 2;
+    cfg->lk.pred_win_size = 11;
+    cfg->lk.pred_retry = retry;
+}
+
 /* Every field of a result is finite and the state is a valid one. */
 static inline int tvo_g_result_ok(const tvo_vo_result *r)
 {
