@@ -3,7 +3,8 @@
 """Benchmark: the VO on degraded copies of a real sequence (blur, noise, a smaller camera, a lower rate).
 
 A user's camera is rarely as sharp, quiet, large and fast as the shared KITTI frames. This program writes
-copies of an EuRoC/ASL sequence with a pinhole camera (no distortion: the shared KITTI sequences):
+copies of an EuRoC/ASL sequence (the smaller copy only of a camera without distortion, as the shared KITTI
+sequences; the others of any camera, the renders too):
 
   - none:        the frames as they are;
   - blur1:       Gaussian blur, sigma 1 px;
@@ -12,7 +13,11 @@ copies of an EuRoC/ASL sequence with a pinhole camera (no distortion: the shared
   - noise6:      Gaussian noise, sigma 6 grey levels;
   - half:        every frame at half the width and height (OpenCV INTER_AREA), the intrinsics halved
                  about the pixel centres;
-  - skip2:       every second frame (half the rate: twice the motion between frames).
+  - skip2:       every second frame (half the rate: twice the motion between frames);
+  - jerk:        one or two frames on from each kept frame, at random (seeded), the kept frames then given
+                 evenly spaced times at the original rate and their ground truth moved with them: the
+                 camera's speed doubles or halves from one frame to the next, the motion a constant-velocity
+                 prediction handles worst (a shaken hand-held camera, a drone's vibration).
 
 Noise is seeded (the same copy on every run). It replays each copy with `tvo_replay --scale none` and the
 given replay arguments, and prints the Sim(3)-aligned ATE (m) of the whole run, the number of frames
@@ -37,7 +42,8 @@ sys.path.insert(0, os.path.join(ROOT, "tools"))
 import replay_copies  # noqa: E402  (beside this file)
 from tinyvo_tools import trajio  # noqa: E402
 
-# name: (scale, keep every n-th frame, blur sigma px, noise sigma grey levels)
+# name: (scale, keep every n-th frame (0: one or two frames on at random, re-timed), blur sigma px,
+#        noise sigma grey levels)
 VARIANTS = {
     "none": (1.0, 1, 0.0, 0.0),
     "blur1": (1.0, 1, 1.0, 0.0),
@@ -45,7 +51,21 @@ VARIANTS = {
     "noise6": (1.0, 1, 0.0, 6.0),
     "half": (0.5, 1, 0.0, 0.0),
     "skip2": (1.0, 2, 0.0, 0.0),
+    "jerk": (1.0, 0, 0.0, 0.0),
 }
+
+
+def kept_frames(n: int, every: int) -> list:
+    """The indices of the frames a copy keeps: every n-th, or (every == 0) steps of 1 or 2 drawn with a
+    fixed seed."""
+    if every > 0:
+        return list(range(0, n, every))
+    rng = np.random.default_rng(7)
+    keep, k = [], 0
+    while k < n:
+        keep.append(k)
+        k += int(rng.integers(1, 3))
+    return keep
 
 
 def write_copy(seq: str, dst: str, scale: float, every: int, blur: float, noise: float) -> None:
@@ -54,14 +74,18 @@ def write_copy(seq: str, dst: str, scale: float, every: int, blur: float, noise:
     out = os.path.join(dst, "mav0", "cam0")
     os.makedirs(os.path.join(out, "data"))
     info = trajio.read_sensor_yaml(os.path.join(cam, "sensor.yaml"))
-    if any(d != 0.0 for d in info.distortion):
-        raise SystemExit("bench_degrade: the sequence's camera has distortion; use a pinhole sequence")
+    if scale != 1.0 and any(d != 0.0 for d in info.distortion):
+        raise SystemExit("bench_degrade: the sequence's camera has distortion; a smaller copy needs a pinhole "
+                         "sequence")
     t_ns, names = trajio.read_cam_frames(cam)
+    keep = kept_frames(len(names), every)
+    # a jerk copy keeps the original frame interval: frame j of the copy at t0 + j * dt
+    dt = int(np.median(np.diff(t_ns))) if len(t_ns) > 1 else 0
+    t_new = [int(t_ns[k]) if every > 0 else int(t_ns[0]) + j * dt for j, k in enumerate(keep)]
     rng = np.random.default_rng(1)
     rows = []
-    for k, (t, name) in enumerate(zip(t_ns, names)):
-        if k % every:
-            continue
+    for k, t in zip(keep, t_new):
+        name = names[k]
         img = cv2.imread(os.path.join(cam, "data", name), cv2.IMREAD_GRAYSCALE)
         if img is None:
             raise SystemExit(f"bench_degrade: cannot read {name}")
@@ -82,10 +106,19 @@ def write_copy(seq: str, dst: str, scale: float, every: int, blur: float, noise:
     fx, fy, cx, cy = info.intrinsics
     info.intrinsics = (fx * scale, fy * scale, (cx + 0.5) * scale - 0.5, (cy + 0.5) * scale - 0.5)
     info.width, info.height = int(round(info.width * scale)), int(round(info.height * scale))
-    info.rate_hz = info.rate_hz / every
+    if every > 0:
+        info.rate_hz = info.rate_hz / every
     trajio.write_sensor_yaml(os.path.join(out, "sensor.yaml"), info)
     gt = os.path.join(seq, "mav0", "state_groundtruth_estimate0")
-    shutil.copytree(gt, os.path.join(dst, "mav0", "state_groundtruth_estimate0"))
+    if every > 0:
+        shutil.copytree(gt, os.path.join(dst, "mav0", "state_groundtruth_estimate0"))
+        return
+    # the ground truth of each kept frame, at the frame's new time
+    src = trajio.read_euroc_groundtruth(gt)
+    poses = trajio.interpolate_poses(src.t_ns, src.poses, t_ns[keep])
+    os.makedirs(os.path.join(dst, "mav0", "state_groundtruth_estimate0"))
+    trajio.write_euroc_groundtruth(os.path.join(dst, "mav0", "state_groundtruth_estimate0", "data.csv"),
+                                   trajio.Trajectory(np.array(t_new, dtype=np.int64), poses, "body", ""))
 
 
 def main() -> int:

@@ -1,0 +1,89 @@
+# SPDX-License-Identifier: Apache-2.0
+"""test/bench/bench_degrade.py's copies on a tiny ASL sequence written here: the frames each copy keeps,
+the jerk copy's evenly spaced times and its ground truth moved with its frames, and the refusal of a
+smaller copy of a camera with distortion."""
+import os
+import pathlib
+import sys
+
+import cv2
+import numpy as np
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "test" / "bench"))
+sys.path.insert(0, str(ROOT / "tools"))
+import bench_degrade  # noqa: E402
+from tinyvo_tools import trajio  # noqa: E402
+
+N, DT = 40, 50_000_000  # 20 Hz
+T0 = 1_000_000_000_000
+
+
+def _sequence(root: pathlib.Path, distortion=(0.0, 0.0, 0.0, 0.0)) -> pathlib.Path:
+    """40 frames (each frame's grey level its index), a camera moving 0.1 m a frame along x."""
+    cam = root / "mav0" / "cam0"
+    (cam / "data").mkdir(parents=True)
+    rows = []
+    for k in range(N):
+        name = f"{T0 + k * DT}.png"
+        cv2.imwrite(str(cam / "data" / name), np.full((24, 32), k, np.uint8))
+        rows.append(f"{T0 + k * DT},{name}\n")
+    (cam / "data.csv").write_text("#timestamp [ns],filename\n" + "".join(rows))
+    info = trajio.CameraInfo(width=32, height=24, intrinsics=(30.0, 30.0, 15.5, 11.5),
+                             distortion=tuple(distortion), rate_hz=20, T_BS=np.eye(4))
+    trajio.write_sensor_yaml(str(cam / "sensor.yaml"), info)
+    gt = root / "mav0" / "state_groundtruth_estimate0"
+    gt.mkdir(parents=True)
+    t = np.array([T0 + k * DT for k in range(N)], np.int64)
+    poses = np.repeat(np.eye(4)[None], N, axis=0)
+    poses[:, 0, 3] = 0.1 * np.arange(N)
+    trajio.write_euroc_groundtruth(str(gt / "data.csv"), trajio.Trajectory(t, poses))
+    return root
+
+
+def test_kept_frames():
+    assert bench_degrade.kept_frames(7, 1) == list(range(7))
+    assert bench_degrade.kept_frames(7, 2) == [0, 2, 4, 6]
+    keep = bench_degrade.kept_frames(200, 0)
+    steps = np.diff(keep)
+    assert keep[0] == 0 and set(steps.tolist()) == {1, 2}
+    assert 0.3 < np.mean(steps == 2) < 0.7  # both steps, about as often
+    assert bench_degrade.kept_frames(200, 0) == keep  # seeded: the same copy every run
+
+
+def test_jerk_copy(tmp_path):
+    src = _sequence(tmp_path / "src")
+    dst = tmp_path / "jerk"
+    bench_degrade.write_copy(str(src), str(dst), *bench_degrade.VARIANTS["jerk"])
+    t, names = trajio.read_cam_frames(str(dst / "mav0" / "cam0"))
+    keep = bench_degrade.kept_frames(N, 0)
+    assert len(names) == len(keep)
+    assert (np.diff(t) == DT).all() and t[0] == T0  # evenly spaced at the original rate
+    for j, k in enumerate(keep):
+        img = cv2.imread(str(dst / "mav0" / "cam0" / "data" / names[j]), cv2.IMREAD_GRAYSCALE)
+        assert int(img[0, 0]) == k  # frame j of the copy is frame keep[j] of the source
+    gt = trajio.read_euroc_groundtruth(str(dst))
+    np.testing.assert_array_equal(gt.t_ns, t)
+    np.testing.assert_allclose(gt.poses[:, 0, 3], 0.1 * np.array(keep), atol=1e-9)
+    assert trajio.read_sensor_yaml(str(dst / "mav0" / "cam0" / "sensor.yaml")).rate_hz == 20
+
+
+def test_skip_copy_keeps_times_and_ground_truth(tmp_path):
+    src = _sequence(tmp_path / "src")
+    dst = tmp_path / "skip2"
+    bench_degrade.write_copy(str(src), str(dst), *bench_degrade.VARIANTS["skip2"])
+    t, _ = trajio.read_cam_frames(str(dst / "mav0" / "cam0"))
+    np.testing.assert_array_equal(t, T0 + DT * np.arange(0, N, 2))
+    assert (dst / "mav0" / "state_groundtruth_estimate0" / "data.csv").read_bytes() == \
+        (src / "mav0" / "state_groundtruth_estimate0" / "data.csv").read_bytes()
+
+
+def test_distortion(tmp_path):
+    src = _sequence(tmp_path / "src", distortion=(-0.28, 0.07, 0.0002, 0.00002))
+    bench_degrade.write_copy(str(src), str(tmp_path / "jerk"), *bench_degrade.VARIANTS["jerk"])
+    info = trajio.read_sensor_yaml(str(tmp_path / "jerk" / "mav0" / "cam0" / "sensor.yaml"))
+    assert tuple(info.distortion) == (-0.28, 0.07, 0.0002, 0.00002)  # the lens kept
+    with pytest.raises(SystemExit, match="distortion"):
+        bench_degrade.write_copy(str(src), str(tmp_path / "half"), *bench_degrade.VARIANTS["half"])
+    assert not os.path.exists(tmp_path / "half" / "mav0" / "cam0" / "data.csv")
