@@ -457,7 +457,8 @@ int main(int argc, char **argv)
     double *timing[TVO_STAGE_COUNT + 1] = {0};
     long counts_state[TVO_VO_STATE_COUNT] = {0}, counts_skip[SKIP_COUNT] = {0};
     long keyframe_frames = 0; /* frames whose rotation is the keyframe rotation */
-    long counts_map[TVO_MAP_STATE_COUNT] = {0}, map_keyframes = 0, ba_turn_refused = 0, gain_retries = 0;
+    long counts_map[TVO_MAP_STATE_COUNT] = {0}, map_keyframes = 0, ba_turn_refused = 0, gain_retries = 0,
+         pred_rescues = 0;
     long affine_tried = 0, affine_refined = 0; /* the affine refinement's attempts and successes */
     map_scale msc;
     tvo_pose T_w_c_vo_prev = {{0}, {0}}; /* the VO's world pose of the previous frame (map on) */
@@ -709,6 +710,7 @@ int main(int argc, char **argv)
         map_keyframes += res.keyframe;
         ba_turn_refused += (res.ba_flags & TVO_VO_BA_TURN_REFUSED) != 0;
         gain_retries += res.gain_retry != 0;
+        pred_rescues += res.pred_rescue != 0;
         affine_tried += res.affine_tried;
         affine_refined += res.affine_refined;
         if (res.keyframe_age > 0)
@@ -883,6 +885,7 @@ int main(int argc, char **argv)
                 fprintf(js, "%s\"%s\": %ld", k ? ", " : "", state_names[k], counts_state[k]);
             fprintf(js, "},\n  \"keyframe_rotation_frames\": %ld,\n  \"gain_retries\": %ld,\n",
                     keyframe_frames, gain_retries);
+            fprintf(js, "  \"pred_rescues\": %ld,\n", pred_rescues);
             fprintf(js, "  \"affine\": {\"tried\": %ld, \"refined\": %ld},\n", affine_tried, affine_refined);
             fprintf(js,
                     "  \"map\": {\"enabled\": %d, \"keyframes\": %ld, \"losses\": %ld, "

@@ -43,6 +43,7 @@ static const setting settings[] = {
         S_D(redetect_coverage),
         S_I(min_pose_tracks),
         S_I(gain_retry),
+        S_I(pred_rescue),
         S_I(fast_min_threshold),
         S_D(pose_threshold_px),
         S_I(min_scale_points),

@@ -124,6 +124,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->redetect_coverage = 0.75;
     cfg->min_pose_tracks = 30;
     cfg->gain_retry = 1;
+    cfg->pred_rescue = 1;
     cfg->fast_min_threshold = 7; /* as ORB-SLAM's second FAST pass (20 then 7) */
     cfg->pose_threshold_px = 1.0;
     cfg->min_scale_points = 20;
@@ -213,7 +214,7 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (cfg->min_tracks < 0 || cfg->min_tracks > cfg->max_tracks)
         return 0;
-    if ((uint32_t)cfg->gain_retry > 1u)
+    if ((uint32_t)cfg->gain_retry > 1u || (uint32_t)cfg->pred_rescue > 1u)
         return 0;
     if (cfg->min_pose_tracks < 8 || cfg->min_pose_tracks > cfg->max_tracks)
         return 0;
@@ -1295,6 +1296,51 @@ static int32_t gain_retry(tvo_vo *vo, const frame_ctx *fc, int32_t tracked)
     return 0;
 }
 
+/* cfg.pred_rescue: LK lost more than half of the tracks the map predicted (pred[i] nonzero) - the motion
+ * model was wrong, not the tracks - so those lost are tracked again the default way (every level, the
+ * full window) from the same guesses, as lk.pred_retry would. They wait in the keyframe rotation's
+ * buffers, free until the pose stage: kx1 holds 2 n points (starts, then guesses), kmask n flags.
+ * Returns the tracks kept; *rescued is 1 when the second pass ran. */
+static int32_t pred_rescue(tvo_vo *vo, const frame_ctx *fc, const tvo_lk_config *lkc, const uint8_t *pred,
+                           int32_t tracked, int32_t *rescued)
+{
+    const int32_t n = vo->n, w = vo->cfg.camera.width, h = vo->cfg.camera.height;
+    tvo_point2f *from = (tvo_point2f *)(void *)vo->kx1, *to = from + n;
+    tvo_lk_config full = *lkc;
+    int32_t np = 0, k = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        if (!pred[i])
+            continue;
+        ++np;
+        if (!vo->st[i]) {
+            from[k] = vo->pts[i];
+            to[k] = vo->next[i];
+            ++k;
+        }
+    }
+    if (k == 0 || 2 * k <= np)
+        return tracked;
+    full.use_initial_flow = 1;
+    full.pred_levels = full.pred_win_size = full.pred_fb_levels = full.pred_retry = 0;
+    if (tvo_lk_track(&full, fc->pp, fc->pc, from, to, vo->kmask, NULL, k, vo->scratch, vo->scratch_size) !=
+        TVO_OK)
+        return tracked;
+    *rescued = 1;
+    k = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        if (!pred[i] || vo->st[i])
+            continue;
+        const tvo_point2f q = to[k];
+        if (vo->kmask[k] && q.x >= 0.0f && q.y >= 0.0f && q.x <= (float)(w - 1) && q.y <= (float)(h - 1)) {
+            vo->next[i] = q;
+            vo->st[i] = 1;
+            ++tracked;
+        }
+        ++k;
+    }
+    return tracked;
+}
+
 /* 1. LK tracking of the tracks into this frame; the tracks that leave the image are dropped. */
 static void stage_track(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
 {
@@ -1305,6 +1351,8 @@ static void stage_track(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
     if (fc->predicted)
         lkc.use_initial_flow = 1;
     tracked = lk_pass(vo, fc, &lkc, vo->ok2);
+    if (fc->predicted && vo->cfg.pred_rescue)
+        tracked = pred_rescue(vo, fc, &lkc, vo->ok2, tracked, &res->pred_rescue);
     if (vo->cfg.gain_retry && vo->n >= vo->cfg.min_pose_tracks && 2 * tracked < vo->n)
         res->gain_retry = gain_retry(vo, fc, tracked);
     if (!vo->cfg.affine_at_keyframes)

@@ -178,11 +178,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cfg.lk.max_level = hdr[5] & 3;
     /* the map's predicted tracks (the balanced preset's way) for half the inputs: from the landmarks
        alone or with their neighbours' depths, on 1 or 2 levels with 11x11 windows, the lost ones tracked
-       again or not */
+       again or not, each lost one or, after a frame that loses more than half, all of them (the rescue) */
     cfg.map_prediction = ((hdr[1] / 81) & 2) ? 1 + (int32_t)((hdr[3] >> 7) & 1u) : 0;
     cfg.lk.pred_levels = 1 + (int32_t)((hdr[3] >> 6) & 1u);
     cfg.lk.pred_win_size = 11;
     cfg.lk.pred_retry = (hdr[6] >> 1) & 1;
+    cfg.pred_rescue = ((hdr[6] >> 1) ^ (hdr[5] >> 7)) & 1; /* a bit of the retry's and of the FAST threshold's */
     /* the local map: on for three inputs in four, with windows of 3..6 keyframes and landmark capacities
        from below to above the track count (header byte 6's bits, beside the scene seed) */
     cfg.map = (hdr[6] & 3u) != 0;

@@ -22,6 +22,7 @@ typedef struct runner {
     tvo_g_model model;
     tvo_traj traj;
     int states[TVO_VO_STATE_COUNT];
+    int rescues; /* frames whose predicted tracks were rescued (cfg.pred_rescue) */
     int errors;
 } runner;
 
@@ -93,6 +94,7 @@ static void step(runner *r, int64_t t_ns, tvo_status expect_or_ok)
     if (res.state == TVO_VO_ROTATION_ONLY)
         assert_true(res.T_prev_cur.t[0] == 0.0 && res.T_prev_cur.t[1] == 0.0 && res.T_prev_cur.t[2] == 0.0);
     r->states[res.state]++;
+    r->rescues += res.pred_rescue;
     st = tvo_nn_run(r->model.nn, res.features, out);
     assert_int_equal(st, TVO_OK); /* features are finite, so the networks must run */
     for (int i = 0; i < 6; ++i)
@@ -163,8 +165,8 @@ static void torture_size(int32_t w, int32_t h, int frames_per_kind)
         step(&r, t, TVO_OK);
     }
     assert_int_equal(r.errors, 0);
-    fprintf(stderr, "%dx%d: ok %d rot-only %d lost %d init %d\n", (int)w, (int)h, r.states[0], r.states[2],
-            r.states[3], r.states[1]);
+    fprintf(stderr, "%dx%d: ok %d rot-only %d lost %d init %d, predicted tracks rescued %d\n", (int)w, (int)h,
+            r.states[0], r.states[2], r.states[3], r.states[1], r.rescues);
     runner_close(&r);
 }
 

@@ -36,6 +36,7 @@ typedef struct job {
     void *vo_mem;
     const tvo_g_model *model;
     int ok_states;
+    int rescues; /* frames whose predicted tracks were rescued (cfg.pred_rescue) */
     int failures;
 } job;
 
@@ -82,6 +83,7 @@ static void *work_thread(void *arg)
             continue;
         }
         j->ok_states += res.state == TVO_VO_OK;
+        j->rescues += res.pred_rescue;
         (void)tvo_nn_run(j->model->nn, res.features, out);
         if (tvo_vo_refine(j->model->nn, &res, &stp) == TVO_OK)
             (void)tvo_traj_step(&traj, &stp, 1.0);
@@ -129,8 +131,10 @@ static size_t measure(const tvo_camera *cam, const uint8_t *frames, const int64_
     used = painted_run(work_thread, &j);
     assert_int_equal(j.failures, 0);
     fprintf(stderr,
-            "%s (%dx%d, %d frames, %d OK): stack high-water %zu bytes (thread baseline %zu), bound %d\n",
-            name, (int)cam->width, (int)cam->height, n, j.ok_states, used - base, base, TVO_STACK_BOUND);
+            "%s (%dx%d, %d frames, %d OK, %d rescued): stack high-water %zu bytes (thread baseline %zu), "
+            "bound %d\n",
+            name, (int)cam->width, (int)cam->height, n, j.ok_states, j.rescues, used - base, base,
+            TVO_STACK_BOUND);
     if (used - base > (size_t)TVO_STACK_BOUND)
         fail_msg("%s: per-frame path used %zu bytes of stack, bound %d", name, used - base, TVO_STACK_BOUND);
     free(j.vo_mem);

@@ -183,7 +183,8 @@ static inline void tvo_g_free_model(tvo_g_model *m)
 }
 
 /* The map's predicted tracks as the balanced preset tracks them (neighbours' depths, 2 levels, 11x11
- * windows), with or without the retry of the lost ones. */
+ * windows, the rescue after a frame that loses more than half of them: cfg.pred_rescue's default), with
+ * or without the retry of the lost ones. */
 static inline void tvo_g_predicted_tracks(tvo_vo_config *cfg, int retry)
 {
     cfg->map_prediction = 2;
@@ -203,6 +204,8 @@ static inline int tvo_g_result_ok(const tvo_vo_result *r)
         if (!isfinite(r->features[i]))
             return 0;
     if (r->tracked < 0 || r->inliers < 0 || r->inliers > r->tracked || r->tracks < 0 || r->new_corners < 0)
+        return 0;
+    if ((uint32_t)r->gain_retry > 1u || (uint32_t)r->pred_rescue > 1u)
         return 0;
     return 1;
 }

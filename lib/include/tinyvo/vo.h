@@ -161,6 +161,12 @@ typedef struct tvo_vo_config {
                                    median depth of the 4 landmark tracks nearest to it in the previous
                                    image; the tracks left over as track_prediction says; 0: off;
                                    default 0 */
+    int32_t pred_rescue;          /* 1 (with map_prediction): when LK loses more than half of the tracks
+                                   the map predicted in a frame (a jerk, a velocity the motion model did
+                                   not foresee), those lost are tracked again the default way (lk's full
+                                   levels and window, as lk.pred_retry would) from the same guesses
+                                   (result.pred_rescue); frames that lose fewer are left as they are.
+                                   0: off; default 1 */
     int32_t affine_win_size;      /* affine track refinement: each track keeps the affine_win_size^2 pixels
                                    around where it was detected (its template), and every frame the
                                    position LK found is refined by aligning the template under an affine
@@ -280,6 +286,9 @@ typedef struct tvo_vo_result {
     tvo_pose T_prev_cur;            /* raw relative pose: p_prev = R p_cur + t, |t| = 1 or t = 0 */
     int32_t tracked;                /* tracks that survived LK + forward-backward into this frame */
     int32_t gain_retry;             /* 1: they were tracked again after an exposure step (cfg.gain_retry) */
+    int32_t pred_rescue;            /* 1: the map predicted their positions, LK lost more than half of the
+                                       predicted ones, and those were tracked again the default way
+                                       (cfg.pred_rescue) */
     int32_t affine_tried;           /* tracks the affine refinement tried to align to their templates in this
                                        frame (cfg.affine_win_size; only on keyframes with
                                        cfg.affine_at_keyframes); 0 without the refinement */
