@@ -10,7 +10,8 @@ per-frame rotation RPE RMSE in deg), a configuration's figure is its median over
 passes when (1) on every sequence and figure its median is at most the default's largest run, (2) for
 each figure the geometric mean over the sequences of candidate median / default median is at most 1,
 (3) on no sequence the median count of LOST frames grows. Figures are compared at 4 significant digits.
-Exit status 0 when every candidate passes, 1 when one fails, 2 on bad input."""
+Exit status 0 when every candidate passes, 1 when one fails, 2 on bad input. TVO_SEEDS="5 6 7 8 9" (as given
+to tools/seed-runs.sh) reads other seeds than the default 24301 1 2 3 4."""
 import json
 import math
 import os
@@ -22,7 +23,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from tinyvo_tools import eval as tvo_eval  # noqa: E402
 from tinyvo_tools import trajio  # noqa: E402
 
-SEEDS = (24301, 1, 2, 3, 4)
+SEEDS = tuple(int(x) for x in os.environ.get("TVO_SEEDS", "24301 1 2 3 4").split())
 EUROC = ("V1_01_easy_head", "V1_01_easy_keyframes")
 
 

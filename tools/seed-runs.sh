@@ -8,6 +8,7 @@
 # OUTDIR/LABEL_s<seed>_<sequence>.txt the trajectories of the two EuRoC samples. RENDERS: the folder of the
 # 8 renders along the EuRoC trajectories (docs/evaluation.md). Sequences come from $TVO_DATA_DIR (default:
 # ../shared/data beside the repository). A run already in OUTDIR is kept. tools/seed-rule.py compares.
+# TVO_SEEDS="5 6 7 8 9" replaces the 5 seeds (default "24301 1 2 3 4"; give seed-rule.py the same).
 set -euo pipefail
 if [ $# -lt 4 ]; then
     sed -n '3,10p' "$0" >&2
@@ -23,7 +24,7 @@ seqs=()
 for s in kitti07_160 kitti06_51 kitti01_51; do seqs+=(--seq "$data/kitti/$s"); done
 for s in MH_01 MH_02 MH_03 MH_04 V1_01 V1_02 V2_01 V2_03; do seqs+=(--seq "$renders/$s"); done
 mkdir -p "$out"
-for seed in 24301 1 2 3 4; do
+for seed in ${TVO_SEEDS:-24301 1 2 3 4}; do
     base=$out/${label}_s$seed
     [ -f "$base.json" ] && continue
     (cd "$root/tools" && "$py" -m tinyvo_tools.suite --replay "$replay" "${seqs[@]}" --scale none \
