@@ -53,7 +53,7 @@ static void usage(FILE *f)
             "  --calib-cam NAME  camera of a Kalibr camchain (default cam0)\n"
             "  --model FILE      tinyvo weights file: the map's scale in metres from the per-DoF\n"
             "                    networks' step lengths, set at every keyframe\n"
-            "  --preset NAME     default, accurate, balanced or small (vo.h, docs/camera.md)\n"
+            "  --preset NAME     default, balanced, accurate, basic or small (vo.h, docs/camera.md)\n"
             "  --size WxH        requested size (default: the calibration's, else 640x480)\n"
             "  --fps N           requested frame rate (default 30)\n"
             "  --frames N        stop after N frames (default: until Ctrl-C)\n"
@@ -185,9 +185,12 @@ int main(int argc, char **argv)
                 preset = TVO_VO_PRESET_BALANCED;
             else if (!strcmp(v, "small"))
                 preset = TVO_VO_PRESET_SMALL;
+            else if (!strcmp(v, "basic"))
+                preset = TVO_VO_PRESET_BASIC;
             else {
                 fprintf(stderr,
-                        "tvo_live: --preset must be default, accurate, balanced or small (got '%s')\n", v);
+                        "tvo_live: --preset must be default, balanced, accurate, basic or small (got '%s')\n",
+                        v);
                 return 2;
             }
             if (tvo_vo_config_preset(&check, NULL, preset) == TVO_ERR_UNSUPPORTED) {

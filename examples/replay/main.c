@@ -103,13 +103,14 @@ static void usage(FILE *f)
             "                       the dataset builder: t_ns,state,relpose_flags,\n"
             "                       pose_status,inliers,<feature names>,rel_scale,\n"
             "                       rel_scale_points\n"
-            "  --preset NAME        default, accurate (the affine refinement and a longer fixed\n"
-            "                       tail in the bundle adjustment: more accurate, 1.2-1.3x the\n"
-            "                       instructions), balanced (accurate with the map's predicted\n"
-            "                       tracks on 2 levels: between the two in accuracy, 0.55-1.05x\n"
-            "                       the default's instructions) or small (a QVGA\n"
-            "                       microcontroller's configuration); the switches below and\n"
-            "                       --set apply on top (vo.h)\n");
+            "  --preset NAME        default (balanced in a build with the affine refinement,\n"
+            "                       else basic), balanced (tracks re-aligned to their first\n"
+            "                       patch, the map's predicted tracks on 2 levels), accurate\n"
+            "                       (balanced with the full tracker on every track: more\n"
+            "                       accurate on real frames, 1.7x balanced's instructions),\n"
+            "                       basic (translation-only LK, no prediction: the least\n"
+            "                       memory) or small (a QVGA microcontroller's configuration);\n"
+            "                       the switches below and --set apply on top (vo.h)\n");
     fprintf(f,
             "  --map 0|1            local map (keyframes, landmarks, bundle adjustment) on or\n"
             "                       off (vo.h; default: the library's, on)\n"
@@ -257,17 +258,10 @@ static int parse_args(int argc, char **argv, options *o)
         } else if (!strcmp(a, "--preset")) {
             tvo_vo_config check;
             NEED_VALUE();
-            if (!strcmp(v, "default"))
-                o->preset = TVO_VO_PRESET_DEFAULT;
-            else if (!strcmp(v, "accurate"))
-                o->preset = TVO_VO_PRESET_ACCURATE;
-            else if (!strcmp(v, "balanced"))
-                o->preset = TVO_VO_PRESET_BALANCED;
-            else if (!strcmp(v, "small"))
-                o->preset = TVO_VO_PRESET_SMALL;
-            else {
+            if (tvo_replay_preset_from_name(v, &o->preset) != 0) {
                 fprintf(stderr,
-                        "tvo_replay: --preset must be default, accurate, balanced or small (got '%s')\n", v);
+                        "tvo_replay: --preset must be default, balanced, accurate, basic or small (got '%s')\n",
+                        v);
                 return -1;
             }
             if (tvo_vo_config_preset(&check, NULL, o->preset) == TVO_ERR_UNSUPPORTED) {

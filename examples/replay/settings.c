@@ -178,3 +178,21 @@ void tvo_replay_settings_print(FILE *f, const tvo_vo_config *cfg)
             fprintf(f, "%-28s float   %.9g\n", settings[i].name, (double)*(const float *)(const void *)field);
     }
 }
+
+int tvo_replay_preset_from_name(const char *name, tvo_vo_preset *preset)
+{
+    static const struct {
+        const char *name;
+        tvo_vo_preset preset;
+    } names[] = {{"default", TVO_VO_PRESET_DEFAULT},
+                 {"balanced", TVO_VO_PRESET_BALANCED},
+                 {"accurate", TVO_VO_PRESET_ACCURATE},
+                 {"basic", TVO_VO_PRESET_BASIC},
+                 {"small", TVO_VO_PRESET_SMALL}};
+    for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); ++i)
+        if (strcmp(name, names[i].name) == 0) {
+            *preset = names[i].preset;
+            return 0;
+        }
+    return -1;
+}

@@ -14,6 +14,10 @@
  * an unknown name, a value that is not a number of the field's type). */
 int tvo_replay_setting_apply(tvo_vo_config *cfg, const char *assignment);
 
+/* The preset called `name` (default, balanced, accurate, basic, small) in *preset. Returns 0, or -1 for
+ * another name (nothing printed). */
+int tvo_replay_preset_from_name(const char *name, tvo_vo_preset *preset);
+
 /* Prints every settable name with its type and its value in cfg, one per line. */
 void tvo_replay_settings_print(FILE *f, const tvo_vo_config *cfg);
 

@@ -108,6 +108,38 @@ static int rotation_check_fails(const tvo_relpose *p)
     return d > (lim > TVO_VO_ROT_CHECK_MIN_DEG ? lim : TVO_VO_ROT_CHECK_MIN_DEG);
 }
 
+/* TVO_VO_PRESET_BASIC's fields: translation-only LK on every track, a window of 6 keyframes with 2 fixed
+ * (TVO_VO_PRESET_SMALL starts from them). */
+static void preset_basic(tvo_vo_config *cfg)
+{
+    cfg->affine_win_size = 0;
+    cfg->map_window = 6;
+    cfg->map_ba_fixed = 2;
+    cfg->map_prediction = 0;
+    cfg->lk.pred_levels = 0;
+    cfg->lk.pred_win_size = 0;
+}
+
+/* TVO_VO_PRESET_ACCURATE's fields: every track re-aligned to its first patch (the affine refinement),
+ * 8 keyframes with 4 fixed, the full tracker on every track. */
+static void preset_accurate(tvo_vo_config *cfg)
+{
+    preset_basic(cfg);
+    cfg->affine_win_size = 21;
+    cfg->map_window = 8;
+    cfg->map_ba_fixed = 4;
+}
+
+/* TVO_VO_PRESET_BALANCED's fields (the defaults in a build with the affine refinement): the accurate
+ * preset's, with the tracks the map predicts tracked on 2 levels with 11x11 windows. */
+static void preset_balanced(tvo_vo_config *cfg)
+{
+    preset_accurate(cfg);
+    cfg->map_prediction = 2;
+    cfg->lk.pred_levels = 2;
+    cfg->lk.pred_win_size = 11;
+}
+
 void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
 {
     if (cfg == NULL)
@@ -138,13 +170,9 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->keyframe_max_rot_deg = 10.0;
     cfg->keyframe_translation = 1;
     cfg->track_prediction = 0; /* on: larger motion per frame tracked, but the EuRoC renders got worse */
-    cfg->map_prediction = 0;
-    cfg->affine_win_size = 0; /* on (21, TVO_VO_PRESET_ACCURATE): more accurate, but it costs 1.2-1.3 times
-                                 the instructions (docs/budget.md, "A third rule") */
     cfg->affine_step = 1;
     cfg->affine_at_keyframes = 0;
     cfg->map = 1;
-    cfg->map_window = 6;
     cfg->map_max_landmarks = 0; /* 2 x max_tracks */
     cfg->map_min_points = 20;
     cfg->map_init_parallax_deg = 1.0;
@@ -154,19 +182,16 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->map_kf_points_ratio = 0.8;
     cfg->map_kf_max_frames = 30;
     cfg->map_ba_iterations = 5;
-    cfg->map_ba_fixed = 2;
     cfg->map_ba_max_turn_deg = 0.5;
     cfg->map_rot_prior = 100.0;
     cfg->clock = NULL;
     cfg->clock_user = NULL;
-}
-
-/* TVO_VO_PRESET_ACCURATE's fields (the balanced preset starts from them). */
-static void preset_accurate(tvo_vo_config *cfg)
-{
-    cfg->affine_win_size = 21;
-    cfg->map_window = 8;
-    cfg->map_ba_fixed = 4;
+    /* the tracker and window: the balanced preset's (docs/budget.md, "A ninth rule"), or the basic
+       tracker's in a build without the affine refinement */
+    if (TVO_WITH_AFFINE)
+        preset_balanced(cfg);
+    else
+        preset_basic(cfg);
 }
 
 tvo_status tvo_vo_config_preset(tvo_vo_config *cfg, const tvo_camera *camera, tvo_vo_preset preset)
@@ -185,12 +210,13 @@ tvo_status tvo_vo_config_preset(tvo_vo_config *cfg, const tvo_camera *camera, tv
     case TVO_VO_PRESET_BALANCED:
         if (!TVO_WITH_AFFINE)
             return TVO_ERR_UNSUPPORTED;
-        preset_accurate(cfg);
-        cfg->map_prediction = 2;
-        cfg->lk.pred_levels = 2;
-        cfg->lk.pred_win_size = 11;
+        preset_balanced(cfg);
+        return TVO_OK;
+    case TVO_VO_PRESET_BASIC:
+        preset_basic(cfg);
         return TVO_OK;
     case TVO_VO_PRESET_SMALL:
+        preset_basic(cfg);
         cfg->max_tracks = 120;
         cfg->min_tracks = 80;
         cfg->keyframe_min_tracks = 40;

@@ -171,8 +171,8 @@ int main(int argc, char **argv)
     FILE *o;
     if (argc < 4) {
         fprintf(stderr,
-                "usage: bench_map_tracks GT.tum TRACKS.txt OUT.tum [--camera W H FX FY CX CY] [--set "
-                "NAME=VALUE]...\n");
+                "usage: bench_map_tracks GT.tum TRACKS.txt OUT.tum [--camera W H FX FY CX CY] [--preset NAME] "
+                "[--set NAME=VALUE]...\n");
         return 1;
     }
     for (int a = 4; a + 6 < argc; ++a)
@@ -186,9 +186,21 @@ int main(int argc, char **argv)
             cam = tvo_camera_make_pinhole((int32_t)v[0], (int32_t)v[1], v[2], v[3], v[4], v[5]);
         }
     tvo_vo_config_default(&cfg, &cam);
+    for (int a = 4; a + 1 < argc; ++a) /* the preset first: --set applies on top of it */
+        if (strcmp(argv[a], "--preset") == 0) {
+            tvo_vo_preset p;
+            if (tvo_replay_preset_from_name(argv[a + 1], &p) != 0 || tvo_vo_config_preset(&cfg, &cam, p) != TVO_OK) {
+                fprintf(stderr, "bench_map_tracks: bad --preset %s\n", argv[a + 1]);
+                return 1;
+            }
+        }
     for (int a = 4; a < argc; ++a) {
         if (strcmp(argv[a], "--camera") == 0 && a + 6 < argc) {
             a += 6;
+            continue;
+        }
+        if (strcmp(argv[a], "--preset") == 0 && a + 1 < argc) {
+            ++a;
             continue;
         }
         if (strcmp(argv[a], "--set") != 0 || a + 1 >= argc ||

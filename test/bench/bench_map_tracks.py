@@ -101,11 +101,23 @@ def write_tum(path, t_s, poses):
             f.write(f"{ts:.9f} " + " ".join(f"{v:.10f}" for v in list(T[:3, 3]) + q) + "\n")
 
 
+def map_args(replay_args):
+    """The replay's --preset and its map settings (--set map_*), for the map bench: the map runs with the
+    configuration the tracks were recorded with."""
+    out = []
+    for k in range(len(replay_args) - 1):
+        name, value = replay_args[k], replay_args[k + 1]
+        if name == "--preset" or (name == "--set" and value.startswith("map_")):
+            out += [name, value]
+    return out
+
+
 def run_map(a, cam, gt, tf, est):
     """The bench binary on one track file; (frames posed text, ATE, rot RPE, scale drift)."""
     fu, fv, cu, cv = cam.intrinsics
     out = subprocess.run([a.map_bench, gt, tf, est, "--camera", str(cam.width), str(cam.height), str(fu), str(fv),
-                          str(cu), str(cv)], check=True, capture_output=True, text=True).stdout
+                          str(cu), str(cv)] + map_args(a.replay_args), check=True, capture_output=True,
+                         text=True).stdout
     words = out.split()
     posed = f"{words[words.index('posed') + 1]} of {words[words.index('frames') + 1]}"
     ev = tvo_eval.evaluate_files(est, gt, gt_format="tum")
@@ -167,6 +179,7 @@ def main(argv=None):
     ap.add_argument("--no-truth", action="store_true",
                     help="a sequence that is not a render: feed the tracker's positions only")
     a = ap.parse_args(argv)
+    a.replay_args = extra
     if a.no_truth:
         with tempfile.TemporaryDirectory() as tmp:
             return no_truth(a, extra, tmp)

@@ -188,6 +188,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
        from below to above the track count (header byte 6's bits, beside the scene seed) */
     cfg.map = (hdr[6] & 3u) != 0;
     cfg.map_window = 3 + (int32_t)((hdr[6] >> 2) & 3u);
+    cfg.map_ba_fixed = 2; /* the smallest valid for every window here (the default, 4, needs 5 or more) */
     cfg.map_max_landmarks = 16 + (int32_t)(hdr[4] * ((hdr[6] >> 4) & 3u));
     cfg.map_min_points = 6 + (int32_t)((hdr[6] >> 6) * 4u);
     while ((need = tvo_vo_required_size(&cfg)) == 0 && cfg.lk.max_level > 0)

@@ -214,14 +214,14 @@ def test_replay_set_settings(replayed, tmp_path):
     r = run([replay, "--list-settings"])
     assert r.returncode == 0
     table = {ln.split()[0]: ln.split()[2] for ln in r.stdout.splitlines()}
-    assert table["map_window"] == "6" and table["lk.win_size"] == "21" and table["map"] == "1"
+    assert table["map_window"] == "8" and table["lk.win_size"] == "21" and table["map"] == "1"
     assert table["relpose.seed"] == str(0x5eed)
     assert len(table) >= 40
     seq = tmp_path / "seq"
     subprocess.run([sys.executable, "-m", "tinyvo_tools.synth", "--out", str(seq), "--builtin", "handheld",
                     "--frames", "40", "--seed", "2", "--quiet"], check=True)
     outs = {}
-    for tag, sets in (("default", []), ("explicit", ["--set", "map_window=6", "--set", "lk.win_size=21"]),
+    for tag, sets in (("default", []), ("explicit", ["--set", "map_window=8", "--set", "lk.win_size=21"]),
                       ("seed", ["--set", "relpose.seed=0x5eed"]), ("seed2", ["--set", "relpose.seed=7"]),
                       ("small", ["--set", "lk.win_size=9", "--set", "max_tracks=100", "--set", "min_tracks=60"])):
         outs[tag] = tmp_path / f"{tag}.txt"
@@ -237,39 +237,45 @@ def test_replay_set_settings(replayed, tmp_path):
 
 
 def test_replay_presets(tmp_path):
-    """--preset NAME selects a named configuration: an unknown name is a usage error naming the three, the
-    accurate preset is the three --set fields it stands for byte for byte, and --set applies on top."""
+    """--preset NAME selects a named configuration: an unknown name is a usage error naming the five; the
+    default is the balanced preset (this build has the affine refinement), each preset is the --set fields
+    it stands for byte for byte, and --set applies on top."""
     replay = program("tvo_replay")
     r = run([replay, "--euroc", "a", "--out", "x", "--preset", "fastest"])
-    assert r.returncode == 2 and "default, accurate, balanced or small" in r.stderr and r.stderr.count("\n") == 1, r.stderr
+    assert r.returncode == 2 and "default, balanced, accurate, basic or small" in r.stderr and \
+        r.stderr.count("\n") == 1, r.stderr
     seq = tmp_path / "seq"
     subprocess.run([sys.executable, "-m", "tinyvo_tools.synth", "--out", str(seq), "--builtin", "handheld",
                     "--frames", "40", "--seed", "2", "--quiet"], check=True)
     outs = {}
+    basic_fields = ["--set", "affine_win_size=0", "--set", "map_window=6", "--set", "map_ba_fixed=2", "--set",
+                    "map_prediction=0", "--set", "lk.pred_levels=0", "--set", "lk.pred_win_size=0"]
     for tag, args in (("default", []), ("preset_default", ["--preset", "default"]),
                       ("accurate", ["--preset", "accurate"]),
-                      ("fields", ["--set", "affine_win_size=21", "--set", "map_window=8", "--set", "map_ba_fixed=4"]),
-                      ("accurate_off", ["--preset", "accurate", "--set", "affine_win_size=0", "--set", "map_window=6",
-                                        "--set", "map_ba_fixed=2"]),
+                      ("fields", ["--set", "map_prediction=0", "--set", "lk.pred_levels=0", "--set",
+                                  "lk.pred_win_size=0"]),
                       ("balanced", ["--preset", "balanced"]),
-                      ("balanced_fields", ["--set", "affine_win_size=21", "--set", "map_window=8", "--set",
-                                           "map_ba_fixed=4", "--set", "map_prediction=2", "--set", "lk.pred_levels=2",
-                                           "--set", "lk.pred_win_size=11"])):
+                      ("balanced_fields", ["--preset", "basic", "--set", "affine_win_size=21", "--set", "map_window=8",
+                                           "--set", "map_ba_fixed=4", "--set", "map_prediction=2", "--set",
+                                           "lk.pred_levels=2", "--set", "lk.pred_win_size=11"]),
+                      ("basic", ["--preset", "basic"]), ("basic_fields", basic_fields),
+                      ("accurate_off", ["--preset", "accurate"] + basic_fields)):
         outs[tag] = tmp_path / f"{tag}.txt"
         r = run([replay, "--euroc", str(seq), "--out", str(outs[tag]), "--quiet"] + args)
         assert r.returncode == 0, r.stderr
     assert outs["preset_default"].read_bytes() == outs["default"].read_bytes()
+    assert outs["balanced"].read_bytes() == outs["default"].read_bytes()
+    assert outs["balanced_fields"].read_bytes() == outs["default"].read_bytes()
     assert outs["accurate"].read_bytes() == outs["fields"].read_bytes()
-    assert outs["accurate"].read_bytes() != outs["default"].read_bytes()
-    assert outs["accurate_off"].read_bytes() == outs["default"].read_bytes()
-    assert outs["balanced"].read_bytes() == outs["balanced_fields"].read_bytes()
-    assert outs["balanced"].read_bytes() not in (outs["default"].read_bytes(), outs["accurate"].read_bytes())
+    assert outs["basic"].read_bytes() == outs["basic_fields"].read_bytes()
+    assert outs["accurate_off"].read_bytes() == outs["basic"].read_bytes()
+    assert len({outs[k].read_bytes() for k in ("default", "accurate", "basic")}) == 3
     mem = {}
-    for name in ("default", "accurate", "balanced", "small"):
+    for name in ("default", "balanced", "accurate", "basic", "small"):
         r = run([replay, "--euroc", str(seq), "--preset", name, "--print-memory"])
         assert r.returncode == 0, r.stderr
         mem[name] = int(r.stdout.split()[-2])
-    assert mem["small"] < mem["default"] < mem["accurate"] == mem["balanced"]
+    assert mem["small"] < mem["basic"] < mem["default"] == mem["accurate"] == mem["balanced"]
 
 
 def test_live_checks_before_the_camera(tmp_path):
@@ -280,7 +286,8 @@ def test_live_checks_before_the_camera(tmp_path):
     r = run([live, "--frames", "-3"])
     assert r.returncode == 2 and "--frames" in r.stderr
     r = run([live, "--preset", "fastest"])
-    assert r.returncode == 2 and "default, accurate, balanced or small" in r.stderr and r.stderr.count("\n") == 1
+    assert r.returncode == 2 and "default, balanced, accurate, basic or small" in r.stderr and \
+        r.stderr.count("\n") == 1
     r = run([live, "--preset", "balanced"] + missing_dev)  # a known preset: now the device is the error
     assert r.returncode == 1 and "no camera at /nonexistent/video9" in r.stderr
     # a calibration the core cannot represent, a missing model, an unwritable --out: refused before

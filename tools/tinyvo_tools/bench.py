@@ -6,7 +6,7 @@
 
 All run on the same frames, single thread, in one session, with ground-truth step lengths:
   tinyvo : tvo_replay --scale gt (its per-stage timings come from --stats: median and p90 per frame), with
-           --preset NAME when given (default, accurate, balanced, small)
+           --preset NAME when given (default, balanced, accurate, basic, small)
   OpenCV, two pipelines (undistortPoints, findEssentialMat (RANSAC, p = 0.999, 1 px) and recoverPose in both):
     fb    : goodFeaturesToTrack (300 corners, re-detect below 200, min distance 10 px), calcOpticalFlowPyrLK
             (21x21, maxLevel 3, 30 iterations / 0.01) forward and backward, a track kept when it comes back
@@ -123,7 +123,7 @@ def main(argv=None):
                          "ratios (a load change on a shared machine then biases one run, not the figure)")
     ap.add_argument("--pipeline", choices=("plain", "fb", "both"), default="both",
                     help="OpenCV pipeline(s) to compare with (module doc)")
-    ap.add_argument("--preset", choices=("default", "accurate", "balanced", "small"), default=None,
+    ap.add_argument("--preset", choices=("default", "balanced", "accurate", "basic", "small"), default=None,
                     help="tinyvo's configuration (tvo_replay --preset; default: the library's defaults)")
     a = ap.parse_args(argv)
     if a.repeat < 1:

@@ -11,7 +11,7 @@
  *     own estimate, and the input of the per-DoF networks (features);
  *   - T_w_c, the camera pose in the VO's world, from the local map: the trajectory to use.
  *
- * The local map (cfg.map, on by default). Keyframes in a sliding window of cfg.map_window (default 6);
+ * The local map (cfg.map, on by default). Keyframes in a sliding window of cfg.map_window (default 8);
  * landmarks are 3D points in the world, triangulated from a track's first keyframe and a later keyframe
  * once their rays are cfg.map_tri_parallax_deg apart, in front of both cameras and reprojecting within
  * 2 px. Every frame is posed by PnP on the landmarks its tracks carry (Huber-robust Gauss-Newton from the
@@ -21,7 +21,7 @@
  * cfg.map_kf_max_frames frames, and never when it barely moved (a turn on the spot adds no structure).
  * At each keyframe: new landmarks, then a bundle adjustment of the window (ba.h: Huber reprojection error
  * in normalised coordinates, Levenberg-Marquardt with the Schur complement on the poses, at most
- * cfg.map_ba_iterations iterations, the cfg.map_ba_fixed (default 2) oldest keyframes fixed to hold the
+ * cfg.map_ba_iterations iterations, the cfg.map_ba_fixed (default 4) oldest keyframes fixed to hold the
  * gauge and the scale: they are fixed, not marginalised), after which observations above 2.5 px are
  * dropped.
  * The map starts from two frames with cfg.map_init_parallax_deg of median parallax (5-point pose,
@@ -160,7 +160,7 @@ typedef struct tvo_vo_config {
                                    (tvo_lk_track_pred); 2: also each other track, as a point at the
                                    median depth of the 4 landmark tracks nearest to it in the previous
                                    image; the tracks left over as track_prediction says; 0: off;
-                                   default 0 */
+                                   default 2 (0 in a build without the affine refinement) */
     int32_t pred_rescue;          /* 1 (with map_prediction): when LK loses more than half of the tracks
                                    the map predicted in a frame (a jerk, a velocity the motion model did
                                    not foresee), those lost are tracked again the default way (lk's full
@@ -176,8 +176,8 @@ typedef struct tvo_vo_config {
                                    the renders"). A track whose alignment fails (no convergence, a
                                    correlation below 0.8, more than 2 px from LK's position, the window
                                    out of the image) keeps LK's position and takes a new template there.
-                                   Odd, [3, 31], or 0: off; default 0 (21 is the tested value; its
-                                   accuracy and cost: docs/budget.md). Memory: (w + 2)^2 + 313 bytes a
+                                   Odd, [3, 31], or 0: off; default 21 (0 in a build without the
+                                   refinement; its accuracy and cost: docs/budget.md). Memory: (w + 2)^2 + 313 bytes a
                                    track (w = affine_win_size). A build with TVO_WITH_AFFINE 0
                                    (options.h) leaves the refinement out: tvo_vo_required_size() is 0
                                    and tvo_vo_init() returns TVO_ERR_UNSUPPORTED for any value but 0 */
@@ -194,7 +194,8 @@ typedef struct tvo_vo_config {
        triangulated between them, every frame posed by PnP on the landmarks its tracks carry, and a
        windowed bundle adjustment at each new keyframe */
     int32_t map;                  /* 1: on; 0: two-view only (the VO of earlier versions); default 1 */
-    int32_t map_window;           /* keyframes in the window, [3, TVO_VO_MAX_WINDOW]; default 6 */
+    int32_t map_window;           /* keyframes in the window, [3, TVO_VO_MAX_WINDOW]; default 8 (6 in a
+                                   build without the affine refinement) */
     int32_t map_max_landmarks;    /* landmark capacity, [16, 100000], or 0: 2 x max_tracks; default 0 */
     int32_t map_min_points;       /* a frame with fewer PnP inliers loses the map, [6, 100000] (above
                                    max_tracks: the map never tracks); default 20 */
@@ -218,7 +219,8 @@ typedef struct tvo_vo_config {
     int32_t map_ba_fixed;         /* the bundle adjustment holds this many of the window's oldest keyframes
                                    fixed (the gauge and the scale; a longer fixed tail ties the scale to
                                    older keyframes, as ORB-SLAM's local bundle adjustment holds the
-                                   keyframes outside its local set), [2, map_window - 1]; default 2 */
+                                   keyframes outside its local set), [2, map_window - 1]; default 4 (2
+                                   in a build without the affine refinement) */
     double map_ba_max_turn_deg;   /* the bundle adjustment's result is not taken (the window keeps its poses
                                    and points from before it; ba_flags gets TVO_VO_BA_TURN_REFUSED) when
                                    it turns the newest keyframe by more than this from the pose its
@@ -241,34 +243,42 @@ typedef struct tvo_vo_config {
     void *clock_user;
 } tvo_vo_config;
 
-/* Fill cfg with defaults for `camera` (copied). */
+/* Fill cfg with defaults for `camera` (copied): the balanced preset's tracker and window below (the
+ * affine refinement, the map's predicted tracks, 8 keyframes with 4 fixed) in a build with the affine
+ * refinement (TVO_WITH_AFFINE, the default build), the basic preset's in a build without it. */
 void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
 
-/* Named configurations, each the defaults with a few fields changed (docs/camera.md, "Presets"):
- * TVO_VO_PRESET_DEFAULT    the defaults (tvo_vo_config_default).
- * TVO_VO_PRESET_ACCURATE   the affine track refinement and a longer fixed tail in the bundle adjustment:
- *                          affine_win_size 21, map_window 8, map_ba_fixed 4. On the sequences of
- *                          docs/budget.md about 0.6 times the default's ATE and 0.7 times its rotation
- *                          error, for 1.2-1.3 times the instructions and 1.45-1.6 times the two-view time per frame
- *                          and about 840 more bytes a track. Needs a build with the affine refinement
- *                          (TVO_WITH_AFFINE, options.h).
- * TVO_VO_PRESET_BALANCED   the accurate preset with the map's predicted tracks: the tracks the local map
- *                          predicts are tracked on 2 pyramid levels with 11x11 windows (map_prediction 2,
- *                          lk.pred_levels 2, lk.pred_win_size 11) before the affine refinement re-aligns
- *                          them. On the sequences of docs/budget.md about 0.5 times the default's ATE and
- *                          0.7 times its rotation error (KITTI 01 the same), for 0.55-1.05 times its
- *                          instructions and 0.83-0.98 times the two-view time per frame once the map
- *                          tracks (before it, the full tracker and the refinement); less accurate
- *                          than TVO_VO_PRESET_ACCURATE on real frames. Needs the affine refinement.
- * TVO_VO_PRESET_SMALL      sized for a QVGA (320x240) camera on a microcontroller: 120 tracks
- *                          (min_tracks 80, keyframe_min_tracks 40, detect.max_corners 120), 3 pyramid
- *                          levels (lk.max_level 2), a map of 5 keyframes and 160 landmarks. At 320x240 the
- *                          VO needs 228,624 bytes on a Cortex-M7 (tools/run-mcu.sh runs it there). */
+/* Named configurations (docs/camera.md, "Presets"):
+ * TVO_VO_PRESET_DEFAULT    the defaults (tvo_vo_config_default): TVO_VO_PRESET_BALANCED in a build with the
+ *                          affine refinement, TVO_VO_PRESET_BASIC without it.
+ * TVO_VO_PRESET_BALANCED   every track re-aligned every frame to the patch it was detected on under an
+ *                          affine warp (affine_win_size 21), the tracks the local map predicts tracked on
+ *                          2 pyramid levels with 11x11 windows before that (map_prediction 2,
+ *                          lk.pred_levels 2, lk.pred_win_size 11; a frame that loses more than half of
+ *                          them tracks those again the full way, pred_rescue), a window of 8 keyframes
+ *                          with 4 fixed (map_window 8, map_ba_fixed 4). On the sequences of
+ *                          docs/budget.md 0.45 times the basic preset's ATE and 0.48 times its rotation
+ *                          error, for 0.55-1.05 times its instructions; about 1,000 more bytes a track.
+ *                          Needs a build with the affine refinement (TVO_WITH_AFFINE, options.h).
+ * TVO_VO_PRESET_ACCURATE   the balanced preset with the full tracker on every track (no map prediction):
+ *                          more accurate than balanced on the real KITTI 07 and 06, for 1.2-1.3 times the
+ *                          basic preset's instructions and 1.45-1.6 times the two-view time per frame.
+ *                          Needs the affine refinement.
+ * TVO_VO_PRESET_BASIC      translation-only LK on every track, a window of 6 keyframes with 2 fixed
+ *                          (affine_win_size 0, map_prediction 0, map_window 6, map_ba_fixed 2): the
+ *                          defaults before version 0.x, and of a build without the affine refinement;
+ *                          the least memory of the full-size presets.
+ * TVO_VO_PRESET_SMALL      sized for a QVGA (320x240) camera on a microcontroller: the basic preset with
+ *                          120 tracks (min_tracks 80, keyframe_min_tracks 40, detect.max_corners 120), 3
+ *                          pyramid levels (lk.max_level 2), a map of 5 keyframes and 160 landmarks. At
+ *                          320x240 the VO needs 228,640 bytes on a Cortex-M7 (tools/run-mcu.sh runs it
+ *                          there). */
 typedef enum tvo_vo_preset {
     TVO_VO_PRESET_DEFAULT = 0,
     TVO_VO_PRESET_ACCURATE = 1,
     TVO_VO_PRESET_SMALL = 2,
-    TVO_VO_PRESET_BALANCED = 3
+    TVO_VO_PRESET_BALANCED = 3,
+    TVO_VO_PRESET_BASIC = 4
 } tvo_vo_preset;
 
 /* Fill cfg with the preset's configuration for `camera` (copied). TVO_OK; TVO_ERR_NULL when cfg is NULL;
