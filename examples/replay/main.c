@@ -260,7 +260,8 @@ static int parse_args(int argc, char **argv, options *o)
             NEED_VALUE();
             if (tvo_replay_preset_from_name(v, &o->preset) != 0) {
                 fprintf(stderr,
-                        "tvo_replay: --preset must be default, balanced, accurate, basic or small (got '%s')\n",
+                        "tvo_replay: --preset must be default, balanced, accurate, basic or small (got "
+                        "'%s')\n",
                         v);
                 return -1;
             }

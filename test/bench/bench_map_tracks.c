@@ -171,7 +171,8 @@ int main(int argc, char **argv)
     FILE *o;
     if (argc < 4) {
         fprintf(stderr,
-                "usage: bench_map_tracks GT.tum TRACKS.txt OUT.tum [--camera W H FX FY CX CY] [--preset NAME] "
+                "usage: bench_map_tracks GT.tum TRACKS.txt OUT.tum [--camera W H FX FY CX CY] [--preset "
+                "NAME] "
                 "[--set NAME=VALUE]...\n");
         return 1;
     }
@@ -189,7 +190,8 @@ int main(int argc, char **argv)
     for (int a = 4; a + 1 < argc; ++a) /* the preset first: --set applies on top of it */
         if (strcmp(argv[a], "--preset") == 0) {
             tvo_vo_preset p;
-            if (tvo_replay_preset_from_name(argv[a + 1], &p) != 0 || tvo_vo_config_preset(&cfg, &cam, p) != TVO_OK) {
+            if (tvo_replay_preset_from_name(argv[a + 1], &p) != 0 ||
+                tvo_vo_config_preset(&cfg, &cam, p) != TVO_OK) {
                 fprintf(stderr, "bench_map_tracks: bad --preset %s\n", argv[a + 1]);
                 return 1;
             }

@@ -1105,8 +1105,8 @@ static void test_bad_input(void **state)
 }
 
 /* The tracker and window fields the presets set (vo.h); the rest of every preset is the basic preset's. */
-static void expect_tracker(const tvo_vo_config *c, int32_t affine, int32_t window, int32_t fixed, int32_t pred,
-                           int32_t pred_levels, int32_t pred_win)
+static void expect_tracker(const tvo_vo_config *c, int32_t affine, int32_t window, int32_t fixed,
+                           int32_t pred, int32_t pred_levels, int32_t pred_win)
 {
     assert_int_equal(c->affine_win_size, affine);
     assert_int_equal(c->map_window, window);
@@ -1157,8 +1157,9 @@ static void test_presets(void **state)
     assert_int_equal(c.map_max_landmarks, 160);
     assert_true(tvo_vo_required_size(&c) > 0);
     assert_true(tvo_vo_required_size(&c) < tvo_vo_required_size(&basic));
-    print_message("320x240: %lu bytes small, %lu basic, %lu default\n", (unsigned long)tvo_vo_required_size(&c),
-                  (unsigned long)tvo_vo_required_size(&basic), (unsigned long)tvo_vo_required_size(&def));
+    print_message("320x240: %lu bytes small, %lu basic, %lu default\n",
+                  (unsigned long)tvo_vo_required_size(&c), (unsigned long)tvo_vo_required_size(&basic),
+                  (unsigned long)tvo_vo_required_size(&def));
     c.max_tracks = basic.max_tracks; /* the rest is the basic preset */
     c.min_tracks = basic.min_tracks;
     c.keyframe_min_tracks = basic.keyframe_min_tracks;
