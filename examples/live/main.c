@@ -18,6 +18,7 @@
  * Exit codes: 0 done (--frames reached or Ctrl-C), 1 a runtime error (a bad calibration or model, no
  * device, device busy or unusable, size mismatch, stream lost or stalled: one line on stderr says
  * which), 2 a usage error (one line naming the option). */
+#include "settings.h"
 #include "tinyvo/port/calib.h"
 #include "tinyvo/port/clock.h"
 #include "tinyvo/port/v4l2.h"
@@ -177,17 +178,7 @@ int main(int argc, char **argv)
             out_path = v;
         } else if (!strcmp(a, "--preset")) {
             tvo_vo_config check;
-            if (!strcmp(v, "default"))
-                preset = TVO_VO_PRESET_DEFAULT;
-            else if (!strcmp(v, "accurate"))
-                preset = TVO_VO_PRESET_ACCURATE;
-            else if (!strcmp(v, "balanced"))
-                preset = TVO_VO_PRESET_BALANCED;
-            else if (!strcmp(v, "small"))
-                preset = TVO_VO_PRESET_SMALL;
-            else if (!strcmp(v, "basic"))
-                preset = TVO_VO_PRESET_BASIC;
-            else {
+            if (tvo_replay_preset_from_name(v, &preset) != 0) {
                 fprintf(stderr,
                         "tvo_live: --preset must be default, balanced, accurate, basic or small (got '%s')\n",
                         v);

@@ -1237,18 +1237,24 @@ static void affine_take(tvo_vo *vo, const frame_ctx *fc)
 }
 #endif
 
+/* 1 when q lies in the image (a NaN does not). */
+static int in_image(const tvo_vo *vo, tvo_point2f q)
+{
+    return q.x >= 0.0f && q.y >= 0.0f && q.x <= (float)(vo->cfg.camera.width - 1) &&
+            q.y <= (float)(vo->cfg.camera.height - 1);
+}
+
 /* LK from the previous pyramid into this one (vo->st, vo->next); the tracks that leave the image are
  * marked lost. Returns the tracks kept. */
 static int32_t lk_pass(tvo_vo *vo, const frame_ctx *fc, const tvo_lk_config *lkc, const uint8_t *pred)
 {
-    const int32_t w = vo->cfg.camera.width, h = vo->cfg.camera.height;
     int32_t kept = 0;
     if (tvo_lk_track_pred(lkc, fc->pp, fc->pc, vo->pts, vo->next, pred, vo->st, NULL, vo->n, vo->scratch,
                           vo->scratch_size) != TVO_OK)
         memset(vo->st, 0, (size_t)vo->n);
     for (int32_t i = 0; i < vo->n; ++i) {
         const tvo_point2f q = vo->next[i];
-        if (vo->st[i] && !(q.x >= 0.0f && q.y >= 0.0f && q.x <= (float)(w - 1) && q.y <= (float)(h - 1)))
+        if (vo->st[i] && !in_image(vo, q))
             vo->st[i] = 0;
         kept += vo->st[i];
     }
@@ -1323,14 +1329,14 @@ static int32_t gain_retry(tvo_vo *vo, const frame_ctx *fc, int32_t tracked)
 }
 
 /* cfg.pred_rescue: LK lost more than half of the tracks the map predicted (pred[i] nonzero) - the motion
- * model was wrong, not the tracks - so those lost are tracked again the default way (every level, the
+ * model was wrong, not the tracks - so those lost are tracked again the full way (every level, the
  * full window) from the same guesses, as lk.pred_retry would. They wait in the keyframe rotation's
  * buffers, free until the pose stage: kx1 holds 2 n points (starts, then guesses), kmask n flags.
  * Returns the tracks kept; *rescued is 1 when the second pass ran. */
 static int32_t pred_rescue(tvo_vo *vo, const frame_ctx *fc, const tvo_lk_config *lkc, const uint8_t *pred,
                            int32_t tracked, int32_t *rescued)
 {
-    const int32_t n = vo->n, w = vo->cfg.camera.width, h = vo->cfg.camera.height;
+    const int32_t n = vo->n;
     tvo_point2f *from = (tvo_point2f *)(void *)vo->kx1, *to = from + n;
     tvo_lk_config full = *lkc;
     int32_t np = 0, k = 0;
@@ -1357,7 +1363,7 @@ static int32_t pred_rescue(tvo_vo *vo, const frame_ctx *fc, const tvo_lk_config 
         if (!pred[i] || vo->st[i])
             continue;
         const tvo_point2f q = to[k];
-        if (vo->kmask[k] && q.x >= 0.0f && q.y >= 0.0f && q.x <= (float)(w - 1) && q.y <= (float)(h - 1)) {
+        if (vo->kmask[k] && in_image(vo, q)) {
             vo->next[i] = q;
             vo->st[i] = 1;
             ++tracked;

@@ -171,9 +171,8 @@ int main(int argc, char **argv)
     FILE *o;
     if (argc < 4) {
         fprintf(stderr,
-                "usage: bench_map_tracks GT.tum TRACKS.txt OUT.tum [--camera W H FX FY CX CY] [--preset "
-                "NAME] "
-                "[--set NAME=VALUE]...\n");
+                "usage: bench_map_tracks GT.tum TRACKS.txt OUT.tum [--camera W H FX FY CX CY]\n"
+                "       [--preset NAME] [--set NAME=VALUE]...\n");
         return 1;
     }
     for (int a = 4; a + 6 < argc; ++a)

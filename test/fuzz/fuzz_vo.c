@@ -183,8 +183,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cfg.lk.pred_levels = 1 + (int32_t)((hdr[3] >> 6) & 1u);
     cfg.lk.pred_win_size = 11;
     cfg.lk.pred_retry = (hdr[6] >> 1) & 1;
-    cfg.pred_rescue = ((hdr[6] >> 1) ^ (hdr[5] >> 7)) &
-            1; /* a bit of the retry's and of the FAST threshold's */
+    /* the rescue: a bit of the retry's and of the FAST threshold's */
+    cfg.pred_rescue = ((hdr[6] >> 1) ^ (hdr[5] >> 7)) & 1;
     /* the local map: on for three inputs in four, with windows of 3..6 keyframes and landmark capacities
        from below to above the track count (header byte 6's bits, beside the scene seed) */
     cfg.map = (hdr[6] & 3u) != 0;

@@ -163,7 +163,7 @@ typedef struct tvo_vo_config {
                                    default 2 (0 in a build without the affine refinement) */
     int32_t pred_rescue;          /* 1 (with map_prediction): when LK loses more than half of the tracks
                                    the map predicted in a frame (a jerk, a velocity the motion model did
-                                   not foresee), those lost are tracked again the default way (lk's full
+                                   not foresee), those lost are tracked again the full way (lk's full
                                    levels and window, as lk.pred_retry would) from the same guesses
                                    (result.pred_rescue); frames that lose fewer are left as they are.
                                    0: off; default 1 */
