@@ -132,7 +132,7 @@ static void ba_config(const tvo_vo_config *cfg, tvo_ba_config *bc)
 {
     tvo_ba_config_default(bc);
     bc->max_iterations = cfg->map_ba_iterations;
-    bc->huber = TVO_MAP_BA_MAX_ERR_PX / focal(cfg);
+    bc->huber = cfg->map_ba_huber_px / focal(cfg);
     bc->max_poses = cfg->map_window;
     bc->max_points = cfg->map_max_landmarks;
     bc->max_obs = cfg->map_window * cfg->max_tracks;

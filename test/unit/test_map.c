@@ -613,6 +613,11 @@ static void test_map_config(void **state)
     REFUSED(map_ba_max_turn_deg, -1.0);
     REFUSED(map_ba_max_turn_deg, 180.5);
     REFUSED(map_ba_max_turn_deg, NAN);
+    REFUSED(map_ba_huber_px, 0.0);
+    REFUSED(map_ba_huber_px, -1.0);
+    REFUSED(map_ba_huber_px, 100.5);
+    REFUSED(map_ba_huber_px, NAN);
+    REFUSED(map_ba_huber_px, INFINITY);
 #undef REFUSED
 }
 

@@ -229,6 +229,11 @@ typedef struct tvo_vo_config {
                                    lower reprojection cost has followed landmarks that are wrong
                                    together (docs/design.md, "Windowed bundle adjustment"). (0, 180];
                                    default 0.5 */
+    double map_ba_huber_px;       /* the bundle adjustment's robust (Huber) width in pixels (divided by the
+                                   focal length): an observation whose reprojection error is larger
+                                   weighs as its error's square root, not its square. Observations left
+                                   above 2.5 px after the adjustment are removed whatever the width.
+                                   (0, 100]; default 2.5 (docs/budget.md, "A tenth rule") */
     double map_rot_prior;         /* weight of this frame's two-view rotation (turning the last pose) as a
                                    prior on its map pose (pnp.h, rot_prior_weight), [0, 1e12]; 0: none;
                                    default 100 (as much as 100 points' reprojection errors: the
