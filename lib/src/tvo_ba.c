@@ -166,6 +166,24 @@ static void to_camera(const tvo_pose *T, const double X[3], double P[3])
     P[2] = T->R[6] * X[0] + T->R[7] * X[1] + T->R[8] * X[2] + T->t[2];
 }
 
+/* Relative-rotation prior q: its residual e = log(R_b R_a^T R_ba^T) and A = R_b R_a^T (the Jacobians of e
+ * under the left steps of a and b are -A and I to first order); returns 1/2 weight |e|^2. */
+static double rot_prior_res(const tvo_ba_problem *p, const tvo_ba_rot_prior *q, double e[3], double A[9])
+{
+    const double *Ra = p->T_c_w[q->pose_a].R, *Rb = p->T_c_w[q->pose_b].R;
+    double E[9];
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+            A[3 * r + c] = Rb[3 * r] * Ra[3 * c] + Rb[3 * r + 1] * Ra[3 * c + 1] +
+                    Rb[3 * r + 2] * Ra[3 * c + 2];
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+            E[3 * r + c] = A[3 * r] * q->R_ba[3 * c] + A[3 * r + 1] * q->R_ba[3 * c + 1] +
+                    A[3 * r + 2] * q->R_ba[3 * c + 2];
+    tvo_rot_to_rotvec(E, e);
+    return 0.5 * q->weight * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+}
+
 /* Cost of the current state over the observations marked usable; +inf when one of them fell below
  * min_depth or a value is not finite. O(obs). */
 static double eval_cost(const tvo_ba_config *c, const tvo_ba_problem *p, const ba_ws *ws)
@@ -181,6 +199,10 @@ static double eval_cost(const tvo_ba_config *c, const tvo_ba_problem *p, const b
             return INFINITY;
         cost += huber_half(P[0] / P[2] - o->x, c->huber, &w);
         cost += huber_half(P[1] / P[2] - o->y, c->huber, &w);
+    }
+    for (int32_t q = 0; q < p->n_rot; ++q) {
+        double e[3], A[9];
+        cost += rot_prior_res(p, &p->rot[q], e, A);
     }
     return isfinite(cost) ? cost : INFINITY;
 }
@@ -413,6 +435,23 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
             }
         }
     }
+    for (int32_t q = 0; q < p->n_rot; ++q) {
+        /* e ~ e0 + w_b - A w_a on the rotation parts: J_b = I, J_a = -A; J_a^T J_a = I */
+        const tvo_ba_rot_prior *rp = &p->rot[q];
+        double e[3], A[9];
+        const double w = rp->weight;
+        cost += rot_prior_res(p, rp, e, A);
+        if (!p->pose_fixed[rp->pose_b])
+            for (int a = 0; a < 3; ++a) {
+                ws->Hc[rp->pose_b][7 * a] += w;
+                ws->gc[rp->pose_b][a] += w * e[a];
+            }
+        if (!p->pose_fixed[rp->pose_a])
+            for (int a = 0; a < 3; ++a) {
+                ws->Hc[rp->pose_a][7 * a] += w;
+                ws->gc[rp->pose_a][a] -= w * (A[a] * e[0] + A[3 + a] * e[1] + A[6 + a] * e[2]);
+            }
+    }
     const int32_t held = hold_points(c, p, ws);
     for (int32_t i = 0; i < p->n_poses; ++i) {
         ws->slot[i] = -1;
@@ -574,6 +613,25 @@ static int build_solve(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *w
             }
         }
     }
+    for (int32_t q = 0; q < p->n_rot; ++q) {
+        /* the priors' cross blocks J_b^T w J_a = -w A (rows of b's rotation, columns of a's), in the lower
+           triangle (row slot above column slot) */
+        const tvo_ba_rot_prior *rp = &p->rot[q];
+        const int32_t sa = ws->slot[rp->pose_a], sb = ws->slot[rp->pose_b];
+        double e[3], A[9];
+        if (sa < 0 || sb < 0)
+            continue;
+        (void)rot_prior_res(p, rp, e, A);
+        for (int r = 0; r < 3; ++r)
+            for (int col = 0; col < 3; ++col) {
+                if (sb > sa)
+                    S[(size_t)(6 * sb + r) * (size_t)n + (size_t)(6 * sa + col)] -= rp->weight *
+                            A[3 * r + col];
+                else
+                    S[(size_t)(6 * sa + r) * (size_t)n + (size_t)(6 * sb + col)] -= rp->weight *
+                            A[3 * col + r];
+            }
+    }
     if (n > 0 && !chol_n(S, n, rel))
         return 0;
     if (!solve)
@@ -691,6 +749,17 @@ static tvo_status check_problem(const tvo_ba_config *cfg, const tvo_ba_problem *
     }
     if (free_vars == 0 || p->n_obs == 0)
         return TVO_ERR_TOO_FEW;
+    if (p->n_rot < 0 || p->n_rot > p->n_poses || (p->n_rot > 0 && p->rot == NULL))
+        return p->n_rot > 0 && p->rot == NULL ? TVO_ERR_NULL : TVO_ERR_ARG;
+    for (int32_t q = 0; q < p->n_rot; ++q) {
+        const tvo_ba_rot_prior *rp = &p->rot[q];
+        if (rp->pose_a < 0 || rp->pose_a >= p->n_poses || rp->pose_b < 0 || rp->pose_b >= p->n_poses ||
+            rp->pose_a == rp->pose_b || !(rp->weight >= 0.0 && isfinite(rp->weight)))
+            return TVO_ERR_ARG;
+        for (int k = 0; k < 9; ++k)
+            if (!isfinite(rp->R_ba[k]))
+                return TVO_ERR_NOT_FINITE;
+    }
     return TVO_OK;
 }
 

@@ -151,6 +151,7 @@ static size_t kf_scratch(const tvo_vo_config *cfg)
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(l, sizeof(int32_t))) * 2);
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(o, sizeof(tvo_ba_obs))));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(o, sizeof(double))));
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(w, sizeof(tvo_ba_rot_prior))));
     return tvo_size_add(s, tvo_arena_round(tvo_ba_scratch_size(&bc)));
 }
 
@@ -187,6 +188,14 @@ tvo_status tvo_map_init(tvo_map *m, const tvo_vo_config *cfg, tvo_arena *a)
     return TVO_OK;
 }
 
+/* The two-view rotations chained since the newest keyframe start again (at a keyframe, a new map). */
+static void chain_reset(tvo_map *m)
+{
+    static const double I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    memcpy(m->chain_R, I, sizeof(I));
+    m->chain_ok = 1;
+}
+
 void tvo_map_reset(tvo_map *m)
 {
     tvo_map_clear(m);
@@ -214,6 +223,7 @@ void tvo_map_clear(tvo_map *m)
     m->lm_cursor = 0;
     m->depth_med = 0.0;
     m->rms = 0.0;
+    chain_reset(m);
     for (int32_t i = 0; i < m->max_lm; ++i) {
         m->lm[i].alive = 0;
         m->lm[i].tracked = 0;
@@ -340,6 +350,7 @@ static tvo_map_kf *kf_push(tvo_map *m, const tvo_pose *T_c_w, int64_t t_ns)
     k->t_ns = t_ns;
     k->T_c_w = *T_c_w;
     k->n_obs = 0;
+    k->has_R_prev = 0;
     return k;
 }
 
@@ -607,6 +618,7 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
     }
     mark_tracked(m, tr);
     m->active = 1;
+    chain_reset(m);
     m->kf_points = made;
     m->frames_since_kf = 0;
     m->cur_kf_id = kf_at(m, 1)->id;
@@ -1014,6 +1026,7 @@ typedef struct ba_work {
     double (*X)[3], *err2;
     int32_t *lm2pt, *pt2lm;
     tvo_ba_obs *obs;
+    tvo_ba_rot_prior *rot;
     void *bs;
     size_t bs_size;
 } ba_work;
@@ -1036,9 +1049,10 @@ static int ba_build(tvo_map *m, const tvo_vo_config *cfg, void *scratch, size_t 
     b->pt2lm = (int32_t *)take(&c, (size_t)m->max_lm * sizeof(int32_t));
     b->obs = (tvo_ba_obs *)take(&c, (size_t)cap_obs * sizeof(tvo_ba_obs));
     b->err2 = (double *)take(&c, (size_t)cap_obs * sizeof(double));
+    b->rot = (tvo_ba_rot_prior *)take(&c, (size_t)m->window * sizeof(tvo_ba_rot_prior));
     b->bs = take(&c, b->bs_size);
     if (b->poses == NULL || b->fixed == NULL || b->X == NULL || b->lm2pt == NULL || b->pt2lm == NULL ||
-        b->obs == NULL || b->err2 == NULL || b->bs == NULL || w < 3)
+        b->obs == NULL || b->err2 == NULL || b->rot == NULL || b->bs == NULL || w < 3)
         return 0;
     for (int32_t j = 0; j < m->max_lm; ++j) {
         b->lm2pt[j] = -1;
@@ -1073,6 +1087,20 @@ static int ba_build(tvo_map *m, const tvo_vo_config *cfg, void *scratch, size_t 
     b->p.point_fixed = NULL;
     b->p.n_obs = no;
     b->p.obs = b->obs;
+    b->p.rot = b->rot;
+    b->p.n_rot = 0;
+    if (cfg->map_ba_rot_prior > 0.0)
+        for (int32_t i = 1; i < w; ++i) {
+            const tvo_map_kf *k = kf_at(m, i);
+            tvo_ba_rot_prior *q = &b->rot[b->p.n_rot];
+            if (!k->has_R_prev)
+                continue;
+            q->pose_a = i - 1;
+            q->pose_b = i;
+            memcpy(q->R_ba, k->R_prev, sizeof(q->R_ba));
+            q->weight = cfg->map_ba_rot_prior;
+            b->p.n_rot++;
+        }
     return np > 0 && no > 0;
 }
 
@@ -1172,6 +1200,9 @@ static void add_keyframe(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
         tr->refine(tr->refine_ctx);
     mark_tracked(m, tr);
     kn = kf_push(m, T, t_ns);
+    kn->has_R_prev = m->chain_ok;
+    memcpy(kn->R_prev, m->chain_R, sizeof(kn->R_prev));
+    chain_reset(m);
     for (int32_t i = 0; i < tr->n; ++i) {
         if (tr->lm[i] >= 0 && tr->inlier[i] && kf_add_obs(m, kn, tr->lm[i], tr->x[i]))
             ++seen;
@@ -1264,6 +1295,13 @@ static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
     mark_tracked(m, tr);
     out->state = TVO_MAP_TRACKING;
     m->depth_med = depth_med;
+    if (R_cur_prev != NULL) {
+        double C[9];
+        tvo_la_mat3_mul(R_cur_prev, m->chain_R, C);
+        memcpy(m->chain_R, C, sizeof(C));
+    } else {
+        m->chain_ok = 0;
+    }
     out->points = n_in;
     if (need_keyframe(m, cfg, &T, n_in, depth_med)) {
         /* the frame keeps its tracking pose (what it was measured to be when it came); the map keeps the

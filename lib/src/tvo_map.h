@@ -32,7 +32,9 @@
 typedef struct tvo_map_kf {
     int32_t id; /* increasing keyframe id (never reused) */
     int64_t t_ns;
-    tvo_pose T_c_w; /* world -> camera */
+    tvo_pose T_c_w;     /* world -> camera */
+    int32_t has_R_prev; /* 1: R_prev holds the two-view rotations chained since the previous keyframe */
+    double R_prev[9];   /* X_this = R_prev X_previous keyframe */
     int32_t n_obs;
     int32_t *obs_lm;    /* [max_tracks] landmark index of each observation */
     tvo_point2d *obs_x; /* [max_tracks] normalised position */
@@ -102,6 +104,9 @@ typedef struct tvo_map {
     double rms;       /* the last landmarks-only PnP reprojection RMS (normalised; 0: unknown) */
     int32_t losses;
     int32_t cur_kf_id; /* id of the keyframe made in the last processed frame, or -1 */
+    double chain_R
+            [9]; /* the frames' two-view rotations chained since the newest keyframe (X_cur = chain X_kf) */
+    int32_t chain_ok;  /* 0 when a frame since then had none */
     int32_t lm_cursor; /* where the search for a free landmark slot starts */
 } tvo_map;
 

@@ -115,6 +115,15 @@ typedef struct tvo_ba_config {
 /* Fills the defaults listed above. cfg == NULL does nothing. */
 void tvo_ba_config_default(tvo_ba_config *cfg);
 
+/* A prior on the rotation between two poses (a gyroscope's, or a chain of two-view rotations): cost
+ * 1/2 weight |log(R_b R_a^T R_ba^T)|^2 (rad^2, the unit of the normalised reprojection errors' squares)
+ * added to the reprojection cost. */
+typedef struct tvo_ba_rot_prior {
+    int32_t pose_a, pose_b; /* indices into the problem's poses, different */
+    double R_ba[9];         /* the measured rotation from camera a to camera b (X_b = R_ba X_a + ...) */
+    double weight;          /* finite, >= 0 */
+} tvo_ba_rot_prior;
+
 typedef struct tvo_ba_problem {
     int32_t n_poses;            /* 1..cfg->max_poses */
     tvo_pose *T_c_w;            /* in/out [n_poses]: camera poses (world -> camera); R must be a rotation */
@@ -126,6 +135,8 @@ typedef struct tvo_ba_problem {
     int32_t n_obs;              /* 0..cfg->max_obs */
     const tvo_ba_obs *obs;      /* [n_obs]; the order does not matter (results do not depend on it
                                   except for rounding) */
+    int32_t n_rot;              /* 0..n_poses: relative-rotation priors (0: none, as before) */
+    const tvo_ba_rot_prior *rot; /* [n_rot] */
 } tvo_ba_problem;
 
 enum {

@@ -234,6 +234,14 @@ typedef struct tvo_vo_config {
                                    weighs as its error's square root, not its square. Observations left
                                    above 2.5 px after the adjustment are removed whatever the width.
                                    (0, 100]; default 2.5 (docs/budget.md, "A tenth rule") */
+    double map_ba_rot_prior;      /* the frames' two-view rotations, chained from each keyframe to the next,
+                                   as priors on the relative rotation of consecutive keyframes in the
+                                   bundle adjustment (ba.h, tvo_ba_rot_prior: a visual gyroscope; the
+                                   per-frame two-view rotation is more accurate than the map's): their
+                                   weight, as map_rot_prior's (100: as much as 100 reprojection errors
+                                   of the same angle), [0, 1e12]; 0: none (no chain breaks it but a frame
+                                   without a two-view rotation); default 0 (docs/budget.md, "An eleventh
+                                   rule") */
     double map_rot_prior;         /* weight of this frame's two-view rotation (turning the last pose) as a
                                    prior on its map pose (pnp.h, rot_prior_weight), [0, 1e12]; 0: none;
                                    default 100 (as much as 100 points' reprojection errors: the
