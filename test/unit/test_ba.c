@@ -9,6 +9,7 @@
 
 #include "tvo_test.h"
 #include "tinyvo/ba.h"
+#include "tinyvo/linalg.h"
 #include "tinyvo/se3.h"
 
 #define FOCAL 458.0
@@ -930,6 +931,123 @@ static void test_stack(void **state)
     free(j.s);
 }
 
+/* Relative rotation b <- a of the scene's current poses against the truth (rad). */
+static double rel_rot_error(const scene *s, int a, int b)
+{
+    double Re[9], Rt[9];
+    tvo_la_mat3_mul_bt(s->T[b].R, s->T[a].R, Re);
+    tvo_la_mat3_mul_bt(s->T_true[b].R, s->T_true[a].R, Rt);
+    return tvo_rot_distance(Re, Rt);
+}
+
+/* Priors on the rotation between consecutive poses (tvo_ba_rot_prior): their cost is counted, a true
+ * prior makes a noisy window's relative rotations better, a heavy one is followed whichever way it
+ * points (X_b = R_ba X_a), and bad priors are refused. */
+static void test_rot_priors(void **state)
+{
+    tvo_ba_rot_prior pr[NPOSE - 1];
+    tvo_ba_report rep;
+    double worst_plain = 0.0, worst_prior = 0.0;
+    (void)state;
+    /* 1. cost: exact observations, one prior 1 degree off: cost = 1/2 w theta^2 */
+    {
+        scene *s = make_scene(40, 0.0, 0.0, 31);
+        const double th = 3.14159265358979 / 180.0, rv[3] = {0.0, th, 0.0};
+        double Rd[9];
+        tvo_rotvec_to_rot(rv, Rd);
+        pr[0].pose_a = 2;
+        pr[0].pose_b = 3;
+        tvo_la_mat3_mul_bt(s->T_true[3].R, s->T_true[2].R, pr[0].R_ba);
+        {
+            double R[9];
+            tvo_la_mat3_mul(Rd, pr[0].R_ba, R);
+            memcpy(pr[0].R_ba, R, sizeof R);
+        }
+        pr[0].weight = 50.0;
+        s->p.n_rot = 1;
+        s->p.rot = pr;
+        assert_int_equal(solve(s, 30, &rep), TVO_OK);
+        fprintf(stderr, "rot prior cost: %.9g (1/2 w theta^2 = %.9g) -> %.9g\n", rep.cost_initial,
+                0.5 * 50.0 * th * th, rep.cost_final);
+        assert_true(fabs(rep.cost_initial - 0.5 * 50.0 * th * th) < 1e-9 * rep.cost_initial);
+        assert_true(rep.cost_final < rep.cost_initial);
+        free(s);
+    }
+    /* 2. a true prior helps a noisy window with few points; 3. a heavy wrong one is followed */
+    for (uint64_t seed = 40; seed < 44; ++seed) {
+        scene *a = make_scene(25, 2.0, 0.0, seed), *b = make_scene(25, 2.0, 0.0, seed);
+        double ea = 0.0, eb = 0.0;
+        perturb(a, 0.01, 0.02, 0.05, seed + 100);
+        perturb(b, 0.01, 0.02, 0.05, seed + 100);
+        for (int i = 0; i + 1 < NPOSE; ++i) {
+            pr[i].pose_a = i;
+            pr[i].pose_b = i + 1;
+            tvo_la_mat3_mul_bt(b->T_true[i + 1].R, b->T_true[i].R, pr[i].R_ba);
+            pr[i].weight = 1e4;
+        }
+        b->p.n_rot = NPOSE - 1;
+        b->p.rot = pr;
+        assert_int_equal(solve(a, 20, &rep), TVO_OK);
+        assert_int_equal(solve(b, 20, &rep), TVO_OK);
+        for (int i = 2; i + 1 < NPOSE; ++i) {
+            ea = fmax(ea, rel_rot_error(a, i, i + 1));
+            eb = fmax(eb, rel_rot_error(b, i, i + 1));
+        }
+        worst_plain = fmax(worst_plain, ea);
+        worst_prior = fmax(worst_prior, eb);
+        assert_true(eb < 0.5 * ea);
+        free(a);
+        free(b);
+    }
+    fprintf(stderr, "rot priors, 2 px noise: worst relative rotation error %.3g rad without, %.3g with\n",
+            worst_plain, worst_prior);
+    {
+        scene *s = make_scene(25, 0.5, 0.0, 45);
+        const double rv[3] = {0.0, 0.0, 0.01};
+        double Rd[9], R[9], Rest[9];
+        tvo_rotvec_to_rot(rv, Rd);
+        pr[0].pose_a = 4;
+        pr[0].pose_b = 5;
+        tvo_la_mat3_mul_bt(s->T_true[5].R, s->T_true[4].R, R);
+        tvo_la_mat3_mul(Rd, R, pr[0].R_ba);
+        pr[0].weight = 1e10;
+        s->p.n_rot = 1;
+        s->p.rot = pr;
+        assert_int_equal(solve(s, 50, &rep), TVO_OK);
+        tvo_la_mat3_mul_bt(s->T[5].R, s->T[4].R, Rest);
+        fprintf(stderr, "heavy prior 0.01 rad off: the estimate is %.3g rad from it\n",
+                tvo_rot_distance(Rest, pr[0].R_ba));
+        assert_true(tvo_rot_distance(Rest, pr[0].R_ba) < 1e-5);
+        /* 4. refused priors */
+        {
+            const tvo_ba_rot_prior good = pr[0];
+            pr[0].pose_b = 4;
+            assert_int_equal(solve(s, 5, &rep), TVO_ERR_ARG);
+            pr[0] = good;
+            pr[0].pose_a = NPOSE;
+            assert_int_equal(solve(s, 5, &rep), TVO_ERR_ARG);
+            pr[0] = good;
+            pr[0].pose_a = -1;
+            assert_int_equal(solve(s, 5, &rep), TVO_ERR_ARG);
+            pr[0] = good;
+            pr[0].weight = -1.0;
+            assert_int_equal(solve(s, 5, &rep), TVO_ERR_ARG);
+            pr[0].weight = NAN;
+            assert_int_equal(solve(s, 5, &rep), TVO_ERR_ARG);
+            pr[0] = good;
+            pr[0].R_ba[4] = NAN;
+            assert_int_equal(solve(s, 5, &rep), TVO_ERR_NOT_FINITE);
+            pr[0] = good;
+            s->p.n_rot = NPOSE + 1;
+            assert_int_equal(solve(s, 5, &rep), TVO_ERR_ARG);
+            s->p.n_rot = 1;
+            s->p.rot = NULL;
+            assert_int_equal(solve(s, 5, &rep), TVO_ERR_NULL);
+        }
+        free(s);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -947,6 +1065,7 @@ int main(void)
             cmocka_unit_test(test_unaligned_scratch_deterministic),
             cmocka_unit_test(test_duplicated_observations),
             cmocka_unit_test(test_scratch_budget),
+            cmocka_unit_test(test_rot_priors),
             cmocka_unit_test(test_stack),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
