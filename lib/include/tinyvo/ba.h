@@ -10,7 +10,10 @@
  * the two components separately (as scipy.optimize.least_squares(loss='huber', f_scale=huber) does):
  *     cost = 1/2 sum_components rho(r^2),  rho(s) = s for sqrt(s) <= huber, 2 huber sqrt(s) - huber^2
  * above (normalised units^2). The normal equations use the IRLS weights w = min(1, huber / |r|), whose
- * gradient J^T W r is the exact gradient of the cost.
+ * gradient J^T W r is the exact gradient of the cost. Optional relative-rotation priors (tvo_ba_rot_prior,
+ * e.g. a gyroscope's or chained two-view rotations) add 1/2 weight |log(R_b R_a^T R_ba^T)|^2 each; their
+ * Jacobians under the left steps below are taken at first order (I for b, -R_b R_a^T for a), and with two
+ * free poses they add a 3x3 block between the two in the reduced system.
  *
  * Parametrisation. A pose step d = [omega, v] (6) is applied on the left as
  *     R <- R_d R,  t <- R_d t + v,   R_d = tvo_rotvec_to_rot(omega)
