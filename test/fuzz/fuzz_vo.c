@@ -192,6 +192,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cfg.map_ba_fixed = 2; /* the smallest valid for every window here (the default, 4, needs 5 or more) */
     cfg.map_max_landmarks = 16 + (int32_t)(hdr[4] * ((hdr[6] >> 4) & 3u));
     cfg.map_min_points = 6 + (int32_t)((hdr[6] >> 6) * 4u);
+    /* the bundle adjustment's options: the two-view rotations as priors between keyframes (weight 100)
+       for half the inputs, a 0.5 px Huber width for another half (bits of the track count's and the
+       window's bytes) */
+    cfg.map_ba_rot_prior = ((hdr[4] >> 1) ^ (hdr[7] >> 6)) & 1 ? 100.0 : 0.0;
+    cfg.map_ba_huber_px = ((hdr[4] >> 2) ^ (hdr[7] >> 5)) & 1 ? 0.5 : 2.5;
     while ((need = tvo_vo_required_size(&cfg)) == 0 && cfg.lk.max_level > 0)
         cfg.lk.max_level--;
     TVO_FUZZ_CHECK(need > 0); /* every size from 16x16 up is valid with one level */

@@ -618,6 +618,9 @@ static void test_map_config(void **state)
     REFUSED(map_ba_huber_px, 100.5);
     REFUSED(map_ba_huber_px, NAN);
     REFUSED(map_ba_huber_px, INFINITY);
+    REFUSED(map_ba_rot_prior, -1.0);
+    REFUSED(map_ba_rot_prior, 1.1e12);
+    REFUSED(map_ba_rot_prior, NAN);
 #undef REFUSED
 }
 
