@@ -151,6 +151,8 @@ int main(int argc, char **argv)
     p.point_fixed = NULL;
     p.n_obs = n_obs;
     p.obs = obs;
+    p.n_rot = 0; /* no rotation priors */
+    p.rot = NULL;
     for (int c = 0; c < calls; ++c) {
         double t0;
         tvo_status st;

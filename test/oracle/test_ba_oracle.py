@@ -56,7 +56,8 @@ class Problem(ctypes.Structure):
     _fields_ = [("n_poses", ctypes.c_int32), ("T_c_w", ctypes.POINTER(Pose)),
                 ("pose_fixed", ctypes.POINTER(ctypes.c_uint8)), ("n_points", ctypes.c_int32),
                 ("X", ctypes.c_void_p), ("point_fixed", ctypes.POINTER(ctypes.c_uint8)),
-                ("n_obs", ctypes.c_int32), ("obs", ctypes.POINTER(Obs))]
+                ("n_obs", ctypes.c_int32), ("obs", ctypes.POINTER(Obs)),
+                ("n_rot", ctypes.c_int32), ("rot", ctypes.c_void_p)]  # no rotation priors (left 0 / NULL)
 
 
 class Report(ctypes.Structure):

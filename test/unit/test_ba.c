@@ -495,6 +495,8 @@ static void test_rejected_step_restores(void **state)
     p.point_fixed = NULL;
     p.n_obs = 2;
     p.obs = obs;
+    p.n_rot = 0;
+    p.rot = NULL;
     tvo_ba_config_default(&cfg);
     cfg.max_iterations = 1;
     cfg.max_poses = 2;
@@ -635,6 +637,8 @@ static void test_hostile_inputs_finite(void **state)
         p.point_fixed = (trial & 1) ? xf : NULL;
         p.n_obs = NO;
         p.obs = obs;
+        p.n_rot = 0;
+        p.rot = NULL;
         st = tvo_ba_solve(&cfg, &p, mem, size, &rep);
         assert_true(st == TVO_OK || st == TVO_ERR_TOO_FEW);
         if (st == TVO_OK) {
