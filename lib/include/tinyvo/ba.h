@@ -123,8 +123,10 @@ void tvo_ba_config_default(tvo_ba_config *cfg);
  * added to the reprojection cost. */
 typedef struct tvo_ba_rot_prior {
     int32_t pose_a, pose_b; /* indices into the problem's poses, different */
-    double R_ba[9];         /* the measured rotation from camera a to camera b (X_b = R_ba X_a + ...) */
-    double weight;          /* finite, >= 0 */
+    /* the measured rotation from camera a to camera b (X_b = R_ba X_a + ...): a rotation matrix (any other
+       gives a meaningless prior; the adjustment still never writes a non-finite value) */
+    double R_ba[9];
+    double weight; /* finite, >= 0 */
 } tvo_ba_rot_prior;
 
 typedef struct tvo_ba_problem {
