@@ -1042,6 +1042,17 @@ static void test_rot_priors(void **state)
             pr[0].R_ba[4] = NAN;
             assert_int_equal(solve(s, 5, &rep), TVO_ERR_NOT_FINITE);
             pr[0] = good;
+            /* a finite matrix that is no rotation, huge or zero: a meaningless prior, never a non-finite pose */
+            for (int v = 0; v < 2; ++v) {
+                for (int k = 0; k < 9; ++k)
+                    pr[0].R_ba[k] = v == 0 ? 1e300 : 0.0;
+                assert_int_equal(solve(s, 5, &rep), TVO_OK);
+                for (int i = 0; i < NPOSE; ++i)
+                    assert_true(tvo_pose_is_finite(&s->T[i]));
+                for (int32_t j = 0; j < s->n_pt; ++j)
+                    assert_true(isfinite(s->X[j][0]) && isfinite(s->X[j][1]) && isfinite(s->X[j][2]));
+            }
+            pr[0] = good;
             s->p.n_rot = NPOSE + 1;
             assert_int_equal(solve(s, 5, &rep), TVO_ERR_ARG);
             s->p.n_rot = 1;
