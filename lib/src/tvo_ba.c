@@ -166,16 +166,23 @@ static void to_camera(const tvo_pose *T, const double X[3], double P[3])
     P[2] = T->R[6] * X[0] + T->R[7] * X[1] + T->R[8] * X[2] + T->t[2];
 }
 
-/* Relative-rotation prior q: its residual e = log(R_b R_a^T R_ba^T) and A = R_b R_a^T (the Jacobians of e
- * under the left steps of a and b are -A and I to first order); returns 1/2 weight |e|^2. */
-static double rot_prior_res(const tvo_ba_problem *p, const tvo_ba_rot_prior *q, double e[3], double A[9])
+/* A = R_b R_a^T of prior q's poses: the Jacobians of its residual under the left steps of a and b are -A
+ * and I to first order. */
+static void rot_prior_rel(const tvo_ba_problem *p, const tvo_ba_rot_prior *q, double A[9])
 {
     const double *Ra = p->T_c_w[q->pose_a].R, *Rb = p->T_c_w[q->pose_b].R;
-    double E[9];
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c)
             A[3 * r + c] = Rb[3 * r] * Ra[3 * c] + Rb[3 * r + 1] * Ra[3 * c + 1] +
                     Rb[3 * r + 2] * Ra[3 * c + 2];
+}
+
+/* Relative-rotation prior q: its residual e = log(R_b R_a^T R_ba^T) and A (rot_prior_rel); returns
+ * 1/2 weight |e|^2. */
+static double rot_prior_res(const tvo_ba_problem *p, const tvo_ba_rot_prior *q, double e[3], double A[9])
+{
+    double E[9];
+    rot_prior_rel(p, q, A);
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c)
             E[3 * r + c] = A[3 * r] * q->R_ba[3 * c] + A[3 * r + 1] * q->R_ba[3 * c + 1] +
@@ -618,10 +625,10 @@ static int build_solve(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *w
            triangle (row slot above column slot) */
         const tvo_ba_rot_prior *rp = &p->rot[q];
         const int32_t sa = ws->slot[rp->pose_a], sb = ws->slot[rp->pose_b];
-        double e[3], A[9];
+        double A[9];
         if (sa < 0 || sb < 0)
             continue;
-        (void)rot_prior_res(p, rp, e, A);
+        rot_prior_rel(p, rp, A);
         for (int r = 0; r < 3; ++r)
             for (int col = 0; col < 3; ++col) {
                 if (sb > sa)
@@ -749,8 +756,10 @@ static tvo_status check_problem(const tvo_ba_config *cfg, const tvo_ba_problem *
     }
     if (free_vars == 0 || p->n_obs == 0)
         return TVO_ERR_TOO_FEW;
-    if (p->n_rot < 0 || p->n_rot > p->n_poses || (p->n_rot > 0 && p->rot == NULL))
-        return p->n_rot > 0 && p->rot == NULL ? TVO_ERR_NULL : TVO_ERR_ARG;
+    if (p->n_rot > 0 && p->rot == NULL)
+        return TVO_ERR_NULL;
+    if (p->n_rot < 0 || p->n_rot > p->n_poses)
+        return TVO_ERR_ARG;
     for (int32_t q = 0; q < p->n_rot; ++q) {
         const tvo_ba_rot_prior *rp = &p->rot[q];
         if (rp->pose_a < 0 || rp->pose_a >= p->n_poses || rp->pose_b < 0 || rp->pose_b >= p->n_poses ||

@@ -617,8 +617,7 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
         f->T_c_w = kf_at(m, 0)->T_c_w;
     }
     mark_tracked(m, tr);
-    m->active = 1;
-    chain_reset(m);
+    m->active = 1; /* the rotation chain starts here: init_landmarks cleared the map */
     m->kf_points = made;
     m->frames_since_kf = 0;
     m->cur_kf_id = kf_at(m, 1)->id;
@@ -1295,12 +1294,14 @@ static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
     mark_tracked(m, tr);
     out->state = TVO_MAP_TRACKING;
     m->depth_med = depth_med;
-    if (R_cur_prev != NULL) {
-        double C[9];
-        tvo_la_mat3_mul(R_cur_prev, m->chain_R, C);
-        memcpy(m->chain_R, C, sizeof(C));
-    } else {
-        m->chain_ok = 0;
+    if (cfg->map_ba_rot_prior > 0.0) { /* the chain is kept for the priors only */
+        if (R_cur_prev != NULL) {
+            double C[9];
+            tvo_la_mat3_mul(R_cur_prev, m->chain_R, C);
+            memcpy(m->chain_R, C, sizeof(C));
+        } else {
+            m->chain_ok = 0;
+        }
     }
     out->points = n_in;
     if (need_keyframe(m, cfg, &T, n_in, depth_med)) {

@@ -104,9 +104,10 @@ typedef struct tvo_map {
     double rms;       /* the last landmarks-only PnP reprojection RMS (normalised; 0: unknown) */
     int32_t losses;
     int32_t cur_kf_id; /* id of the keyframe made in the last processed frame, or -1 */
-    double chain_R
-            [9]; /* the frames' two-view rotations chained since the newest keyframe (X_cur = chain X_kf) */
-    int32_t chain_ok;  /* 0 when a frame since then had none */
+    /* the frames' two-view rotations chained since the newest keyframe (X_cur = chain_R X_kf), kept when
+       cfg.map_ba_rot_prior > 0; chain_ok 0 when a frame since then had none */
+    double chain_R[9];
+    int32_t chain_ok;
     int32_t lm_cursor; /* where the search for a free landmark slot starts */
 } tvo_map;
 
