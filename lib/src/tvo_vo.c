@@ -64,6 +64,8 @@ struct tvo_vo {
     uint32_t next_id;
     tvo_map map;
     tvo_pose T_c_w;                 /* the last frame's pose in the VO's world (world -> camera) */
+    double chain_gain;              /* the two-view chain's step length over its base (map_chain_scale_sigmas) */
+    double rs_se;                   /* the standard error of log(rel_scale) of this frame */
     int32_t aff_tried, aff_refined; /* this frame's affine refinements (tvo_vo_result.affine_*) */
     int32_t cover_ref; /* cells of the coverage grid the tracks covered after the last detection */
     /* affine refinement (cfg.affine_win_size > 0, else all NULL): each track's template, its model
@@ -177,6 +179,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->map_min_points = 20;
     cfg->map_init_parallax_deg = 1.0;
     cfg->map_init_wait_s = 0.0;
+    cfg->map_chain_scale_sigmas = 0.0;
     cfg->map_tri_parallax_deg = 0.5;
     cfg->map_kf_baseline = 0.1;
     cfg->map_kf_points_ratio = 0.8;
@@ -291,6 +294,8 @@ static int config_valid(const tvo_vo_config *cfg)
         !(cfg->map_tri_parallax_deg > 0.0 && cfg->map_tri_parallax_deg <= 30.0))
         return 0;
     if (!(cfg->map_init_wait_s >= 0.0 && cfg->map_init_wait_s <= 86400.0))
+        return 0;
+    if (!(cfg->map_chain_scale_sigmas >= 0.0 && cfg->map_chain_scale_sigmas <= 100.0))
         return 0;
     if (!(cfg->map_kf_baseline > 0.0 && cfg->map_kf_baseline <= 10.0) ||
         !(cfg->map_kf_points_ratio >= 0.0 && cfg->map_kf_points_ratio <= 1.0))
@@ -467,6 +472,7 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
     }
 #endif
     vo->T_c_w = tvo_pose_identity();
+    vo->chain_gain = 1.0;
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
     for (int i = 0; i < 4; ++i) {
         tvo_point2d c;
@@ -499,6 +505,7 @@ void tvo_vo_reset(tvo_vo *vo)
     if (vo->cfg.map)
         tvo_map_reset(&vo->map);
     vo->T_c_w = tvo_pose_identity();
+    vo->chain_gain = 1.0;
     vo->next_id = 0;
     vo->has_pred = 0;
 }
@@ -715,7 +722,15 @@ static double relative_scale(tvo_vo *vo, const double R[9], const double t[3], i
     *used = k;
     if (k < vo->cfg.min_scale_points)
         return TVO_VO_REL_SCALE_NONE;
-    return tvo_la_select_kth(ratio, k, k / 2);
+    {
+        /* the median's standard error in log: 1.2533 sigma / sqrt(k) for the median of k normal values,
+           sigma from the ratios' median absolute deviation in log (1.4826 MAD) */
+        const double med = tvo_la_select_kth(ratio, k, k / 2), lmed = tvo_dm_log(med);
+        for (int32_t i = 0; i < k; ++i)
+            ratio[i] = fabs(tvo_dm_log(ratio[i]) - lmed);
+        vo->rs_se = 1.4826 * 1.2533 * tvo_la_select_kth(ratio, k, k / 2) / sqrt((double)k);
+        return med;
+    }
 }
 
 /* ---- keyframe rotation ------------------------------------------------------------------------- */
@@ -1027,13 +1042,35 @@ static tvo_pose chain_pose(const tvo_vo *vo, const tvo_vo_result *res)
         /* before the first map the unit is one step per frame, and the first map's baseline continues
            it (tvo_map.h) */
         if (res->state == TVO_VO_OK)
-            len = vo->cfg.map && vo->map.speed > 0.0 ? vo->map.speed * (double)res->dt_ns * 1e-9 : 1.0;
+            len = (vo->cfg.map && vo->map.speed > 0.0 ? vo->map.speed * (double)res->dt_ns * 1e-9 : 1.0) *
+                  vo->chain_gain;
         if (!(len >= 0.0) || !isfinite(len))
             len = 0.0;
         for (int c = 0; c < 3; ++c)
             step.t[c] *= len;
     }
     return tvo_pose_compose(&step, &vo->T_c_w);
+}
+
+/* With cfg.map_chain_scale_sigmas > 0 (and the map on), the chain's step length follows this frame's
+ * relative scale where it differs from a constant speed by more than that many standard errors: the
+ * log of rel_scale soft-thresholded by that bound (the change the tracks show beyond their noise, shrunk
+ * by it), so that a constant speed keeps its steps and a camera that speeds up or slows down before its
+ * first map (a car starting, a jerk) gets steps of the right length. The gain stays within [1e-3, 1e3]. */
+static void chain_follow_scale(tvo_vo *vo, const tvo_vo_result *res)
+{
+    double z, tau, w;
+    if (!vo->cfg.map || !(vo->cfg.map_chain_scale_sigmas > 0.0) || res->state != TVO_VO_OK ||
+        !(res->rel_scale > 0.0) || !isfinite(res->rel_scale))
+        return;
+    z = tvo_dm_log(res->rel_scale);
+    tau = vo->cfg.map_chain_scale_sigmas * vo->rs_se;
+    w = z > tau ? z - tau : (z < -tau ? z + tau : 0.0);
+    vo->chain_gain *= tvo_dm_exp(w);
+    if (!(vo->chain_gain >= 1e-3))
+        vo->chain_gain = 1e-3;
+    else if (vo->chain_gain > 1e3)
+        vo->chain_gain = 1e3;
 }
 
 static void affine_refine_keyframe(void *ctx);
@@ -1075,9 +1112,11 @@ static int map_prior_flags(const tvo_vo_result *res)
  * vo->n carried tracks. R_cur_prev: this frame's two-view rotation, or NULL. Sets vo->T_c_w. */
 static void map_step(tvo_vo *vo, tvo_vo_result *res, int64_t t_ns, const double *R_cur_prev)
 {
-    const tvo_pose prior = chain_pose(vo, res);
+    tvo_pose prior;
     tvo_map_tracks tr;
     tvo_map_frame mf;
+    chain_follow_scale(vo, res);
+    prior = chain_pose(vo, res);
     if (!vo->cfg.map) {
         vo->T_c_w = prior;
         res->map_state = TVO_MAP_OFF;
@@ -1096,6 +1135,8 @@ static void map_step(tvo_vo *vo, tvo_vo_result *res, int64_t t_ns, const double 
         mf.state = TVO_MAP_LOST;
     }
     vo->T_c_w = mf.T_c_w;
+    if (mf.state == TVO_MAP_TRACKING || mf.state == TVO_MAP_INITIALISED)
+        vo->chain_gain = 1.0; /* a chain that starts again (a loss) starts from the map's speed */
     res->map_state = mf.state;
     res->keyframe = mf.keyframe;
     res->map_points = mf.points;
