@@ -64,7 +64,7 @@ struct tvo_vo {
     uint32_t next_id;
     tvo_map map;
     tvo_pose T_c_w;                 /* the last frame's pose in the VO's world (world -> camera) */
-    double chain_gain;              /* the two-view chain's step length over its base (map_chain_scale_sigmas) */
+    double chain_gain;              /* the two-view chain's step length over its base (chain_scale_sigmas) */
     double rs_se;                   /* the standard error of log(rel_scale) of this frame */
     int32_t aff_tried, aff_refined; /* this frame's affine refinements (tvo_vo_result.affine_*) */
     int32_t cover_ref; /* cells of the coverage grid the tracks covered after the last detection */
@@ -179,7 +179,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->map_min_points = 20;
     cfg->map_init_parallax_deg = 1.0;
     cfg->map_init_wait_s = 0.0;
-    cfg->map_chain_scale_sigmas = 0.0;
+    cfg->chain_scale_sigmas = 0.0;
     cfg->map_tri_parallax_deg = 0.5;
     cfg->map_kf_baseline = 0.1;
     cfg->map_kf_points_ratio = 0.8;
@@ -295,7 +295,7 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (!(cfg->map_init_wait_s >= 0.0 && cfg->map_init_wait_s <= 86400.0))
         return 0;
-    if (!(cfg->map_chain_scale_sigmas >= 0.0 && cfg->map_chain_scale_sigmas <= 100.0))
+    if (!(cfg->chain_scale_sigmas >= 0.0 && cfg->chain_scale_sigmas <= 100.0))
         return 0;
     if (!(cfg->map_kf_baseline > 0.0 && cfg->map_kf_baseline <= 10.0) ||
         !(cfg->map_kf_points_ratio >= 0.0 && cfg->map_kf_points_ratio <= 1.0))
@@ -1040,10 +1040,10 @@ static tvo_pose chain_pose(const tvo_vo *vo, const tvo_vo_result *res)
         double len = 0.0;
         step = tvo_pose_inverse(&res->T_prev_cur); /* T_cur_prev */
         /* before the first map the unit is one step per frame, and the first map's baseline continues
-           it (tvo_map.h) */
+           it (tvo_map.h); times the speed changes chain_follow_scale took (1 without cfg.chain_scale_sigmas) */
         if (res->state == TVO_VO_OK)
             len = (vo->cfg.map && vo->map.speed > 0.0 ? vo->map.speed * (double)res->dt_ns * 1e-9 : 1.0) *
-                  vo->chain_gain;
+                    vo->chain_gain;
         if (!(len >= 0.0) || !isfinite(len))
             len = 0.0;
         for (int c = 0; c < 3; ++c)
@@ -1052,7 +1052,7 @@ static tvo_pose chain_pose(const tvo_vo *vo, const tvo_vo_result *res)
     return tvo_pose_compose(&step, &vo->T_c_w);
 }
 
-/* With cfg.map_chain_scale_sigmas > 0 (and the map on), the chain's step length follows this frame's
+/* With cfg.chain_scale_sigmas > 0 (and the map on), the chain's step length follows this frame's
  * relative scale where it differs from a constant speed by more than that many standard errors: the
  * log of rel_scale soft-thresholded by that bound (the change the tracks show beyond their noise, shrunk
  * by it), so that a constant speed keeps its steps and a camera that speeds up or slows down before its
@@ -1060,11 +1060,11 @@ static tvo_pose chain_pose(const tvo_vo *vo, const tvo_vo_result *res)
 static void chain_follow_scale(tvo_vo *vo, const tvo_vo_result *res)
 {
     double z, tau, w;
-    if (!vo->cfg.map || !(vo->cfg.map_chain_scale_sigmas > 0.0) || res->state != TVO_VO_OK ||
+    if (!vo->cfg.map || !(vo->cfg.chain_scale_sigmas > 0.0) || res->state != TVO_VO_OK ||
         !(res->rel_scale > 0.0) || !isfinite(res->rel_scale))
         return;
     z = tvo_dm_log(res->rel_scale);
-    tau = vo->cfg.map_chain_scale_sigmas * vo->rs_se;
+    tau = vo->cfg.chain_scale_sigmas * vo->rs_se;
     w = z > tau ? z - tau : (z < -tau ? z + tau : 0.0);
     vo->chain_gain *= tvo_dm_exp(w);
     if (!(vo->chain_gain >= 1e-3))

@@ -197,6 +197,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
        window's bytes) */
     cfg.map_ba_rot_prior = ((hdr[4] >> 1) ^ (hdr[7] >> 6)) & 1 ? 100.0 : 0.0;
     cfg.map_ba_huber_px = ((hdr[4] >> 2) ^ (hdr[7] >> 5)) & 1 ? 0.5 : 2.5;
+    /* the chain's steps following the relative scale (beyond 3 standard errors, or every change) */
+    cfg.chain_scale_sigmas = ((hdr[4] >> 3) ^ (hdr[7] >> 4)) & 1 ? (((hdr[5] & 1) != 0) ? 3.0 : 1e-9) : 0.0;
     while ((need = tvo_vo_required_size(&cfg)) == 0 && cfg.lk.max_level > 0)
         cfg.lk.max_level--;
     TVO_FUZZ_CHECK(need > 0); /* every size from 16x16 up is valid with one level */

@@ -601,6 +601,9 @@ static void test_map_config(void **state)
     REFUSED(map_init_wait_s, -1.0);
     REFUSED(map_init_wait_s, 86401.0);
     REFUSED(map_init_wait_s, NAN);
+    REFUSED(chain_scale_sigmas, -1.0);
+    REFUSED(chain_scale_sigmas, 100.5);
+    REFUSED(chain_scale_sigmas, NAN);
     REFUSED(map_tri_parallax_deg, 31.0);
     REFUSED(map_kf_baseline, 0.0);
     REFUSED(map_kf_baseline, INFINITY);

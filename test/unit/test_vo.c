@@ -325,6 +325,59 @@ static void test_relative_scale(void **state)
     }
 }
 
+/* cfg.chain_scale_sigmas: the frames without a map pose (here every frame: a map that needs 30 deg of
+ * parallax never starts) are placed by the two-view chain. With 0 each step is one unit long, whatever the
+ * camera did; with 3 the steps follow the relative scale's changes beyond 3 standard errors, so their
+ * lengths over the first one's follow the true ones (the steps of test_relative_scale change by 30-100 %
+ * from frame to frame, far beyond the scale's noise). */
+static void test_chain_scale(void **state)
+{
+    const double dir[3] = {0.6, 0.1, -0.79};
+    double worst[2] = {0.0, 0.0};
+    (void)state;
+    for (int pass = 0; pass < 2; ++pass) {
+        fixture *f = calloc(1, sizeof(fixture));
+        tvo_camera cam = test_camera();
+        double first = 0.0, prev_c[3] = {0.0, 0.0, 0.0};
+        int steps = 0;
+        assert_non_null(f);
+        assert_int_equal(tvo_vo_config_preset(&f->cfg, &cam, TVO_VO_PRESET_BASIC), TVO_OK);
+        f->cfg.map_init_parallax_deg = 30.0;
+        f->cfg.chain_scale_sigmas = pass == 0 ? 0.0 : 3.0;
+        open_vo(f);
+        for (int k = 0; k < SCALE_FRAMES; ++k) {
+            tvo_pose T = scale_pose(k, dir);
+            tvo_vo_result res;
+            tvo_image img = tvo_image_make(W, H, W, f->img);
+            render(&T, f->img);
+            assert_int_equal(tvo_vo_process(f->vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
+            assert_true(tvo_pose_is_finite(&res.T_w_c));
+            assert_int_equal(res.map_state, TVO_MAP_INITIALISING);
+            if (k > 0 && res.state == TVO_VO_OK) {
+                const double d[3] = {res.T_w_c.t[0] - prev_c[0], res.T_w_c.t[1] - prev_c[1],
+                                     res.T_w_c.t[2] - prev_c[2]};
+                const double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                double e;
+                if (first == 0.0)
+                    first = len;
+                e = fabs((len / first) / (scale_steps[k - 1] / scale_steps[0]) - 1.0);
+                worst[pass] = e > worst[pass] ? e : worst[pass];
+                if (pass == 0)
+                    assert_true(fabs(len - 1.0) < 1e-9); /* one unit a frame */
+                steps++;
+            }
+            memcpy(prev_c, res.T_w_c.t, sizeof(prev_c));
+        }
+        fprintf(stderr, "chain_scale_sigmas %g: %d steps, worst step length error %.1f %%\n",
+                f->cfg.chain_scale_sigmas, steps, 100.0 * worst[pass]);
+        assert_true(steps >= (SCALE_FRAMES - 1) * 8 / 10);
+        free(f->mem);
+        free(f);
+    }
+    assert_true(worst[0] > 0.5); /* unit steps: 0.12 m against 0.08 m, 0.045 against 0.08 ... */
+    assert_true(worst[1] < 0.1);
+}
+
 /* Pure rotation: no translation, so never a relative scale. */
 static void test_relative_scale_rotation_only(void **state)
 {
@@ -1280,6 +1333,7 @@ int main(void)
             cmocka_unit_test_setup_teardown(test_single_plane_unresolved, setup, teardown),
             cmocka_unit_test_setup_teardown(test_relative_scale, setup_basic, teardown),
             cmocka_unit_test_setup_teardown(test_relative_scale_rotation_only, setup, teardown),
+            cmocka_unit_test(test_chain_scale),
             cmocka_unit_test(test_keyframe_rotation),
             cmocka_unit_test(test_track_prediction),
             cmocka_unit_test(test_redetect_coverage),

@@ -206,14 +206,16 @@ typedef struct tvo_vo_config {
                                    keeps few tracks from frame to frame (blur, noise, a low frame rate)
                                    gets a map at all. [0, 86400], 0: never fewer; default 0
                                    (docs/design.md, "Initialisation") */
-    double map_chain_scale_sigmas; /* the steps of the two-view chain (the frames without a map pose: before
+    double chain_scale_sigmas;    /* the steps of the two-view chain (the frames without a map pose: before
                                    the first map and while the map is lost) follow the relative scale's
                                    changes (rel_scale) beyond this many of its standard errors: a step
                                    length changes from one frame to the next only by what the tracks
                                    show beyond their noise (shrunk by that much), and keeps its length
                                    otherwise. 0: every chain step has the same length (one unit a frame
                                    before the first map, the map's last speed after a loss). [0, 100];
-                                   default 0 (docs/design.md, "Losses") */
+                                   default 0 (docs/design.md, "The chain's step length"; 3 on
+                                   degraded and jerky KITTI copies: 0.70 times the whole run's ATE,
+                                   docs/budget.md, "A twelfth rule") */
     double map_tri_parallax_deg;  /* a track is triangulated when its rays are this far apart, (0, 30];
                                    default 0.5 */
     double map_kf_baseline;       /* a new keyframe when the camera moved more than this x the median depth
