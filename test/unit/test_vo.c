@@ -262,6 +262,15 @@ static tvo_pose scale_pose(int k, const double dir[3])
     return T;
 }
 
+/* Frame k of the relative-scale sequence, rendered and processed (1 s + k x 50 ms). */
+static void scale_frame(fixture *f, int k, const double dir[3], tvo_vo_result *res)
+{
+    tvo_pose T = scale_pose(k, dir);
+    tvo_image img = tvo_image_make(W, H, W, f->img);
+    render(&T, f->img);
+    assert_int_equal(tvo_vo_process(f->vo, &img, 1000000000LL + k * 50000000LL, res), TVO_OK);
+}
+
 static void test_relative_scale(void **state)
 {
     fixture *f = *state;
@@ -269,11 +278,8 @@ static void test_relative_scale(void **state)
     double worst = 0.0, prop = scale_steps[0], prop_worst = 0.0;
     int avail = 0;
     for (int k = 0; k < SCALE_FRAMES; ++k) {
-        tvo_pose T = scale_pose(k, dir);
         tvo_vo_result res;
-        tvo_image img = tvo_image_make(W, H, W, f->img);
-        render(&T, f->img);
-        assert_int_equal(tvo_vo_process(f->vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
+        scale_frame(f, k, dir, &res);
         assert_true(isfinite(res.rel_scale) && res.rel_scale >= 0.0);
         if (k < 2) {
             assert_true(res.rel_scale == TVO_VO_REL_SCALE_NONE);
@@ -346,11 +352,8 @@ static void test_chain_scale(void **state)
         f->cfg.chain_scale_sigmas = pass == 0 ? 0.0 : 3.0;
         open_vo(f);
         for (int k = 0; k < SCALE_FRAMES; ++k) {
-            tvo_pose T = scale_pose(k, dir);
             tvo_vo_result res;
-            tvo_image img = tvo_image_make(W, H, W, f->img);
-            render(&T, f->img);
-            assert_int_equal(tvo_vo_process(f->vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
+            scale_frame(f, k, dir, &res);
             assert_true(tvo_pose_is_finite(&res.T_w_c));
             assert_int_equal(res.map_state, TVO_MAP_INITIALISING);
             if (k > 0 && res.state == TVO_VO_OK) {
