@@ -63,9 +63,9 @@ struct tvo_vo {
     uint8_t *minl;        /* [max_tracks] */
     uint32_t next_id;
     tvo_map map;
-    tvo_pose T_c_w;                 /* the last frame's pose in the VO's world (world -> camera) */
-    double chain_gain;              /* the two-view chain's step length over its base (chain_scale_sigmas) */
-    double rs_se;                   /* the standard error of log(rel_scale) of this frame */
+    tvo_pose T_c_w;    /* the last frame's pose in the VO's world (world -> camera) */
+    double chain_gain; /* the two-view chain's step length over its base (chain_scale_sigmas) */
+    double rs_se;      /* the standard error of log(rel_scale) of this frame (with chain_scale_sigmas) */
     int32_t aff_tried, aff_refined; /* this frame's affine refinements (tvo_vo_result.affine_*) */
     int32_t cover_ref; /* cells of the coverage grid the tracks covered after the last detection */
     /* affine refinement (cfg.affine_win_size > 0, else all NULL): each track's template, its model
@@ -723,12 +723,16 @@ static double relative_scale(tvo_vo *vo, const double R[9], const double t[3], i
     if (k < vo->cfg.min_scale_points)
         return TVO_VO_REL_SCALE_NONE;
     {
-        /* the median's standard error in log: 1.2533 sigma / sqrt(k) for the median of k normal values,
-           sigma from the ratios' median absolute deviation in log (1.4826 MAD) */
-        const double med = tvo_la_select_kth(ratio, k, k / 2), lmed = tvo_dm_log(med);
-        for (int32_t i = 0; i < k; ++i)
-            ratio[i] = fabs(tvo_dm_log(ratio[i]) - lmed);
-        vo->rs_se = 1.4826 * 1.2533 * tvo_la_select_kth(ratio, k, k / 2) / sqrt((double)k);
+        const double med = tvo_la_select_kth(ratio, k, k / 2);
+        if (vo->cfg.map && vo->cfg.chain_scale_sigmas > 0.0) {
+            /* for chain_follow_scale only: the median's standard error in log, 1.2533 sigma / sqrt(k) for
+               the median of k normal values, sigma from the ratios' median absolute deviation in log
+               (1.4826 MAD) */
+            const double lmed = tvo_dm_log(med);
+            for (int32_t i = 0; i < k; ++i)
+                ratio[i] = fabs(tvo_dm_log(ratio[i]) - lmed);
+            vo->rs_se = 1.4826 * 1.2533 * tvo_la_select_kth(ratio, k, k / 2) / sqrt((double)k);
+        }
         return med;
     }
 }
