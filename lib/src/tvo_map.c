@@ -1128,6 +1128,18 @@ static void ba_drop_outliers(tvo_map *m, const tvo_vo_config *cfg, const ba_work
     }
 }
 
+/* Remove the window's observations of freed landmarks: a freed slot is reused by the next landmark made,
+ * and an observation left behind would then observe that one (and its count would be off). */
+static void purge_dead_obs(tvo_map *m)
+{
+    for (int32_t i = 0; i < m->n_kf; ++i) {
+        tvo_map_kf *k = kf_at(m, i);
+        for (int32_t o = k->n_obs - 1; o >= 0; --o)
+            if (!m->lm[k->obs_lm[o]].alive)
+                kf_remove_obs(m, k, o);
+    }
+}
+
 /* Tracks whose landmark lost its observation in the newest keyframe let go of it (and wait again from
  * this frame); landmarks left with fewer than two observations and no track are freed. */
 static void release_unobserved(tvo_map *m, tvo_map_tracks *tr)
@@ -1147,9 +1159,16 @@ static void release_unobserved(tvo_map *m, tvo_map_tracks *tr)
         }
     }
     mark_tracked(m, tr);
-    for (int32_t j = 0; j < m->max_lm; ++j)
-        if (m->lm[j].alive && !m->lm[j].tracked && m->lm[j].n_obs < 2)
-            lm_free(m, j);
+    {
+        int32_t freed_seen = 0;
+        for (int32_t j = 0; j < m->max_lm; ++j)
+            if (m->lm[j].alive && !m->lm[j].tracked && m->lm[j].n_obs < 2) {
+                freed_seen += m->lm[j].n_obs > 0;
+                lm_free(m, j);
+            }
+        if (freed_seen > 0)
+            purge_dead_obs(m);
+    }
 }
 
 static void bundle_adjust(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, void *scratch,
