@@ -165,7 +165,9 @@ static void test_store_stays_consistent(void **state)
         tr = (tvo_map_tracks){n, x, ok, lm, tri_fr, tri_x, inlier, NULL, NULL};
         tvo_map_new_tracks(&m, &tr, first);
         {
-            const int bad = count_inconsistencies(&m);
+            int bad = count_inconsistencies(&m);
+            for (int32_t i = 0; i < n; ++i) /* a track's landmark is a live one */
+                bad += lm[i] >= 0 && (lm[i] >= m.max_lm || !m.lm[lm[i]].alive);
             if (bad > worst)
                 worst = bad;
             if (bad > 0 && getenv("TVO_MAP_TEST_VERBOSE"))
