@@ -74,7 +74,6 @@ static const setting settings[] = {
         S_D(map_ba_max_turn_deg),
         S_D(map_ba_huber_px),
         S_D(map_ba_rot_prior),
-        S_I(map_ba_lm_prior),
         S_D(map_rot_prior),
         S_I(detect.fast_threshold),
         S_I(detect.block_size),

@@ -166,78 +166,6 @@ static void to_camera(const tvo_pose *T, const double X[3], double P[3])
     P[2] = T->R[6] * X[0] + T->R[7] * X[1] + T->R[8] * X[2] + T->t[2];
 }
 
-/* Point prior q at X: its cost c0 + g^T d + 1/2 d^T H d (d = X - X0), and its gradient g + H d to grad
- * when grad is not NULL. 0 cost for an empty prior. */
-static double point_prior_cost(const tvo_ba_point_prior *q, const double X[3], double grad[3])
-{
-    double d[3], Hd[3], c;
-    if (q->n <= 0) {
-        if (grad != NULL)
-            grad[0] = grad[1] = grad[2] = 0.0;
-        return 0.0;
-    }
-    for (int a = 0; a < 3; ++a)
-        d[a] = X[a] - q->X0[a];
-    for (int a = 0; a < 3; ++a)
-        Hd[a] = q->H[sym3[a][0]] * d[0] + q->H[sym3[a][1]] * d[1] + q->H[sym3[a][2]] * d[2];
-    c = q->c0;
-    for (int a = 0; a < 3; ++a)
-        c += (q->g[a] + 0.5 * Hd[a]) * d[a];
-    if (grad != NULL)
-        for (int a = 0; a < 3; ++a)
-            grad[a] = q->g[a] + Hd[a];
-    return c;
-}
-
-void tvo_ba_point_prior_clear(tvo_ba_point_prior *q)
-{
-    if (q != NULL)
-        memset(q, 0, sizeof(*q));
-}
-
-int tvo_ba_point_prior_add(tvo_ba_point_prior *q, const tvo_pose *T_c_w, const double X[3], double x,
-                           double y, double huber)
-{
-    double P[3], iz, u, v, r[2], w[2], c, J[2][3];
-    if (q == NULL || T_c_w == NULL || X == NULL || !(isfinite(x) && isfinite(y)) ||
-        !(isfinite(X[0]) && isfinite(X[1]) && isfinite(X[2])) || !(huber > 0.0 && isfinite(huber)) ||
-        !pose_finite(T_c_w))
-        return 0;
-    to_camera(T_c_w, X, P);
-    if (!(P[2] >= 1e-9))
-        return 0;
-    iz = 1.0 / P[2];
-    u = P[0] * iz;
-    v = P[1] * iz;
-    r[0] = u - x;
-    r[1] = v - y;
-    if (!(isfinite(r[0]) && isfinite(r[1])))
-        return 0;
-    c = huber_half(r[0], huber, &w[0]) + huber_half(r[1], huber, &w[1]);
-    for (int a = 0; a < 3; ++a) {
-        J[0][a] = iz * (T_c_w->R[a] - u * T_c_w->R[6 + a]);
-        J[1][a] = iz * (T_c_w->R[3 + a] - v * T_c_w->R[6 + a]);
-    }
-    if (q->n > 0) {
-        /* re-express the quadratic around X: c0 <- q(X), g <- g + H (X - X0) */
-        double gX[3];
-        q->c0 = point_prior_cost(q, X, gX);
-        memcpy(q->g, gX, sizeof(gX));
-    } else {
-        memset(q, 0, sizeof(*q));
-    }
-    memcpy(q->X0, X, sizeof(q->X0));
-    q->c0 += c;
-    for (int a = 0; a < 3; ++a) {
-        const double wa0 = w[0] * J[0][a], wa1 = w[1] * J[1][a];
-        for (int b = a; b < 3; ++b)
-            q->H[sym3[a][b]] += wa0 * J[0][b] + wa1 * J[1][b];
-        q->g[a] += wa0 * r[0] + wa1 * r[1];
-    }
-    q->n++;
-    return 1;
-}
-
 /* A = R_b R_a^T of prior q's poses: the Jacobians of its residual under the left steps of a and b are -A
  * and I to first order. */
 static void rot_prior_rel(const tvo_ba_problem *p, const tvo_ba_rot_prior *q, double A[9])
@@ -283,9 +211,6 @@ static double eval_cost(const tvo_ba_config *c, const tvo_ba_problem *p, const b
         double e[3], A[9];
         cost += rot_prior_res(p, &p->rot[q], e, A);
     }
-    if (p->point_prior != NULL)
-        for (int32_t j = 0; j < p->n_points; ++j)
-            cost += point_prior_cost(&p->point_prior[j], p->X[j], NULL);
     return isfinite(cost) ? cost : INFINITY;
 }
 
@@ -534,20 +459,6 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
                 ws->gc[rp->pose_a][a] -= w * (A[a] * e[0] + A[3 + a] * e[1] + A[6 + a] * e[2]);
             }
     }
-    if (p->point_prior != NULL)
-        for (int32_t j = 0; j < p->n_points; ++j) {
-            const tvo_ba_point_prior *q = &p->point_prior[j];
-            double g[3];
-            if (q->n <= 0)
-                continue;
-            cost += point_prior_cost(q, p->X[j], g);
-            if (ws->pstate[j] != PT_FREE)
-                continue;
-            for (int a = 0; a < 6; ++a)
-                ws->V[j][a] += q->H[a];
-            for (int a = 0; a < 3; ++a)
-                ws->gx[j][a] += g[a];
-        }
     const int32_t held = hold_points(c, p, ws);
     for (int32_t i = 0; i < p->n_poses; ++i) {
         ws->slot[i] = -1;
@@ -849,17 +760,6 @@ static tvo_status check_problem(const tvo_ba_config *cfg, const tvo_ba_problem *
         return TVO_ERR_NULL;
     if (p->n_rot < 0 || p->n_rot > p->n_poses)
         return TVO_ERR_ARG;
-    if (p->point_prior != NULL)
-        for (int32_t j = 0; j < p->n_points; ++j) {
-            const tvo_ba_point_prior *q = &p->point_prior[j];
-            int ok = isfinite(q->c0);
-            for (int a = 0; a < 3; ++a)
-                ok = ok && isfinite(q->X0[a]) && isfinite(q->g[a]);
-            for (int a = 0; a < 6; ++a)
-                ok = ok && isfinite(q->H[a]);
-            if (!ok)
-                return TVO_ERR_NOT_FINITE;
-        }
     for (int32_t q = 0; q < p->n_rot; ++q) {
         const tvo_ba_rot_prior *rp = &p->rot[q];
         if (rp->pose_a < 0 || rp->pose_a >= p->n_poses || rp->pose_b < 0 || rp->pose_b >= p->n_poses ||

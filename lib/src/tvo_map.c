@@ -104,8 +104,6 @@ size_t tvo_map_layout_size(const tvo_vo_config *cfg)
     s = tvo_size_add(s, tvo_size_mul(w, tvo_arena_round(tvo_size_mul(n, sizeof(int32_t)))));
     s = tvo_size_add(s, tvo_size_mul(w, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d)))));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(l, sizeof(tvo_map_lm))));
-    if (cfg->map_ba_lm_prior)
-        s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(l, sizeof(tvo_ba_point_prior))));
     return s;
 }
 
@@ -154,8 +152,6 @@ static size_t kf_scratch(const tvo_vo_config *cfg)
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(o, sizeof(tvo_ba_obs))));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(o, sizeof(double))));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(w, sizeof(tvo_ba_rot_prior))));
-    if (cfg->map_ba_lm_prior)
-        s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(l, sizeof(tvo_ba_point_prior))));
     return tvo_size_add(s, tvo_arena_round(tvo_ba_scratch_size(&bc)));
 }
 
@@ -188,13 +184,6 @@ tvo_status tvo_map_init(tvo_map *m, const tvo_vo_config *cfg, tvo_arena *a)
     m->lm = (tvo_map_lm *)tvo_arena_alloc(a, (size_t)m->max_lm * sizeof(tvo_map_lm));
     if (m->lm == NULL)
         return TVO_ERR_NO_MEMORY;
-    if (cfg->map_ba_lm_prior) {
-        m->lm_prior = (tvo_ba_point_prior *)tvo_arena_alloc(a,
-                                                            (size_t)m->max_lm * sizeof(tvo_ba_point_prior));
-        if (m->lm_prior == NULL)
-            return TVO_ERR_NO_MEMORY;
-        m->lm_huber = cfg->map_ba_huber_px / focal(cfg);
-    }
     tvo_map_reset(m);
     return TVO_OK;
 }
@@ -314,8 +303,6 @@ static int32_t lm_alloc(tvo_map *m)
             m->lm[j].alive = 1;
             m->lm[j].n_obs = 0;
             m->lm[j].tracked = 0;
-            if (m->lm_prior != NULL)
-                tvo_ba_point_prior_clear(&m->lm_prior[j]);
             m->n_lm++;
             return j;
         }
@@ -334,8 +321,8 @@ static int kf_add_obs(tvo_map *m, tvo_map_kf *k, int32_t j, tvo_point2d x)
     return 1;
 }
 
-/* Drop the oldest keyframe of the window: its observations go (into the priors of the landmarks that
- * live on, with cfg.map_ba_lm_prior), and landmarks nobody observes or tracks any more are freed. */
+/* Drop the oldest keyframe of the window: its observations go, and landmarks nobody observes or tracks
+ * any more are freed. */
 static void kf_drop_oldest(tvo_map *m)
 {
     tvo_map_kf *k = kf_at(m, 0);
@@ -344,9 +331,6 @@ static void kf_drop_oldest(tvo_map *m)
         m->lm[j].n_obs--;
         if (m->lm[j].n_obs <= 0 && !m->lm[j].tracked)
             lm_free(m, j);
-        else if (m->lm_prior != NULL)
-            (void)tvo_ba_point_prior_add(&m->lm_prior[j], &k->T_c_w, m->lm[j].X, k->obs_x[o].x, k->obs_x[o].y,
-                                         m->lm_huber);
     }
     k->n_obs = 0;
     m->kf_head = (m->kf_head + 1) % m->window;
@@ -1042,7 +1026,6 @@ typedef struct ba_work {
     int32_t *lm2pt, *pt2lm;
     tvo_ba_obs *obs;
     tvo_ba_rot_prior *rot;
-    tvo_ba_point_prior *prior; /* [points] with cfg.map_ba_lm_prior, else NULL */
     void *bs;
     size_t bs_size;
 } ba_work;
@@ -1066,13 +1049,9 @@ static int ba_build(tvo_map *m, const tvo_vo_config *cfg, void *scratch, size_t 
     b->obs = (tvo_ba_obs *)take(&c, (size_t)cap_obs * sizeof(tvo_ba_obs));
     b->err2 = (double *)take(&c, (size_t)cap_obs * sizeof(double));
     b->rot = (tvo_ba_rot_prior *)take(&c, (size_t)m->window * sizeof(tvo_ba_rot_prior));
-    b->prior = m->lm_prior != NULL
-            ? (tvo_ba_point_prior *)take(&c, (size_t)m->max_lm * sizeof(tvo_ba_point_prior))
-            : NULL;
     b->bs = take(&c, b->bs_size);
     if (b->poses == NULL || b->fixed == NULL || b->X == NULL || b->lm2pt == NULL || b->pt2lm == NULL ||
-        b->obs == NULL || b->err2 == NULL || b->rot == NULL || b->bs == NULL || w < 3 ||
-        (m->lm_prior != NULL && b->prior == NULL))
+        b->obs == NULL || b->err2 == NULL || b->rot == NULL || b->bs == NULL || w < 3)
         return 0;
     for (int32_t j = 0; j < m->max_lm; ++j) {
         b->lm2pt[j] = -1;
@@ -1080,8 +1059,6 @@ static int ba_build(tvo_map *m, const tvo_vo_config *cfg, void *scratch, size_t 
             b->lm2pt[j] = np;
             b->pt2lm[np] = j;
             memcpy(b->X[np], m->lm[j].X, sizeof(b->X[np]));
-            if (b->prior != NULL)
-                b->prior[np] = m->lm_prior[j];
             ++np;
         }
     }
@@ -1111,7 +1088,6 @@ static int ba_build(tvo_map *m, const tvo_vo_config *cfg, void *scratch, size_t 
     b->p.obs = b->obs;
     b->p.rot = b->rot;
     b->p.n_rot = 0;
-    b->p.point_prior = b->prior;
     if (cfg->map_ba_rot_prior > 0.0)
         for (int32_t i = 1; i < w; ++i) {
             const tvo_map_kf *k = kf_at(m, i);

@@ -79,11 +79,7 @@ typedef struct tvo_map {
     int32_t kf_head; /* slot of the oldest keyframe (ring) */
     tvo_map_kf *kf;  /* [window] */
     tvo_map_lm *lm;  /* [max_lm] */
-    /* [max_lm] with cfg.map_ba_lm_prior (else NULL): each landmark's prior from the observations of the
-       keyframes that left the window (with lm_huber, the adjustment's robust width) */
-    tvo_ba_point_prior *lm_prior;
-    double lm_huber;
-    int32_t n_lm; /* alive landmarks */
+    int32_t n_lm;    /* alive landmarks */
     int32_t next_kf_id;
     int32_t active; /* 1 while the map poses frames */
     tvo_map_frame_pose ring[TVO_MAP_RING];

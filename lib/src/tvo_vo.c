@@ -188,7 +188,6 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->map_ba_max_turn_deg = 0.5;
     cfg->map_ba_huber_px = 2.5;
     cfg->map_ba_rot_prior = 0.0;
-    cfg->map_ba_lm_prior = 0;
     cfg->map_rot_prior = 100.0;
     cfg->clock = NULL;
     cfg->clock_user = NULL;
@@ -309,8 +308,6 @@ static int config_valid(const tvo_vo_config *cfg)
     if (!(cfg->map_ba_huber_px > 0.0 && cfg->map_ba_huber_px <= 100.0))
         return 0;
     if (!(cfg->map_ba_rot_prior >= 0.0 && cfg->map_ba_rot_prior <= 1e12))
-        return 0;
-    if (cfg->map_ba_lm_prior != 0 && cfg->map_ba_lm_prior != 1)
         return 0;
     if (cfg->map_ba_fixed < 2 || cfg->map_ba_fixed > cfg->map_window - 1)
         return 0;

@@ -129,21 +129,6 @@ typedef struct tvo_ba_rot_prior {
     double weight; /* finite, >= 0 */
 } tvo_ba_rot_prior;
 
-/* A prior on one point from observations by cameras that are no longer in the problem (e.g. keyframes
- * that left a sliding window, whose poses were fixed): their robust cost linearised at X0 (a Gauss-Newton
- * model with the IRLS weights taken there), added to the reprojection cost as
- *     c0 + g^T d + 1/2 d^T H d,   d = X - X0.
- * Built with tvo_ba_point_prior_add(); n = 0 is no prior. H and g are in normalised units (the unit of
- * the reprojection errors). Exact for the observations' Gauss-Newton model around X0, a good one while
- * the point moves by much less than its depth. */
-typedef struct tvo_ba_point_prior {
-    double X0[3]; /* where the prior is linearised */
-    double H[6];  /* information, upper triangle: xx xy xz yy yz zz (positive semidefinite) */
-    double g[3];  /* gradient at X0 */
-    double c0;    /* cost at X0 (>= 0) */
-    int32_t n;    /* observations absorbed; 0: no prior */
-} tvo_ba_point_prior;
-
 typedef struct tvo_ba_problem {
     int32_t n_poses;            /* 1..cfg->max_poses */
     tvo_pose *T_c_w;            /* in/out [n_poses]: camera poses (world -> camera); R must be a rotation */
@@ -157,10 +142,6 @@ typedef struct tvo_ba_problem {
                                   except for rounding) */
     int32_t n_rot;              /* 0..n_poses: relative-rotation priors (0: none, as before) */
     const tvo_ba_rot_prior *rot; /* [n_rot] */
-    /* (added) [n_points] priors on the points (tvo_ba_point_prior; entries with n = 0 add nothing), or
-       NULL (none, as before). A free point's prior adds H to its 3x3 block (it does not count as an
-       observation for the 2 it needs to be adjusted); a fixed or held point's adds its constant cost. */
-    const tvo_ba_point_prior *point_prior;
 } tvo_ba_problem;
 
 enum {
@@ -203,17 +184,6 @@ size_t tvo_ba_scratch_size(const tvo_ba_config *cfg);
  * Non-finite observations are not an error: they are left out and counted in rep->obs_skipped. */
 tvo_status tvo_ba_solve(const tvo_ba_config *cfg, tvo_ba_problem *p, void *scratch, size_t scratch_size,
                         tvo_ba_report *rep);
-
-/* Empties q (n = 0, everything 0). q == NULL does nothing. */
-void tvo_ba_point_prior_clear(tvo_ba_point_prior *q);
-
-/* Adds to q the observation (x, y) (normalised) of the point X by the fixed camera T_c_w, with the
- * Huber width huber (normalised units, as tvo_ba_config.huber), linearised at X. When q already holds
- * observations linearised at another X0, its quadratic is first re-expressed around X (exact for a
- * quadratic). Returns 1 when absorbed; 0 (q unchanged) when an argument is NULL, the observation or X is
- * not finite, huber is not finite > 0, or X is not in front of the camera (Z_c < 1e-9). */
-int tvo_ba_point_prior_add(tvo_ba_point_prior *q, const tvo_pose *T_c_w, const double X[3], double x,
-                           double y, double huber);
 
 /* Squared reprojection error |predicted - (x, y)|^2 of each observation (normalised units^2) to
  * err2[n_obs], so that the caller can drop outliers; TVO_BA_ERR_INVALID for a point at Z_c <= 0 in that

@@ -252,13 +252,6 @@ typedef struct tvo_vo_config {
                                    of the same angle), [0, 1e12]; 0: none (no chain breaks it but a frame
                                    without a two-view rotation); default 0 (docs/budget.md, "An eleventh
                                    rule") */
-    int32_t map_ba_lm_prior;      /* 1: a keyframe that leaves the window leaves its observations of the
-                                   landmarks that live on as priors on them (ba.h, tvo_ba_point_prior:
-                                   its observations' robust cost with its pose fixed, linearised), so the
-                                   bundle adjustment keeps the older views' constraints on depth and
-                                   scale, as ORB-SLAM's local bundle adjustment keeps the keyframes
-                                   outside its window fixed; memory: 104 bytes a landmark. 0 or 1;
-                                   default 0 */
     double map_rot_prior;         /* weight of this frame's two-view rotation (turning the last pose) as a
                                    prior on its map pose (pnp.h, rot_prior_weight), [0, 1e12]; 0: none;
                                    default 100 (as much as 100 points' reprojection errors: the
