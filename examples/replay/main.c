@@ -452,8 +452,8 @@ int main(int argc, char **argv)
     double *timing[TVO_STAGE_COUNT + 1] = {0};
     long counts_state[TVO_VO_STATE_COUNT] = {0}, counts_skip[SKIP_COUNT] = {0};
     long keyframe_frames = 0; /* frames whose rotation is the keyframe rotation */
-    long counts_map[TVO_MAP_STATE_COUNT] = {0}, map_keyframes = 0, ba_turn_refused = 0, gain_retries = 0,
-         pred_rescues = 0;
+    long counts_map[TVO_MAP_STATE_COUNT] = {0}, map_keyframes = 0, ba_turn_refused = 0, map_store_full = 0,
+         gain_retries = 0, pred_rescues = 0;
     long affine_tried = 0, affine_refined = 0; /* the affine refinement's attempts and successes */
     map_scale msc;
     tvo_pose T_w_c_vo_prev = {{0}, {0}}; /* the VO's world pose of the previous frame (map on) */
@@ -704,6 +704,7 @@ int main(int argc, char **argv)
         counts_map[res.map_state]++;
         map_keyframes += res.keyframe;
         ba_turn_refused += (res.ba_flags & TVO_VO_BA_TURN_REFUSED) != 0;
+        map_store_full = res.map_store_full; /* counted by the VO since init */
         gain_retries += res.gain_retry != 0;
         pred_rescues += res.pred_rescue != 0;
         affine_tried += res.affine_tried;
@@ -884,8 +885,9 @@ int main(int argc, char **argv)
             fprintf(js, "  \"affine\": {\"tried\": %ld, \"refined\": %ld},\n", affine_tried, affine_refined);
             fprintf(js,
                     "  \"map\": {\"enabled\": %d, \"keyframes\": %ld, \"losses\": %ld, "
-                    "\"ba_turn_refused\": %ld, \"scale\": %.9g, \"states\": {",
-                    (int)cfg.map, map_keyframes, counts_map[TVO_MAP_LOST], ba_turn_refused, msc.s);
+                    "\"ba_turn_refused\": %ld, \"store_full\": %ld, \"scale\": %.9g, \"states\": {",
+                    (int)cfg.map, map_keyframes, counts_map[TVO_MAP_LOST], ba_turn_refused, map_store_full,
+                    msc.s);
             for (int k = 0; k < TVO_MAP_STATE_COUNT; ++k)
                 fprintf(js, "%s\"%s\": %ld", k ? ", " : "", map_state_names[k], counts_map[k]);
             fprintf(js, "}},\n  \"timing_us\": {\n");

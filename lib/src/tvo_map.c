@@ -207,6 +207,7 @@ void tvo_map_reset(tvo_map *m)
     m->serial = -1;
     m->speed = 0.0;
     m->losses = 0;
+    m->store_full = 0;
 }
 
 void tvo_map_clear(tvo_map *m)
@@ -561,8 +562,10 @@ static int32_t init_landmarks(tvo_map *m, const tvo_vo_config *cfg, tvo_map_trac
         if (!ip->mask[q] || !triangulate(&k0->T_c_w, &k1->T_c_w, ip->xa[q], ip->xb[q], min_cos, max_err, X))
             continue;
         j = lm_alloc(m);
-        if (j < 0)
+        if (j < 0) {
+            m->store_full++;
             break;
+        }
         memcpy(m->lm[j].X, X, sizeof(X));
         (void)kf_add_obs(m, k0, j, ip->xa[q]);
         (void)kf_add_obs(m, k1, j, ip->xb[q]);
@@ -986,8 +989,10 @@ static int32_t triangulate_new(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tra
         if (k0->n_obs >= m->max_tracks || kn->n_obs >= m->max_tracks)
             continue;
         j = lm_alloc(m);
-        if (j < 0)
+        if (j < 0) {
+            m->store_full++; /* the keyframe's other tracks wait for the next one */
             break;
+        }
         memcpy(m->lm[j].X, X, sizeof(X));
         (void)kf_add_obs(m, k0, j,
                          tr->tri_x[i]); /* first seen in a keyframe of the window: observed there too */

@@ -103,7 +103,8 @@ typedef struct tvo_map {
     double depth_med; /* median depth of the last tracked frame's inliers (map units; 0: unknown) */
     double rms;       /* the last landmarks-only PnP reprojection RMS (normalised; 0: unknown) */
     int32_t losses;
-    int32_t cur_kf_id; /* id of the keyframe made in the last processed frame, or -1 */
+    int32_t store_full; /* keyframes and new maps that found the landmark store full (since init) */
+    int32_t cur_kf_id;  /* id of the keyframe made in the last processed frame, or -1 */
     /* the frames' two-view rotations chained since the newest keyframe (X_cur = chain_R X_kf), kept when
        cfg.map_ba_rot_prior > 0; chain_ok 0 when a frame since then had none */
     double chain_R[9];

@@ -1659,6 +1659,7 @@ static void finish_frame(tvo_vo *vo, const frame_ctx *fc, int64_t t_ns, tvo_vo_r
     if (vo->cfg.map) {
         res->map_landmarks = vo->map.n_lm;
         res->map_losses = vo->map.losses;
+        res->map_store_full = vo->map.store_full;
     }
     affine_take(vo, fc);
     vo->has_prev = 1;

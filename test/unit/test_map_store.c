@@ -81,7 +81,7 @@ static int count_inconsistencies(const tvo_map *m)
 /* Drives the map along the road; jump: the chance per frame that a track slides off its point by up to
  * +-8 px in each axis (and stays off: a track that locked onto something else). Asserts the store's
  * consistency and finite poses after every frame, and that the map tracked most frames. */
-static void run_road(double jump)
+static int32_t run_road(double jump, int32_t max_landmarks)
 {
     tvo_camera cam = tvo_camera_make_pinhole(W, H, FOCAL, FOCAL, (W - 1) / 2.0, (H - 1) / 2.0);
     tvo_vo_config cfg;
@@ -101,7 +101,7 @@ static void run_road(double jump)
     cfg.min_tracks = MAX_TRACKS / 2;
     cfg.map_window = 4;
     cfg.map_ba_fixed = 2;
-    cfg.map_max_landmarks = 64; /* slots reused within a few keyframes */
+    cfg.map_max_landmarks = max_landmarks;
     assert_true(tvo_vo_required_size(&cfg) > 0);
     /* points along the road ahead: 2-12 m to the sides and above and below, up to 30 m beyond the end */
     for (int i = 0; i < N_POINTS; ++i) {
@@ -196,12 +196,13 @@ static void run_road(double jump)
     assert_int_equal(worst, 0);
     free(mem);
     free(scratch);
+    return m.store_full;
 }
 
 static void test_store_stays_consistent(void **state)
 {
     (void)state;
-    run_road(0.0);
+    run_road(0.0, 64); /* slots reused within a few keyframes */
 }
 
 /* Tracks that slide off their points: the PnP and the bundle adjustment's outlier removal drop
@@ -209,7 +210,16 @@ static void test_store_stays_consistent(void **state)
 static void test_store_with_sliding_tracks(void **state)
 {
     (void)state;
-    run_road(0.03);
+    run_road(0.03, 64);
+}
+
+/* The store's count of keyframes that found it full (map_store_full in the VO's result): 64 slots for a
+ * window of 4 keyframes and 60 tracks fill, 600 never do. */
+static void test_store_full_counted(void **state)
+{
+    (void)state;
+    assert_true(run_road(0.0, 64) > 0);
+    assert_int_equal(run_road(0.0, 600), 0);
 }
 
 int main(void)
@@ -217,6 +227,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
             cmocka_unit_test(test_store_stays_consistent),
             cmocka_unit_test(test_store_with_sliding_tracks),
+            cmocka_unit_test(test_store_full_counted),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

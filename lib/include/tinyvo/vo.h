@@ -355,6 +355,9 @@ typedef struct tvo_vo_result {
     int32_t map_new_points; /* landmarks triangulated in this frame */
     int32_t map_landmarks;  /* landmarks in the map after this frame */
     int32_t map_losses;     /* map losses since init (TVO_MAP_LOST frames) */
+    int32_t map_store_full; /* (added) keyframes and new maps since init that found the landmark store
+                               (map_max_landmarks) full and made fewer landmarks than they could: a
+                               store too small for the window and the scene */
     int32_t ba_iterations;  /* bundle adjustment iterations in this frame (0: none ran) */
     int32_t ba_flags;       /* its TVO_BA_FLAG_* (ba.h), and TVO_VO_BA_TURN_REFUSED */
     int64_t stage_ns[TVO_STAGE_COUNT];
