@@ -11,10 +11,8 @@
  * PnP and windowed bundle adjustment, and the drift they add. Over many noise seeds the figures are
  * stable, so a change to the map can be judged here before the chaotic figures of whole sequences.
  *
- * The scene: a camera driving along a straight road at 0.15 m a frame (10 Hz), swaying 0.4 m sideways
- * and 3 degrees in yaw, among points 1-6 m to the sides, 3 m above and below, spread along the road;
- * each track follows one point for 10-40 frames (or until it leaves the 320x240 image, focal 250 px),
- * and new tracks fill up to --tracks.
+ * The scene is test/common/tvo_road.h's: a camera driving down a straight road at 0.15 m a frame
+ * (10 Hz), tracks of 10-40 frames, new tracks filling up to --tracks.
  *
  *   bench_map_road [--frames N] [--noise PX] [--drift PX] [--tracks N] [--seeds N] [--preset NAME]
  *                  [--set NAME=VALUE]...
@@ -40,41 +38,9 @@
 #include "tinyvo/arena.h"
 #include "tinyvo/se3.h"
 #include "tvo_map.h"
+#include "tvo_road.h"
 
-#define W 320
-#define H 240
-#define FOCAL 250.0
-#define DT_NS 100000000LL
-#define STEP_M 0.15
 #define MAX_SEEDS 1000
-
-static double rnd(uint32_t *s)
-{
-    *s = *s * 1664525u + 1013904223u;
-    return (double)(*s >> 8) / 16777216.0;
-}
-
-/* world -> camera pose of frame k */
-static tvo_pose camera(int k)
-{
-    tvo_pose T_w_c = tvo_pose_identity();
-    const double v[3] = {0.0, 0.05 * sin(0.07 * k), 0.0};
-    tvo_rotvec_to_rot(v, T_w_c.R);
-    T_w_c.t[0] = 0.4 * sin(0.05 * k);
-    T_w_c.t[2] = STEP_M * k;
-    return tvo_pose_inverse(&T_w_c);
-}
-
-static int project(const tvo_pose *T_c_w, const double X[3], tvo_point2d *x)
-{
-    double P[3];
-    tvo_pose_transform_point(T_c_w, X, P);
-    if (!(P[2] > 0.5))
-        return 0;
-    x->x = P[0] / P[2];
-    x->y = P[1] / P[2];
-    return fabs(x->x * FOCAL) < W / 2 - 5 && fabs(x->y * FOCAL) < H / 2 - 5;
-}
 
 static double dist3(const double a[3], const double b[3])
 {
@@ -98,33 +64,23 @@ typedef struct road {
 /* One run with noise seed `seed`; 0 on an allocation or map error. */
 static int run(const tvo_vo_config *cfg, const road *rd, uint32_t seed, run_result *res)
 {
-    const int nt = rd->max_tracks, np = rd->n_points;
-    double(*pts)[3] = malloc((size_t)np * sizeof(*pts));
-    int32_t *pid = malloc((size_t)nt * sizeof(int32_t)), *life = malloc((size_t)nt * sizeof(int32_t));
-    tvo_point2d *off = malloc((size_t)nt * sizeof(tvo_point2d)); /* each track's walk, normalised */
-    int32_t *lm = malloc((size_t)nt * sizeof(int32_t)), *tri_fr = malloc((size_t)nt * sizeof(int32_t));
-    tvo_point2d *x = malloc((size_t)nt * sizeof(tvo_point2d)),
-                *tri_x = malloc((size_t)nt * sizeof(tvo_point2d));
-    uint8_t *ok = malloc((size_t)nt), *inlier = malloc((size_t)nt);
     tvo_pose *est = malloc((size_t)rd->frames * sizeof(tvo_pose));
-    int *has = calloc((size_t)rd->frames, sizeof(int));
     const size_t ls = tvo_map_layout_size(cfg) + TVO_ARENA_ALIGN, ss = tvo_map_scratch_size(cfg);
     void *mem = malloc(ls), *scratch = malloc(ss);
-    int32_t n = 0, next_point = 0, good = 1, last = -1, half = -1;
+    int32_t good = 1, last = -1, half = -1;
+    tvo_road r;
     tvo_map m;
     tvo_arena ar;
     memset(res, 0, sizeof(*res));
-    if (!pts || !pid || !life || !off || !lm || !tri_fr || !x || !tri_x || !ok || !inlier || !est || !has ||
-        !mem || !scratch) {
+    if (!tvo_road_open(&r, rd->frames, rd->max_tracks, rd->n_points, rd->noise, rd->drift, 0.0, seed)) {
+        free(est);
+        free(mem);
+        free(scratch);
+        return 0;
+    }
+    if (!est || !mem || !scratch) {
         good = 0;
         goto done;
-    }
-    memset(ok, 1, (size_t)nt);
-    for (int i = 0; i < np; ++i) {
-        const double side = rnd(&seed) < 0.5 ? -1.0 : 1.0;
-        pts[i][0] = side * (1.0 + 5.0 * rnd(&seed));
-        pts[i][1] = -3.0 + 6.0 * rnd(&seed);
-        pts[i][2] = 2.0 + (STEP_M * rd->frames + 30.0) * (double)i / np;
     }
     tvo_arena_init(&ar, mem, ls);
     if (tvo_map_init(&m, cfg, &ar) != TVO_OK) {
@@ -132,70 +88,27 @@ static int run(const tvo_vo_config *cfg, const road *rd, uint32_t seed, run_resu
         goto done;
     }
     for (int k = 0; k < rd->frames; ++k) {
-        const tvo_pose T = camera(k);
-        tvo_map_tracks tr;
         tvo_map_frame out;
-        double R_cur_prev[9];
-        int32_t first, kept = 0;
-        for (int32_t i = 0; i < n; ++i) {
-            tvo_point2d p;
-            if (--life[i] <= 0 || !project(&T, pts[pid[i]], &p))
-                continue;
-            pid[kept] = pid[i];
-            life[kept] = life[i];
-            lm[kept] = lm[i];
-            tri_fr[kept] = tri_fr[i];
-            tri_x[kept] = tri_x[i];
-            off[kept].x = off[i].x + (rnd(&seed) - 0.5) * rd->drift / FOCAL;
-            off[kept].y = off[i].y + (rnd(&seed) - 0.5) * rd->drift / FOCAL;
-            x[kept].x = p.x + off[kept].x + (rnd(&seed) - 0.5) * rd->noise / FOCAL;
-            x[kept].y = p.y + off[kept].y + (rnd(&seed) - 0.5) * rd->noise / FOCAL;
-            ++kept;
-        }
-        n = kept;
-        if (k > 0) {
-            const tvo_pose Tp = camera(k - 1), Twp = tvo_pose_inverse(&Tp), d = tvo_pose_compose(&T, &Twp);
-            memcpy(R_cur_prev, d.R, sizeof(R_cur_prev));
-        }
-        tr = (tvo_map_tracks){n, x, ok, lm, tri_fr, tri_x, inlier, NULL, NULL};
-        if (tvo_map_process(&m, cfg, &tr, 1000000000LL + k * DT_NS, k > 0 ? R_cur_prev : NULL, 0, &T, scratch,
-                            ss, &out) != TVO_OK) {
+        if (tvo_road_frame(&r, &m, cfg, k, scratch, ss, &out) != TVO_OK) {
             good = 0;
             goto done;
         }
         if ((out.state == TVO_MAP_TRACKING || out.state == TVO_MAP_INITIALISED) &&
             tvo_pose_is_finite(&out.T_c_w)) {
             est[k] = out.T_c_w;
-            has[k] = 1;
             res->posed++;
             last = k;
             if (half < 0 && k >= rd->frames / 2)
                 half = k;
         }
-        first = n;
-        while (n < nt && next_point < np) {
-            tvo_point2d p;
-            const int32_t i = next_point++;
-            if (!project(&T, pts[i], &p))
-                continue;
-            pid[n] = i;
-            life[n] = 10 + (int32_t)(30.0 * rnd(&seed));
-            lm[n] = -1;
-            tri_fr[n] = -1;
-            off[n].x = off[n].y = 0.0;
-            x[n] = p;
-            ++n;
-        }
-        tr = (tvo_map_tracks){n, x, ok, lm, tri_fr, tri_x, inlier, NULL, NULL};
-        tvo_map_new_tracks(&m, &tr, first);
     }
     res->losses = m.losses;
     if (last >= 0 && half >= 0 && last > half) {
-        const tvo_pose Tl = camera(last), Th = camera(half);
+        const tvo_pose Tl = tvo_road_camera(last), Th = tvo_road_camera(half);
         const tvo_pose Gl = tvo_pose_inverse(&Tl), Gh = tvo_pose_inverse(&Th);
         const tvo_pose El = tvo_pose_inverse(&est[last]), Eh = tvo_pose_inverse(&est[half]);
         const tvo_pose dR = tvo_pose_relative(&Gl, &El);
-        const double path = STEP_M * last; /* the sway adds under 0.1 % */
+        const double path = TVO_ROAD_STEP_M * last; /* the sway adds under 0.1 % */
         res->end_err_pct = 100.0 * dist3(Gl.t, El.t) / path;
         res->scale = dist3(El.t, Eh.t) / dist3(Gl.t, Gh.t);
         res->rot_err_deg = tvo_rot_angle(dR.R) * 180.0 / 3.14159265358979323846;
@@ -203,18 +116,8 @@ static int run(const tvo_vo_config *cfg, const road *rd, uint32_t seed, run_resu
         res->end_err_pct = res->scale = res->rot_err_deg = NAN;
     }
 done:
-    free(pts);
-    free(pid);
-    free(life);
-    free(off);
-    free(lm);
-    free(tri_fr);
-    free(x);
-    free(tri_x);
-    free(ok);
-    free(inlier);
+    tvo_road_close(&r);
     free(est);
-    free(has);
     free(mem);
     free(scratch);
     return good;
@@ -239,7 +142,8 @@ static void med_max(double *v, int n, double *med, double *max)
 
 int main(int argc, char **argv)
 {
-    tvo_camera cam = tvo_camera_make_pinhole(W, H, FOCAL, FOCAL, (W - 1) / 2.0, (H - 1) / 2.0);
+    tvo_camera cam = tvo_camera_make_pinhole(TVO_ROAD_WIDTH, TVO_ROAD_HEIGHT, TVO_ROAD_FOCAL, TVO_ROAD_FOCAL,
+                                             (TVO_ROAD_WIDTH - 1) / 2.0, (TVO_ROAD_HEIGHT - 1) / 2.0);
     tvo_vo_config cfg;
     road rd = {400, 150, 0, 0.3, 0.0};
     int seeds = 10;
@@ -299,7 +203,7 @@ int main(int argc, char **argv)
     rd.n_points = (int)(rd.frames * 30.0 * rd.max_tracks / 150.0) + 1000;
     printf("road: %d frames (%.0f m), %d tracks, noise %.2f px, drift %.2f px a frame, window %d with %d "
            "fixed\n",
-           rd.frames, STEP_M * rd.frames, rd.max_tracks, rd.noise, rd.drift, cfg.map_window,
+           rd.frames, TVO_ROAD_STEP_M * rd.frames, rd.max_tracks, rd.noise, rd.drift, cfg.map_window,
            cfg.map_ba_fixed);
     printf("seed  posed  losses  end error %% of path  scale, 2nd half  rotation error, deg\n");
     for (int s = 0; s < seeds; ++s) {
