@@ -294,7 +294,8 @@ static void lm_free(tvo_map *m, int32_t j)
     }
 }
 
-/* A free landmark slot, or -1 when the map is full. */
+/* A free landmark slot, or -1 when the map is full (counted in store_full: each caller stops making
+ * landmarks at the first -1). */
 static int32_t lm_alloc(tvo_map *m)
 {
     for (int32_t k = 0; k < m->max_lm; ++k) {
@@ -308,6 +309,7 @@ static int32_t lm_alloc(tvo_map *m)
             return j;
         }
     }
+    m->store_full++;
     return -1;
 }
 
@@ -562,10 +564,8 @@ static int32_t init_landmarks(tvo_map *m, const tvo_vo_config *cfg, tvo_map_trac
         if (!ip->mask[q] || !triangulate(&k0->T_c_w, &k1->T_c_w, ip->xa[q], ip->xb[q], min_cos, max_err, X))
             continue;
         j = lm_alloc(m);
-        if (j < 0) {
-            m->store_full++;
+        if (j < 0)
             break;
-        }
         memcpy(m->lm[j].X, X, sizeof(X));
         (void)kf_add_obs(m, k0, j, ip->xa[q]);
         (void)kf_add_obs(m, k1, j, ip->xb[q]);
@@ -989,10 +989,8 @@ static int32_t triangulate_new(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tra
         if (k0->n_obs >= m->max_tracks || kn->n_obs >= m->max_tracks)
             continue;
         j = lm_alloc(m);
-        if (j < 0) {
-            m->store_full++; /* the keyframe's other tracks wait for the next one */
-            break;
-        }
+        if (j < 0)
+            break; /* the store is full: the keyframe's other tracks wait for the next one */
         memcpy(m->lm[j].X, X, sizeof(X));
         (void)kf_add_obs(m, k0, j,
                          tr->tri_x[i]); /* first seen in a keyframe of the window: observed there too */
