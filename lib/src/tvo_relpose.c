@@ -1860,3 +1860,32 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg_in, const tvo_poin
     pose_result(&w, &ch, out, inlier_mask);
     return TVO_OK;
 }
+
+/* The truncated Sampson cost of one correspondence under E: min(s^2, thr2) / thr2, 1 when s^2 is not a
+ * number below thr2 (sampson2's 1e300 for an unmeasurable distance, a NaN from a non-finite point). */
+static double twin_term(const double E[9], const tvo_point2d *p1, const tvo_point2d *p2, double thr2)
+{
+    const double s2 = sampson2(E, p1, p2);
+    return s2 < thr2 ? s2 / thr2 : 1.0;
+}
+
+int tvo_relpose_twin_choice(const tvo_relpose *r, const tvo_point2d *x1, const tvo_point2d *x2, int32_t n,
+                            double threshold)
+{
+    double E0[9], E1[9], sum = 0.0, sum2 = 0.0;
+    if (r == NULL || x1 == NULL || x2 == NULL || n < 1 || !(threshold > 0.0) || !isfinite(threshold) ||
+        !(r->flags & TVO_RELPOSE_FLAG_AMBIGUOUS))
+        return -1;
+    essential_from_pose(r->R, r->t, E0);
+    essential_from_pose(r->R_alt, r->t_alt, E1);
+    for (int32_t i = 0; i < n; ++i) {
+        const double thr2 = threshold * threshold;
+        const double d = twin_term(E0, &x1[i], &x2[i], thr2) - twin_term(E1, &x1[i], &x2[i], thr2);
+        sum += d;
+        sum2 += d * d;
+    }
+    /* sum < 0: (R, t) has the lower cost */
+    if (!(fabs(sum) >= 1.0 && sum * sum >= 9.0 * sum2))
+        return -1;
+    return sum < 0.0 ? 0 : 1;
+}

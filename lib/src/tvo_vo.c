@@ -596,16 +596,24 @@ static tvo_status relpose_tracks(tvo_vo *vo, const tvo_relpose_config *rc, int32
     return tvo_relpose_estimate(rc, vo->x1, vo->x2, m, out, vo->mask, vo->scratch, vo->scratch_size);
 }
 
-/* A plane seen with a small baseline has two poses that explain the tracks equally well (relpose
- * flags AMBIGUOUS). Pick the twin whose translation continues the recent motion (frames at camera
- * rate move smoothly). Without a recent direction, or when neither twin is within 45 degrees of it,
- * the epipolar model alone (rc without the homography), which also weighs the points off the plane,
- * picks one; the frame keeps the AMBIGUOUS flag. If that fails too, only the rotation is kept (the
- * twins' rotations differ by about the parallax, which is small here).
+/* A plane seen with a small baseline has two poses that explain the plane's tracks equally well
+ * (relpose flags AMBIGUOUS). The tracks off the plane fit only the true twin's epipolar geometry: the
+ * twin they clearly favour (tvo_relpose_twin_choice at the pose threshold) is taken. Otherwise the
+ * twin whose translation continues the recent motion (frames at camera rate move smoothly). Without a
+ * recent direction, or when neither twin is within 45 degrees of it, the epipolar model alone (rc
+ * without the homography) picks one. The frame keeps the AMBIGUOUS flag. If that fails too, only the
+ * rotation is kept (the twins' rotations differ by about the parallax, which is small here).
  * Returns the resulting state and writes the pose to use into *rp. */
 static tvo_vo_state resolve_ambiguous(tvo_vo *vo, tvo_relpose_config rc, int32_t m, tvo_relpose *rp)
 {
     tvo_relpose re;
+    const int twin = tvo_relpose_twin_choice(rp, vo->x1, vo->x2, m, rc.threshold);
+    if (twin == 1) {
+        memcpy(rp->R, rp->R_alt, sizeof(rp->R));
+        memcpy(rp->t, rp->t_alt, sizeof(rp->t));
+    }
+    if (twin >= 0)
+        return TVO_VO_OK;
     if (vo->t_dir_age <= TVO_VO_PRIOR_FRAMES) {
         const double *d = vo->t_dir;
         double c0 = rp->t[0] * d[0] + rp->t[1] * d[1] + rp->t[2] * d[2];
