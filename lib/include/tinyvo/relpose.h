@@ -140,9 +140,9 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg, const tvo_point2d
  * estimate's cfg->threshold).
  * Returns 0 when (R, t) fits better, 1 when (R_alt, t_alt) does, -1 when neither clearly does or for
  * NULL pointers, n < 1, a threshold that is not finite and > 0, or a result without the AMBIGUOUS flag.
- * Cost: two Sampson distances per correspondence (about 60 K instructions for 300 points). On the 8
- * EuRoC renders it chose the twin nearer the ground truth in all of 3,147 ambiguous frames where it
- * chose (of 3,366; docs/design.md, "Plane twins"). */
+ * Cost: two Sampson distances per correspondence, about 140 instructions (33 K per call on the V1_01
+ * render, callgrind). Over two runs of each of the 8 EuRoC renders and KITTI 07 it chose in 3,147 of
+ * 3,366 ambiguous frames, each time the twin nearer the ground truth (docs/design.md, "Plane twins"). */
 int tvo_relpose_twin_choice(const tvo_relpose *r, const tvo_point2d *x1, const tvo_point2d *x2, int32_t n,
                             double threshold);
 
