@@ -1872,14 +1872,14 @@ static double twin_term(const double E[9], const tvo_point2d *p1, const tvo_poin
 int tvo_relpose_twin_choice(const tvo_relpose *r, const tvo_point2d *x1, const tvo_point2d *x2, int32_t n,
                             double threshold)
 {
-    double E0[9], E1[9], sum = 0.0, sum2 = 0.0;
+    double E0[9], E1[9], thr2, sum = 0.0, sum2 = 0.0;
     if (r == NULL || x1 == NULL || x2 == NULL || n < 1 || !(threshold > 0.0) || !isfinite(threshold) ||
         !(r->flags & TVO_RELPOSE_FLAG_AMBIGUOUS))
         return -1;
     essential_from_pose(r->R, r->t, E0);
     essential_from_pose(r->R_alt, r->t_alt, E1);
+    thr2 = threshold * threshold;
     for (int32_t i = 0; i < n; ++i) {
-        const double thr2 = threshold * threshold;
         const double d = twin_term(E0, &x1[i], &x2[i], thr2) - twin_term(E1, &x1[i], &x2[i], thr2);
         sum += d;
         sum2 += d * d;

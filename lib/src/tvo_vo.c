@@ -596,6 +596,13 @@ static tvo_status relpose_tracks(tvo_vo *vo, const tvo_relpose_config *rc, int32
     return tvo_relpose_estimate(rc, vo->x1, vo->x2, m, out, vo->mask, vo->scratch, vo->scratch_size);
 }
 
+/* The ambiguous estimate rp takes its twin's pose (R_alt, t_alt). */
+static void take_twin(tvo_relpose *rp)
+{
+    memcpy(rp->R, rp->R_alt, sizeof(rp->R));
+    memcpy(rp->t, rp->t_alt, sizeof(rp->t));
+}
+
 /* A plane seen with a small baseline has two poses that explain the plane's tracks equally well
  * (relpose flags AMBIGUOUS). The tracks off the plane fit only the true twin's epipolar geometry: the
  * twin they clearly favour (tvo_relpose_twin_choice at the pose threshold) is taken. Otherwise the
@@ -608,10 +615,8 @@ static tvo_vo_state resolve_ambiguous(tvo_vo *vo, tvo_relpose_config rc, int32_t
 {
     tvo_relpose re;
     const int twin = tvo_relpose_twin_choice(rp, vo->x1, vo->x2, m, rc.threshold);
-    if (twin == 1) {
-        memcpy(rp->R, rp->R_alt, sizeof(rp->R));
-        memcpy(rp->t, rp->t_alt, sizeof(rp->t));
-    }
+    if (twin == 1)
+        take_twin(rp);
     if (twin >= 0)
         return TVO_VO_OK;
     if (vo->t_dir_age <= TVO_VO_PRIOR_FRAMES) {
@@ -619,8 +624,7 @@ static tvo_vo_state resolve_ambiguous(tvo_vo *vo, tvo_relpose_config rc, int32_t
         double c0 = rp->t[0] * d[0] + rp->t[1] * d[1] + rp->t[2] * d[2];
         double c1 = rp->t_alt[0] * d[0] + rp->t_alt[1] * d[1] + rp->t_alt[2] * d[2];
         if (c1 > c0) {
-            memcpy(rp->R, rp->R_alt, sizeof(rp->R));
-            memcpy(rp->t, rp->t_alt, sizeof(rp->t));
+            take_twin(rp);
             c0 = c1;
         }
         if (c0 >= TVO_VO_PRIOR_COS)
