@@ -36,6 +36,29 @@ typedef struct scene {
     int n;
 } scene;
 
+/* Correspondence i of sc: the point at depth z on the ray (x, y) of camera 1, seen by camera 2 after the
+ * scene's motion (R, base t), both positions with noise_px of noise; 0 (nothing written, nothing drawn)
+ * when camera 2 does not see it (closer than 0.5 or outside the image). */
+static int scene_put(scene *sc, int i, double x, double y, double z, double base, double noise_px,
+                     uint64_t *s)
+{
+    double X1[3] = {x * z, y * z, z}, X2[3];
+    tvo_la_mat3_vec(sc->R, X1, X2);
+    for (int k = 0; k < 3; ++k)
+        X2[k] += base * sc->t[k];
+    if (X2[2] < 0.5)
+        return 0;
+    double u = X2[0] / X2[2], v = X2[1] / X2[2];
+    if (fabs(u) > HALF_W || fabs(v) > HALF_H)
+        return 0;
+    sc->x1[i].x = x + noise_px / F_PX * nrand(s);
+    sc->x1[i].y = y + noise_px / F_PX * nrand(s);
+    sc->x2[i].x = u + noise_px / F_PX * nrand(s);
+    sc->x2[i].y = v + noise_px / F_PX * nrand(s);
+    sc->outlier[i] = 0;
+    return 1;
+}
+
 /* random rotation of angle <= max_deg, translation of length `base` in a random direction (0 for
  * pure rotation); planar != 0 puts all points on one plane (2: and moves mostly sideways) */
 static void make_scene(scene *sc, uint64_t seed, int n, double max_deg, double base, double noise_px,
@@ -66,21 +89,8 @@ static void make_scene(scene *sc, uint64_t seed, int n, double max_deg, double b
             double z = planar ? 4.0 / (pn[0] * x + pn[1] * y + pn[2]) : 1.0 + 7.0 * urand(&s);
             if (!(z > 0.5 && z < 50.0))
                 continue;
-            double X1[3] = {x * z, y * z, z}, X2[3];
-            tvo_la_mat3_vec(sc->R, X1, X2);
-            for (int k = 0; k < 3; ++k)
-                X2[k] += base * sc->t[k];
-            if (X2[2] < 0.5)
-                continue;
-            double u = X2[0] / X2[2], v = X2[1] / X2[2];
-            if (fabs(u) > HALF_W || fabs(v) > HALF_H)
-                continue;
-            sc->x1[i].x = x + noise_px / F_PX * nrand(&s);
-            sc->x1[i].y = y + noise_px / F_PX * nrand(&s);
-            sc->x2[i].x = u + noise_px / F_PX * nrand(&s);
-            sc->x2[i].y = v + noise_px / F_PX * nrand(&s);
-            sc->outlier[i] = 0;
-            break;
+            if (scene_put(sc, i, x, y, z, base, noise_px, &s))
+                break;
         }
         if (urand(&s) < outlier_ratio) {
             sc->x2[i].x = (2.0 * urand(&s) - 1.0) * HALF_W;

@@ -481,18 +481,8 @@ static void put_off_plane(scene *sc, uint64_t seed, int k, double base, double n
     for (int i = 0; i < k; ++i)
         for (int tries = 0; tries < 1000; ++tries) {
             double x = (2.0 * urand(&s) - 1.0) * HALF_W, y = (2.0 * urand(&s) - 1.0) * HALF_H;
-            double z = 1.0 + 7.0 * urand(&s), X1[3] = {x * z, y * z, z}, X2[3];
-            tvo_la_mat3_vec(sc->R, X1, X2);
-            for (int c = 0; c < 3; ++c)
-                X2[c] += base * sc->t[c];
-            if (X2[2] < 0.5 || fabs(X2[0] / X2[2]) > HALF_W || fabs(X2[1] / X2[2]) > HALF_H)
-                continue;
-            sc->x1[i].x = x + noise_px / F_PX * nrand(&s);
-            sc->x1[i].y = y + noise_px / F_PX * nrand(&s);
-            sc->x2[i].x = X2[0] / X2[2] + noise_px / F_PX * nrand(&s);
-            sc->x2[i].y = X2[1] / X2[2] + noise_px / F_PX * nrand(&s);
-            sc->outlier[i] = 0;
-            break;
+            if (scene_put(sc, i, x, y, 1.0 + 7.0 * urand(&s), base, noise_px, &s))
+                break;
         }
 }
 
