@@ -85,18 +85,11 @@ static void mcu_config(tvo_vo_config *cfg, const tvo_camera *cam)
     (void)tvo_vo_config_preset(cfg, cam, TVO_VO_PRESET_SMALL);
 }
 
-/* A pinhole camera without distortion. */
+/* A pinhole camera without distortion, checked. */
 static tvo_status mcu_camera(tvo_camera *cam, int32_t w, int32_t h, double fx, double fy, double cx,
                              double cy)
 {
-    memset(cam, 0, sizeof(*cam));
-    cam->width = w;
-    cam->height = h;
-    cam->fx = fx;
-    cam->fy = fy;
-    cam->cx = cx;
-    cam->cy = cy;
-    cam->model = TVO_DIST_NONE;
+    *cam = tvo_camera_make_pinhole(w, h, fx, fy, cx, cy);
     return tvo_camera_check(cam);
 }
 
