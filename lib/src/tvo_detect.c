@@ -391,33 +391,75 @@ static void det_add_existing(const tvo_detect_config *cfg, const det_layout *L, 
     }
 }
 
-/* FAST in bands of rows; shortlist the strongest per cell (cells already full of existing points skipped) */
+/* First pixel of cell column (row) c of n over the inner region [B, B + inner): the smallest u with
+ * u n / inner >= c, the inverse of the cell index computed below. */
+static int32_t det_cell_start(int32_t c, int32_t n, int32_t inner, int32_t B)
+{
+    return B + (int32_t)(((int64_t)c * inner + n - 1) / n);
+}
+
+/* FAST's corners of rows [y0, y1) of cell row cy, in the columns of the cells that are not yet full of
+ * existing points (those cells' corners would be dropped: not computing them gives the same shortlist,
+ * as the shortlists are sorted by a total order afterwards): one rectangle per run of such cells. */
+static tvo_status det_fast_runs(const tvo_detect_config *cfg, const tvo_image *img, const det_layout *L,
+                                det_work *w, int32_t cy, int32_t y0, int32_t y1, int32_t *nb)
+{
+    const int32_t gc = cfg->grid_cols, *full = w->nexist + (size_t)cy * (size_t)gc;
+    int32_t c = 0;
+    *nb = 0;
+    while (c < gc) {
+        int32_t e, got = 0;
+        tvo_status st;
+        if (full[c] >= L->quota) {
+            ++c;
+            continue;
+        }
+        for (e = c + 1; e < gc && full[e] < L->quota; ++e) {
+        }
+        st = tvo_fast9_detect_rect(img, cfg->fast_threshold, 1, det_cell_start(c, gc, L->inner_w, L->border),
+                                   det_cell_start(e, gc, L->inner_w, L->border), y0, y1, w->band + *nb,
+                                   L->band_cap - *nb, &got, w->fast_mem, tvo_fast_scratch_size(img->width));
+        if (st != TVO_OK && st != TVO_ERR_NO_MEMORY)
+            return st;
+        *nb += got;
+        c = e;
+    }
+    return TVO_OK;
+}
+
+/* FAST in bands of rows, each band split where a cell row ends; shortlist the strongest per cell (FAST
+ * runs only in the cells not already full of existing points) */
 static tvo_status det_shortlist(const tvo_detect_config *cfg, const tvo_image *img, const det_layout *L,
                                 det_work *w)
 {
-    int32_t W = img->width, H = img->height, B = L->border, y0;
+    int32_t W = img->width, H = img->height, B = L->border, y0, ys;
     for (y0 = B; y0 < H - B; y0 += DET_BAND) {
         int32_t y1 = y0 + DET_BAND < H - B ? y0 + DET_BAND : H - B;
-        int32_t nb = 0, k;
-        tvo_status st = tvo_fast9_detect_rows(img, cfg->fast_threshold, 1, y0, y1, w->band, L->band_cap, &nb,
-                                              w->fast_mem, tvo_fast_scratch_size(W));
-        if (st != TVO_OK && st != TVO_ERR_NO_MEMORY)
-            return st;
-        for (k = 0; k < nb; ++k) {
-            int32_t x = (int32_t)w->band[k].x, y = (int32_t)w->band[k].y, cx, cy, cell;
-            det_cand cd;
-            if (x < B || x >= W - B)
-                continue;
-            cx = (int32_t)(((int64_t)(x - B) * cfg->grid_cols) / L->inner_w);
-            cy = (int32_t)(((int64_t)(y - B) * cfg->grid_rows) / L->inner_h);
-            cell = cy * cfg->grid_cols + cx;
-            if (w->nexist[cell] >= L->quota)
-                continue;
-            cd.x = x;
-            cd.y = y;
-            cd.score = w->band[k].score;
-            cd.order = y * W + x;
-            det_heap_push(w->cand + (size_t)cell * (size_t)L->ncand, &w->ncand[cell], L->ncand, &cd);
+        for (ys = y0; ys < y1;) {
+            const int32_t crow = (int32_t)(((int64_t)(ys - B) * cfg->grid_rows) / L->inner_h);
+            const int32_t ce = det_cell_start(crow + 1, cfg->grid_rows, L->inner_h, B);
+            const int32_t ye = ce < y1 ? ce : y1;
+            int32_t nb = 0, k;
+            tvo_status st = det_fast_runs(cfg, img, L, w, crow, ys, ye, &nb);
+            if (st != TVO_OK)
+                return st;
+            ys = ye;
+            for (k = 0; k < nb; ++k) {
+                int32_t x = (int32_t)w->band[k].x, y = (int32_t)w->band[k].y, cx, cy, cell;
+                det_cand cd;
+                if (x < B || x >= W - B)
+                    continue;
+                cx = (int32_t)(((int64_t)(x - B) * cfg->grid_cols) / L->inner_w);
+                cy = (int32_t)(((int64_t)(y - B) * cfg->grid_rows) / L->inner_h);
+                cell = cy * cfg->grid_cols + cx;
+                if (w->nexist[cell] >= L->quota)
+                    continue;
+                cd.x = x;
+                cd.y = y;
+                cd.score = w->band[k].score;
+                cd.order = y * W + x;
+                det_heap_push(w->cand + (size_t)cell * (size_t)L->ncand, &w->ncand[cell], L->ncand, &cd);
+            }
         }
     }
     return TVO_OK;

@@ -163,19 +163,20 @@ static int fast_is_corner(const uint8_t *p, const int32_t ofs[16], const uint8_t
     return fast_has_run9(bright) || fast_has_run9(dark);
 }
 
-/* Detect the corners of one row (y fixed, x in [3, width-3)): positions into pos[], scores into the
- * score row (zeroed first). Returns the number of corners. */
-static int32_t fast_row(const uint8_t *row, int32_t width, const int32_t ofs[16], const uint8_t *ttab,
-                        int32_t threshold, uint8_t *score_row, int32_t *pos)
+/* Detect the corners of one row (y fixed) at x in [x0, x1), 3 <= x0, x1 <= width - 3: positions into
+ * pos[], scores into the score row (zeroed first over [x0 - 1, x1 + 1), all that the non-max test of
+ * these pixels and their neighbours reads). Returns the number of corners. */
+static int32_t fast_row(const uint8_t *row, int32_t x0, int32_t x1, const int32_t ofs[16],
+                        const uint8_t *ttab, int32_t threshold, uint8_t *score_row, int32_t *pos)
 {
-    int32_t n = 0, x = 3;
+    int32_t n = 0, x = x0;
     const int32_t o0 = ofs[0], o4 = ofs[4], o8 = ofs[8], o12 = ofs[12];
-    memset(score_row, 0, (size_t)width);
+    memset(score_row + x0 - 1, 0, (size_t)x1 - (size_t)x0 + 2u);
     (void)threshold; /* read by the SIMD block only; the portable path works from ttab */
 #if TVO_FAST_SIMD
     {
         const fast_v16 thr = FV_SET1(threshold);
-        for (; x + 16 <= width - 3; x += 16) {
+        for (; x + 16 <= x1; x += 16) {
             const uint8_t *p = row + x;
             fast_v16 c = FV_LOAD(p);
             /* screen: q brighter iff sat(q - sat(c + t)) != 0, darker iff sat(sat(c - t) - q) != 0
@@ -238,7 +239,7 @@ static int32_t fast_row(const uint8_t *row, int32_t width, const int32_t ofs[16]
         }
     }
 #endif
-    for (; x < width - 3; ++x) {
+    for (; x < x1; ++x) {
         const uint8_t *p = row + x;
         const uint8_t *tab = ttab + 255 - p[0];
         unsigned t0 = tab[p[o0]], t4 = tab[p[o4]], t8 = tab[p[o8]], t12 = tab[p[o12]];
@@ -287,15 +288,19 @@ static tvo_status fast_check(const tvo_image *img, int32_t threshold, const tvo_
     return TVO_OK;
 }
 
-/* Emit the corners of row y (positions pos[0..n)) into out; with nonmax, keep those whose score is
- * strictly above their 8 neighbours in rows above/cur/below. Returns 0, or 1 when out is full. */
-static int fast_emit(int32_t y, const int32_t *pos, int32_t n, const uint8_t *above, const uint8_t *cur,
-                     const uint8_t *below, int nonmax, tvo_corner *out, int32_t capacity, int32_t *count)
+/* Emit the corners of row y (positions pos[0..n)) with xa <= x < xb into out; with nonmax, keep those
+ * whose score is strictly above their 8 neighbours in rows above/cur/below. Returns 0, or 1 when out is
+ * full. */
+static int fast_emit(int32_t y, const int32_t *pos, int32_t n, int32_t xa, int32_t xb, const uint8_t *above,
+                     const uint8_t *cur, const uint8_t *below, int nonmax, tvo_corner *out, int32_t capacity,
+                     int32_t *count)
 {
     int32_t i;
     for (i = 0; i < n; ++i) {
         int32_t x = pos[i];
         int s = cur[x];
+        if (x < xa || x >= xb)
+            continue;
         if (nonmax &&
             !(s > cur[x - 1] && s > cur[x + 1] && s > above[x - 1] && s > above[x] && s > above[x + 1] &&
               s > below[x - 1] && s > below[x] && s > below[x + 1]))
@@ -310,16 +315,16 @@ static int fast_emit(int32_t y, const int32_t *pos, int32_t n, const uint8_t *ab
     return 0;
 }
 
-tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int nonmax, int32_t y_begin,
-                                 int32_t y_end, tvo_corner *out, int32_t capacity, int32_t *count,
-                                 void *scratch, size_t scratch_size)
+tvo_status tvo_fast9_detect_rect(const tvo_image *img, int32_t threshold, int nonmax, int32_t x_begin,
+                                 int32_t x_end, int32_t y_begin, int32_t y_end, tvo_corner *out,
+                                 int32_t capacity, int32_t *count, void *scratch, size_t scratch_size)
 {
     uint8_t ttab[511];
     int32_t ofs[16];
     uint8_t *srow[3];
     int32_t *plist[3];
     int32_t npos[3];
-    int32_t W, H, r, r0, r1, i;
+    int32_t W, H, r, r0, r1, i, c0, c1;
     size_t need;
     uint8_t *mem;
     tvo_status st = fast_check(img, threshold, out, capacity, count);
@@ -338,7 +343,11 @@ tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int no
         y_begin = 3;
     if (y_end > H - 3)
         y_end = H - 3;
-    if (W < 7 || H < 7 || y_begin >= y_end)
+    if (x_begin < 3)
+        x_begin = 3;
+    if (x_end > W - 3)
+        x_end = W - 3;
+    if (W < 7 || H < 7 || y_begin >= y_end || x_begin >= x_end)
         return TVO_OK;
 
     for (i = 0; i < 511; ++i) {
@@ -363,6 +372,9 @@ tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int no
     }
 
     nonmax = nonmax != 0;
+    /* the columns evaluated: the range, and with non-max the neighbours its corners are compared with */
+    c0 = x_begin - nonmax < 3 ? 3 : x_begin - nonmax;
+    c1 = x_end + nonmax > W - 3 ? W - 3 : x_end + nonmax;
     r0 = y_begin - nonmax;
     if (r0 < 3)
         r0 = 3;
@@ -372,17 +384,18 @@ tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int no
 
     for (r = r0; r <= r1; ++r) {
         int slot = r % 3;
-        npos[slot] = fast_row(img->data + (size_t)r * (size_t)img->stride, W, ofs, ttab, threshold,
+        npos[slot] = fast_row(img->data + (size_t)r * (size_t)img->stride, c0, c1, ofs, ttab, threshold,
                               srow[slot], plist[slot]);
         if (!nonmax) {
-            if (fast_emit(r, plist[slot], npos[slot], NULL, srow[slot], NULL, 0, out, capacity, count))
+            if (fast_emit(r, plist[slot], npos[slot], x_begin, x_end, NULL, srow[slot], NULL, 0, out,
+                          capacity, count))
                 return TVO_ERR_NO_MEMORY;
         } else if (r - 1 >= y_begin && r - 1 >= r0) {
             int ps = (r - 1) % 3, pps = (r - 2) % 3;
             if (r - 2 < r0) /* never evaluated: no corners there */
                 memset(srow[pps], 0, (size_t)W);
-            if (fast_emit(r - 1, plist[ps], npos[ps], srow[pps], srow[ps], srow[slot], 1, out, capacity,
-                          count))
+            if (fast_emit(r - 1, plist[ps], npos[ps], x_begin, x_end, srow[pps], srow[ps], srow[slot], 1, out,
+                          capacity, count))
                 return TVO_ERR_NO_MEMORY;
         }
     }
@@ -392,10 +405,19 @@ tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int no
         if (r1 - 1 < r0)
             memset(srow[as], 0, (size_t)W);
         memset(srow[bs], 0, (size_t)W);
-        if (fast_emit(r1, plist[s], npos[s], srow[as], srow[s], srow[bs], 1, out, capacity, count))
+        if (fast_emit(r1, plist[s], npos[s], x_begin, x_end, srow[as], srow[s], srow[bs], 1, out, capacity,
+                      count))
             return TVO_ERR_NO_MEMORY;
     }
     return TVO_OK;
+}
+
+tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int nonmax, int32_t y_begin,
+                                 int32_t y_end, tvo_corner *out, int32_t capacity, int32_t *count,
+                                 void *scratch, size_t scratch_size)
+{
+    return tvo_fast9_detect_rect(img, threshold, nonmax, 0, TVO_MAX_IMAGE_DIM, y_begin, y_end, out, capacity,
+                                 count, scratch, scratch_size);
 }
 
 tvo_status tvo_fast9_detect(const tvo_image *img, int32_t threshold, int nonmax, tvo_corner *out,

@@ -7,5 +7,6 @@
 #define tvo_fast_scratch_size tvo_fast_scratch_size_portable
 #define tvo_fast9_detect tvo_fast9_detect_portable
 #define tvo_fast9_detect_rows tvo_fast9_detect_rows_portable
+#define tvo_fast9_detect_rect tvo_fast9_detect_rect_portable
 #define tvo_fast9_score_at tvo_fast9_score_at_portable
 #include "../../lib/src/tvo_fast.c"

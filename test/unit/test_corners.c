@@ -17,6 +17,10 @@ size_t tvo_fast_scratch_size_portable(int32_t width);
 tvo_status tvo_fast9_detect_rows_portable(const tvo_image *img, int32_t threshold, int nonmax,
                                           int32_t y_begin, int32_t y_end, tvo_corner *out, int32_t capacity,
                                           int32_t *count, void *scratch, size_t scratch_size);
+tvo_status tvo_fast9_detect_rect_portable(const tvo_image *img, int32_t threshold, int nonmax,
+                                          int32_t x_begin, int32_t x_end, int32_t y_begin, int32_t y_end,
+                                          tvo_corner *out, int32_t capacity, int32_t *count, void *scratch,
+                                          size_t scratch_size);
 
 /* ---- helpers ------------------------------------------------------------------------------------- */
 
@@ -322,6 +326,65 @@ static void test_fast_rows_and_capacity(void **state)
                          (int32_t)all[i].score);
     assert_int_equal(tvo_fast9_score_at(&t.img, 2, 10), -1);
     assert_int_equal(tvo_fast9_score_at(&t.img, 10, 87), -1);
+    free(s);
+    img_free(&t);
+}
+
+/* Rectangles: exactly the whole image's corners that lie in the rectangle, in the same order, with the
+ * same scores (the non-max test sees the neighbours outside it), from the SIMD build and the portable
+ * path; rectangles of every width from 1 to past the 16-pixel block, at every offset near the borders,
+ * clamped ones and empty ones. */
+static void test_fast_rect(void **state)
+{
+    enum { RW = 131, RH = 60 };
+    test_img t = img_new(RW, RH, RW + 5, 0);
+    tvo_corner *all = (tvo_corner *)malloc(3 * sizeof(tvo_corner) * RW * RH), *part = all + RW * RH,
+               *pp = part + RW * RH;
+    size_t ss = tvo_fast_scratch_size(RW);
+    void *s = malloc(ss);
+    uint64_t seed = 5u;
+    int32_t kind, nonmax, checked = 0;
+    (void)state;
+    assert_non_null(all);
+    assert_non_null(s);
+    for (kind = 0; kind < 3; ++kind) {
+        if (kind < 2)
+            img_random(&t, 31u + (uint64_t)kind, kind);
+        else
+            img_blocks(&t, 3u);
+        for (nonmax = 0; nonmax <= 1; ++nonmax) {
+            int32_t nall = 0, thr = kind == 0 ? 40 : 8, trial;
+            assert_int_equal(tvo_fast9_detect(&t.img, thr, nonmax, all, RW * RH, &nall, s, ss), TVO_OK);
+            assert_true(nall > 30);
+            for (trial = 0; trial < 400; ++trial) {
+                /* x0 in [-4, RW), widths 0..40 (and the whole width now and then), y the same way */
+                int32_t x0 = (int32_t)(tvo_test_rand(&seed) % (RW + 4)) - 4;
+                int32_t w = trial % 9 == 0 ? RW + 8 : (int32_t)(tvo_test_rand(&seed) % 41);
+                int32_t y0 = (int32_t)(tvo_test_rand(&seed) % (RH + 4)) - 4;
+                int32_t h = (int32_t)(tvo_test_rand(&seed) % 25), np = -1, nq = -1, i, k = 0;
+                assert_int_equal(tvo_fast9_detect_rect(&t.img, thr, nonmax, x0, x0 + w, y0, y0 + h, part,
+                                                       RW * RH, &np, s, ss),
+                                 TVO_OK);
+                assert_int_equal(tvo_fast9_detect_rect_portable(&t.img, thr, nonmax, x0, x0 + w, y0, y0 + h,
+                                                                pp, RW * RH, &nq, s, ss),
+                                 TVO_OK);
+                assert_same_corners(part, np, pp, nq);
+                for (i = 0; i < nall; ++i) {
+                    const int32_t x = (int32_t)all[i].x, y = (int32_t)all[i].y;
+                    if (x < x0 || x >= x0 + w || y < y0 || y >= y0 + h)
+                        continue;
+                    assert_true(k < np);
+                    assert_true(part[k].x == all[i].x && part[k].y == all[i].y &&
+                                part[k].score == all[i].score);
+                    ++k;
+                }
+                assert_int_equal(k, np);
+                checked += np;
+            }
+        }
+    }
+    assert_true(checked > 1000); /* the rectangles had corners to compare */
+    free(all);
     free(s);
     img_free(&t);
 }
@@ -758,6 +821,7 @@ int main(void)
             cmocka_unit_test(test_fast_square_corners),
             cmocka_unit_test(test_fast_matches_reference),
             cmocka_unit_test(test_fast_simd_matches_portable),
+            cmocka_unit_test(test_fast_rect),
             cmocka_unit_test(test_fast_kernel_name),
             cmocka_unit_test(test_fast_rows_and_capacity),
             cmocka_unit_test(test_fast_bad_input),

@@ -64,6 +64,16 @@ tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int no
                                  int32_t y_end, tvo_corner *out, int32_t capacity, int32_t *count,
                                  void *scratch, size_t scratch_size);
 
+/* The same, restricted to the corners with x_begin <= x < x_end and y_begin <= y < y_end: exactly the
+ * corners (and scores, and non-max decisions) that tvo_fast9_detect reports in that rectangle, in
+ * row-major order. Lets callers skip the parts of an image where they want no corners (tvo_detect skips
+ * its full cells). The range is clamped to the image; an empty range gives 0 corners. Cost: the pixels
+ * of columns x_begin-4 .. x_end+3 in rows y_begin-4 .. y_end+3 are read. Same statuses as
+ * tvo_fast9_detect. */
+tvo_status tvo_fast9_detect_rect(const tvo_image *img, int32_t threshold, int nonmax, int32_t x_begin,
+                                 int32_t x_end, int32_t y_begin, int32_t y_end, tvo_corner *out,
+                                 int32_t capacity, int32_t *count, void *scratch, size_t scratch_size);
+
 /* OpenCV's FAST-9 score (definition above) of pixel (x, y); x, y must be >= 3 inside the image (no check
  * beyond that; returns -1 for a pixel outside that range or a bad view). Meaningful for corners only:
  * for a non-corner it returns max(..)-1 over the arcs, which may be below any threshold. */
