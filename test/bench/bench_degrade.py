@@ -18,6 +18,9 @@ sequences; the others of any camera, the renders too):
                  evenly spaced times at the original rate and their ground truth moved with them: the
                  camera's speed doubles or halves from one frame to the next, the motion a constant-velocity
                  prediction handles worst (a shaken hand-held camera, a drone's vibration).
+  - reverse:     every frame, the last first, at the original rate with the ground truth moved with the
+                 frames: the same path driven backwards (a car reversing; what enters the view now comes
+                 in at the borders and leaves at the centre).
 
 Noise is seeded (the same copy on every run). It replays each copy with `tvo_replay --scale none` and the
 given replay arguments, and prints the Sim(3)-aligned ATE (m) of the whole run, the number of frames
@@ -42,8 +45,8 @@ sys.path.insert(0, os.path.join(ROOT, "tools"))
 import replay_copies  # noqa: E402  (beside this file)
 from tinyvo_tools import trajio  # noqa: E402
 
-# name: (scale, keep every n-th frame (0: one or two frames on at random, re-timed), blur sigma px,
-#        noise sigma grey levels)
+# name: (scale, keep every n-th frame (0: one or two frames on at random, re-timed; -1: every frame, last
+#        first, re-timed), blur sigma px, noise sigma grey levels)
 VARIANTS = {
     "none": (1.0, 1, 0.0, 0.0),
     "blur1": (1.0, 1, 1.0, 0.0),
@@ -52,14 +55,17 @@ VARIANTS = {
     "half": (0.5, 1, 0.0, 0.0),
     "skip2": (1.0, 2, 0.0, 0.0),
     "jerk": (1.0, 0, 0.0, 0.0),
+    "reverse": (1.0, -1, 0.0, 0.0),
 }
 
 
 def kept_frames(n: int, every: int) -> list:
-    """The indices of the frames a copy keeps: every n-th, or (every == 0) steps of 1 or 2 drawn with a
-    fixed seed."""
+    """The indices of the frames a copy keeps: every n-th, (every == 0) steps of 1 or 2 drawn with a
+    fixed seed, or (every < 0) every frame from the last to the first."""
     if every > 0:
         return list(range(0, n, every))
+    if every < 0:
+        return list(range(n - 1, -1, -1))
     rng = np.random.default_rng(7)
     keep, k = [], 0
     while k < n:
@@ -79,7 +85,7 @@ def write_copy(seq: str, dst: str, scale: float, every: int, blur: float, noise:
                          "sequence")
     t_ns, names = trajio.read_cam_frames(cam)
     keep = kept_frames(len(names), every)
-    # a jerk copy keeps the original frame interval: frame j of the copy at t0 + j * dt
+    # a jerk or reversed copy keeps the original frame interval: frame j of the copy at t0 + j * dt
     dt = int(np.median(np.diff(t_ns))) if len(t_ns) > 1 else 0
     t_new = [int(t_ns[k]) if every > 0 else int(t_ns[0]) + j * dt for j, k in enumerate(keep)]
     rng = np.random.default_rng(1)

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
 """test/bench/bench_degrade.py's copies on a tiny ASL sequence written here: the frames each copy keeps,
-the jerk copy's evenly spaced times and its ground truth moved with its frames, and the refusal of a
+the jerk and reversed copies' evenly spaced times and their ground truth moved with their frames, and the refusal of a
 smaller copy of a camera with distortion."""
 import os
 import pathlib
@@ -50,6 +50,21 @@ def test_kept_frames():
     assert keep[0] == 0 and set(steps.tolist()) == {1, 2}
     assert 0.3 < np.mean(steps == 2) < 0.7  # both steps, about as often
     assert bench_degrade.kept_frames(200, 0) == keep  # seeded: the same copy every run
+    assert bench_degrade.kept_frames(4, -1) == [3, 2, 1, 0]
+
+
+def test_reverse_copy(tmp_path):
+    src = _sequence(tmp_path / "src")
+    dst = tmp_path / "reverse"
+    bench_degrade.write_copy(str(src), str(dst), *bench_degrade.VARIANTS["reverse"])
+    t, names = trajio.read_cam_frames(str(dst / "mav0" / "cam0"))
+    assert len(names) == N and (np.diff(t) == DT).all() and t[0] == T0
+    for j in range(N):
+        img = cv2.imread(str(dst / "mav0" / "cam0" / "data" / names[j]), cv2.IMREAD_GRAYSCALE)
+        assert int(img[0, 0]) == N - 1 - j  # the last frame first
+    gt = trajio.read_euroc_groundtruth(str(dst))
+    np.testing.assert_array_equal(gt.t_ns, t)
+    np.testing.assert_allclose(gt.poses[:, 0, 3], 0.1 * (N - 1 - np.arange(N)), atol=1e-9)
 
 
 def test_jerk_copy(tmp_path):

@@ -415,6 +415,38 @@ static void test_fast_bad_input(void **state)
     assert_int_equal(tvo_fast9_detect(&t.img, -1, 1, out, 16, &n, s, ss), TVO_ERR_ARG);
     assert_int_equal(tvo_fast9_detect(&t.img, 256, 1, out, 16, &n, s, ss), TVO_ERR_ARG);
     assert_int_equal(tvo_fast9_detect(&t.img, 10, 1, out, -1, &n, s, ss), TVO_ERR_ARG);
+    assert_int_equal(tvo_fast9_detect_rect(NULL, 10, 1, 0, 32, 0, 32, out, 16, &n, s, ss), TVO_ERR_NULL);
+    assert_int_equal(n, 0);
+    assert_int_equal(tvo_fast9_detect_rect(&t.img, 10, 1, 0, 32, 0, 32, NULL, 16, &n, s, ss), TVO_ERR_NULL);
+    assert_int_equal(tvo_fast9_detect_rect(&t.img, 10, 1, 0, 32, 0, 32, out, 16, &n, s, ss - 1),
+                     TVO_ERR_NO_MEMORY);
+    assert_int_equal(tvo_fast9_detect_rect(&bad_stride, 10, 1, 0, 32, 0, 32, out, 16, &n, s, ss),
+                     TVO_ERR_SIZE);
+    assert_int_equal(tvo_fast9_detect_rect(&t.img, 300, 1, 0, 32, 0, 32, out, 16, &n, s, ss), TVO_ERR_ARG);
+    {
+        /* extreme and reversed ranges: clamped to the image, no overflow; an empty one gives no corner */
+        tvo_corner all[32 * 32], part[32 * 32];
+        int32_t na = 0, np = -1;
+        img_random(&t, 11u, 0);
+        assert_int_equal(tvo_fast9_detect(&t.img, 20, 1, all, 32 * 32, &na, s, ss), TVO_OK);
+        assert_true(na > 3);
+        assert_int_equal(tvo_fast9_detect_rect(&t.img, 20, 1, INT32_MIN, INT32_MAX, INT32_MIN, INT32_MAX,
+                                               part, 32 * 32, &np, s, ss),
+                         TVO_OK);
+        assert_same_corners(all, na, part, np);
+        assert_int_equal(tvo_fast9_detect_rect(&t.img, 20, 1, 20, 10, 0, 32, part, 32 * 32, &np, s, ss),
+                         TVO_OK);
+        assert_int_equal(np, 0);
+        assert_int_equal(tvo_fast9_detect_rect(&t.img, 20, 1, INT32_MAX, INT32_MIN, 0, 32, part, 32 * 32, &np,
+                                               s, ss),
+                         TVO_OK);
+        assert_int_equal(np, 0);
+        /* capacity: TVO_ERR_NO_MEMORY and the first corners, as tvo_fast9_detect */
+        assert_int_equal(tvo_fast9_detect_rect(&t.img, 20, 1, 0, 32, 0, 32, part, 2, &np, s, ss),
+                         TVO_ERR_NO_MEMORY);
+        assert_int_equal(np, 2);
+        assert_same_corners(all, 2, part, 2);
+    }
     assert_int_equal(tvo_fast9_detect_ref(&t.img, 10, 1, NULL, 16, &n), TVO_ERR_NULL);
     assert_int_equal(tvo_fast9_detect_ref(&bad_stride, 10, 1, out, 16, &n), TVO_ERR_SIZE);
     assert_int_equal(tvo_fast9_score_at(NULL, 5, 5), -1);
