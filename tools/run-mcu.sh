@@ -59,11 +59,13 @@ for t in $MCU_TESTS; do
   arm-none-eabi-gcc $CPU -Os -std=c99 -ffp-contract=off -ffunction-sections -fdata-sections \
     -Itest/mcu/shim -Itest/common -Ilib/include -Ilib/src/internal -c "test/unit/$t.c" -o "$B/$t.o"
   objs=("$B/$t.o")
-  if [ "$t" = test_corners ]; then # the portable FAST-9 it compares the library's with (test/CMakeLists.txt)
-    # shellcheck disable=SC2086
-    arm-none-eabi-gcc $CPU -Os -std=c99 -ffp-contract=off -ffunction-sections -fdata-sections \
-      -Ilib/include -Ilib/src/internal -c test/unit/fast_portable.c -o "$B/fast_portable.o"
-    objs+=("$B/fast_portable.o")
+  if [ "$t" = test_corners ]; then # the second builds it compares the library's with (test/CMakeLists.txt)
+    for second in fast_portable detect_all_cells; do
+      # shellcheck disable=SC2086
+      arm-none-eabi-gcc $CPU -Os -std=c99 -ffp-contract=off -ffunction-sections -fdata-sections \
+        -Ilib/include -Ilib/src/internal -c "test/unit/$second.c" -o "$B/$second.o"
+      objs+=("$B/$second.o")
+    done
   fi
   link "$B/$t.elf" "${objs[@]}"
   start=$(date +%s)

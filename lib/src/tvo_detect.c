@@ -15,6 +15,11 @@
 #define DET_MIN_GRID_CELL 8.0f /* smallest cell of the spacing grid, px */
 #define DET_MAX_CORNERS (1 << 20)
 #define DET_MAX_CANDIDATES 4096
+/* 1 only in a test build: FAST runs in every cell, the full ones too, as it did before the full cells
+ * were skipped (test_corners compares the two builds' results bit for bit) */
+#ifndef TVO_DETECT_FAST_IN_FULL_CELLS
+#define TVO_DETECT_FAST_IN_FULL_CELLS 0
+#endif
 
 typedef struct det_cand {
     int32_t x, y;
@@ -392,7 +397,8 @@ static void det_add_existing(const tvo_detect_config *cfg, const det_layout *L, 
 }
 
 /* First pixel of cell column (row) c of n over the inner region [B, B + inner): the smallest u with
- * u n / inner >= c, the inverse of the cell index computed below. */
+ * u n / inner >= c, the inverse of the cell index computed below. It is the ceiling: the next cell row
+ * then starts after any pixel of this one, so det_shortlist's sub-bands always advance. */
 static int32_t det_cell_start(int32_t c, int32_t n, int32_t inner, int32_t B)
 {
     return B + (int32_t)(((int64_t)c * inner + n - 1) / n);
@@ -410,11 +416,11 @@ static tvo_status det_fast_runs(const tvo_detect_config *cfg, const tvo_image *i
     while (c < gc) {
         int32_t e, got = 0;
         tvo_status st;
-        if (full[c] >= L->quota) {
+        if (!TVO_DETECT_FAST_IN_FULL_CELLS && full[c] >= L->quota) {
             ++c;
             continue;
         }
-        for (e = c + 1; e < gc && full[e] < L->quota; ++e) {
+        for (e = c + 1; e < gc && (TVO_DETECT_FAST_IN_FULL_CELLS || full[e] < L->quota); ++e) {
         }
         st = tvo_fast9_detect_rect(img, cfg->fast_threshold, 1, det_cell_start(c, gc, L->inner_w, L->border),
                                    det_cell_start(e, gc, L->inner_w, L->border), y0, y1, w->band + *nb,

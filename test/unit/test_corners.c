@@ -17,6 +17,12 @@ size_t tvo_fast_scratch_size_portable(int32_t width);
 tvo_status tvo_fast9_detect_rows_portable(const tvo_image *img, int32_t threshold, int nonmax,
                                           int32_t y_begin, int32_t y_end, tvo_corner *out, int32_t capacity,
                                           int32_t *count, void *scratch, size_t scratch_size);
+/* the detector with FAST in every cell, full ones too, built into this test from lib/src/tvo_detect.c
+ * (detect_all_cells.c) */
+tvo_status tvo_detect_all_cells(const tvo_detect_config *cfg, const tvo_image *img,
+                                const tvo_point2f *existing, int32_t n_existing, tvo_corner *out,
+                                int32_t capacity, int32_t *count, void *scratch, size_t scratch_size);
+size_t tvo_detect_scratch_size_all_cells(const tvo_detect_config *cfg, int32_t width, int32_t height);
 tvo_status tvo_fast9_detect_rect_portable(const tvo_image *img, int32_t threshold, int nonmax,
                                           int32_t x_begin, int32_t x_end, int32_t y_begin, int32_t y_end,
                                           tvo_corner *out, int32_t capacity, int32_t *count, void *scratch,
@@ -730,6 +736,98 @@ static void test_detect_existing(void **state)
     img_free(&t);
 }
 
+/* FAST only in the cells not full of existing points gives what FAST everywhere gave (the corners of full
+ * cells were dropped): the same corners, scores and order, on textured, smooth and rendered images, with
+ * existing points that fill a random share of the cells (some cells over their quota, some at it, some
+ * below), several grids, quotas, spacings and scores. */
+static void test_detect_skips_full_cells(void **state)
+{
+    test_img t = img_new(331, 247, 340, 0);
+    det_run *a = (det_run *)malloc(sizeof(det_run)), *b = (det_run *)malloc(sizeof(det_run));
+    tvo_point2f ex[600];
+    tvo_pose T = tvo_pose_identity();
+    uint64_t seed = 99u;
+    int32_t trial, compared = 0, with_full = 0;
+    (void)state;
+    assert_non_null(a);
+    assert_non_null(b);
+    for (trial = 0; trial < 60; ++trial) {
+        tvo_detect_config cfg;
+        int32_t nex = 0, c, full = 0, counts[64 * 64];
+        size_t ss, ss2;
+        void *s;
+        tvo_status st, st2;
+        tvo_image view = tvo_image_make(331, 247, 340, t.buf);
+        if (trial % 3 == 0)
+            img_blocks(&t, 3u + (uint64_t)trial);
+        else if (trial % 3 == 1)
+            img_random(&t, 7u + (uint64_t)trial, 1);
+        else { /* the rendered room, rows of 331 pixels */
+            const tvo_image room = tvo_image_make(331, 247, 331, t.buf);
+            T.t[0] = 0.01 * trial;
+            tvo_room_render(&T, 331, 247, 200.0, t.buf);
+            memcpy(&view, &room, sizeof view);
+        }
+        tvo_detect_config_default(&cfg);
+        cfg.grid_cols = 4 + (int32_t)(tvo_test_rand(&seed) % 9);
+        cfg.grid_rows = 3 + (int32_t)(tvo_test_rand(&seed) % 7);
+        cfg.max_corners = 50 + (int32_t)(tvo_test_rand(&seed) % 400);
+        cfg.min_distance = (float)(tvo_test_rand(&seed) % 3) * 5.0f;
+        cfg.fast_threshold = 10 + (int32_t)(tvo_test_rand(&seed) % 20);
+        cfg.score = trial % 4 == 3 ? TVO_SCORE_FAST : TVO_SCORE_SHI_TOMASI;
+        /* existing points: clusters in about half the cells, with 0-2 x the quota each, and a few anywhere */
+        for (c = 0; c < cfg.grid_cols * cfg.grid_rows; ++c) {
+            const int32_t quota = (cfg.max_corners + cfg.grid_cols * cfg.grid_rows - 1) /
+                    (cfg.grid_cols * cfg.grid_rows);
+            const int32_t k = tvo_test_rand(&seed) % 2 ? (int32_t)(tvo_test_rand(&seed) % (2 * quota + 1))
+                                                       : 0;
+            const float cw = 331.0f / (float)cfg.grid_cols, ch = 247.0f / (float)cfg.grid_rows;
+            for (int32_t q = 0; q < k && nex < 560; ++q) {
+                ex[nex].x = cw *
+                        ((float)(c % cfg.grid_cols) + 0.1f +
+                         0.8f * (float)(tvo_test_rand(&seed) % 1000) / 1000.0f);
+                ex[nex].y = ch *
+                        ((float)(c / cfg.grid_cols) + 0.1f +
+                         0.8f * (float)(tvo_test_rand(&seed) % 1000) / 1000.0f);
+                ++nex;
+            }
+        }
+        for (c = 0; c < 20; ++c, ++nex) {
+            ex[nex].x = (float)(tvo_test_rand(&seed) % 3310) / 10.0f;
+            ex[nex].y = (float)(tvo_test_rand(&seed) % 2470) / 10.0f;
+        }
+        /* how many cells are full (the share FAST skips): counted as the detector counts them */
+        memset(counts, 0, sizeof(counts));
+        for (c = 0; c < nex; ++c) {
+            const int32_t b0 = cfg.border, iw = 331 - 2 * b0, ih = 247 - 2 * b0; /* border 8 >= 4 */
+            const int32_t u = (int32_t)ex[c].x - b0, v = (int32_t)ex[c].y - b0;
+            if (ex[c].x >= (float)b0 && ex[c].y >= (float)b0 && u < iw && v < ih)
+                counts[(v * cfg.grid_rows / ih) * cfg.grid_cols + u * cfg.grid_cols / iw]++;
+        }
+        for (c = 0; c < cfg.grid_cols * cfg.grid_rows; ++c)
+            full += counts[c] >=
+                    (cfg.max_corners + cfg.grid_cols * cfg.grid_rows - 1) / (cfg.grid_cols * cfg.grid_rows);
+        ss = tvo_detect_scratch_size(&cfg, 331, 247);
+        ss2 = tvo_detect_scratch_size_all_cells(&cfg, 331, 247);
+        assert_true(ss > 0 && ss == ss2);
+        s = malloc(ss);
+        assert_non_null(s);
+        st = tvo_detect(&cfg, &view, ex, nex, a->out, 2048, &a->n, s, ss);
+        st2 = tvo_detect_all_cells(&cfg, &view, ex, nex, b->out, 2048, &b->n, s, ss);
+        free(s);
+        assert_int_equal(st, TVO_OK);
+        assert_int_equal(st2, TVO_OK);
+        assert_same_corners(a->out, a->n, b->out, b->n);
+        compared += a->n;
+        with_full += full > 0 && full < cfg.grid_cols * cfg.grid_rows;
+    }
+    assert_true(compared > 2000); /* the runs had corners to compare */
+    assert_true(with_full > 40);  /* and most had full cells beside others */
+    free(a);
+    free(b);
+    img_free(&t);
+}
+
 static void test_detect_bad_input(void **state)
 {
     test_img t = img_new(64, 48, 64, 0);
@@ -863,6 +961,7 @@ int main(void)
             cmocka_unit_test(test_detect_spreads),
             cmocka_unit_test(test_detect_empty_cells),
             cmocka_unit_test(test_detect_existing),
+            cmocka_unit_test(test_detect_skips_full_cells),
             cmocka_unit_test(test_detect_bad_input),
             cmocka_unit_test(test_detect_scores_and_options),
     };
