@@ -450,11 +450,9 @@ static tvo_status det_shortlist(const tvo_detect_config *cfg, const tvo_image *i
             if (st != TVO_OK)
                 return st;
             ys = ye;
-            for (k = 0; k < nb; ++k) {
+            for (k = 0; k < nb; ++k) { /* every corner lies in [B, W - B): the rectangles do */
                 int32_t x = (int32_t)w->band[k].x, y = (int32_t)w->band[k].y, cx, cy, cell;
                 det_cand cd;
-                if (x < B || x >= W - B)
-                    continue;
                 cx = (int32_t)(((int64_t)(x - B) * cfg->grid_cols) / L->inner_w);
                 cy = (int32_t)(((int64_t)(y - B) * cfg->grid_rows) / L->inner_h);
                 cell = cy * cfg->grid_cols + cx;
