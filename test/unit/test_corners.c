@@ -753,7 +753,7 @@ static void test_detect_skips_full_cells(void **state)
     assert_non_null(b);
     for (trial = 0; trial < 60; ++trial) {
         tvo_detect_config cfg;
-        int32_t nex = 0, c, full = 0, counts[64 * 64];
+        int32_t nex = 0, c, full = 0, ncell, quota, counts[64 * 64];
         size_t ss, ss2;
         void *s;
         tvo_status st, st2;
@@ -775,10 +775,10 @@ static void test_detect_skips_full_cells(void **state)
         cfg.min_distance = (float)(tvo_test_rand(&seed) % 3) * 5.0f;
         cfg.fast_threshold = 10 + (int32_t)(tvo_test_rand(&seed) % 20);
         cfg.score = trial % 4 == 3 ? TVO_SCORE_FAST : TVO_SCORE_SHI_TOMASI;
+        ncell = cfg.grid_cols * cfg.grid_rows;
+        quota = (cfg.max_corners + ncell - 1) / ncell; /* the detector's per-cell quota */
         /* existing points: clusters in about half the cells, with 0-2 x the quota each, and a few anywhere */
-        for (c = 0; c < cfg.grid_cols * cfg.grid_rows; ++c) {
-            const int32_t quota = (cfg.max_corners + cfg.grid_cols * cfg.grid_rows - 1) /
-                    (cfg.grid_cols * cfg.grid_rows);
+        for (c = 0; c < ncell; ++c) {
             const int32_t k = tvo_test_rand(&seed) % 2 ? (int32_t)(tvo_test_rand(&seed) % (2 * quota + 1))
                                                        : 0;
             const float cw = 331.0f / (float)cfg.grid_cols, ch = 247.0f / (float)cfg.grid_rows;
@@ -798,15 +798,11 @@ static void test_detect_skips_full_cells(void **state)
         }
         /* how many cells are full (the share FAST skips): counted as the detector counts them */
         memset(counts, 0, sizeof(counts));
-        for (c = 0; c < nex; ++c) {
-            const int32_t b0 = cfg.border, iw = 331 - 2 * b0, ih = 247 - 2 * b0; /* border 8 >= 4 */
-            const int32_t u = (int32_t)ex[c].x - b0, v = (int32_t)ex[c].y - b0;
-            if (ex[c].x >= (float)b0 && ex[c].y >= (float)b0 && u < iw && v < ih)
-                counts[(v * cfg.grid_rows / ih) * cfg.grid_cols + u * cfg.grid_cols / iw]++;
-        }
-        for (c = 0; c < cfg.grid_cols * cfg.grid_rows; ++c)
-            full += counts[c] >=
-                    (cfg.max_corners + cfg.grid_cols * cfg.grid_rows - 1) / (cfg.grid_cols * cfg.grid_rows);
+        for (c = 0; c < nex; ++c) /* the points inside the cells' region (border 8) */
+            if (ex[c].x >= 8.0f && ex[c].y >= 8.0f && ex[c].x < 331.0f - 8.0f && ex[c].y < 247.0f - 8.0f)
+                counts[cell_of(&cfg, 331, 247, ex[c].x, ex[c].y)]++;
+        for (c = 0; c < ncell; ++c)
+            full += counts[c] >= quota;
         ss = tvo_detect_scratch_size(&cfg, 331, 247);
         ss2 = tvo_detect_scratch_size_all_cells(&cfg, 331, 247);
         assert_true(ss > 0 && ss == ss2);
@@ -819,7 +815,7 @@ static void test_detect_skips_full_cells(void **state)
         assert_int_equal(st2, TVO_OK);
         assert_same_corners(a->out, a->n, b->out, b->n);
         compared += a->n;
-        with_full += full > 0 && full < cfg.grid_cols * cfg.grid_rows;
+        with_full += full > 0 && full < ncell;
     }
     assert_true(compared > 2000); /* the runs had corners to compare */
     assert_true(with_full > 40);  /* and most had full cells beside others */
