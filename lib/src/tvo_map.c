@@ -18,6 +18,11 @@
 #define TVO_MAP_TRI_MIN_DEPTH 1e-3
 /* ...and at most this far (a point beyond it is as good as at infinity: its parallax is noise). */
 #define TVO_MAP_TRI_MAX_DEPTH 1e4
+/* The first map's points need cfg.map_tri_parallax_deg, like every landmark; when fewer than the
+ * first map needs reach it and it is above this (deg), the pair is triangulated again at this one, so
+ * that a higher landmark threshold does not hold back a first map that the default would have made (a
+ * highway, whose tracks leave the view before many reach 1 deg). */
+#define TVO_MAP_INIT_TRI_FALLBACK_DEG 0.5
 /* After a bundle adjustment, observations with a larger reprojection error are removed. */
 #define TVO_MAP_BA_MAX_ERR_PX 2.5
 /* No keyframe below this share of cfg.map_kf_baseline (the camera only turned). */
@@ -549,9 +554,9 @@ static double init_baseline(const tvo_map *m, const tvo_pose *T_c_w_chain, int64
 /* The map's first two keyframes (the reference at T0, this frame at T1) and the pair's inliers
  * triangulated between them; returns the landmarks made (the tracks carry them). */
 static int32_t init_landmarks(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, const init_pair *ip,
-                              const tvo_pose *T0, int64_t t0, const tvo_pose *T1, int64_t t_ns)
+                              const tvo_pose *T0, int64_t t0, const tvo_pose *T1, int64_t t_ns, double min_deg)
 {
-    const double min_cos = tvo_dm_cos(deg2rad(cfg->map_tri_parallax_deg));
+    const double min_cos = tvo_dm_cos(deg2rad(min_deg));
     const double max_err = TVO_MAP_TRI_MAX_ERR_PX / focal(cfg);
     tvo_map_kf *k0, *k1;
     int32_t made = 0;
@@ -600,7 +605,12 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
     for (int c2 = 0; c2 < 3; ++c2)
         T_cur_ref.t[c2] = ip.rp.t[c2] / tn * baseline;
     T1 = tvo_pose_compose(&T_cur_ref, &T0);
-    made = init_landmarks(m, cfg, tr, &ip, &T0, t0, &T1, t_ns);
+    made = init_landmarks(m, cfg, tr, &ip, &T0, t0, &T1, t_ns, cfg->map_tri_parallax_deg);
+    if (made < need && cfg->map_tri_parallax_deg > TVO_MAP_INIT_TRI_FALLBACK_DEG) {
+        for (int32_t i = 0; i < tr->n; ++i)
+            tr->lm[i] = -1;
+        made = init_landmarks(m, cfg, tr, &ip, &T0, t0, &T1, t_ns, TVO_MAP_INIT_TRI_FALLBACK_DEG);
+    }
     if (made < need) {
         /* not enough structure yet: back to waiting on the same reference */
         for (int32_t i = 0; i < tr->n; ++i)
