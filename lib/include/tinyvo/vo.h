@@ -217,7 +217,8 @@ typedef struct tvo_vo_config {
                                    degraded and jerky KITTI copies: 0.70 times the whole run's ATE,
                                    docs/budget.md, "A twelfth rule") */
     double map_tri_parallax_deg;  /* a track is triangulated when its rays are this far apart, (0, 30];
-                                   default 0.5 */
+                                   default 0.5 (1 suits a car's camera: docs/camera.md); the first map
+                                   falls back to 0.5 when too few of its points reach a higher value */
     double map_kf_baseline;       /* a new keyframe when the camera moved more than this x the median depth
                                    of its landmarks since the last keyframe, (0, 10]; default 0.1 */
     double map_kf_points_ratio;   /* ...or when fewer than this share of the last keyframe's landmarks
