@@ -564,6 +564,39 @@ static void test_map_init_wait(void **state)
     }
 }
 
+/* The first map needs its points at map_tri_parallax_deg like every landmark, but falls back to 0.5 deg
+ * when fewer than it needs reach a higher threshold: with 5 deg (which few of the first pair's points
+ * reach) the map starts on the same frame with the same landmarks as with the default 0.5 deg, and goes
+ * on tracking; later keyframes still make landmarks (at 5 deg). */
+static void test_map_init_fallback(void **state)
+{
+    int init_frame[2] = {-1, -1}, init_points[2] = {0, 0}, tracking[2] = {0, 0};
+    (void)state;
+    for (int pass = 0; pass < 2; ++pass) {
+        fixture *f = new_fixture(1);
+        f->cfg.map_tri_parallax_deg = pass == 0 ? 0.5 : 5.0;
+        start_vo(f);
+        for (int k = 0; k < 60; ++k) {
+            tvo_vo_result res;
+            const tvo_pose T = walk(k);
+            assert_int_equal(step(f, &T, k, &res), TVO_OK);
+            assert_true(tvo_pose_is_finite(&res.T_w_c));
+            if (res.map_state == TVO_MAP_INITIALISED && init_frame[pass] < 0) {
+                init_frame[pass] = k;
+                init_points[pass] = res.map_new_points;
+            }
+            tracking[pass] += res.map_state == TVO_MAP_TRACKING;
+        }
+        fprintf(stderr, "map_tri_parallax_deg %.1f: map from frame %d on %d landmarks, %d frames tracked\n",
+                f->cfg.map_tri_parallax_deg, init_frame[pass], init_points[pass], tracking[pass]);
+        close_vo(f);
+    }
+    assert_true(init_frame[0] >= 0);
+    assert_int_equal(init_frame[1], init_frame[0]);
+    assert_int_equal(init_points[1], init_points[0]);
+    assert_int_equal(tracking[1], 59 - init_frame[1]);
+}
+
 static void test_map_config(void **state)
 {
     tvo_camera cam = test_camera();
@@ -635,6 +668,7 @@ int main(void)
             cmocka_unit_test(test_map_loss_and_new_map), cmocka_unit_test(test_tracks_view),
             cmocka_unit_test(test_map_config),           cmocka_unit_test(test_map_hover),
             cmocka_unit_test(test_map_ba_turn_check),    cmocka_unit_test(test_map_init_wait),
+            cmocka_unit_test(test_map_init_fallback),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
