@@ -554,7 +554,8 @@ static double init_baseline(const tvo_map *m, const tvo_pose *T_c_w_chain, int64
 /* The map's first two keyframes (the reference at T0, this frame at T1) and the pair's inliers
  * triangulated between them; returns the landmarks made (the tracks carry them). */
 static int32_t init_landmarks(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, const init_pair *ip,
-                              const tvo_pose *T0, int64_t t0, const tvo_pose *T1, int64_t t_ns, double min_deg)
+                              const tvo_pose *T0, int64_t t0, const tvo_pose *T1, int64_t t_ns,
+                              double min_deg)
 {
     const double min_cos = tvo_dm_cos(deg2rad(min_deg));
     const double max_err = TVO_MAP_TRI_MAX_ERR_PX / focal(cfg);
