@@ -25,8 +25,10 @@
 #define TVO_MAP_INIT_TRI_FALLBACK_DEG 0.5
 /* After a bundle adjustment, observations with a larger reprojection error are removed. */
 #define TVO_MAP_BA_MAX_ERR_PX 2.5
-/* No keyframe below this share of cfg.map_kf_baseline (the camera only turned). */
+/* No keyframe below this share of cfg.map_kf_baseline (the camera only turned)... */
 #define TVO_MAP_KF_MIN_BASELINE 0.25
+/* ...unless fewer than this share of the last keyframe's landmarks are left (the map runs out of points). */
+#define TVO_MAP_KF_RESCUE_RATIO 0.5
 /* PnP inlier threshold, in pixels. */
 #define TVO_MAP_PNP_THRESHOLD_PX 2.0
 /* The initial pair needs max(TVO_MAP_INIT_MIN_POINTS, cfg.max_tracks / TVO_MAP_INIT_TRACKS_DIV)
@@ -962,10 +964,14 @@ static int need_keyframe(const tvo_map *m, const tvo_vo_config *cfg, const tvo_p
 {
     const tvo_map_kf *k = &m->kf[(m->kf_head + m->n_kf - 1) % m->window];
     const double base = centre_distance(&k->T_c_w, T);
-    /* a keyframe that barely moved adds no structure (nothing to triangulate) and, as one of the two
-       oldest of a later window, would hold the scale on a tiny baseline: none while the camera only
-       turns, whatever the other criteria say (the map is lost instead when its points run out) */
-    if (!(depth_med > 0.0) || base < TVO_MAP_KF_MIN_BASELINE * cfg->map_kf_baseline * depth_med)
+    /* a keyframe that barely moved adds little structure and, as one of the oldest of a later window,
+       would hold the scale on a tiny baseline: none while the camera only turns... unless the map is
+       running out of points (a turn, or a camera backing away from what it sees, takes them out of view
+       faster than the baseline grows): then a keyframe is the only way to new landmarks, and the tracks
+       that wait since an older keyframe count their parallax from there, not from the last keyframe */
+    const int running_out = (double)n_in < TVO_MAP_KF_RESCUE_RATIO * (double)m->kf_points;
+    if (!(depth_med > 0.0) ||
+        (!running_out && base < TVO_MAP_KF_MIN_BASELINE * cfg->map_kf_baseline * depth_med))
         return 0;
     if (m->frames_since_kf + 1 >= cfg->map_kf_max_frames)
         return 1;
