@@ -27,8 +27,9 @@
 #define TVO_MAP_BA_MAX_ERR_PX 2.5
 /* No keyframe below this share of cfg.map_kf_baseline (the camera only turned)... */
 #define TVO_MAP_KF_MIN_BASELINE 0.25
-/* ...unless fewer than this share of the last keyframe's landmarks are left (the map runs out of points). */
-#define TVO_MAP_KF_RESCUE_RATIO 0.5
+/* ...unless fewer than this many times cfg.map_min_points landmarks are left (the map runs out of points:
+ * below map_min_points it is lost). */
+#define TVO_MAP_KF_RESCUE_POINTS 2
 /* PnP inlier threshold, in pixels. */
 #define TVO_MAP_PNP_THRESHOLD_PX 2.0
 /* The initial pair needs max(TVO_MAP_INIT_MIN_POINTS, cfg.max_tracks / TVO_MAP_INIT_TRACKS_DIV)
@@ -969,7 +970,7 @@ static int need_keyframe(const tvo_map *m, const tvo_vo_config *cfg, const tvo_p
        running out of points (a turn, or a camera backing away from what it sees, takes them out of view
        faster than the baseline grows): then a keyframe is the only way to new landmarks, and the tracks
        that wait since an older keyframe count their parallax from there, not from the last keyframe */
-    const int running_out = (double)n_in < TVO_MAP_KF_RESCUE_RATIO * (double)m->kf_points;
+    const int running_out = n_in < TVO_MAP_KF_RESCUE_POINTS * cfg->map_min_points;
     if (!(depth_med > 0.0) ||
         (!running_out && base < TVO_MAP_KF_MIN_BASELINE * cfg->map_kf_baseline * depth_med))
         return 0;
