@@ -567,7 +567,7 @@ static void test_map_init_wait(void **state)
 /* The first map needs its points at map_tri_parallax_deg like every landmark, but falls back to 0.5 deg
  * when fewer than it needs reach a higher threshold: with 5 deg (which few of the first pair's points
  * reach) the map starts on the same frame with the same landmarks as with the default 0.5 deg, and goes
- * on tracking; later keyframes still make landmarks (at 5 deg). */
+ * on tracking. */
 static void test_map_init_fallback(void **state)
 {
     int init_frame[2] = {-1, -1}, init_points[2] = {0, 0}, tracking[2] = {0, 0};

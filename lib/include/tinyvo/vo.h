@@ -18,7 +18,8 @@
  * motion-model prediction with this frame's two-view rotation, P3P RANSAC when that fails; pnp.h). A new
  * keyframe is made when the camera moved more than cfg.map_kf_baseline x the median landmark depth since
  * the last one, when fewer than cfg.map_kf_points_ratio of its landmarks remain, or after
- * cfg.map_kf_max_frames frames, and never when it barely moved (a turn on the spot adds no structure).
+ * cfg.map_kf_max_frames frames, and not when it barely moved (a turn on the spot adds little structure)
+ * unless fewer than 2 x cfg.map_min_points landmarks are left (the map is about to be lost).
  * At each keyframe: new landmarks, then a bundle adjustment of the window (ba.h: Huber reprojection error
  * in normalised coordinates, Levenberg-Marquardt with the Schur complement on the poses, at most
  * cfg.map_ba_iterations iterations, the cfg.map_ba_fixed (default 4) oldest keyframes fixed to hold the
@@ -198,7 +199,8 @@ typedef struct tvo_vo_config {
                                    build without the affine refinement) */
     int32_t map_max_landmarks;    /* landmark capacity, [16, 100000], or 0: 2 x max_tracks; default 0 */
     int32_t map_min_points;       /* a frame with fewer PnP inliers loses the map, [6, 100000] (above
-                                   max_tracks: the map never tracks); default 20 */
+                                   max_tracks: the map never tracks); below twice as many, a keyframe
+                                   needs no minimum baseline; default 20 */
     double map_init_parallax_deg; /* the initial pair needs this median parallax, (0, 30]; default 1 */
     double map_init_wait_s;       /* a new map (the first, or after a loss) needs max(40, max_tracks / 3)
                                    landmarks from its first pair; after this many seconds of frames
