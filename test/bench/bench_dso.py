@@ -120,8 +120,11 @@ def main() -> int:
     idx = np.searchsorted(t_rel, rows[:, 0] - 5e-4).clip(0, len(t_rel) - 1)
     if len(rows) and np.max(np.abs(t_rel[idx] - rows[:, 0])) > 1e-3:
         raise SystemExit("bench_dso: a timestamp of result.txt matches no frame")
-    poses = trajio.pose_from_pq(rows[:, 1:4], rows[:, [7, 4, 5, 6]])
-    trajio.write_tum(os.path.join(out, "traj.txt"), trajio.Trajectory(t_ns[idx], poses, "camera"))
+    if len(rows):
+        poses = trajio.pose_from_pq(rows[:, 1:4], rows[:, [7, 4, 5, 6]])
+        trajio.write_tum(os.path.join(out, "traj.txt"), trajio.Trajectory(t_ns[idx], poses, "camera"))
+    else:  # DSO posed nothing (never initialised): an empty trajectory
+        open(os.path.join(out, "traj.txt"), "w", encoding="utf-8").close()
 
     m = re.search(r"([0-9.]+)ms per frame \(single core\)", text)
     posed = np.unique(idx)
