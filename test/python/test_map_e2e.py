@@ -26,20 +26,31 @@ CASES = {
 }
 
 
-@pytest.mark.parametrize("name", sorted(CASES))
-def test_kitti_own_scale(name, tmp_path):
+def _kitti(name):
+    """The shared KITTI sequence `name` (the test skips without it); fails when tvo_replay is not built."""
     seq = DATA / "kitti" / name
     if not seq.is_dir():
         pytest.skip(f"{seq} not found (set TVO_DATA_DIR to the shared data folder)")
     if not REPLAY.exists():
         pytest.fail(f"{REPLAY} not built (set TVO_BUILD_DIR)")
-    max_ate, max_rot, frames, max_wait = CASES[name]
+    return seq
+
+
+def _replay_eval(seq, tmp_path):
+    """tvo_replay --scale none over seq, then tinyvo_tools.eval against its ground truth: (stats, eval)."""
     traj, stats, ev = tmp_path / "traj.txt", tmp_path / "stats.json", tmp_path / "eval.json"
     subprocess.run([str(REPLAY), "--euroc", str(seq), "--out", str(traj), "--scale", "none",
                     "--stats", str(stats), "--quiet"], check=True)
     subprocess.run([sys.executable, "-m", "tinyvo_tools.eval", "--est", str(traj), "--gt", str(seq),
                     "--out", str(ev), "--quiet"], check=True, stdout=subprocess.DEVNULL)
-    st, e = json.loads(stats.read_text()), json.loads(ev.read_text())
+    return json.loads(stats.read_text()), json.loads(ev.read_text())
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_kitti_own_scale(name, tmp_path):
+    seq = _kitti(name)
+    max_ate, max_rot, frames, max_wait = CASES[name]
+    st, e = _replay_eval(seq, tmp_path)
     assert st["frames"]["processed"] == frames
     assert st["map"]["enabled"] == 1
     assert st["map"]["losses"] == 0
@@ -59,21 +70,12 @@ def test_kitti07_reversed_keeps_map(tmp_path):
     (fewer than 2 x map_min_points landmarks) the map makes a keyframe anyway and keeps going. Measured:
     0.544 m, no loss (with the baseline rule enforced there: one loss, 1.39 m; docs/budget.md, "A
     twenty-first rule")."""
-    seq = DATA / "kitti" / "kitti07_160"
-    if not seq.is_dir():
-        pytest.skip(f"{seq} not found (set TVO_DATA_DIR to the shared data folder)")
-    if not REPLAY.exists():
-        pytest.fail(f"{REPLAY} not built (set TVO_BUILD_DIR)")
+    seq = _kitti("kitti07_160")
     sys.path.insert(0, str(ROOT / "test" / "bench"))
     import bench_degrade  # noqa: E402  (beside the benchmarks)
     copy = tmp_path / "reverse"
     bench_degrade.write_copy(str(seq), str(copy), 1.0, -1, 0.0, 0.0)
-    traj, stats, ev = tmp_path / "traj.txt", tmp_path / "stats.json", tmp_path / "eval.json"
-    subprocess.run([str(REPLAY), "--euroc", str(copy), "--out", str(traj), "--scale", "none",
-                    "--stats", str(stats), "--quiet"], check=True)
-    subprocess.run([sys.executable, "-m", "tinyvo_tools.eval", "--est", str(traj), "--gt", str(copy),
-                    "--out", str(ev), "--quiet"], check=True, stdout=subprocess.DEVNULL)
-    st, e = json.loads(stats.read_text()), json.loads(ev.read_text())
+    st, e = _replay_eval(copy, tmp_path)
     assert st["frames"]["processed"] == 160
     assert st["frames"]["lost"] == 0
     assert st["map"]["losses"] == 0

@@ -103,6 +103,14 @@ static tvo_status step(fixture *f, const tvo_pose *T, int k, tvo_vo_result *res)
     return st;
 }
 
+/* Frame k of the walk rendered and processed: TVO_OK and a finite world pose. */
+static void walk_step(fixture *f, int k, tvo_vo_result *res)
+{
+    const tvo_pose T = walk(k);
+    assert_int_equal(step(f, &T, k, res), TVO_OK);
+    assert_true(tvo_pose_is_finite(&res->T_w_c));
+}
+
 /* least-squares scale s minimising sum |gt - s est|^2 over frames [a, b) (both worlds start at the
  * identity) */
 static double best_scale(const tvo_pose *gt, const tvo_pose *est, int a, int b)
@@ -542,9 +550,7 @@ static void test_map_init_wait(void **state)
         start_vo(f);
         for (int k = 0; k < 60; ++k) {
             tvo_vo_result res;
-            const tvo_pose T = walk(k);
-            assert_int_equal(step(f, &T, k, &res), TVO_OK);
-            assert_true(tvo_pose_is_finite(&res.T_w_c));
+            walk_step(f, k, &res);
             max_tracks = res.tracks > max_tracks ? res.tracks : max_tracks;
             if (res.map_state == TVO_MAP_INITIALISED && init_frame < 0)
                 init_frame = k;
@@ -578,9 +584,7 @@ static void test_map_init_fallback(void **state)
         start_vo(f);
         for (int k = 0; k < 60; ++k) {
             tvo_vo_result res;
-            const tvo_pose T = walk(k);
-            assert_int_equal(step(f, &T, k, &res), TVO_OK);
-            assert_true(tvo_pose_is_finite(&res.T_w_c));
+            walk_step(f, k, &res);
             if (res.map_state == TVO_MAP_INITIALISED && init_frame[pass] < 0) {
                 init_frame[pass] = k;
                 init_points[pass] = res.map_new_points;
