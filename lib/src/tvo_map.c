@@ -555,7 +555,8 @@ static double init_baseline(const tvo_map *m, const tvo_pose *T_c_w_chain, int64
 }
 
 /* The map's first two keyframes (the reference at T0, this frame at T1) and the pair's inliers
- * triangulated between them; returns the landmarks made (the tracks carry them). */
+ * triangulated between them, in a cleared map (every track unlinked first); returns the landmarks made
+ * (the tracks carry them). */
 static int32_t init_landmarks(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, const init_pair *ip,
                               const tvo_pose *T0, int64_t t0, const tvo_pose *T1, int64_t t_ns,
                               double min_deg)
@@ -564,6 +565,8 @@ static int32_t init_landmarks(tvo_map *m, const tvo_vo_config *cfg, tvo_map_trac
     const double max_err = TVO_MAP_TRI_MAX_ERR_PX / focal(cfg);
     tvo_map_kf *k0, *k1;
     int32_t made = 0;
+    for (int32_t i = 0; i < tr->n; ++i)
+        tr->lm[i] = -1;
     tvo_map_clear(m);
     k0 = kf_push(m, T0, t0);
     k1 = kf_push(m, T1, t_ns);
@@ -610,11 +613,8 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
         T_cur_ref.t[c2] = ip.rp.t[c2] / tn * baseline;
     T1 = tvo_pose_compose(&T_cur_ref, &T0);
     made = init_landmarks(m, cfg, tr, &ip, &T0, t0, &T1, t_ns, cfg->map_tri_parallax_deg);
-    if (made < need && cfg->map_tri_parallax_deg > TVO_MAP_INIT_TRI_FALLBACK_DEG) {
-        for (int32_t i = 0; i < tr->n; ++i)
-            tr->lm[i] = -1;
+    if (made < need && cfg->map_tri_parallax_deg > TVO_MAP_INIT_TRI_FALLBACK_DEG)
         made = init_landmarks(m, cfg, tr, &ip, &T0, t0, &T1, t_ns, TVO_MAP_INIT_TRI_FALLBACK_DEG);
-    }
     if (made < need) {
         /* not enough structure yet: back to waiting on the same reference */
         for (int32_t i = 0; i < tr->n; ++i)
