@@ -3,6 +3,8 @@
 """Apply the second accuracy rule of docs/budget.md to runs made by tools/seed-runs.sh.
 
     tools/seed-rule.py OUTDIR DEFAULT CANDIDATE [CANDIDATE ...] [--markdown]
+    tools/seed-rule.py OUTDIR LABEL --null N
+
 
 For every label, the 5 seeded runs are read from OUTDIR (LABEL_s<seed>.json, the suite's JSON, and the
 trajectories of the two EuRoC samples, evaluated here). Per sequence and figure (Sim(3) ATE RMSE in m,
@@ -11,7 +13,13 @@ passes when (1) on every sequence and figure its median is at most the default's
 each figure the geometric mean over the sequences of candidate median / default median is at most 1,
 (3) on no sequence the median count of LOST frames grows. Figures are compared at 4 significant digits.
 Exit status 0 when every candidate passes, 1 when one fails, 2 on bad input. TVO_SEEDS="5 6 7 8 9" (as given
-to tools/seed-runs.sh) reads other seeds than the default 24301 1 2 3 4."""
+to tools/seed-runs.sh) reads other seeds than the default 24301 1 2 3 4.
+
+--null N measures how often the rule refuses a change that changes nothing: LABEL's runs over TVO_SEEDS
+(at least 10 seeds, say 15) are split N times at random into a "default" and a "candidate" of 5 seeds
+each, both the same configuration, and each split is judged as above. It prints the share of splits that
+fail and which conditions refuse them (exit status 0; the splits are drawn with a fixed generator, so
+the figures repeat)."""
 import json
 import math
 import os
@@ -25,6 +33,9 @@ from tinyvo_tools import trajio  # noqa: E402
 
 SEEDS = tuple(int(x) for x in os.environ.get("TVO_SEEDS", "24301 1 2 3 4").split())
 EUROC = ("V1_01_easy_head", "V1_01_easy_keyframes")
+# The calibrated rule's thresholds (docs/budget.md, "The second rule measured against itself"):
+CAL_ALPHA = 0.002
+CAL_GM = {"ate": 1.03, "rot": 1.01}
 
 
 def sig4(x):
@@ -52,10 +63,10 @@ def euroc_figures(traj, seq):
     return None, float(np.sqrt(np.mean(np.sum(d[:, 3:] ** 2, axis=1)))), lost
 
 
-def load(outdir, label, data):
-    """{sequence: {"ate": [5], "rot": [5], "lost": [5]}} for one label."""
+def load(outdir, label, data, seeds=SEEDS):
+    """{sequence: {"ate": [...], "rot": [...], "lost": [...]}} for one label, one entry per seed."""
     runs = {}
-    for seed in SEEDS:
+    for seed in seeds:
         base = os.path.join(outdir, f"{label}_s{seed}")
         suite = json.load(open(base + ".json", encoding="utf-8"))
         for r in suite["sequences"]:
@@ -67,7 +78,7 @@ def load(outdir, label, data):
             d["lost"].append(r["lost"])
         for e in EUROC:
             if not os.path.exists(f"{base}_{e}.txt"):
-                if seed == SEEDS[0]:
+                if seed == seeds[0]:
                     print(f"seed-rule: {label}: no {e} runs, left out", file=sys.stderr)
                 continue
             a, rot, lost = euroc_figures(f"{base}_{e}.txt", os.path.join(data, "euroc", e))
@@ -108,35 +119,161 @@ def judge(D, C):
     return rows, gm, fails
 
 
+def judge_calibrated(D, C):
+    """Rows and the verdict of candidate C against default D under the calibrated rule: per sequence and
+    figure, a one-sided Mann-Whitney test of "C's runs are larger than D's" at CAL_ALPHA; the geometric
+    mean of the median ratios at most CAL_GM; no more LOST frames (median)."""
+    from scipy.stats import mannwhitneyu
+    rows, fails, logs = [], [], {"ate": [], "rot": []}
+    for seq, d in D.items():
+        if seq not in C:
+            fails.append(f"{seq} missing")
+            continue
+        c = C[seq]
+        row = {"seq": seq}
+        for f in ("ate", "rot"):
+            if d[f][0] is None:
+                row[f] = None
+                continue
+            dv, cv = [sig4(x) for x in d[f]], [sig4(x) for x in c[f]]
+            dm, cm = sig4(float(np.median(dv))), sig4(float(np.median(cv)))
+            p = 1.0 if dv == cv or len(set(dv + cv)) == 1 else \
+                float(mannwhitneyu(cv, dv, alternative="greater").pvalue)
+            row[f] = (dm, cm, p, p >= CAL_ALPHA)
+            logs[f].append(math.log(cm / dm))
+            if p < CAL_ALPHA:
+                fails.append(f"{seq} {f}")
+        dl, cl = float(np.median(d["lost"])), float(np.median(c["lost"]))
+        row["lost"] = (dl, cl)
+        if cl > dl:
+            fails.append(f"{seq} lost")
+        rows.append(row)
+    gm = {f: math.exp(sum(v) / len(v)) if v else float("nan") for f, v in logs.items()}
+    for f in ("ate", "rot"):
+        if not sig4(gm[f]) <= CAL_GM[f]:
+            fails.append(f"geometric mean {f} {gm[f]:.4f}")
+    return rows, gm, fails
+
+
+RULES = {"second": judge, "calibrated": judge_calibrated}
+
+
+def subset(runs, idx, factor=1.0, only=None):
+    """The runs of the seeds at positions idx, their figures times factor (on sequence `only`, or on all)."""
+    out = {}
+    for seq, d in runs.items():
+        k = factor if only in (None, seq) else 1.0
+        out[seq] = {f: [v[i] if v[i] is None or f == "lost" else v[i] * k for i in idx] for f, v in d.items()}
+    return out
+
+
+def null_rate(runs, n, k, rule, factor=1.0, only=None):
+    """Share of n random splits of one configuration's runs into a "default" and a "candidate" of k seeds
+    each that `rule` refuses (the candidate's figures times factor, on sequence `only` or on all), how
+    often each condition refuses one, and the splits' geometric means: (share, {condition: count},
+    {figure: [geometric mean per split]})."""
+    m = len(next(iter(runs.values()))["rot"])
+    if m < 2 * k:
+        raise SystemExit(f"seed-rule: --null needs at least {2 * k} seeds, got {m}")
+    rng = np.random.default_rng(20261205)
+    failed, why, gms = 0, {}, {"ate": [], "rot": []}
+    for _ in range(n):
+        perm = rng.permutation(m)
+        _, gm, fails = RULES[rule](subset(runs, perm[:k]), subset(runs, perm[k:2 * k], factor, only))
+        failed += bool(fails)
+        for f in gms:
+            gms[f].append(gm[f])
+        for f in fails:
+            key = f.rsplit(" ", 1)[0] if f.startswith("geometric mean") else f
+            why[key] = why.get(key, 0) + 1
+    return failed / n, why, gms
+
+
+def option(args, name, convert, default):
+    """Remove `name VALUE` from args and return the converted value (default when absent)."""
+    if name not in args:
+        return default
+    i = args.index(name)
+    try:
+        value = convert(args[i + 1])
+    except (IndexError, ValueError):
+        raise SystemExit(f"seed-rule: {name} needs a value") from None
+    del args[i:i + 2]
+    return value
+
+
+def print_table(rows, rule, md):
+    if rule == "second":
+        head = ("ATE D median / D max / C median", "rot RPE D median / D max / C median")
+    else:
+        head = ("ATE D median / C median / p", "rot RPE D median / C median / p")
+    if md:
+        print(f"| sequence | {head[0]} | {head[1]} | lost D / C |")
+        print("|---|---|---|---|")
+    for r in rows:
+        cells = []
+        for f in ("ate", "rot"):
+            if r[f] is None:
+                cells.append("-")
+            elif rule == "second":
+                dm, dmax, cm, ok = r[f]
+                cells.append(f"{dm:.4g} / {dmax:.4g} / {cm:.4g}{'' if ok else ' **worse**'}")
+            else:
+                dm, cm, p, ok = r[f]
+                cells.append(f"{dm:.4g} / {cm:.4g} / {p:.2g}{'' if ok else ' **worse**'}")
+        lost = f"{r['lost'][0]:g} / {r['lost'][1]:g}"
+        print(f"| {r['seq']} | {cells[0]} | {cells[1]} | {lost} |" if md else
+              f"  {r['seq']:<22} ATE {cells[0]:<36} rot {cells[1]:<36} lost {lost}")
+
+
 def main(argv):
-    md = "--markdown" in argv
-    args = [a for a in argv if a != "--markdown"]
-    if len(args) < 3:
+    args = list(argv)
+    md = "--markdown" in args
+    args = [a for a in args if a != "--markdown"]
+    try:
+        null = option(args, "--null", int, 0)
+        rule = option(args, "--rule", str, "second")
+        group = option(args, "--group", int, 5)
+        factor = option(args, "--regress", float, 1.0)
+        only = option(args, "--regress-only", str, None)
+        cand_seeds = option(args, "--candidate-seeds", lambda v: tuple(int(x) for x in v.split()), SEEDS)
+    except SystemExit as e:
+        print(e, file=sys.stderr)
+        return 2
+    if rule not in RULES or null < 0 or group < 1 or not factor > 0:
+        print("seed-rule: --rule second|calibrated, --null N >= 1, --group K >= 1, --regress F > 0",
+              file=sys.stderr)
+        return 2
+    if len(args) != 2 if null else len(args) < 3:
         print(__doc__, file=sys.stderr)
         return 2
     outdir, dlabel, cands = args[0], args[1], args[2:]
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     data = os.environ.get("TVO_DATA_DIR", os.path.join(root, "..", "shared", "data"))
     D = load(outdir, dlabel, data)
+    if null:
+        share, why, gms = null_rate(D, null, group, rule, factor, only)
+        what = "itself" if factor == 1.0 else f"itself times {factor:g}" + (f" on {only}" if only else "")
+        print(f"{dlabel} against {what}, {rule} rule: {null} random splits of seeds "
+              f"{', '.join(map(str, SEEDS))} into two groups of {group}")
+        print(f"refused: {share:.1%} of the splits")
+        for f, c in sorted(why.items(), key=lambda x: (-x[1], x[0])):
+            print(f"  {f}: {c / null:.1%}")
+        for f in ("ate", "rot"):
+            q = np.percentile(gms[f], [5, 50, 95, 99])
+            print(f"geometric mean of the median ratios, {f}: 5 / 50 / 95 / 99th percentiles "
+                  + " / ".join(f"{x:.4f}" for x in q))
+        return 0
     status = 0
     for cl in cands:
-        rows, gm, fails = judge(D, load(outdir, cl, data))
-        print(f"\n{cl} against {dlabel} (medians over seeds {', '.join(map(str, SEEDS))}; "
-              f"D max = the default's largest run)")
-        if md:
-            print("| sequence | ATE D median / D max / C median | rot RPE D median / D max / C median | lost D / C |")
-            print("|---|---|---|---|")
-        for r in rows:
-            cells = []
-            for f in ("ate", "rot"):
-                if r[f] is None:
-                    cells.append("-")
-                else:
-                    dm, dmax, cm, ok = r[f]
-                    cells.append(f"{dm:.4g} / {dmax:.4g} / {cm:.4g}{'' if ok else ' **worse**'}")
-            lost = f"{r['lost'][0]:g} / {r['lost'][1]:g}"
-            print(f"| {r['seq']} | {cells[0]} | {cells[1]} | {lost} |" if md else
-                  f"  {r['seq']:<22} ATE {cells[0]:<36} rot {cells[1]:<36} lost {lost}")
+        rows, gm, fails = RULES[rule](D, load(outdir, cl, data, cand_seeds))
+        seeds = ", ".join(map(str, SEEDS))
+        if cand_seeds != SEEDS:
+            seeds = f"{seeds} (default), {', '.join(map(str, cand_seeds))} (candidate)"
+        print(f"\n{cl} against {dlabel}, {rule} rule (medians over seeds {seeds}"
+              + ("; D max = the default's largest run)" if rule == "second" else
+                 f"; p: one-sided Mann-Whitney, C above D, refused below {CAL_ALPHA:g})"))
+        print_table(rows, rule, md)
         print(f"geometric mean of C/D medians: ATE {gm['ate']:.4f}, rot RPE {gm['rot']:.4f}")
         print(f"verdict: {'PASS' if not fails else 'FAIL (' + '; '.join(fails) + ')'}")
         status |= 1 if fails else 0
