@@ -68,3 +68,64 @@ def test_other_seeds(tmp_path):
     assert r.returncode == 0 and "seeds 5, 6, 7, 8, 9" in r.stdout, r.stdout + r.stderr
     r = run(tmp_path, "D", "C")
     assert r.returncode != 0
+
+
+def spread_runs(n, base, step, lost=0):
+    """n runs of one sequence whose figures climb evenly from base by step (a seed spread)."""
+    return [(base + k * step, 0.1 * base + k * step * 0.01, lost) for k in range(n)]
+
+
+def test_null_rate_of_a_change_that_changes_nothing(tmp_path):
+    """--null splits one configuration's runs into two groups and judges one by the other: without any
+    spread nothing is refused; with a spread the second rule refuses some splits; a candidate made worse
+    (--regress) is refused every time by both rules."""
+    seeds = tuple(range(10, 40))
+    write_runs(tmp_path, "flat", {"a": [(1.0, 0.1, 0)] * 30, "b": [(0.5, 0.05, 0)] * 30}, seeds)
+    write_runs(tmp_path, "D", {"a": spread_runs(30, 1.0, 0.01), "b": spread_runs(30, 0.5, 0.02)}, seeds)
+    r = run(tmp_path, "flat", "--null", "200", seeds=seeds)
+    assert r.returncode == 0 and "refused: 0.0% of the splits" in r.stdout, r.stdout + r.stderr
+    r = run(tmp_path, "D", "--null", "500", seeds=seeds)
+    share = float(r.stdout.split("refused: ")[1].split("%")[0])
+    assert r.returncode == 0 and 20.0 < share < 100.0, r.stdout + r.stderr
+    for rule in ("second", "calibrated"):
+        r = run(tmp_path, "D", "--null", "200", "--rule", rule, "--group", "15", "--regress", "1.5", seeds=seeds)
+        assert "refused: 100.0% of the splits" in r.stdout, (rule, r.stdout + r.stderr)
+    r = run(tmp_path, "D", "--null", "200", "--rule", "calibrated", "--group", "15", "--regress", "1.5",
+            "--regress-only", "b", seeds=seeds)
+    assert "refused: 100.0% of the splits" in r.stdout and "  b rot: 100.0%" in r.stdout, r.stdout
+    a = [float(l.split(": ")[1].rstrip("%")) for l in r.stdout.splitlines() if l.startswith("  a ")]
+    assert all(x < 5.0 for x in a), r.stdout  # the untouched sequence refuses a split only by chance
+    # too few seeds for two groups
+    r = run(tmp_path, "D", "--null", "10", "--group", "16", seeds=seeds)
+    assert r.returncode != 0 and "at least 32 seeds" in (r.stdout + r.stderr)
+
+
+def test_calibrated_rule_verdicts(tmp_path):
+    """The calibrated rule refuses a candidate whose runs lie clearly above the default's on one cell, or
+    whose geometric mean is beyond 1.03 (ATE), and passes one drawn from the same spread."""
+    seeds = tuple(range(75, 90))
+    write_runs(tmp_path, "D", {"a": spread_runs(15, 1.0, 0.01), "b": spread_runs(15, 0.5, 0.02)}, seeds)
+    write_runs(tmp_path, "same", {"a": spread_runs(15, 1.0, 0.01)[::-1], "b": spread_runs(15, 0.5, 0.02)},
+               seeds)
+    # every run of b above every run of the default: refused on that cell
+    write_runs(tmp_path, "above", {"a": spread_runs(15, 0.9, 0.01), "b": spread_runs(15, 0.9, 0.02)}, seeds)
+    # within the spread on each cell (p above 0.002) but 4 % worse on the whole
+    write_runs(tmp_path, "mean", {"a": spread_runs(15, 1.04, 0.01), "b": spread_runs(15, 0.52, 0.02)}, seeds)
+    r = run(tmp_path, "D", "same", "--rule", "calibrated", seeds=seeds)
+    assert r.returncode == 0 and "verdict: PASS" in r.stdout, r.stdout + r.stderr
+    r = run(tmp_path, "D", "above", "--rule", "calibrated", seeds=seeds)
+    assert r.returncode == 1 and "b ate" in r.stdout and "a ate" not in r.stdout.split("verdict")[1], r.stdout
+    r = run(tmp_path, "D", "mean", "--rule", "calibrated", seeds=seeds)
+    assert r.returncode == 1 and "geometric mean ate" in r.stdout, r.stdout
+
+
+def test_candidate_seeds_and_bad_options(tmp_path):
+    """--candidate-seeds reads the candidate's runs of other seeds; unknown rules, a non-positive number of
+    splits or a --null with candidates are usage errors."""
+    write_runs(tmp_path, "D", {"a": [(1.0, 0.1, 0)] * 5})
+    write_runs(tmp_path, "C", {"a": [(0.9, 0.1, 0)] * 5}, (5, 6, 7, 8, 9))
+    r = run(tmp_path, "D", "C", "--candidate-seeds", "5 6 7 8 9")
+    assert r.returncode == 0 and "5, 6, 7, 8, 9 (candidate)" in r.stdout, r.stdout + r.stderr
+    for bad in (["--rule", "third"], ["--null", "0"], ["--null", "x"], ["--regress", "0"], ["--null", "5", "C"]):
+        r = run(tmp_path, "D", *bad)
+        assert r.returncode == 2, (bad, r.stdout, r.stderr)
