@@ -179,7 +179,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->map_min_points = 20;
     cfg->map_init_parallax_deg = 1.0;
     cfg->map_init_wait_s = 0.0;
-    cfg->chain_scale_sigmas = 0.0;
+    cfg->chain_scale_sigmas = 3.0;
     cfg->map_tri_parallax_deg = 0.5;
     cfg->map_kf_baseline = 0.1;
     cfg->map_kf_points_ratio = 0.8;

@@ -40,11 +40,11 @@
 /* the VO and the map with the defaults: the balanced preset's tracker, or the basic preset's in a build
    without the affine refinement (TVO_WITH_AFFINE 0) */
 #if TVO_WITH_AFFINE
-#define EXPECT_VO 0x466c59a7738d7312ULL
-#define EXPECT_MAP 0xbda1f5ed227be232ULL
+#define EXPECT_VO 0xb5edd1663c767326ULL
+#define EXPECT_MAP 0xd78c0f2b5143e3ceULL
 #else
 #define EXPECT_VO 0xca2d97807cbf5eabULL
-#define EXPECT_MAP 0x6019563258239bf5ULL
+#define EXPECT_MAP 0x12e925834057473cULL
 #endif
 /* ==== end of EXPECTED DIGESTS ==== */
 
