@@ -44,7 +44,7 @@
 #define EXPECT_MAP 0xd78c0f2b5143e3ceULL
 #else
 #define EXPECT_VO 0xca2d97807cbf5eabULL
-#define EXPECT_MAP 0x12e925834057473cULL
+#define EXPECT_MAP 0x6019563258239bf5ULL
 #endif
 /* ==== end of EXPECTED DIGESTS ==== */
 

@@ -1156,10 +1156,12 @@ static void test_bad_input(void **state)
     }
 }
 
-/* The tracker and window fields the presets set (vo.h); the rest of every preset is the basic preset's. */
+/* The tracker, window and chain fields the presets set (vo.h); the rest of every preset is the basic
+ * preset's. */
 static void expect_tracker(const tvo_vo_config *c, int32_t affine, int32_t window, int32_t fixed,
-                           int32_t pred, int32_t pred_levels, int32_t pred_win)
+                           int32_t pred, int32_t pred_levels, int32_t pred_win, double chain_sigmas)
 {
+    assert_true(c->chain_scale_sigmas == chain_sigmas);
     assert_int_equal(c->affine_win_size, affine);
     assert_int_equal(c->map_window, window);
     assert_int_equal(c->map_ba_fixed, fixed);
@@ -1177,6 +1179,7 @@ static void copy_tracker(tvo_vo_config *c, const tvo_vo_config *from)
     c->map_prediction = from->map_prediction;
     c->lk.pred_levels = from->lk.pred_levels;
     c->lk.pred_win_size = from->lk.pred_win_size;
+    c->chain_scale_sigmas = from->chain_scale_sigmas;
 }
 
 /* The presets (vo.h): the default is the balanced preset in a build with the affine refinement and the
@@ -1193,14 +1196,14 @@ static void test_presets(void **state)
     assert_memory_equal(&c, &def, sizeof(c));
 
     assert_int_equal(tvo_vo_config_preset(&basic, &cam, TVO_VO_PRESET_BASIC), TVO_OK);
-    expect_tracker(&basic, 0, 6, 2, 0, 0, 0);
+    expect_tracker(&basic, 0, 6, 2, 0, 0, 0, 0.0);
     assert_true(tvo_vo_required_size(&basic) > 0);
     c = basic;
     copy_tracker(&c, &def);
     assert_memory_equal(&c, &def, sizeof(c)); /* the default differs from basic in the tracker only */
 
     assert_int_equal(tvo_vo_config_preset(&c, &cam, TVO_VO_PRESET_SMALL), TVO_OK);
-    expect_tracker(&c, 0, 5, 2, 0, 0, 0);
+    expect_tracker(&c, 0, 5, 2, 0, 0, 0, 0.0);
     assert_int_equal(c.max_tracks, 120);
     assert_int_equal(c.min_tracks, 80);
     assert_int_equal(c.keyframe_min_tracks, 40);
@@ -1222,14 +1225,14 @@ static void test_presets(void **state)
     assert_memory_equal(&c, &basic, sizeof(c));
 
 #if TVO_WITH_AFFINE
-    expect_tracker(&def, 21, 8, 4, 2, 2, 11);
+    expect_tracker(&def, 21, 8, 4, 2, 2, 11, 3.0);
     assert_true(tvo_vo_required_size(&def) > tvo_vo_required_size(&basic));
 
     assert_int_equal(tvo_vo_config_preset(&c, &cam, TVO_VO_PRESET_BALANCED), TVO_OK);
     assert_memory_equal(&c, &def, sizeof(c));
 
     assert_int_equal(tvo_vo_config_preset(&c, &cam, TVO_VO_PRESET_ACCURATE), TVO_OK);
-    expect_tracker(&c, 21, 8, 4, 0, 0, 0);
+    expect_tracker(&c, 21, 8, 4, 0, 0, 0, 3.0);
     assert_int_equal(tvo_vo_required_size(&c), tvo_vo_required_size(&def));
     copy_tracker(&c, &basic);
     assert_memory_equal(&c, &basic, sizeof(c));

@@ -215,10 +215,11 @@ typedef struct tvo_vo_config {
                                    show beyond their noise (shrunk by that much), and keeps its length
                                    otherwise. 0: every chain step has the same length (one unit a frame
                                    before the first map, the map's last speed after a loss). [0, 100];
-                                   default 3 (docs/design.md, "The chain's step length"; against 0:
-                                   0.88 times the ATE over the accuracy sequences, 0.81 times on
-                                   degraded, jerky and reversed copies, docs/budget.md, "A
-                                   twenty-third rule") */
+                                   default 3 in the balanced and accurate presets (against 0: 0.88 times
+                                   the ATE over the accuracy sequences, 0.81 times on degraded, jerky
+                                   and reversed copies), 0 in the basic and small ones, whose tracker
+                                   it costs the KITTI 01 highway a quarter of its ATE (docs/design.md,
+                                   "The chain's step length"; docs/budget.md, "A twenty-third rule") */
     double map_tri_parallax_deg;  /* a track is triangulated when its rays are this far apart, (0, 30];
                                    default 0.5 (1 suits a car's camera: docs/camera.md); the first map
                                    falls back to 0.5 when too few of its points reach a higher value */
@@ -283,7 +284,8 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
  *                          2 pyramid levels with 11x11 windows before that (map_prediction 2,
  *                          lk.pred_levels 2, lk.pred_win_size 11; a frame that loses more than half of
  *                          them tracks those again the full way, pred_rescue), a window of 8 keyframes
- *                          with 4 fixed (map_window 8, map_ba_fixed 4). On the sequences of
+ *                          with 4 fixed (map_window 8, map_ba_fixed 4), the chain's steps following the
+ *                          relative scale before the map (chain_scale_sigmas 3). On the sequences of
  *                          docs/budget.md 0.45 times the basic preset's ATE and 0.48 times its rotation
  *                          error, for 0.55-1.05 times its instructions; about 1,000 more bytes a track.
  *                          Needs a build with the affine refinement (TVO_WITH_AFFINE, options.h).
@@ -291,8 +293,9 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
  *                          more accurate than balanced on the real KITTI 07 and 06, for 1.2-1.3 times the
  *                          basic preset's instructions and 1.45-1.6 times the two-view time per frame.
  *                          Needs the affine refinement.
- * TVO_VO_PRESET_BASIC      translation-only LK on every track, a window of 6 keyframes with 2 fixed
- *                          (affine_win_size 0, map_prediction 0, map_window 6, map_ba_fixed 2): the
+ * TVO_VO_PRESET_BASIC      translation-only LK on every track, a window of 6 keyframes with 2 fixed, chain
+ *                          steps of one length (affine_win_size 0, map_prediction 0, map_window 6,
+ *                          map_ba_fixed 2, chain_scale_sigmas 0): the
  *                          defaults before version 0.x, and of a build without the affine refinement;
  *                          the least memory of the full-size presets.
  * TVO_VO_PRESET_SMALL      sized for a QVGA (320x240) camera on a microcontroller: the basic preset with
