@@ -249,7 +249,8 @@ def test_replay_presets(tmp_path):
                     "--frames", "40", "--seed", "2", "--quiet"], check=True)
     outs = {}
     basic_fields = ["--set", "affine_win_size=0", "--set", "map_window=6", "--set", "map_ba_fixed=2", "--set",
-                    "map_prediction=0", "--set", "lk.pred_levels=0", "--set", "lk.pred_win_size=0"]
+                    "map_prediction=0", "--set", "lk.pred_levels=0", "--set", "lk.pred_win_size=0", "--set",
+                    "chain_scale_sigmas=0"]
     for tag, args in (("default", []), ("preset_default", ["--preset", "default"]),
                       ("accurate", ["--preset", "accurate"]),
                       ("fields", ["--set", "map_prediction=0", "--set", "lk.pred_levels=0", "--set",
@@ -257,7 +258,8 @@ def test_replay_presets(tmp_path):
                       ("balanced", ["--preset", "balanced"]),
                       ("balanced_fields", ["--preset", "basic", "--set", "affine_win_size=21", "--set", "map_window=8",
                                            "--set", "map_ba_fixed=4", "--set", "map_prediction=2", "--set",
-                                           "lk.pred_levels=2", "--set", "lk.pred_win_size=11"]),
+                                           "lk.pred_levels=2", "--set", "lk.pred_win_size=11", "--set",
+                                           "chain_scale_sigmas=3"]),
                       ("basic", ["--preset", "basic"]), ("basic_fields", basic_fields),
                       ("accurate_off", ["--preset", "accurate"] + basic_fields)):
         outs[tag] = tmp_path / f"{tag}.txt"
