@@ -89,11 +89,14 @@ def load(outdir, label, data, seeds=SEEDS):
     return runs
 
 
-def judge(D, C):
-    """Rows and the verdict of candidate C against default D."""
+def judge_cells(D, C, cell, gm_max, same_count):
+    """Rows and the verdict of candidate C against default D: cell(d_runs, c_runs) gives each sequence's
+    and figure's (row cell, passes, log of the median ratio); the geometric means of the median ratios
+    must be at most gm_max[figure]; the median count of LOST frames must not grow. same_count: a sequence
+    whose candidate has another number of runs counts as missing."""
     rows, fails, logs = [], [], {"ate": [], "rot": []}
     for seq, d in D.items():
-        if seq not in C or len(C[seq]["rot"]) != len(d["rot"]):
+        if seq not in C or (same_count and len(C[seq]["rot"]) != len(d["rot"])):
             fails.append(f"{seq} missing")
             continue
         c = C[seq]
@@ -102,10 +105,9 @@ def judge(D, C):
             if d[f][0] is None:
                 row[f] = None
                 continue
-            dm, cm, dmax = (sig4(float(np.median(d[f]))), sig4(float(np.median(c[f]))), sig4(max(d[f])))
-            row[f] = (dm, dmax, cm, cm <= dmax)
-            logs[f].append(math.log(cm / dm))
-            if cm > dmax:
+            row[f], ok, log_ratio = cell(d[f], c[f])
+            logs[f].append(log_ratio)
+            if not ok:
                 fails.append(f"{seq} {f}")
         dl, cl = float(np.median(d["lost"])), float(np.median(c["lost"]))
         row["lost"] = (dl, cl)
@@ -114,45 +116,35 @@ def judge(D, C):
         rows.append(row)
     gm = {f: math.exp(sum(v) / len(v)) if v else float("nan") for f, v in logs.items()}
     for f in ("ate", "rot"):
-        if not sig4(gm[f]) <= 1.0:
+        if not sig4(gm[f]) <= gm_max[f]:
             fails.append(f"geometric mean {f} {gm[f]:.4f}")
     return rows, gm, fails
+
+
+def second_cell(dv, cv):
+    """The second rule's cell: the candidate's median at most the default's largest run."""
+    dm, cm, dmax = sig4(float(np.median(dv))), sig4(float(np.median(cv))), sig4(max(dv))
+    return (dm, dmax, cm, cm <= dmax), cm <= dmax, math.log(cm / dm)
+
+
+def calibrated_cell(dv, cv):
+    """The calibrated rule's cell: a one-sided Mann-Whitney test of "the candidate's runs are larger than
+    the default's" at CAL_ALPHA, on the figures at 4 significant digits."""
+    from scipy.stats import mannwhitneyu
+    dv, cv = [sig4(x) for x in dv], [sig4(x) for x in cv]
+    dm, cm = sig4(float(np.median(dv))), sig4(float(np.median(cv)))
+    p = 1.0 if dv == cv or len(set(dv + cv)) == 1 else float(mannwhitneyu(cv, dv, alternative="greater").pvalue)
+    return (dm, cm, p, p >= CAL_ALPHA), p >= CAL_ALPHA, math.log(cm / dm)
+
+
+def judge(D, C):
+    """The second rule: every median within the default's runs, geometric means at most 1."""
+    return judge_cells(D, C, second_cell, {"ate": 1.0, "rot": 1.0}, True)
 
 
 def judge_calibrated(D, C):
-    """Rows and the verdict of candidate C against default D under the calibrated rule: per sequence and
-    figure, a one-sided Mann-Whitney test of "C's runs are larger than D's" at CAL_ALPHA; the geometric
-    mean of the median ratios at most CAL_GM; no more LOST frames (median)."""
-    from scipy.stats import mannwhitneyu
-    rows, fails, logs = [], [], {"ate": [], "rot": []}
-    for seq, d in D.items():
-        if seq not in C:
-            fails.append(f"{seq} missing")
-            continue
-        c = C[seq]
-        row = {"seq": seq}
-        for f in ("ate", "rot"):
-            if d[f][0] is None:
-                row[f] = None
-                continue
-            dv, cv = [sig4(x) for x in d[f]], [sig4(x) for x in c[f]]
-            dm, cm = sig4(float(np.median(dv))), sig4(float(np.median(cv)))
-            p = 1.0 if dv == cv or len(set(dv + cv)) == 1 else \
-                float(mannwhitneyu(cv, dv, alternative="greater").pvalue)
-            row[f] = (dm, cm, p, p >= CAL_ALPHA)
-            logs[f].append(math.log(cm / dm))
-            if p < CAL_ALPHA:
-                fails.append(f"{seq} {f}")
-        dl, cl = float(np.median(d["lost"])), float(np.median(c["lost"]))
-        row["lost"] = (dl, cl)
-        if cl > dl:
-            fails.append(f"{seq} lost")
-        rows.append(row)
-    gm = {f: math.exp(sum(v) / len(v)) if v else float("nan") for f, v in logs.items()}
-    for f in ("ate", "rot"):
-        if not sig4(gm[f]) <= CAL_GM[f]:
-            fails.append(f"geometric mean {f} {gm[f]:.4f}")
-    return rows, gm, fails
+    """The calibrated rule: no cell refused by its Mann-Whitney test, geometric means at most CAL_GM."""
+    return judge_cells(D, C, calibrated_cell, CAL_GM, False)
 
 
 RULES = {"second": judge, "calibrated": judge_calibrated}
