@@ -183,7 +183,6 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->map_min_points = 20;
     cfg->map_init_parallax_deg = 1.0;
     cfg->map_init_wait_s = 0.0;
-    cfg->chain_scale_sigmas = 0.0;
     cfg->map_tri_parallax_deg = 0.5;
     cfg->map_kf_baseline = 0.1;
     cfg->map_kf_points_ratio = 0.8;
@@ -195,8 +194,8 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->map_rot_prior = 100.0;
     cfg->clock = NULL;
     cfg->clock_user = NULL;
-    /* the tracker and window: the balanced preset's (docs/budget.md, "A ninth rule"), or the basic
-       tracker's in a build without the affine refinement */
+    /* the tracker, window and chain step: the balanced preset's (docs/budget.md, "A ninth rule"), or
+       the basic preset's in a build without the affine refinement */
     if (TVO_WITH_AFFINE)
         preset_balanced(cfg);
     else
