@@ -454,7 +454,8 @@ int main(int argc, char **argv)
     long keyframe_frames = 0; /* frames whose rotation is the keyframe rotation */
     long counts_map[TVO_MAP_STATE_COUNT] = {0}, map_keyframes = 0, ba_turn_refused = 0, map_store_full = 0,
          gain_retries = 0, pred_rescues = 0;
-    long affine_tried = 0, affine_refined = 0; /* the affine refinement's attempts and successes */
+    long affine_tried = 0, affine_refined = 0, affine_ended = 0; /* the affine refinement's attempts,
+                                                                      successes and tracks ended */
     map_scale msc;
     tvo_pose T_w_c_vo_prev = {{0}, {0}}; /* the VO's world pose of the previous frame (map on) */
     int vo_reset_pending =
@@ -709,6 +710,7 @@ int main(int argc, char **argv)
         pred_rescues += res.pred_rescue != 0;
         affine_tried += res.affine_tried;
         affine_refined += res.affine_refined;
+        affine_ended += res.affine_ended;
         if (res.keyframe_age > 0)
             keyframe_frames++;
         if (tracks != NULL) {
@@ -882,7 +884,8 @@ int main(int argc, char **argv)
             fprintf(js, "},\n  \"keyframe_rotation_frames\": %ld,\n  \"gain_retries\": %ld,\n",
                     keyframe_frames, gain_retries);
             fprintf(js, "  \"pred_rescues\": %ld,\n", pred_rescues);
-            fprintf(js, "  \"affine\": {\"tried\": %ld, \"refined\": %ld},\n", affine_tried, affine_refined);
+            fprintf(js, "  \"affine\": {\"tried\": %ld, \"refined\": %ld, \"ended\": %ld},\n", affine_tried,
+                    affine_refined, affine_ended);
             fprintf(js,
                     "  \"map\": {\"enabled\": %d, \"keyframes\": %ld, \"losses\": %ld, "
                     "\"ba_turn_refused\": %ld, \"store_full\": %ld, \"scale\": %.9g, \"states\": {",

@@ -375,7 +375,7 @@ int tvo_aff_refine_kernel(const uint8_t *tpl, const tvo_aff_model *model, int32_
         tvo_aff_sums sm;
         double b[6], dp[6], g, mean_i, var_i;
         if (!window_inside(A, t, h, img))
-            return 0;
+            return TVO_AFF_AT_BORDER;
             /* one pass over the warped window: the patch's sums, its correlation with the template and
            sum sd I */
 #if TVO_AFF_SIMD
@@ -403,8 +403,10 @@ int tvo_aff_refine_kernel(const uint8_t *tpl, const tvo_aff_model *model, int32_
                 (double)eps;
     }
     det = A[0] * A[3] - A[1] * A[2];
-    if (!converged || !(det > 0.25 && det < 4.0) || !window_inside(A, t, h, img))
+    if (!converged || !(det > 0.25 && det < 4.0))
         return 0;
+    if (!window_inside(A, t, h, img))
+        return TVO_AFF_AT_BORDER;
     if (ncc != NULL)
         *ncc = (float)corr; /* of the patch before the last step, which moved no corner by more than eps */
     for (int i = 0; i < 4; ++i)

@@ -66,7 +66,7 @@ struct tvo_vo {
     tvo_pose T_c_w;    /* the last frame's pose in the VO's world (world -> camera) */
     double chain_gain; /* the two-view chain's step length over its base (chain_scale_sigmas) */
     double rs_se;      /* the standard error of log(rel_scale) of this frame (with chain_scale_sigmas) */
-    int32_t aff_tried, aff_refined; /* this frame's affine refinements (tvo_vo_result.affine_*) */
+    int32_t aff_tried, aff_refined, aff_ended; /* this frame's affine refinements (tvo_vo_result.affine_*) */
     int32_t cover_ref; /* cells of the coverage grid the tracks covered after the last detection */
     /* affine refinement (cfg.affine_win_size > 0, else all NULL): each track's template, its model
        and warp, valid where hast[i] */
@@ -178,6 +178,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->track_prediction = 0; /* on: larger motion per frame tracked, but the EuRoC renders got worse */
     cfg->affine_step = 1;
     cfg->affine_at_keyframes = 0;
+    cfg->affine_end_share = 0.0;
     cfg->map = 1;
     cfg->map_max_landmarks = 0; /* 2 x max_tracks */
     cfg->map_min_points = 20;
@@ -277,6 +278,8 @@ static int config_valid(const tvo_vo_config *cfg)
          (cfg->affine_win_size & 1) == 0))
         return 0;
     if (cfg->affine_at_keyframes != 0 && cfg->affine_at_keyframes != 1)
+        return 0;
+    if (!(cfg->affine_end_share >= 0.0 && cfg->affine_end_share <= 1.0))
         return 0;
     if (cfg->affine_step < 1 || cfg->affine_step > 15 ||
         (cfg->affine_win_size != 0 && !tvo_aff_step_ok(cfg->affine_win_size, cfg->affine_step)))
@@ -1196,8 +1199,9 @@ typedef struct frame_ctx {
 #if TVO_WITH_AFFINE
 /* Track i's alignment to its template in l0, from `at` (where LK left it) with the warp of its last
  * refinement: 1 when it is taken (converged, correlated, within TVO_VO_AFF_MAX_MOVE px of `at`), with
- * the new warp in *aw and the point in *out; the caller commits it. Either way the track is counted and
- * left without a template until then (hast[i] 0: a new one is taken in finish_frame). */
+ * the new warp in *aw and the point in *out; the caller commits it; TVO_AFF_AT_BORDER when the window
+ * reached the image's border, 0 when the alignment failed. Either way the track is counted and left
+ * without a template until then (hast[i] 0: a new one is taken in finish_frame). */
 static int affine_align(tvo_vo *vo, int32_t i, const tvo_image *l0, tvo_point2f at, tvo_aff_warp *aw,
                         tvo_point2f *out)
 {
@@ -1209,10 +1213,12 @@ static int affine_align(tvo_vo *vo, int32_t i, const tvo_image *l0, tvo_point2f 
     aw->t[0] += at.x - ox;
     aw->t[1] += at.y - oy;
     vo->hast[i] = 0;
-    if (!tvo_aff_refine(vo->tpl + (size_t)i * tvo_aff_template_bytes(side), &vo->am[i], side,
-                        vo->cfg.affine_step, l0, aw, TVO_VO_AFF_ITERS, TVO_VO_AFF_EPS, vo->scratch,
-                        vo->scratch_size, &ncc) ||
-        !(ncc >= TVO_VO_AFF_MIN_NCC))
+    const int r = tvo_aff_refine(vo->tpl + (size_t)i * tvo_aff_template_bytes(side), &vo->am[i], side,
+                                 vo->cfg.affine_step, l0, aw, TVO_VO_AFF_ITERS, TVO_VO_AFF_EPS, vo->scratch,
+                                 vo->scratch_size, &ncc);
+    if (r != 1)
+        return r == TVO_AFF_AT_BORDER ? TVO_AFF_AT_BORDER : 0;
+    if (!(ncc >= TVO_VO_AFF_MIN_NCC))
         return 0;
     tvo_aff_point(aw, &px, &py);
     if (!((px - at.x) * (px - at.x) + (py - at.y) * (py - at.y) < TVO_VO_AFF_MAX_MOVE * TVO_VO_AFF_MAX_MOVE))
@@ -1232,17 +1238,39 @@ static void affine_commit(tvo_vo *vo, int32_t i, const tvo_aff_warp *aw)
 
 static void affine_refine(tvo_vo *vo, const frame_ctx *fc)
 {
+    int32_t tried = 0, failed = 0;
     if (vo->hast == NULL)
         return;
     const tvo_image l0 = tvo_pyramid_level(fc->pc, 0);
+    /* kmask (free from the end of LK to the pose stage) flags the tracks whose alignment failed */
+    memset(vo->kmask, 0, (size_t)vo->n);
     for (int32_t i = 0; i < vo->n; ++i) {
         tvo_aff_warp aw;
         tvo_point2f p;
-        if (!vo->st[i] || !vo->hast[i] || !affine_align(vo, i, &l0, vo->next[i], &aw, &p))
+        int r;
+        if (!vo->st[i] || !vo->hast[i])
             continue;
+        r = affine_align(vo, i, &l0, vo->next[i], &aw, &p);
+        if (r == TVO_AFF_AT_BORDER)
+            continue;
+        ++tried;
+        if (r != 1) {
+            vo->kmask[i] = 1;
+            ++failed;
+            continue;
+        }
         vo->next[i] = p;
         affine_commit(vo, i, &aw);
     }
+    /* cfg.affine_end_share: in a frame where few alignments fail, a failure is the track's (a corner on a
+       depth edge slides along it), where many fail it is the images' (blur, low contrast); a window at
+       the image's border is neither, and was not counted */
+    if (failed > 0 && (double)failed <= vo->cfg.affine_end_share * (double)tried)
+        for (int32_t i = 0; i < vo->n; ++i)
+            if (vo->kmask[i]) {
+                vo->st[i] = 0;
+                vo->aff_ended++;
+            }
 }
 
 /* With affine_at_keyframes: the refinement of a frame that becomes a keyframe (the map's refine hook,
@@ -1259,7 +1287,7 @@ static void affine_refine_keyframe(void *ctx)
         tvo_aff_warp aw;
         tvo_point2f p;
         tvo_point2d xn;
-        if (!vo->hast[i] || !affine_align(vo, i, &l0, vo->pts[i], &aw, &p) ||
+        if (!vo->hast[i] || affine_align(vo, i, &l0, vo->pts[i], &aw, &p) != 1 ||
             tvo_camera_undistort_point(&vo->cfg.camera, p.x, p.y, &xn) != TVO_OK)
             continue;
         vo->pts[i] = p;
@@ -1666,6 +1694,7 @@ static void finish_frame(tvo_vo *vo, const frame_ctx *fc, int64_t t_ns, tvo_vo_r
     res->tracks = vo->n;
     res->affine_tried = vo->aff_tried;
     res->affine_refined = vo->aff_refined;
+    res->affine_ended = vo->aff_ended;
     res->T_w_c = tvo_pose_inverse(&vo->T_c_w);
     if (!tvo_pose_is_finite(&res->T_w_c)) { /* cannot happen: every pose taken is checked; never emit it */
         vo->T_c_w = tvo_pose_identity();
@@ -1721,7 +1750,7 @@ tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_
         return TVO_ERR_ARG;
     memset(&fc, 0, sizeof(fc));
     fc.kf = KF_NONE;
-    vo->aff_tried = vo->aff_refined = 0;
+    vo->aff_tried = vo->aff_refined = vo->aff_ended = 0;
     t0 = now_ns(vo);
     fc.pc = &vo->pyr[vo->cur];
     fc.pp = &vo->pyr[vo->cur ^ 1];

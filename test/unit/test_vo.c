@@ -586,7 +586,7 @@ static void room_project(const tvo_pose *T_w_c, const double X[3], double *x, do
  * the median of those distances and their count. */
 #define AFF_FRAMES 60
 #define AFF_MAX_IDS 4096
-static double run_walk_tracks(int32_t affine, int32_t at_keyframes, int *count, long aff[2])
+static double run_walk_tracks(int32_t affine, int32_t at_keyframes, double end_share, int *count, long aff[3])
 {
     static double X0[AFF_MAX_IDS][3];
     static uint8_t have[AFF_MAX_IDS];
@@ -598,10 +598,11 @@ static double run_walk_tracks(int32_t affine, int32_t at_keyframes, int *count, 
     int32_t n = 0;
     tvo_pose T = tvo_pose_identity();
     memset(have, 0, sizeof(have));
-    aff[0] = aff[1] = 0;
+    aff[0] = aff[1] = aff[2] = 0;
     tvo_vo_config_default(&f.cfg, &cam);
     f.cfg.affine_win_size = affine;
     f.cfg.affine_at_keyframes = at_keyframes;
+    f.cfg.affine_end_share = end_share;
     open_vo(&f);
     for (int k = 0; k < AFF_FRAMES; ++k) {
         const double dir[3] = {0.1, 0.05, 1.0};
@@ -611,8 +612,13 @@ static double run_walk_tracks(int32_t affine, int32_t at_keyframes, int *count, 
         render(&T, f.img);
         assert_int_equal(tvo_vo_process(f.vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
         assert_true(res.affine_refined >= 0 && res.affine_refined <= res.affine_tried);
+        /* a track is ended only when its alignment failed, and only in a frame where at most end_share of
+           the alignments failed (the border cases, counted in tried, make that share smaller still) */
+        assert_true(res.affine_ended >= 0 && res.affine_ended <= res.affine_tried - res.affine_refined);
+        assert_true(res.affine_ended == 0 || res.affine_ended <= end_share * res.affine_tried);
         aff[0] += res.affine_tried;
         aff[1] += res.affine_refined;
+        aff[2] += res.affine_ended;
         assert_int_equal(tvo_vo_tracks(f.vo, t, 300, &n), TVO_OK);
         for (int32_t i = 0; i < n && i < 300; ++i)
             if (t[i].age == 0 && t[i].id < AFF_MAX_IDS) {
@@ -646,10 +652,12 @@ static double run_walk_tracks(int32_t affine, int32_t at_keyframes, int *count, 
  * without the refinement, more than with it on every frame. */
 static void test_affine_refinement(void **state)
 {
-    int n_on, n_off, n_kf;
-    long a_on[2], a_off[2], a_kf[2];
-    const double on = run_walk_tracks(21, 0, &n_on, a_on), off = run_walk_tracks(0, 0, &n_off, a_off);
-    const double kf = run_walk_tracks(21, 1, &n_kf, a_kf);
+    int n_on, n_off, n_kf, n_end;
+    long a_on[3], a_off[3], a_kf[3], a_end[3];
+    const double on = run_walk_tracks(21, 0, 0.0, &n_on, a_on),
+                 off = run_walk_tracks(0, 0, 0.0, &n_off, a_off);
+    const double kf = run_walk_tracks(21, 1, 0.0, &n_kf, a_kf);
+    const double end = run_walk_tracks(21, 0, 0.1, &n_end, a_end);
     (void)state;
     fprintf(stderr,
             "walk, affine refinements (tried / refined): %ld / %ld every frame, %ld / %ld at keyframes\n",
@@ -667,6 +675,17 @@ static void test_affine_refinement(void **state)
     assert_true(on < 0.15);
     assert_true(on < 0.5 * off);
     assert_true(kf < 0.3 * off);
+    /* cfg.affine_end_share: off, no track is ended; at 0.1 on this sharp scene the few tracks whose
+       alignment fails are ended, and the tracks that stay are as accurate */
+    fprintf(stderr,
+            "walk, affine_end_share 0.1: %ld of %ld alignments failed, %ld tracks ended; median error %.3f "
+            "px "
+            "(%d tracks)\n",
+            a_end[0] - a_end[1], a_end[0], a_end[2], end, n_end);
+    assert_true(a_on[2] == 0 && a_kf[2] == 0 && a_off[2] == 0);
+    assert_true(a_end[2] > 0 && a_end[2] <= a_end[0] - a_end[1]);
+    assert_true(n_end >= 50);
+    assert_true(end < 0.15);
 }
 #else
 /* A build without the affine refinement (TVO_WITH_AFFINE 0) refuses a configuration that asks for it,
@@ -1106,6 +1125,16 @@ static void test_bad_input(void **state)
             for (int i = 0; i < 3; ++i) {
                 bad = f->cfg;
                 bad.affine_at_keyframes = v[i];
+                assert_refused(&bad, f->mem);
+            }
+        }
+        /* the share of failed alignments below which their tracks are ended: [0, 1], 0 (off) by default */
+        {
+            const double v[4] = {-0.01, 1.01, NAN, INFINITY};
+            assert_true(f->cfg.affine_end_share == 0.0);
+            for (int i = 0; i < 4; ++i) {
+                bad = f->cfg;
+                bad.affine_end_share = v[i];
                 assert_refused(&bad, f->mem);
             }
         }

@@ -191,6 +191,16 @@ typedef struct tvo_vo_config {
                                    observations, new landmarks and bundle adjustment), on every track
                                    with a template; the frames between keep LK's positions, which
                                    start from the refined ones. 0: on every frame; default 0 */
+    double affine_end_share;      /* in a frame where at most this share of the affine alignments fails (no
+                                   convergence, a correlation below 0.8, a degenerate warp, more than 2
+                                   px from LK's position; a window that reaches the image's border is
+                                   neither counted nor ended), each track whose alignment failed is ended
+                                   as if LK had lost it, instead of keeping LK's position with a new
+                                   template: where the images are sharp a failure is the track's (a corner
+                                   on a depth edge slides along it). [0, 1], 0: off; default 0 in every
+                                   preset. 0.1 on the renders: 0.855 times the per-frame rotation error,
+                                   MH_01's ATE twice; for a sharp global-shutter camera, not a car's
+                                   (docs/budget.md, "A twenty-seventh rule") */
     /* local map (vo.h header comment, "The local map"): keyframes in a sliding window, landmarks
        triangulated between them, every frame posed by PnP on the landmarks its tracks carry, and a
        windowed bundle adjustment at each new keyframe */
@@ -301,7 +311,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
  * TVO_VO_PRESET_SMALL      sized for a QVGA (320x240) camera on a microcontroller: the basic preset with
  *                          120 tracks (min_tracks 80, keyframe_min_tracks 40, detect.max_corners 120), 3
  *                          pyramid levels (lk.max_level 2), a map of 5 keyframes and 160 landmarks. At
- *                          320x240 the VO needs 229,600 bytes on a Cortex-M7 (tools/run-mcu.sh runs it
+ *                          320x240 the VO needs 229,616 bytes on a Cortex-M7 (tools/run-mcu.sh runs it
  *                          there). */
 typedef enum tvo_vo_preset {
     TVO_VO_PRESET_DEFAULT = 0,
@@ -334,7 +344,8 @@ typedef struct tvo_vo_result {
                                        cfg.affine_at_keyframes); 0 without the refinement */
     int32_t affine_refined;         /* of them, those it moved: the others keep LK's position and take a new
                                        template (no convergence, a correlation below 0.8, more than 2 px from
-                                       LK's position, the window out of the image) */
+                                       LK's position, the window out of the image), or are ended */
+    int32_t affine_ended;           /* of the others, the tracks ended (cfg.affine_end_share); 0 when off */
     int32_t inliers;                /* pose inliers among them */
     int32_t new_corners;            /* corners added by re-detection in this frame */
     int32_t tracks;                 /* tracks carried to the next frame */

@@ -135,17 +135,23 @@ int tvo_aff_take(const tvo_image *img, float x, float y, int32_t side, int32_t s
 /* The track's point under w. */
 void tvo_aff_point(const tvo_aff_warp *w, float *x, float *y);
 
+/* tvo_aff_refine's result when the window reaches the image's border (which says nothing against the
+ * match: the caller may treat it apart from a failure). */
+#define TVO_AFF_AT_BORDER (-1)
+
 /* Refine w so that the template matches img, starting from w as given (its t moved by the caller to
  * where translation LK put the point); side and step as the model was taken with. At most max_iters
- * steps, stopping when a step moves no window corner by more than eps pixels. 1 on success with w updated and *ncc the normalised correlation of
- * the final patch with the template; 0 (w unchanged) when the template is flat, the warp leaves the
- * image, degenerates (determinant outside [1/4, 4]) or does not converge. */
+ * steps, stopping when a step moves no window corner by more than eps pixels. 1 on success with w
+ * updated and *ncc the normalised correlation of the final patch with the template; w unchanged and
+ * TVO_AFF_AT_BORDER when the window leaves the image (at the start, during the steps or at the end), 0
+ * when an argument is bad, the template is flat, the warp degenerates (determinant outside [1/4, 4]) or
+ * does not converge. */
 int tvo_aff_refine(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, int32_t step,
                    const tvo_image *img, tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch,
                    size_t scratch_size, float *ncc);
 
 /* tvo_aff_refine with the portable code for the sums and the template's gradients (portable != 0) or
- * the fastest built in (0): the same results either way. */
+ * the fastest built in (0): the same results (and return values) either way. */
 int tvo_aff_refine_kernel(const uint8_t *tpl, const tvo_aff_model *model, int32_t side, int32_t step,
                           const tvo_image *img, tvo_aff_warp *w, int32_t max_iters, float eps, void *scratch,
                           size_t scratch_size, float *ncc, int portable);
