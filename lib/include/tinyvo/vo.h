@@ -197,10 +197,11 @@ typedef struct tvo_vo_config {
                                    neither counted nor ended), each track whose alignment failed is ended
                                    as if LK had lost it, instead of keeping LK's position with a new
                                    template: where the images are sharp a failure is the track's (a corner
-                                   on a depth edge slides along it). [0, 1], 0: off; default 0 in every
-                                   preset. 0.1 on the renders: 0.855 times the per-frame rotation error,
-                                   MH_01's ATE twice; for a sharp global-shutter camera, not a car's
-                                   (docs/budget.md, "A twenty-seventh rule") */
+                                   on a depth edge slides along it). Not with affine_at_keyframes 1.
+                                   [0, 1], 0: off; default 0 in every preset. 0.1 on the renders: 0.855
+                                   times the per-frame rotation error, MH_01's ATE twice; for a sharp
+                                   global-shutter camera, not a car's (docs/budget.md, "A twenty-seventh
+                                   rule") */
     /* local map (vo.h header comment, "The local map"): keyframes in a sliding window, landmarks
        triangulated between them, every frame posed by PnP on the landmarks its tracks carry, and a
        windowed bundle adjustment at each new keyframe */
