@@ -1217,7 +1217,7 @@ static int affine_align(tvo_vo *vo, int32_t i, const tvo_image *l0, tvo_point2f 
                                  vo->cfg.affine_step, l0, aw, TVO_VO_AFF_ITERS, TVO_VO_AFF_EPS, vo->scratch,
                                  vo->scratch_size, &ncc);
     if (r != 1)
-        return r == TVO_AFF_AT_BORDER ? TVO_AFF_AT_BORDER : 0;
+        return r; /* 0, or TVO_AFF_AT_BORDER */
     if (!(ncc >= TVO_VO_AFF_MIN_NCC))
         return 0;
     tvo_aff_point(aw, &px, &py);

@@ -678,9 +678,8 @@ static void test_affine_refinement(void **state)
     /* cfg.affine_end_share: off, no track is ended; at 0.1 on this sharp scene the few tracks whose
        alignment fails are ended, and the tracks that stay are as accurate */
     fprintf(stderr,
-            "walk, affine_end_share 0.1: %ld of %ld alignments failed, %ld tracks ended; median error %.3f "
-            "px "
-            "(%d tracks)\n",
+            "walk, affine_end_share 0.1: %ld of %ld alignments failed, %ld tracks ended; "
+            "median error %.3f px (%d tracks)\n",
             a_end[0] - a_end[1], a_end[0], a_end[2], end, n_end);
     assert_true(a_on[2] == 0 && a_kf[2] == 0 && a_off[2] == 0);
     assert_true(a_end[2] > 0 && a_end[2] <= a_end[0] - a_end[1]);
