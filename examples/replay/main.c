@@ -453,7 +453,7 @@ int main(int argc, char **argv)
     long counts_state[TVO_VO_STATE_COUNT] = {0}, counts_skip[SKIP_COUNT] = {0};
     long keyframe_frames = 0; /* frames whose rotation is the keyframe rotation */
     long counts_map[TVO_MAP_STATE_COUNT] = {0}, map_keyframes = 0, ba_turn_refused = 0, map_store_full = 0,
-         gain_retries = 0, pred_rescues = 0;
+         gain_retries = 0, pred_rescues = 0, map_refound = 0;
     long affine_tried = 0, affine_refined = 0, affine_ended = 0; /* the affine refinement's attempts,
                                                                       successes and tracks ended */
     map_scale msc;
@@ -711,6 +711,7 @@ int main(int argc, char **argv)
         affine_tried += res.affine_tried;
         affine_refined += res.affine_refined;
         affine_ended += res.affine_ended;
+        map_refound += res.map_refound;
         if (res.keyframe_age > 0)
             keyframe_frames++;
         if (tracks != NULL) {
@@ -888,8 +889,10 @@ int main(int argc, char **argv)
                     affine_refined, affine_ended);
             fprintf(js,
                     "  \"map\": {\"enabled\": %d, \"keyframes\": %ld, \"losses\": %ld, "
-                    "\"ba_turn_refused\": %ld, \"store_full\": %ld, \"scale\": %.9g, \"states\": {",
+                    "\"ba_turn_refused\": %ld, \"store_full\": %ld, \"refound\": %ld, \"scale\": %.9g, "
+                    "\"states\": {",
                     (int)cfg.map, map_keyframes, counts_map[TVO_MAP_LOST], ba_turn_refused, map_store_full,
+                    map_refound,
                     msc.s);
             for (int k = 0; k < TVO_MAP_STATE_COUNT; ++k)
                 fprintf(js, "%s\"%s\": %ld", k ? ", " : "", map_state_names[k], counts_map[k]);

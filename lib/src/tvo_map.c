@@ -192,6 +192,8 @@ tvo_status tvo_map_init(tvo_map *m, const tvo_vo_config *cfg, tvo_arena *a)
     m->lm = (tvo_map_lm *)tvo_arena_alloc(a, (size_t)m->max_lm * sizeof(tvo_map_lm));
     if (m->lm == NULL)
         return TVO_ERR_NO_MEMORY;
+    for (int32_t i = 0; i < m->max_lm; ++i)
+        m->lm[i].gen = 0;
     tvo_map_reset(m);
     return TVO_OK;
 }
@@ -313,6 +315,7 @@ static int32_t lm_alloc(tvo_map *m)
             m->lm[j].alive = 1;
             m->lm[j].n_obs = 0;
             m->lm[j].tracked = 0;
+            m->lm[j].gen++;
             m->n_lm++;
             return j;
         }
@@ -1378,4 +1381,23 @@ void tvo_map_new_tracks(const tvo_map *m, tvo_map_tracks *tr, int32_t first)
         tr->tri_x[i] = tr->x[i];
         tr->tri_fr[i] = tr->x_ok[i] ? m->serial : -1;
     }
+}
+
+int tvo_map_refind_point(const tvo_map *m, int32_t j, uint32_t gen, const tvo_pose *T_c_w, tvo_point2d *xn)
+{
+    double p[3];
+    if (j < 0 || j >= m->max_lm || !m->lm[j].alive || m->lm[j].tracked || m->lm[j].gen != gen || !m->active)
+        return 0;
+    tvo_pose_transform_point(T_c_w, m->lm[j].X, p);
+    if (!(p[2] > 0.0))
+        return 0;
+    xn->x = p[0] / p[2];
+    xn->y = p[1] / p[2];
+    return isfinite(xn->x) && isfinite(xn->y);
+}
+
+void tvo_map_refound(tvo_map *m, int32_t j)
+{
+    if (j >= 0 && j < m->max_lm && m->lm[j].alive)
+        m->lm[j].tracked = 1;
 }

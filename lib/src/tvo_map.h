@@ -41,11 +41,13 @@ typedef struct tvo_map_kf {
 } tvo_map_kf;
 
 /* A landmark: a world point, the number of window keyframes that observe it, and whether a live
- * track carries it. Free when !alive. */
+ * track carries it. Free when !alive. gen counts the landmarks its slot has held, so that a landmark is
+ * told apart from a later one in the same slot (tvo_map_refind_point). */
 typedef struct tvo_map_lm {
     double X[3];
     int16_t n_obs;
     uint8_t alive, tracked;
+    uint32_t gen;
 } tvo_map_lm;
 
 /* The VO's tracks as the map sees them: parallel arrays of length n, owned by the VO. The map reads x
@@ -156,5 +158,12 @@ int tvo_map_predict_pose(const tvo_map *m, int64_t t_ns, int64_t prev_t_ns, tvo_
 
 /* Tracks added after tvo_map_process (re-detection) start their wait for triangulation in this frame. */
 void tvo_map_new_tracks(const tvo_map *m, tvo_map_tracks *tr, int32_t first);
+
+/* For finding a landmark again (cfg.map_refind): 1 when slot j holds landmark generation gen, alive,
+ * carried by no track and in front of the camera T_c_w, with *xn its normalised projection; else 0. */
+int tvo_map_refind_point(const tvo_map *m, int32_t j, uint32_t gen, const tvo_pose *T_c_w, tvo_point2d *xn);
+
+/* Landmark j is carried by a track again (the VO set the track's lm to j). */
+void tvo_map_refound(tvo_map *m, int32_t j);
 
 #endif /* TVO_MAP_H */

@@ -74,6 +74,19 @@ struct tvo_vo {
     tvo_aff_warp *aw;  /* [max_tracks] */
     tvo_aff_model *am; /* [max_tracks] */
     uint8_t *hast;     /* [max_tracks] */
+#if TVO_WITH_AFFINE
+    /* landmarks found again (cfg.map_refind, else NULL): a ring of the templates of ended landmark tracks,
+       each with its landmark's slot (-1: empty) and generation, its model, its last warp and the
+       searches in view that failed */
+    int32_t *rf_lm;      /* [map_refind] */
+    uint32_t *rf_gen;    /* [map_refind] */
+    uint8_t *rf_miss;    /* [map_refind] */
+    uint8_t *rf_tpl;     /* [map_refind x tvo_aff_template_bytes(affine_win_size)] */
+    tvo_aff_model *rf_am; /* [map_refind] */
+    tvo_aff_warp *rf_aw; /* [map_refind] */
+    int32_t rf_next;     /* the entry the next ended track overwrites */
+    int32_t rf_found;    /* this frame's (tvo_vo_result.map_refound) */
+#endif
     void *scratch;
     size_t scratch_size;
 };
@@ -88,6 +101,24 @@ struct tvo_vo {
 #define TVO_VO_AFF_EPS 0.02f
 #define TVO_VO_AFF_MIN_NCC 0.8f
 #define TVO_VO_AFF_MAX_MOVE 2.0f
+
+#if TVO_WITH_AFFINE
+/* cfg.map_refind: a landmark is not looked for where a track lies within this many pixels of its
+ * projection (that track may be the point found again by the detector), and its entry is dropped after
+ * this many failed searches in view. */
+#define TVO_VO_REFIND_CLEAR_PX 3.0f
+#define TVO_VO_REFIND_MISSES 3
+
+/* The store of cfg.map_refind emptied (at init and reset). */
+static void refind_clear(tvo_vo *vo)
+{
+    if (vo->rf_lm == NULL)
+        return;
+    for (int32_t e = 0; e < vo->cfg.map_refind; ++e)
+        vo->rf_lm[e] = -1;
+    vo->rf_next = 0;
+}
+#endif
 /* ...and an ambiguous pose is resolved only when the chosen candidate is within this angle of it. */
 #define TVO_VO_PRIOR_COS 0.7071067811865476 /* cos 45 deg */
 /* A pose with a translation whose rotation is further than this many times the rotation-compensated
@@ -179,6 +210,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->affine_step = 1;
     cfg->affine_at_keyframes = 0;
     cfg->affine_end_share = 0.0;
+    cfg->map_refind = 0;
     cfg->map = 1;
     cfg->map_max_landmarks = 0; /* 2 x max_tracks */
     cfg->map_min_points = 20;
@@ -281,6 +313,9 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (!(cfg->affine_end_share >= 0.0 && cfg->affine_end_share <= 1.0))
         return 0;
+    if (cfg->map_refind < 0 || cfg->map_refind > 4096 ||
+        (cfg->map_refind > 0 && (cfg->affine_win_size == 0 || cfg->map != 1)))
+        return 0;
     if (cfg->affine_step < 1 || cfg->affine_step > 15 ||
         (cfg->affine_win_size != 0 && !tvo_aff_step_ok(cfg->affine_win_size, cfg->affine_step)))
         return 0;
@@ -375,6 +410,14 @@ static size_t layout_size(const tvo_vo_config *cfg)
         s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_aff_warp))));
         s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_aff_model))));
         s = tvo_size_add(s, tvo_arena_round(n));
+    }
+    if (cfg->map_refind > 0) {
+        const size_t r = (size_t)cfg->map_refind;
+        s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(r, sizeof(int32_t))) * 2); /* rf_lm rf_gen */
+        s = tvo_size_add(s, tvo_arena_round(r));                                    /* rf_miss */
+        s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(r, tvo_aff_template_bytes(cfg->affine_win_size))));
+        s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(r, sizeof(tvo_aff_model))));
+        s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(r, sizeof(tvo_aff_warp))));
     }
 #endif
     s = tvo_size_add(s, tvo_arena_round(scratch_need(cfg)));
@@ -476,6 +519,19 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
             return TVO_ERR_NO_MEMORY;
         memset(vo->hast, 0, n);
     }
+    if (cfg->map_refind > 0) {
+        const size_t r = (size_t)cfg->map_refind;
+        vo->rf_lm = (int32_t *)tvo_arena_alloc(&a, r * sizeof(int32_t));
+        vo->rf_gen = (uint32_t *)tvo_arena_alloc(&a, r * sizeof(uint32_t));
+        vo->rf_miss = (uint8_t *)tvo_arena_alloc(&a, r);
+        vo->rf_tpl = (uint8_t *)tvo_arena_alloc(&a, r * tvo_aff_template_bytes(cfg->affine_win_size));
+        vo->rf_am = (tvo_aff_model *)tvo_arena_alloc(&a, r * sizeof(tvo_aff_model));
+        vo->rf_aw = (tvo_aff_warp *)tvo_arena_alloc(&a, r * sizeof(tvo_aff_warp));
+        if (vo->rf_lm == NULL || vo->rf_gen == NULL || vo->rf_miss == NULL || vo->rf_tpl == NULL ||
+            vo->rf_am == NULL || vo->rf_aw == NULL)
+            return TVO_ERR_NO_MEMORY;
+        refind_clear(vo);
+    }
 #endif
     vo->T_c_w = tvo_pose_identity();
     vo->chain_gain = 1.0;
@@ -510,6 +566,9 @@ void tvo_vo_reset(tvo_vo *vo)
     vo->has_kf = 0;
     if (vo->cfg.map)
         tvo_map_reset(&vo->map);
+#if TVO_WITH_AFFINE
+    refind_clear(vo);
+#endif
     vo->T_c_w = tvo_pose_identity();
     vo->chain_gain = 1.0;
     vo->next_id = 0;
@@ -878,13 +937,37 @@ static int translation_given_rotation(const tvo_vo *vo, const double R[9], int32
     return 1;
 }
 
-/* Keep the entries i with keep[i] != 0 of the parallel track arrays, in order. */
+#if TVO_WITH_AFFINE
+/* cfg.map_refind: track i ends; when it carries a landmark and holds a template, both go into the store
+ * (the oldest entry overwritten). */
+static void refind_keep(tvo_vo *vo, int32_t i)
+{
+    const int32_t e = vo->rf_next, j = vo->lm[i];
+    if (vo->rf_lm == NULL || j < 0 || !vo->hast[i] || !vo->map.lm[j].alive)
+        return;
+    const size_t tb = tvo_aff_template_bytes(vo->cfg.affine_win_size);
+    vo->rf_lm[e] = j;
+    vo->rf_gen[e] = vo->map.lm[j].gen;
+    vo->rf_miss[e] = 0;
+    memcpy(vo->rf_tpl + (size_t)e * tb, vo->tpl + (size_t)i * tb, tb);
+    vo->rf_am[e] = vo->am[i];
+    vo->rf_aw[e] = vo->aw[i];
+    vo->rf_next = (e + 1) % vo->cfg.map_refind;
+}
+#endif
+
+/* Keep the entries i with keep[i] != 0 of the parallel track arrays, in order (an entry dropped leaves
+ * its landmark's template to cfg.map_refind). */
 static int32_t compact(tvo_vo *vo, int32_t n, const uint8_t *keep)
 {
     int32_t m = 0;
     for (int32_t i = 0; i < n; ++i) {
-        if (!keep[i])
+        if (!keep[i]) {
+#if TVO_WITH_AFFINE
+            refind_keep(vo, i);
+#endif
             continue;
+        }
         vo->pts[m] = vo->pts[i];
         vo->next[m] = vo->next[i];
         vo->x1[m] = vo->x1[i];
@@ -1650,11 +1733,104 @@ static void stage_pose(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
     accept_pose(vo, fc, &rc, &rp, res);
 }
 
-/* 5. Re-detection when tracks run low (the new tracks start waiting for the map's triangulation). */
+#if TVO_WITH_AFFINE
+/* 5a. Landmarks found again (cfg.map_refind), on a frame the map posed: each stored landmark that is
+ * still in the map, carried by no track, in view and without a track within TVO_VO_REFIND_CLEAR_PX of
+ * its projection has its template aligned there, from its last warp moved to the projection (the
+ * affine refinement's test: converged, a correlation of at least TVO_VO_AFF_MIN_NCC, within
+ * TVO_VO_AFF_MAX_MOVE px). Found, it becomes a new track that carries the landmark (an inlier of this
+ * frame's pose, so the map predicts it in the next), with the template and the new warp. An entry is
+ * dropped when found, when its landmark left the map or is carried again, or after
+ * TVO_VO_REFIND_MISSES failed searches; one out of view waits. Returns the landmarks found. */
+static int32_t refind(tvo_vo *vo, const frame_ctx *fc, const tvo_vo_result *res)
+{
+    const int32_t side = vo->cfg.affine_win_size;
+    const float clear2 = TVO_VO_REFIND_CLEAR_PX * TVO_VO_REFIND_CLEAR_PX;
+    int32_t found = 0;
+    if (vo->rf_lm == NULL || res->map_state != TVO_MAP_TRACKING)
+        return 0;
+    const tvo_image l0 = tvo_pyramid_level(fc->pc, 0);
+    const size_t tb = tvo_aff_template_bytes(side);
+    for (int32_t e = 0; e < vo->cfg.map_refind && vo->n < vo->cfg.max_tracks; ++e) {
+        const int32_t j = vo->rf_lm[e], k = vo->n;
+        tvo_point2d xn, xk;
+        tvo_point2f q, p;
+        tvo_aff_warp aw;
+        double u, v;
+        float ox, oy, ncc = 0.0f;
+        int near = 0, r;
+        if (j < 0)
+            continue;
+        if (!tvo_map_refind_point(&vo->map, j, vo->rf_gen[e], &vo->T_c_w, &xn)) {
+            vo->rf_lm[e] = -1;
+            continue;
+        }
+        if (tvo_camera_distort_point(&vo->cfg.camera, &xn, &u, &v) != TVO_OK)
+            continue;
+        q.x = (float)u;
+        q.y = (float)v;
+        if (!in_image(vo, q))
+            continue;
+        for (int32_t i = 0; i < vo->n && !near; ++i) {
+            const float dx = vo->pts[i].x - q.x, dy = vo->pts[i].y - q.y;
+            near = dx * dx + dy * dy < clear2;
+        }
+        if (near)
+            continue;
+        aw = vo->rf_aw[e];
+        tvo_aff_point(&aw, &ox, &oy);
+        aw.t[0] += q.x - ox;
+        aw.t[1] += q.y - oy;
+        r = tvo_aff_refine(vo->rf_tpl + (size_t)e * tb, &vo->rf_am[e], side, vo->cfg.affine_step, &l0, &aw,
+                           TVO_VO_AFF_ITERS, TVO_VO_AFF_EPS, vo->scratch, vo->scratch_size, &ncc);
+        if (r == TVO_AFF_AT_BORDER)
+            continue;
+        if (r == 1)
+            tvo_aff_point(&aw, &p.x, &p.y);
+        if (r != 1 || !(ncc >= TVO_VO_AFF_MIN_NCC) ||
+            !((p.x - q.x) * (p.x - q.x) + (p.y - q.y) * (p.y - q.y) <
+              TVO_VO_AFF_MAX_MOVE * TVO_VO_AFF_MAX_MOVE) ||
+            !in_image(vo, p) || tvo_camera_undistort_point(&vo->cfg.camera, p.x, p.y, &xk) != TVO_OK) {
+            if (++vo->rf_miss[e] >= TVO_VO_REFIND_MISSES)
+                vo->rf_lm[e] = -1;
+            continue;
+        }
+        vo->pts[k] = p;
+        vo->x2[k] = xk;
+        vo->ok2[k] = 1;
+        vo->has0[k] = 0;
+        vo->hask[k] = 0;
+        vo->id[k] = vo->next_id++;
+        vo->age[k] = 0;
+        vo->lm[k] = j;
+        vo->tri_fr[k] = -1;
+        vo->tri_x[k] = xk;
+        vo->minl[k] = 1;
+        memcpy(vo->tpl + (size_t)k * tb, vo->rf_tpl + (size_t)e * tb, tb);
+        vo->am[k] = vo->rf_am[e];
+        vo->aw[k] = aw;
+        vo->hast[k] = 1;
+        vo->n++;
+        tvo_map_refound(&vo->map, j);
+        vo->rf_lm[e] = -1;
+        ++found;
+    }
+    return found;
+}
+#endif
+
+/* 5. Re-detection when tracks run low (the new tracks start waiting for the map's triangulation), after
+ * the landmarks found again (cfg.map_refind). */
 static void stage_redetect(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
 {
-    const int32_t before = vo->n;
+    int32_t before;
     int64_t t1 = now_ns(vo);
+#if TVO_WITH_AFFINE
+    res->map_refound = refind(vo, fc, res);
+    res->stage_ns[TVO_STAGE_MAP] += now_ns(vo) - t1;
+    t1 = now_ns(vo);
+#endif
+    before = vo->n;
     if (vo->n < vo->cfg.min_tracks ||
         (vo->n < vo->cfg.max_tracks &&
          (double)track_coverage(vo) < vo->cfg.redetect_coverage * (double)vo->cover_ref))

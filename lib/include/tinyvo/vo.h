@@ -202,6 +202,14 @@ typedef struct tvo_vo_config {
                                    times the per-frame rotation error, MH_01's ATE twice; for a sharp
                                    global-shutter camera, not a car's (docs/budget.md, "A twenty-seventh
                                    rule") */
+    int32_t map_refind;           /* landmarks found again: a track that ends while it carries a landmark
+                                   leaves its affine template in a store of this many entries (the
+                                   oldest overwritten); on every frame the map posed, each stored
+                                   landmark that no track carries is looked for where the pose projects
+                                   it (its template aligned there: converged, a correlation of at least
+                                   0.8, within 2 px), and found it becomes a new track that carries it.
+                                   Needs the map and affine_win_size > 0. [0, 4096], 0: off; default 0
+                                   in every preset */
     /* local map (vo.h header comment, "The local map"): keyframes in a sliding window, landmarks
        triangulated between them, every frame posed by PnP on the landmarks its tracks carry, and a
        windowed bundle adjustment at each new keyframe */
@@ -347,6 +355,7 @@ typedef struct tvo_vo_result {
                                        template (no convergence, a correlation below 0.8, more than 2 px from
                                        LK's position, the window out of the image), or are ended */
     int32_t affine_ended;           /* of the others, the tracks ended (cfg.affine_end_share); 0 when off */
+    int32_t map_refound;            /* landmarks found again and carried by new tracks (cfg.map_refind) */
     int32_t inliers;                /* pose inliers among them */
     int32_t new_corners;            /* corners added by re-detection in this frame */
     int32_t tracks;                 /* tracks carried to the next frame */
