@@ -892,8 +892,7 @@ int main(int argc, char **argv)
                     "\"ba_turn_refused\": %ld, \"store_full\": %ld, \"refound\": %ld, \"scale\": %.9g, "
                     "\"states\": {",
                     (int)cfg.map, map_keyframes, counts_map[TVO_MAP_LOST], ba_turn_refused, map_store_full,
-                    map_refound,
-                    msc.s);
+                    map_refound, msc.s);
             for (int k = 0; k < TVO_MAP_STATE_COUNT; ++k)
                 fprintf(js, "%s\"%s\": %ld", k ? ", " : "", map_state_names[k], counts_map[k]);
             fprintf(js, "}},\n  \"timing_us\": {\n");

@@ -78,14 +78,14 @@ struct tvo_vo {
     /* landmarks found again (cfg.map_refind, else NULL): a ring of the templates of ended landmark tracks,
        each with its landmark's slot (-1: empty) and generation, its model, its last warp and the
        searches in view that failed */
-    int32_t *rf_lm;      /* [map_refind] */
-    uint32_t *rf_gen;    /* [map_refind] */
-    uint8_t *rf_miss;    /* [map_refind] */
-    uint8_t *rf_tpl;     /* [map_refind x tvo_aff_template_bytes(affine_win_size)] */
+    int32_t *rf_lm;       /* [map_refind] */
+    uint32_t *rf_gen;     /* [map_refind] */
+    uint8_t *rf_miss;     /* [map_refind] */
+    uint8_t *rf_tpl;      /* [map_refind x tvo_aff_template_bytes(affine_win_size)] */
     tvo_aff_model *rf_am; /* [map_refind] */
-    tvo_aff_warp *rf_aw; /* [map_refind] */
-    int32_t rf_next;     /* the entry the next ended track overwrites */
-    int32_t rf_found;    /* this frame's (tvo_vo_result.map_refound) */
+    tvo_aff_warp *rf_aw;  /* [map_refind] */
+    int32_t rf_next;      /* the entry the next ended track overwrites */
+    int32_t rf_found;     /* this frame's (tvo_vo_result.map_refound) */
 #endif
     void *scratch;
     size_t scratch_size;
@@ -442,6 +442,38 @@ size_t tvo_vo_required_size(const tvo_vo_config *cfg)
     return layout_size(&c);
 }
 
+#if TVO_WITH_AFFINE
+/* The affine refinement's arrays (cfg.affine_win_size > 0) and the store of cfg.map_refind, from the
+ * VO's block (in the order of layout_size). */
+static tvo_status affine_alloc(tvo_vo *vo, const tvo_vo_config *cfg, tvo_arena *a)
+{
+    const size_t n = (size_t)cfg->max_tracks;
+    if (cfg->affine_win_size > 0) {
+        vo->tpl = (uint8_t *)tvo_arena_alloc(a, n * tvo_aff_template_bytes(cfg->affine_win_size));
+        vo->aw = (tvo_aff_warp *)tvo_arena_alloc(a, n * sizeof(tvo_aff_warp));
+        vo->am = (tvo_aff_model *)tvo_arena_alloc(a, n * sizeof(tvo_aff_model));
+        vo->hast = (uint8_t *)tvo_arena_alloc(a, n);
+        if (vo->tpl == NULL || vo->aw == NULL || vo->am == NULL || vo->hast == NULL)
+            return TVO_ERR_NO_MEMORY;
+        memset(vo->hast, 0, n);
+    }
+    if (cfg->map_refind > 0) {
+        const size_t r = (size_t)cfg->map_refind;
+        vo->rf_lm = (int32_t *)tvo_arena_alloc(a, r * sizeof(int32_t));
+        vo->rf_gen = (uint32_t *)tvo_arena_alloc(a, r * sizeof(uint32_t));
+        vo->rf_miss = (uint8_t *)tvo_arena_alloc(a, r);
+        vo->rf_tpl = (uint8_t *)tvo_arena_alloc(a, r * tvo_aff_template_bytes(cfg->affine_win_size));
+        vo->rf_am = (tvo_aff_model *)tvo_arena_alloc(a, r * sizeof(tvo_aff_model));
+        vo->rf_aw = (tvo_aff_warp *)tvo_arena_alloc(a, r * sizeof(tvo_aff_warp));
+        if (vo->rf_lm == NULL || vo->rf_gen == NULL || vo->rf_miss == NULL || vo->rf_tpl == NULL ||
+            vo->rf_am == NULL || vo->rf_aw == NULL)
+            return TVO_ERR_NO_MEMORY;
+        refind_clear(vo);
+    }
+    return TVO_OK;
+}
+#endif
+
 tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, size_t mem_size)
 {
     tvo_vo_config cfg_r;
@@ -510,27 +542,10 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
             return ms;
     }
 #if TVO_WITH_AFFINE
-    if (cfg->affine_win_size > 0) {
-        vo->tpl = (uint8_t *)tvo_arena_alloc(&a, n * tvo_aff_template_bytes(cfg->affine_win_size));
-        vo->aw = (tvo_aff_warp *)tvo_arena_alloc(&a, n * sizeof(tvo_aff_warp));
-        vo->am = (tvo_aff_model *)tvo_arena_alloc(&a, n * sizeof(tvo_aff_model));
-        vo->hast = (uint8_t *)tvo_arena_alloc(&a, n);
-        if (vo->tpl == NULL || vo->aw == NULL || vo->am == NULL || vo->hast == NULL)
-            return TVO_ERR_NO_MEMORY;
-        memset(vo->hast, 0, n);
-    }
-    if (cfg->map_refind > 0) {
-        const size_t r = (size_t)cfg->map_refind;
-        vo->rf_lm = (int32_t *)tvo_arena_alloc(&a, r * sizeof(int32_t));
-        vo->rf_gen = (uint32_t *)tvo_arena_alloc(&a, r * sizeof(uint32_t));
-        vo->rf_miss = (uint8_t *)tvo_arena_alloc(&a, r);
-        vo->rf_tpl = (uint8_t *)tvo_arena_alloc(&a, r * tvo_aff_template_bytes(cfg->affine_win_size));
-        vo->rf_am = (tvo_aff_model *)tvo_arena_alloc(&a, r * sizeof(tvo_aff_model));
-        vo->rf_aw = (tvo_aff_warp *)tvo_arena_alloc(&a, r * sizeof(tvo_aff_warp));
-        if (vo->rf_lm == NULL || vo->rf_gen == NULL || vo->rf_miss == NULL || vo->rf_tpl == NULL ||
-            vo->rf_am == NULL || vo->rf_aw == NULL)
-            return TVO_ERR_NO_MEMORY;
-        refind_clear(vo);
+    {
+        const tvo_status as = affine_alloc(vo, cfg, &a);
+        if (as != TVO_OK)
+            return as;
     }
 #endif
     vo->T_c_w = tvo_pose_identity();
@@ -1734,12 +1749,38 @@ static void stage_pose(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
 }
 
 #if TVO_WITH_AFFINE
+/* cfg.map_refind: store entry e found at p (normalised xk) with warp aw: a new track that carries its
+ * landmark (an inlier of this frame's pose, so the map predicts it in the next), with the entry's
+ * template; the entry is emptied. */
+static void refound_track(tvo_vo *vo, int32_t e, tvo_point2f p, tvo_point2d xk, const tvo_aff_warp *aw)
+{
+    const int32_t k = vo->n, j = vo->rf_lm[e];
+    const size_t tb = tvo_aff_template_bytes(vo->cfg.affine_win_size);
+    vo->pts[k] = p;
+    vo->x2[k] = xk;
+    vo->ok2[k] = 1;
+    vo->has0[k] = 0; /* a new track: no earlier position, none in the keyframe */
+    vo->hask[k] = 0;
+    vo->id[k] = vo->next_id++;
+    vo->age[k] = 0;
+    vo->lm[k] = j;
+    vo->tri_fr[k] = -1;
+    vo->tri_x[k] = xk;
+    vo->minl[k] = 1;
+    memcpy(vo->tpl + (size_t)k * tb, vo->rf_tpl + (size_t)e * tb, tb);
+    vo->am[k] = vo->rf_am[e];
+    vo->aw[k] = *aw;
+    vo->hast[k] = 1;
+    vo->n++;
+    tvo_map_refound(&vo->map, j);
+    vo->rf_lm[e] = -1;
+}
+
 /* 5a. Landmarks found again (cfg.map_refind), on a frame the map posed: each stored landmark that is
  * still in the map, carried by no track, in view and without a track within TVO_VO_REFIND_CLEAR_PX of
  * its projection has its template aligned there, from its last warp moved to the projection (the
  * affine refinement's test: converged, a correlation of at least TVO_VO_AFF_MIN_NCC, within
- * TVO_VO_AFF_MAX_MOVE px). Found, it becomes a new track that carries the landmark (an inlier of this
- * frame's pose, so the map predicts it in the next), with the template and the new warp. An entry is
+ * TVO_VO_AFF_MAX_MOVE px). Found, it becomes a new track (refound_track). An entry is
  * dropped when found, when its landmark left the map or is carried again, or after
  * TVO_VO_REFIND_MISSES failed searches; one out of view waits. Returns the landmarks found. */
 static int32_t refind(tvo_vo *vo, const frame_ctx *fc, const tvo_vo_result *res)
@@ -1752,7 +1793,7 @@ static int32_t refind(tvo_vo *vo, const frame_ctx *fc, const tvo_vo_result *res)
     const tvo_image l0 = tvo_pyramid_level(fc->pc, 0);
     const size_t tb = tvo_aff_template_bytes(side);
     for (int32_t e = 0; e < vo->cfg.map_refind && vo->n < vo->cfg.max_tracks; ++e) {
-        const int32_t j = vo->rf_lm[e], k = vo->n;
+        const int32_t j = vo->rf_lm[e];
         tvo_point2d xn, xk;
         tvo_point2f q, p;
         tvo_aff_warp aw;
@@ -1795,24 +1836,7 @@ static int32_t refind(tvo_vo *vo, const frame_ctx *fc, const tvo_vo_result *res)
                 vo->rf_lm[e] = -1;
             continue;
         }
-        vo->pts[k] = p;
-        vo->x2[k] = xk;
-        vo->ok2[k] = 1;
-        vo->has0[k] = 0;
-        vo->hask[k] = 0;
-        vo->id[k] = vo->next_id++;
-        vo->age[k] = 0;
-        vo->lm[k] = j;
-        vo->tri_fr[k] = -1;
-        vo->tri_x[k] = xk;
-        vo->minl[k] = 1;
-        memcpy(vo->tpl + (size_t)k * tb, vo->rf_tpl + (size_t)e * tb, tb);
-        vo->am[k] = vo->rf_am[e];
-        vo->aw[k] = aw;
-        vo->hast[k] = 1;
-        vo->n++;
-        tvo_map_refound(&vo->map, j);
-        vo->rf_lm[e] = -1;
+        refound_track(vo, e, p, xk, &aw);
         ++found;
     }
     return found;

@@ -103,6 +103,8 @@ static void check_result(const tvo_vo_config *cfg, const tvo_vo_result *r)
     TVO_FUZZ_CHECK(r->inliers >= 0 && r->inliers <= r->tracked);
     TVO_FUZZ_CHECK(r->new_corners >= 0 && r->new_corners <= cfg->max_tracks);
     TVO_FUZZ_CHECK(r->tracks >= 0 && r->tracks <= cfg->max_tracks);
+    TVO_FUZZ_CHECK(r->map_refound >= 0 && r->map_refound <= r->tracks &&
+                   (cfg->map_refind > 0 || r->map_refound == 0));
     TVO_FUZZ_CHECK(isfinite(r->parallax_deg) && r->parallax_deg >= 0.0);
     TVO_FUZZ_CHECK(r->dt_ns >= 0);
     for (int i = 0; i < TVO_FEAT_COUNT; ++i)
@@ -199,6 +201,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cfg.map_ba_huber_px = ((hdr[4] >> 2) ^ (hdr[7] >> 5)) & 1 ? 0.5 : 2.5;
     /* the chain's steps following the relative scale (beyond 3 standard errors, or every change) */
     cfg.chain_scale_sigmas = ((hdr[4] >> 3) ^ (hdr[7] >> 4)) & 1 ? (((hdr[5] & 1) != 0) ? 3.0 : 1e-9) : 0.0;
+    /* landmarks found again, with the map and the affine refinement, for half of those inputs: stores of
+       1..16 entries, so that the ring wraps */
+    cfg.map_refind = cfg.map && cfg.affine_win_size > 0 && (((hdr[4] >> 4) ^ (hdr[7] >> 3)) & 1)
+            ? 1 + (int32_t)(hdr[5] & 15u)
+            : 0;
     while ((need = tvo_vo_required_size(&cfg)) == 0 && cfg.lk.max_level > 0)
         cfg.lk.max_level--;
     TVO_FUZZ_CHECK(need > 0); /* every size from 16x16 up is valid with one level */

@@ -686,6 +686,116 @@ static void test_affine_refinement(void **state)
     assert_true(n_end >= 50);
     assert_true(end < 0.15);
 }
+
+/* cfg.map_refind: the walk of run_walk_tracks with a flat bar over a quarter of the frame for two frames
+ * (frames 36 and 37), which ends the tracks under it. Counts the landmarks found again and, for each
+ * track that carries a landmark from its first frame on (a landmark found again: a detected track waits
+ * for its triangulation), its distance from the nearest point seen before the bar by a landmark track
+ * that the bar ended (err[]: the truth, from the renderer's geometry, projected into that frame). */
+#define OCC_FIRST 36
+#define OCC_FRAMES 2
+static void run_occluded_walk(int32_t refind, long *refound, int *lost_frames, double *err, int *ne)
+{
+    static double X0[AFF_MAX_IDS][3];
+    static uint8_t have[AFF_MAX_IDS], ended[AFF_MAX_IDS];
+    fixture f;
+    tvo_camera cam = test_camera();
+    tvo_vo_track t[300];
+    int32_t n = 0;
+    uint32_t before[300];
+    int32_t nb = 0;
+    memset(have, 0, sizeof(have));
+    memset(ended, 0, sizeof(ended));
+    *refound = 0;
+    *lost_frames = 0;
+    *ne = 0;
+    tvo_vo_config_default(&f.cfg, &cam);
+    f.cfg.map_refind = refind;
+    open_vo(&f);
+    for (int k = 0; k < AFF_FRAMES; ++k) {
+        const double dir[3] = {0.1, 0.05, 1.0};
+        tvo_vo_result res;
+        tvo_image img = tvo_image_make(W, H, W, f.img);
+        const tvo_pose T = motion(k, dir, 0.02, 0.2);
+        render(&T, f.img);
+        if (k >= OCC_FIRST && k < OCC_FIRST + OCC_FRAMES)
+            for (int y = 0; y < H; ++y)
+                memset(f.img + (size_t)y * W + W / 4, 128, W / 4);
+        assert_int_equal(tvo_vo_process(f.vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
+        assert_true(res.map_refound >= 0 && res.map_refound <= res.tracks);
+        assert_true(refind > 0 || res.map_refound == 0);
+        *refound += res.map_refound;
+        *lost_frames += res.map_state != TVO_MAP_TRACKING && res.map_state != TVO_MAP_INITIALISED && k > 20;
+        assert_int_equal(tvo_vo_tracks(f.vo, t, 300, &n), TVO_OK);
+        for (int32_t i = 0; i < n && i < 300; ++i) {
+            if (t[i].id >= AFF_MAX_IDS)
+                continue;
+            if (t[i].age == 0) {
+                room_point(&T, t[i].x, t[i].y, X0[t[i].id]);
+                have[t[i].id] = 1;
+            }
+            if (t[i].age == 0 && t[i].landmark && k >= OCC_FIRST && *ne < 300) {
+                /* a landmark found again: the nearest of the points the bar took from the map's tracks */
+                double best = 1e9;
+                for (uint32_t id = 0; id < AFF_MAX_IDS; ++id) {
+                    double x, y;
+                    if (!ended[id])
+                        continue;
+                    room_project(&T, X0[id], &x, &y);
+                    if (hypot(t[i].x - x, t[i].y - y) < best)
+                        best = hypot(t[i].x - x, t[i].y - y);
+                }
+                err[(*ne)++] = best;
+            }
+        }
+        if (k == OCC_FIRST - 1) { /* the landmark tracks before the bar */
+            nb = 0;
+            for (int32_t i = 0; i < n && i < 300; ++i)
+                if (t[i].landmark && t[i].id < AFF_MAX_IDS && have[t[i].id])
+                    before[nb++] = t[i].id;
+        }
+        if (k == OCC_FIRST + OCC_FRAMES - 1) /* ...and those the bar ended */
+            for (int32_t b = 0; b < nb; ++b) {
+                int alive = 0;
+                for (int32_t i = 0; i < n && i < 300 && !alive; ++i)
+                    alive = t[i].id == before[b];
+                ended[before[b]] = (uint8_t)!alive;
+            }
+    }
+    free(f.mem);
+}
+
+/* cfg.map_refind: the landmarks whose tracks the bar ended are found again where they are when it
+ * leaves, on the points they were made from; off, none is. */
+static void test_map_refind(void **state)
+{
+    static double err_on[300], err_off[300];
+    long found_on, found_off;
+    int lost_on, lost_off, n_on, n_off, within = 0;
+    (void)state;
+    run_occluded_walk(64, &found_on, &lost_on, err_on, &n_on);
+    run_occluded_walk(0, &found_off, &lost_off, err_off, &n_off);
+    for (int i = 1; i < n_on; ++i) /* insertion sort: a few dozen values */
+        for (int j = i; j > 0 && err_on[j] < err_on[j - 1]; --j) {
+            const double e = err_on[j];
+            err_on[j] = err_on[j - 1];
+            err_on[j - 1] = e;
+        }
+    for (int i = 0; i < n_on; ++i)
+        within += err_on[i] < 1.0;
+    fprintf(stderr,
+            "occluded walk, map_refind 64: %ld landmarks found again, %d of them within 1 px of a point the "
+            "bar took (median %.3f px); off: %ld found, %d tracks born with a landmark\n",
+            found_on, within, n_on > 0 ? err_on[n_on / 2] : -1.0, found_off, n_off);
+    assert_int_equal(lost_on, 0);
+    assert_int_equal(lost_off, 0);
+    assert_int_equal(found_off, 0);
+    assert_int_equal(n_off, 0);
+    assert_true(found_on >= 10);
+    assert_int_equal(n_on, found_on);
+    assert_true(within >= n_on * 9 / 10);
+    assert_true(err_on[n_on / 2] < 0.3);
+}
 #else
 /* A build without the affine refinement (TVO_WITH_AFFINE 0) refuses a configuration that asks for it,
  * with its own status, and runs without it. */
@@ -1137,6 +1247,34 @@ static void test_bad_input(void **state)
                 assert_refused(&bad, f->mem);
             }
         }
+        /* landmarks found again: [0, 4096], 0 (off) by default; it needs the map and the affine
+           refinement's templates */
+        {
+            const int32_t v[3] = {-1, 4097, INT32_MAX};
+            assert_int_equal(f->cfg.map_refind, 0);
+            for (int i = 0; i < 3; ++i) {
+                bad = f->cfg;
+                bad.map_refind = v[i];
+                assert_refused(&bad, f->mem);
+            }
+            bad = f->cfg;
+            bad.affine_win_size = 0;
+            bad.map_refind = 64;
+            assert_refused(&bad, f->mem);
+#if TVO_WITH_AFFINE
+            bad.affine_win_size = 21;
+            bad.map = 0;
+            assert_refused(&bad, f->mem);
+            bad.map = 1;
+            {
+                /* accepted with both, and its store is in the required size: 64 templates and more */
+                tvo_vo_config off = bad;
+                off.map_refind = 0;
+                assert_true(tvo_vo_required_size(&bad) >=
+                            tvo_vo_required_size(&off) + 64 * (size_t)(23 * 23 + sizeof(double) * 35));
+            }
+#endif
+        }
         /* the refinement's sampling step: [1, 15], and it divides affine_win_size / 2 */
         {
             const int32_t steps[3] = {0, -2, 16};
@@ -1355,25 +1493,28 @@ static void test_pred_rescue(void **state)
 
 int main(void)
 {
-    const struct CMUnitTest tests[] = {
-            cmocka_unit_test_setup_teardown(test_translating_camera, setup, teardown),
-            cmocka_unit_test_setup_teardown(test_more_tracks_than_max_corners, setup, teardown),
-            cmocka_unit_test_setup_teardown(test_pure_rotation_reports_rotation_only, setup, teardown),
-            cmocka_unit_test_setup_teardown(test_single_plane_twins, setup, teardown),
-            cmocka_unit_test_setup_teardown(test_single_plane_unresolved, setup, teardown),
-            cmocka_unit_test_setup_teardown(test_relative_scale, setup_basic, teardown),
-            cmocka_unit_test_setup_teardown(test_relative_scale_rotation_only, setup, teardown),
-            cmocka_unit_test_setup_teardown(test_chain_scale, setup_basic, teardown),
-            cmocka_unit_test(test_keyframe_rotation),
-            cmocka_unit_test(test_track_prediction),
-            cmocka_unit_test(test_redetect_coverage),
-            cmocka_unit_test(test_gain_retry),
-            cmocka_unit_test(test_pred_rescue),
-            cmocka_unit_test(test_affine_refinement),
-            cmocka_unit_test(test_scale_filter),
-            cmocka_unit_test(test_presets),
-            cmocka_unit_test(test_refine_step_length),
-            cmocka_unit_test_setup_teardown(test_bad_input, setup_basic, teardown),
+    const struct CMUnitTest tests[] =
+    { cmocka_unit_test_setup_teardown(test_translating_camera, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_more_tracks_than_max_corners, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_pure_rotation_reports_rotation_only, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_single_plane_twins, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_single_plane_unresolved, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_relative_scale, setup_basic, teardown),
+      cmocka_unit_test_setup_teardown(test_relative_scale_rotation_only, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_chain_scale, setup_basic, teardown),
+      cmocka_unit_test(test_keyframe_rotation),
+      cmocka_unit_test(test_track_prediction),
+      cmocka_unit_test(test_redetect_coverage),
+      cmocka_unit_test(test_gain_retry),
+      cmocka_unit_test(test_pred_rescue),
+      cmocka_unit_test(test_affine_refinement),
+#if TVO_WITH_AFFINE
+      cmocka_unit_test(test_map_refind),
+#endif
+      cmocka_unit_test(test_scale_filter),
+      cmocka_unit_test(test_presets),
+      cmocka_unit_test(test_refine_step_length),
+      cmocka_unit_test_setup_teardown(test_bad_input, setup_basic, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
