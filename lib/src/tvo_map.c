@@ -2,6 +2,8 @@
 /* tinyvo: the VO's local map. See tvo_map.h for the design and vo.h for the configuration. */
 #include "tvo_map.h"
 
+#include "tinyvo/options.h"
+
 #include <math.h>
 #include <string.h>
 
@@ -192,8 +194,10 @@ tvo_status tvo_map_init(tvo_map *m, const tvo_vo_config *cfg, tvo_arena *a)
     m->lm = (tvo_map_lm *)tvo_arena_alloc(a, (size_t)m->max_lm * sizeof(tvo_map_lm));
     if (m->lm == NULL)
         return TVO_ERR_NO_MEMORY;
+#if TVO_WITH_AFFINE
     for (int32_t i = 0; i < m->max_lm; ++i)
         m->lm[i].gen = 0;
+#endif
     tvo_map_reset(m);
     return TVO_OK;
 }
@@ -315,7 +319,9 @@ static int32_t lm_alloc(tvo_map *m)
             m->lm[j].alive = 1;
             m->lm[j].n_obs = 0;
             m->lm[j].tracked = 0;
+#if TVO_WITH_AFFINE
             m->lm[j].gen++;
+#endif
             m->n_lm++;
             return j;
         }
@@ -1383,6 +1389,7 @@ void tvo_map_new_tracks(const tvo_map *m, tvo_map_tracks *tr, int32_t first)
     }
 }
 
+#if TVO_WITH_AFFINE
 int tvo_map_refind_point(const tvo_map *m, int32_t j, uint32_t gen, const tvo_pose *T_c_w, tvo_point2d *xn)
 {
     double p[3];
@@ -1401,3 +1408,4 @@ void tvo_map_refound(tvo_map *m, int32_t j)
     if (j >= 0 && j < m->max_lm && m->lm[j].alive)
         m->lm[j].tracked = 1;
 }
+#endif

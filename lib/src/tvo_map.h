@@ -22,6 +22,7 @@
 #define TVO_MAP_H
 
 #include "tinyvo/arena.h"
+#include "tinyvo/options.h"
 #include "tinyvo/ba.h"
 #include "tinyvo/pnp.h"
 #include "tinyvo/relpose.h"
@@ -159,11 +160,13 @@ int tvo_map_predict_pose(const tvo_map *m, int64_t t_ns, int64_t prev_t_ns, tvo_
 /* Tracks added after tvo_map_process (re-detection) start their wait for triangulation in this frame. */
 void tvo_map_new_tracks(const tvo_map *m, tvo_map_tracks *tr, int32_t first);
 
-/* For finding a landmark again (cfg.map_refind): 1 when slot j holds landmark generation gen, alive,
+#if TVO_WITH_AFFINE
+/* For finding a landmark again (cfg.map_refind; a build with the affine refinement): 1 when slot j holds landmark generation gen, alive,
  * carried by no track and in front of the camera T_c_w, with *xn its normalised projection; else 0. */
 int tvo_map_refind_point(const tvo_map *m, int32_t j, uint32_t gen, const tvo_pose *T_c_w, tvo_point2d *xn);
 
 /* Landmark j is carried by a track again (the VO set the track's lm to j). */
 void tvo_map_refound(tvo_map *m, int32_t j);
+#endif
 
 #endif /* TVO_MAP_H */

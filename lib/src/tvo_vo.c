@@ -85,7 +85,6 @@ struct tvo_vo {
     tvo_aff_model *rf_am; /* [map_refind] */
     tvo_aff_warp *rf_aw;  /* [map_refind] */
     int32_t rf_next;      /* the entry the next ended track overwrites */
-    int32_t rf_found;     /* this frame's (tvo_vo_result.map_refound) */
 #endif
     void *scratch;
     size_t scratch_size;

@@ -191,6 +191,14 @@ typedef struct tvo_vo_config {
                                    observations, new landmarks and bundle adjustment), on every track
                                    with a template; the frames between keep LK's positions, which
                                    start from the refined ones. 0: on every frame; default 0 */
+    int32_t map_refind;           /* landmarks found again: a track that ends while it carries a landmark
+                                   leaves its affine template in a store of this many entries (the
+                                   oldest overwritten); on every frame the map posed, each stored
+                                   landmark that no track carries is looked for where the pose projects
+                                   it (its template aligned there: converged, a correlation of at least
+                                   0.8, within 2 px), and found it becomes a new track that carries it.
+                                   Needs the map and affine_win_size > 0. [0, 4096], 0: off; default 0
+                                   in every preset */
     double affine_end_share;      /* in a frame where at most this share of the affine alignments fails (no
                                    convergence, a correlation below 0.8, a degenerate warp, more than 2
                                    px from LK's position; a window that reaches the image's border is
@@ -202,14 +210,6 @@ typedef struct tvo_vo_config {
                                    times the per-frame rotation error, MH_01's ATE twice; for a sharp
                                    global-shutter camera, not a car's (docs/budget.md, "A twenty-seventh
                                    rule") */
-    int32_t map_refind;           /* landmarks found again: a track that ends while it carries a landmark
-                                   leaves its affine template in a store of this many entries (the
-                                   oldest overwritten); on every frame the map posed, each stored
-                                   landmark that no track carries is looked for where the pose projects
-                                   it (its template aligned there: converged, a correlation of at least
-                                   0.8, within 2 px), and found it becomes a new track that carries it.
-                                   Needs the map and affine_win_size > 0. [0, 4096], 0: off; default 0
-                                   in every preset */
     /* local map (vo.h header comment, "The local map"): keyframes in a sliding window, landmarks
        triangulated between them, every frame posed by PnP on the landmarks its tracks carry, and a
        windowed bundle adjustment at each new keyframe */
