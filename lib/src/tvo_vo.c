@@ -81,6 +81,7 @@ struct tvo_vo {
     int32_t *rf_lm;       /* [map_refind] */
     uint32_t *rf_gen;     /* [map_refind] */
     uint8_t *rf_miss;     /* [map_refind] */
+    uint8_t *rf_wait;     /* [map_refind] frames left before the first search */
     uint8_t *rf_tpl;      /* [map_refind x tvo_aff_template_bytes(affine_win_size)] */
     tvo_aff_model *rf_am; /* [map_refind] */
     tvo_aff_warp *rf_aw;  /* [map_refind] */
@@ -102,9 +103,11 @@ struct tvo_vo {
 #define TVO_VO_AFF_MAX_MOVE 2.0f
 
 #if TVO_WITH_AFFINE
-/* cfg.map_refind: a landmark is not looked for where a track lies within this many pixels of its
- * projection (that track may be the point found again by the detector), and its entry is dropped after
- * this many failed searches in view. */
+/* cfg.map_refind: a landmark is first looked for this many frames after its track ended (not in the frame
+ * whose forward-backward check ended it: a real occlusion lasts), not where a track lies within
+ * TVO_VO_REFIND_CLEAR_PX pixels of its projection (that track may be the point found again by the
+ * detector), and its entry is dropped after TVO_VO_REFIND_MISSES failed searches in view. */
+#define TVO_VO_REFIND_WAIT 3
 #define TVO_VO_REFIND_CLEAR_PX 3.0f
 #define TVO_VO_REFIND_MISSES 3
 
@@ -413,7 +416,7 @@ static size_t layout_size(const tvo_vo_config *cfg)
     if (cfg->map_refind > 0) {
         const size_t r = (size_t)cfg->map_refind;
         s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(r, sizeof(int32_t))) * 2); /* rf_lm rf_gen */
-        s = tvo_size_add(s, tvo_arena_round(r));                                    /* rf_miss */
+        s = tvo_size_add(s, tvo_arena_round(r) * 2);                                /* rf_miss rf_wait */
         s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(r, tvo_aff_template_bytes(cfg->affine_win_size))));
         s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(r, sizeof(tvo_aff_model))));
         s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(r, sizeof(tvo_aff_warp))));
@@ -461,11 +464,12 @@ static tvo_status affine_alloc(tvo_vo *vo, const tvo_vo_config *cfg, tvo_arena *
         vo->rf_lm = (int32_t *)tvo_arena_alloc(a, r * sizeof(int32_t));
         vo->rf_gen = (uint32_t *)tvo_arena_alloc(a, r * sizeof(uint32_t));
         vo->rf_miss = (uint8_t *)tvo_arena_alloc(a, r);
+        vo->rf_wait = (uint8_t *)tvo_arena_alloc(a, r);
         vo->rf_tpl = (uint8_t *)tvo_arena_alloc(a, r * tvo_aff_template_bytes(cfg->affine_win_size));
         vo->rf_am = (tvo_aff_model *)tvo_arena_alloc(a, r * sizeof(tvo_aff_model));
         vo->rf_aw = (tvo_aff_warp *)tvo_arena_alloc(a, r * sizeof(tvo_aff_warp));
-        if (vo->rf_lm == NULL || vo->rf_gen == NULL || vo->rf_miss == NULL || vo->rf_tpl == NULL ||
-            vo->rf_am == NULL || vo->rf_aw == NULL)
+        if (vo->rf_lm == NULL || vo->rf_gen == NULL || vo->rf_miss == NULL || vo->rf_wait == NULL ||
+            vo->rf_tpl == NULL || vo->rf_am == NULL || vo->rf_aw == NULL)
             return TVO_ERR_NO_MEMORY;
         refind_clear(vo);
     }
@@ -963,6 +967,7 @@ static void refind_keep(tvo_vo *vo, int32_t i)
     vo->rf_lm[e] = j;
     vo->rf_gen[e] = vo->map.lm[j].gen;
     vo->rf_miss[e] = 0;
+    vo->rf_wait[e] = TVO_VO_REFIND_WAIT;
     memcpy(vo->rf_tpl + (size_t)e * tb, vo->tpl + (size_t)i * tb, tb);
     vo->rf_am[e] = vo->am[i];
     vo->rf_aw[e] = vo->aw[i];
@@ -1803,6 +1808,10 @@ static int32_t refind(tvo_vo *vo, const frame_ctx *fc, const tvo_vo_result *res)
             continue;
         if (!tvo_map_refind_point(&vo->map, j, vo->rf_gen[e], &vo->T_c_w, &xn)) {
             vo->rf_lm[e] = -1;
+            continue;
+        }
+        if (vo->rf_wait[e] > 0) {
+            vo->rf_wait[e]--;
             continue;
         }
         if (tvo_camera_distort_point(&vo->cfg.camera, &xn, &u, &v) != TVO_OK)
