@@ -1781,12 +1781,13 @@ static void refound_track(tvo_vo *vo, int32_t e, tvo_point2f p, tvo_point2d xk, 
 }
 
 /* 5a. Landmarks found again (cfg.map_refind), on a frame the map posed: each stored landmark that is
- * still in the map, carried by no track, in view and without a track within TVO_VO_REFIND_CLEAR_PX of
- * its projection has its template aligned there, from its last warp moved to the projection (the
- * affine refinement's test: converged, a correlation of at least TVO_VO_AFF_MIN_NCC, within
- * TVO_VO_AFF_MAX_MOVE px). Found, it becomes a new track (refound_track). An entry is
- * dropped when found, when its landmark left the map or is carried again, or after
- * TVO_VO_REFIND_MISSES failed searches; one out of view waits. Returns the landmarks found. */
+ * still in the map, carried by no track, TVO_VO_REFIND_WAIT frames or more past the end of its track, in
+ * view and without a track within TVO_VO_REFIND_CLEAR_PX of its projection has its template aligned
+ * there, from its last warp moved to the projection (the affine refinement's test: converged, a
+ * correlation of at least TVO_VO_AFF_MIN_NCC, within TVO_VO_AFF_MAX_MOVE px). Found, it becomes a new
+ * track (refound_track). An entry is dropped when found, when its landmark left the map, is behind the
+ * camera or is carried again, or after TVO_VO_REFIND_MISSES failed searches; one out of view waits.
+ * Returns the landmarks found. */
 static int32_t refind(tvo_vo *vo, const frame_ctx *fc, const tvo_vo_result *res)
 {
     const int32_t side = vo->cfg.affine_win_size;

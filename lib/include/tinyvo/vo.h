@@ -193,10 +193,11 @@ typedef struct tvo_vo_config {
                                    start from the refined ones. 0: on every frame; default 0 */
     int32_t map_refind;           /* landmarks found again: a track that ends while it carries a landmark
                                    leaves its affine template in a store of this many entries (the
-                                   oldest overwritten); on every frame the map posed, each stored
-                                   landmark that no track carries is looked for where the pose projects
-                                   it (its template aligned there: converged, a correlation of at least
-                                   0.8, within 2 px), and found it becomes a new track that carries it.
+                                   oldest overwritten); on every frame the map posed from the third
+                                   after the track ended, each stored landmark that no track carries is
+                                   looked for where the pose projects it (its template aligned there:
+                                   converged, a correlation of at least 0.8, within 2 px), and found it
+                                   becomes a new track that carries it.
                                    Needs the map and affine_win_size > 0. [0, 4096], 0: off; default 0
                                    in every preset */
     double affine_end_share;      /* in a frame where at most this share of the affine alignments fails (no
