@@ -60,6 +60,7 @@ static const setting settings[] = {
         S_I(affine_at_keyframes),
         S_D(affine_end_share),
         S_I(map_refind),
+        S_I(map_refind_rescue),
         S_I(map),
         S_I(map_window),
         S_I(map_max_landmarks),

@@ -213,6 +213,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->affine_at_keyframes = 0;
     cfg->affine_end_share = 0.0;
     cfg->map_refind = 0;
+    cfg->map_refind_rescue = 0;
     cfg->map = 1;
     cfg->map_max_landmarks = 0; /* 2 x max_tracks */
     cfg->map_min_points = 20;
@@ -317,6 +318,8 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (cfg->map_refind < 0 || cfg->map_refind > 4096 ||
         (cfg->map_refind > 0 && (cfg->affine_win_size == 0 || cfg->map != 1)))
+        return 0;
+    if (cfg->map_refind_rescue != 0 && cfg->map_refind_rescue != 1)
         return 0;
     if (cfg->affine_step < 1 || cfg->affine_step > 15 ||
         (cfg->affine_win_size != 0 && !tvo_aff_step_ok(cfg->affine_win_size, cfg->affine_step)))
@@ -1787,11 +1790,14 @@ static void refound_track(tvo_vo *vo, int32_t e, tvo_point2f p, tvo_point2d xk, 
  * correlation of at least TVO_VO_AFF_MIN_NCC, within TVO_VO_AFF_MAX_MOVE px). Found, it becomes a new
  * track (refound_track). An entry is dropped when found, when its landmark left the map, is behind the
  * camera or is carried again, or after TVO_VO_REFIND_MISSES failed searches; one out of view waits.
- * Returns the landmarks found. */
+ * With cfg.map_refind_rescue the search runs only on frames with fewer than 2 x map_min_points PnP
+ * inliers (the waits and the drops on every frame). Returns the landmarks found. */
 static int32_t refind(tvo_vo *vo, const frame_ctx *fc, const tvo_vo_result *res)
 {
     const int32_t side = vo->cfg.affine_win_size;
     const float clear2 = TVO_VO_REFIND_CLEAR_PX * TVO_VO_REFIND_CLEAR_PX;
+    /* cfg.map_refind_rescue: only while the map runs short of points (the keyframe rule's test) */
+    const int search = !vo->cfg.map_refind_rescue || res->map_points < 2 * vo->cfg.map_min_points;
     int32_t found = 0;
     if (vo->rf_lm == NULL || res->map_state != TVO_MAP_TRACKING)
         return 0;
@@ -1815,6 +1821,8 @@ static int32_t refind(tvo_vo *vo, const frame_ctx *fc, const tvo_vo_result *res)
             vo->rf_wait[e]--;
             continue;
         }
+        if (!search)
+            continue;
         if (tvo_camera_distort_point(&vo->cfg.camera, &xn, &u, &v) != TVO_OK)
             continue;
         q.x = (float)u;

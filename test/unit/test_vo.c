@@ -687,14 +687,15 @@ static void test_affine_refinement(void **state)
     assert_true(end < 0.15);
 }
 
-/* cfg.map_refind: the walk of run_walk_tracks with a flat bar over a quarter of the frame for two frames
- * (frames 36 and 37), which ends the tracks under it. Counts the landmarks found again and, for each
+/* cfg.map_refind (and map_refind_rescue): the walk of run_walk_tracks with a flat bar `bar` pixels wide
+ * from a quarter of the frame on, for two frames (frames 36 and 37), which ends the tracks under it. Counts the landmarks found again and, for each
  * track that carries a landmark from its first frame on (a landmark found again: a detected track waits
  * for its triangulation), its distance from the nearest point seen before the bar by a landmark track
  * that the bar ended (err[]: the truth, from the renderer's geometry, projected into that frame). */
 #define OCC_FIRST 36
 #define OCC_FRAMES 2
-static void run_occluded_walk(int32_t refind, long *refound, int *lost_frames, double *err, int *ne)
+static void run_occluded_walk(int32_t refind, int32_t rescue, int bar, long *refound, int *lost_frames,
+                              double *err, int *ne)
 {
     static double X0[AFF_MAX_IDS][3];
     static uint8_t have[AFF_MAX_IDS], ended[AFF_MAX_IDS];
@@ -711,6 +712,7 @@ static void run_occluded_walk(int32_t refind, long *refound, int *lost_frames, d
     *ne = 0;
     tvo_vo_config_default(&f.cfg, &cam);
     f.cfg.map_refind = refind;
+    f.cfg.map_refind_rescue = rescue;
     open_vo(&f);
     for (int k = 0; k < AFF_FRAMES; ++k) {
         const double dir[3] = {0.1, 0.05, 1.0};
@@ -720,7 +722,7 @@ static void run_occluded_walk(int32_t refind, long *refound, int *lost_frames, d
         render(&T, f.img);
         if (k >= OCC_FIRST && k < OCC_FIRST + OCC_FRAMES)
             for (int y = 0; y < H; ++y)
-                memset(f.img + (size_t)y * W + W / 4, 128, W / 4);
+                memset(f.img + (size_t)y * W + W / 4, 128, (size_t)bar);
         assert_int_equal(tvo_vo_process(f.vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
         assert_true(res.map_refound >= 0 && res.map_refound <= res.tracks);
         assert_true(refind > 0 || res.map_refound == 0);
@@ -773,8 +775,8 @@ static void test_map_refind(void **state)
     long found_on, found_off;
     int lost_on, lost_off, n_on, n_off, within = 0;
     (void)state;
-    run_occluded_walk(64, &found_on, &lost_on, err_on, &n_on);
-    run_occluded_walk(0, &found_off, &lost_off, err_off, &n_off);
+    run_occluded_walk(64, 0, W / 4, &found_on, &lost_on, err_on, &n_on);
+    run_occluded_walk(0, 0, W / 4, &found_off, &lost_off, err_off, &n_off);
     for (int i = 1; i < n_on; ++i) /* insertion sort: a few dozen values */
         for (int j = i; j > 0 && err_on[j] < err_on[j - 1]; --j) {
             const double e = err_on[j];
@@ -795,6 +797,32 @@ static void test_map_refind(void **state)
     assert_int_equal(n_on, found_on);
     assert_true(within >= n_on * 9 / 10);
     assert_true(err_on[n_on / 2] < 0.3);
+}
+
+/* cfg.map_refind_rescue: the landmarks are looked for only while the map runs short of points. A bar over
+ * a quarter of the frame leaves the map enough: nothing is found again. One over three quarters leaves
+ * it short: they are found again, on their points. */
+static void test_map_refind_rescue(void **state)
+{
+    static double err[300];
+    long found_quarter, found_most;
+    int lost_quarter, lost_most, n_quarter, n_most, within = 0;
+    (void)state;
+    run_occluded_walk(64, 1, W / 4, &found_quarter, &lost_quarter, err, &n_quarter);
+    run_occluded_walk(64, 1, W * 3 / 4, &found_most, &lost_most, err, &n_most);
+    for (int i = 0; i < n_most; ++i)
+        within += err[i] < 1.0;
+    fprintf(stderr,
+            "occluded walk, map_refind 64 as a rescue: a quarter hidden, %ld found again; three quarters, "
+            "%ld "
+            "found again, %d of them within 1 px of a point the bar took\n",
+            found_quarter, found_most, within);
+    assert_int_equal(lost_quarter, 0);
+    assert_int_equal(lost_most, 0);
+    assert_int_equal(found_quarter, 0);
+    assert_true(found_most >= 10);
+    assert_int_equal(n_most, found_most);
+    assert_true(within >= n_most * 9 / 10);
 }
 #else
 /* A build without the affine refinement (TVO_WITH_AFFINE 0) refuses a configuration that asks for it,
@@ -1257,6 +1285,14 @@ static void test_bad_input(void **state)
                 bad.map_refind = v[i];
                 assert_refused(&bad, f->mem);
             }
+            /* the rescue: 0 or 1 */
+            assert_int_equal(f->cfg.map_refind_rescue, 0);
+            for (int i = 0; i < 3; ++i) {
+                const int32_t r[3] = {-1, 2, 255};
+                bad = f->cfg;
+                bad.map_refind_rescue = r[i];
+                assert_refused(&bad, f->mem);
+            }
             bad = f->cfg;
             bad.affine_win_size = 0;
             bad.map_refind = 64;
@@ -1510,6 +1546,7 @@ int main(void)
       cmocka_unit_test(test_affine_refinement),
 #if TVO_WITH_AFFINE
       cmocka_unit_test(test_map_refind),
+      cmocka_unit_test(test_map_refind_rescue),
 #endif
       cmocka_unit_test(test_scale_filter),
       cmocka_unit_test(test_presets),

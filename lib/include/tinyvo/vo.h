@@ -256,6 +256,10 @@ typedef struct tvo_vo_config {
                                    older keyframes, as ORB-SLAM's local bundle adjustment holds the
                                    keyframes outside its local set), [2, map_window - 1]; default 4 (2
                                    in a build without the affine refinement) */
+    int32_t map_refind_rescue;    /* with map_refind: 1 looks for the stored landmarks only on the frames
+                                   whose PnP inliers are fewer than 2 x map_min_points (the map running
+                                   short of points: after a jump or a fast turn), a rescue; 0 on every
+                                   frame the map posed. 0 or 1; default 0 */
     double map_ba_max_turn_deg;   /* the bundle adjustment's result is not taken (the window keeps its poses
                                    and points from before it; ba_flags gets TVO_VO_BA_TURN_REFUSED) when
                                    it turns the newest keyframe by more than this from the pose its
