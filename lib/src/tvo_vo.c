@@ -111,6 +111,12 @@ struct tvo_vo {
 #define TVO_VO_REFIND_CLEAR_PX 3.0f
 #define TVO_VO_REFIND_MISSES 3
 
+/* cfg.map_refind acts (and has its store) only with the map and the affine refinement's templates. */
+static int refind_on(const tvo_vo_config *cfg)
+{
+    return cfg->map_refind > 0 && cfg->map && cfg->affine_win_size > 0;
+}
+
 /* The store of cfg.map_refind emptied (at init and reset). */
 static void refind_clear(tvo_vo *vo)
 {
@@ -154,12 +160,15 @@ static void preset_basic(tvo_vo_config *cfg)
     cfg->map_prediction = 0;
     cfg->lk.pred_levels = 0;
     cfg->lk.pred_win_size = 0;
+    cfg->map_refind = 0;
+    cfg->map_refind_rescue = 0;
 }
 
 /* TVO_VO_PRESET_ACCURATE's fields: every track re-aligned to its first patch (the affine refinement),
  * 8 keyframes with 4 fixed, the full tracker on every track, the chain's steps following the relative
  * scale (docs/budget.md, "A twenty-third rule": measured on the balanced preset; on the basic tracker it
- * costs the KITTI 01 highway a quarter of its ATE, so the basic and small presets keep 0). */
+ * costs the KITTI 01 highway a quarter of its ATE, so the basic and small presets keep 0), and the
+ * landmarks of 64 ended tracks found again while the map runs short of points ("A thirty-second rule"). */
 static void preset_accurate(tvo_vo_config *cfg)
 {
     preset_basic(cfg);
@@ -167,6 +176,8 @@ static void preset_accurate(tvo_vo_config *cfg)
     cfg->chain_scale_sigmas = 3.0;
     cfg->map_window = 8;
     cfg->map_ba_fixed = 4;
+    cfg->map_refind = 64;
+    cfg->map_refind_rescue = 1;
 }
 
 /* TVO_VO_PRESET_BALANCED's fields (the defaults in a build with the affine refinement): the accurate
@@ -316,8 +327,7 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (!(cfg->affine_end_share >= 0.0 && cfg->affine_end_share <= 1.0))
         return 0;
-    if (cfg->map_refind < 0 || cfg->map_refind > 4096 ||
-        (cfg->map_refind > 0 && (cfg->affine_win_size == 0 || cfg->map != 1)))
+    if (cfg->map_refind < 0 || cfg->map_refind > 4096) /* inert without the map or the templates */
         return 0;
     if (cfg->map_refind_rescue != 0 && cfg->map_refind_rescue != 1)
         return 0;
@@ -416,7 +426,7 @@ static size_t layout_size(const tvo_vo_config *cfg)
         s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_aff_model))));
         s = tvo_size_add(s, tvo_arena_round(n));
     }
-    if (cfg->map_refind > 0) {
+    if (refind_on(cfg)) {
         const size_t r = (size_t)cfg->map_refind;
         s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(r, sizeof(int32_t))) * 2); /* rf_lm rf_gen */
         s = tvo_size_add(s, tvo_arena_round(r) * 2);                                /* rf_miss rf_wait */
@@ -462,7 +472,7 @@ static tvo_status affine_alloc(tvo_vo *vo, const tvo_vo_config *cfg, tvo_arena *
             return TVO_ERR_NO_MEMORY;
         memset(vo->hast, 0, n);
     }
-    if (cfg->map_refind > 0) {
+    if (refind_on(cfg)) {
         const size_t r = (size_t)cfg->map_refind;
         vo->rf_lm = (int32_t *)tvo_arena_alloc(a, r * sizeof(int32_t));
         vo->rf_gen = (uint32_t *)tvo_arena_alloc(a, r * sizeof(uint32_t));

@@ -206,6 +206,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cfg.map_refind = cfg.map && cfg.affine_win_size > 0 && (((hdr[4] >> 4) ^ (hdr[7] >> 3)) & 1)
             ? 1 + (int32_t)(hdr[5] & 15u)
             : 0;
+    cfg.map_refind_rescue = (hdr[5] >> 4) & 1; /* ...looking on every frame or only when the map runs short */
     while ((need = tvo_vo_required_size(&cfg)) == 0 && cfg.lk.max_level > 0)
         cfg.lk.max_level--;
     TVO_FUZZ_CHECK(need > 0); /* every size from 16x16 up is valid with one level */

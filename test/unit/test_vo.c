@@ -1275,8 +1275,8 @@ static void test_bad_input(void **state)
                 assert_refused(&bad, f->mem);
             }
         }
-        /* landmarks found again: [0, 4096], 0 (off) by default; it needs the map and the affine
-           refinement's templates */
+        /* landmarks found again: [0, 4096], 0 (off) in the basic preset; without the map or the affine
+           refinement's templates it does nothing and takes no memory */
         {
             const int32_t v[3] = {-1, 4097, INT32_MAX};
             assert_int_equal(f->cfg.map_refind, 0);
@@ -1296,16 +1296,17 @@ static void test_bad_input(void **state)
             bad = f->cfg;
             bad.affine_win_size = 0;
             bad.map_refind = 64;
-            assert_refused(&bad, f->mem);
+            assert_true(tvo_vo_required_size(&bad) == tvo_vo_required_size(&f->cfg));
 #if TVO_WITH_AFFINE
             bad.affine_win_size = 21;
             bad.map = 0;
-            assert_refused(&bad, f->mem);
-            bad.map = 1;
             {
-                /* accepted with both, and its store is in the required size: 64 templates and more */
                 tvo_vo_config off = bad;
                 off.map_refind = 0;
+                assert_true(tvo_vo_required_size(&bad) == tvo_vo_required_size(&off));
+                /* with both, its store is in the required size: 64 templates and more */
+                bad.map = 1;
+                off.map = 1;
                 assert_true(tvo_vo_required_size(&bad) >=
                             tvo_vo_required_size(&off) + 64 * (size_t)(23 * 23 + sizeof(double) * 35));
             }
@@ -1370,6 +1371,9 @@ static void expect_tracker(const tvo_vo_config *c, int32_t affine, int32_t windo
     assert_int_equal(c->map_prediction, pred);
     assert_int_equal(c->lk.pred_levels, pred_levels);
     assert_int_equal(c->lk.pred_win_size, pred_win);
+    /* the presets with the refinement find the landmarks of ended tracks again as a rescue */
+    assert_int_equal(c->map_refind, affine > 0 ? 64 : 0);
+    assert_int_equal(c->map_refind_rescue, affine > 0);
 }
 
 /* c with the tracker and window fields of `from` */
@@ -1382,6 +1386,8 @@ static void copy_tracker(tvo_vo_config *c, const tvo_vo_config *from)
     c->lk.pred_levels = from->lk.pred_levels;
     c->lk.pred_win_size = from->lk.pred_win_size;
     c->chain_scale_sigmas = from->chain_scale_sigmas;
+    c->map_refind = from->map_refind;
+    c->map_refind_rescue = from->map_refind_rescue;
 }
 
 /* The presets (vo.h): the default is the balanced preset in a build with the affine refinement and the

@@ -197,9 +197,10 @@ typedef struct tvo_vo_config {
                                    after the track ended, each stored landmark that no track carries is
                                    looked for where the pose projects it (its template aligned there:
                                    converged, a correlation of at least 0.8, within 2 px), and found it
-                                   becomes a new track that carries it.
-                                   Needs the map and affine_win_size > 0. [0, 4096], 0: off; default 0
-                                   in every preset */
+                                   becomes a new track that carries it (about 850 bytes an entry).
+                                   Without the map or affine_win_size > 0 it does nothing and takes
+                                   no memory. [0, 4096], 0: off; default 64 (the balanced and accurate
+                                   presets; 0 in the basic and small ones) */
     double affine_end_share;      /* in a frame where at most this share of the affine alignments fails (no
                                    convergence, a correlation below 0.8, a degenerate warp, more than 2
                                    px from LK's position; a window that reaches the image's border is
@@ -259,7 +260,9 @@ typedef struct tvo_vo_config {
     int32_t map_refind_rescue;    /* with map_refind: 1 looks for the stored landmarks only on the frames
                                    whose PnP inliers are fewer than 2 x map_min_points (the map running
                                    short of points: after a jump or a fast turn), a rescue; 0 on every
-                                   frame the map posed. 0 or 1; default 0 */
+                                   frame the map posed (worse on clean frames: docs/budget.md, "A
+                                   thirty-first rule"). 0 or 1; default 1 (0 in the basic and small
+                                   presets) */
     double map_ba_max_turn_deg;   /* the bundle adjustment's result is not taken (the window keeps its poses
                                    and points from before it; ba_flags gets TVO_VO_BA_TURN_REFUSED) when
                                    it turns the newest keyframe by more than this from the pose its
@@ -309,9 +312,11 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
  *                          lk.pred_levels 2, lk.pred_win_size 11; a frame that loses more than half of
  *                          them tracks those again the full way, pred_rescue), a window of 8 keyframes
  *                          with 4 fixed (map_window 8, map_ba_fixed 4), the chain's steps following the
- *                          relative scale before the map (chain_scale_sigmas 3). On the sequences of
- *                          docs/budget.md 0.45 times the basic preset's ATE and 0.48 times its rotation
- *                          error, for 0.55-1.05 times its instructions; about 1,000 more bytes a track.
+ *                          relative scale before the map (chain_scale_sigmas 3), and the landmarks of
+ *                          64 ended tracks found again while the map runs short of points (map_refind
+ *                          64, map_refind_rescue 1). On the sequences of docs/budget.md 0.45 times the
+ *                          basic preset's ATE and 0.48 times its rotation error, for 0.55-1.05 times
+ *                          its instructions; about 1,000 more bytes a track and 54 KB for the store.
  *                          Needs a build with the affine refinement (TVO_WITH_AFFINE, options.h).
  * TVO_VO_PRESET_ACCURATE   the balanced preset with the full tracker on every track (no map prediction):
  *                          more accurate than balanced on the real KITTI 07 and 06, for 1.2-1.3 times the
@@ -325,7 +330,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
  * TVO_VO_PRESET_SMALL      sized for a QVGA (320x240) camera on a microcontroller: the basic preset with
  *                          120 tracks (min_tracks 80, keyframe_min_tracks 40, detect.max_corners 120), 3
  *                          pyramid levels (lk.max_level 2), a map of 5 keyframes and 160 landmarks. At
- *                          320x240 the VO needs 229,616 bytes on a Cortex-M7 (tools/run-mcu.sh runs it
+ *                          320x240 the VO needs 229,648 bytes on a Cortex-M7 (tools/run-mcu.sh runs it
  *                          there). */
 typedef enum tvo_vo_preset {
     TVO_VO_PRESET_DEFAULT = 0,
