@@ -2,8 +2,6 @@
 /* tinyvo: the VO's local map. See tvo_map.h for the design and vo.h for the configuration. */
 #include "tvo_map.h"
 
-#include "tinyvo/options.h"
-
 #include <math.h>
 #include <string.h>
 

@@ -161,8 +161,9 @@ int tvo_map_predict_pose(const tvo_map *m, int64_t t_ns, int64_t prev_t_ns, tvo_
 void tvo_map_new_tracks(const tvo_map *m, tvo_map_tracks *tr, int32_t first);
 
 #if TVO_WITH_AFFINE
-/* For finding a landmark again (cfg.map_refind; a build with the affine refinement): 1 when slot j holds landmark generation gen, alive,
- * carried by no track and in front of the camera T_c_w, with *xn its normalised projection; else 0. */
+/* For finding a landmark again (cfg.map_refind; a build with the affine refinement): 1 when slot j holds
+ * landmark generation gen, alive, carried by no track and in front of the camera T_c_w, with *xn its
+ * normalised projection; else 0. */
 int tvo_map_refind_point(const tvo_map *m, int32_t j, uint32_t gen, const tvo_pose *T_c_w, tvo_point2d *xn);
 
 /* Landmark j is carried by a track again (the VO set the track's lm to j). */

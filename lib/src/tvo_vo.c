@@ -1312,25 +1312,18 @@ typedef struct frame_ctx {
  * where its template aligns under an affine warp, starting from LK's position with the last frame's
  * warp; a point whose refinement fails keeps LK's position and takes a new template in finish_frame. */
 #if TVO_WITH_AFFINE
-/* Track i's alignment to its template in l0, from `at` (where LK left it) with the warp of its last
- * refinement: 1 when it is taken (converged, correlated, within TVO_VO_AFF_MAX_MOVE px of `at`), with
- * the new warp in *aw and the point in *out; the caller commits it; TVO_AFF_AT_BORDER when the window
- * reached the image's border, 0 when the alignment failed. Either way the track is counted and left
- * without a template until then (hast[i] 0: a new one is taken in finish_frame). */
-static int affine_align(tvo_vo *vo, int32_t i, const tvo_image *l0, tvo_point2f at, tvo_aff_warp *aw,
-                        tvo_point2f *out)
+/* A template (tpl, am) aligned in l0 from `at` with the warp *aw moved there: 1 when the alignment is
+ * taken (converged, correlated, within TVO_VO_AFF_MAX_MOVE px of `at`), with the new warp in *aw and the
+ * point in *out; TVO_AFF_AT_BORDER when the window reached the image's border, 0 when it failed. */
+static int align_template(tvo_vo *vo, const uint8_t *tpl, const tvo_aff_model *am, const tvo_image *l0,
+                          tvo_point2f at, tvo_aff_warp *aw, tvo_point2f *out)
 {
-    const int32_t side = vo->cfg.affine_win_size;
     float ox, oy, px, py, ncc = 0.0f;
-    *aw = vo->aw[i];
-    vo->aff_tried++;
     tvo_aff_point(aw, &ox, &oy);
     aw->t[0] += at.x - ox;
     aw->t[1] += at.y - oy;
-    vo->hast[i] = 0;
-    const int r = tvo_aff_refine(vo->tpl + (size_t)i * tvo_aff_template_bytes(side), &vo->am[i], side,
-                                 vo->cfg.affine_step, l0, aw, TVO_VO_AFF_ITERS, TVO_VO_AFF_EPS, vo->scratch,
-                                 vo->scratch_size, &ncc);
+    const int r = tvo_aff_refine(tpl, am, vo->cfg.affine_win_size, vo->cfg.affine_step, l0, aw,
+                                 TVO_VO_AFF_ITERS, TVO_VO_AFF_EPS, vo->scratch, vo->scratch_size, &ncc);
     if (r != 1)
         return r; /* 0, or TVO_AFF_AT_BORDER */
     if (!(ncc >= TVO_VO_AFF_MIN_NCC))
@@ -1341,6 +1334,19 @@ static int affine_align(tvo_vo *vo, int32_t i, const tvo_image *l0, tvo_point2f 
     out->x = px;
     out->y = py;
     return 1;
+}
+
+/* Track i's alignment to its template in l0, from `at` (where LK left it) with the warp of its last
+ * refinement (align_template); the caller commits a taken one. Either way the track is counted and left
+ * without a template until then (hast[i] 0: a new one is taken in finish_frame). */
+static int affine_align(tvo_vo *vo, int32_t i, const tvo_image *l0, tvo_point2f at, tvo_aff_warp *aw,
+                        tvo_point2f *out)
+{
+    *aw = vo->aw[i];
+    vo->aff_tried++;
+    vo->hast[i] = 0;
+    return align_template(vo, vo->tpl + (size_t)i * tvo_aff_template_bytes(vo->cfg.affine_win_size),
+                          &vo->am[i], l0, at, aw, out);
 }
 
 /* A taken alignment: the warp kept, the template valid again. */
@@ -1796,15 +1802,14 @@ static void refound_track(tvo_vo *vo, int32_t e, tvo_point2f p, tvo_point2d xk, 
 /* 5a. Landmarks found again (cfg.map_refind), on a frame the map posed: each stored landmark that is
  * still in the map, carried by no track, TVO_VO_REFIND_WAIT frames or more past the end of its track, in
  * view and without a track within TVO_VO_REFIND_CLEAR_PX of its projection has its template aligned
- * there, from its last warp moved to the projection (the affine refinement's test: converged, a
- * correlation of at least TVO_VO_AFF_MIN_NCC, within TVO_VO_AFF_MAX_MOVE px). Found, it becomes a new
+ * there, from its last warp moved to the projection (align_template, the affine refinement's test).
+ * Found, it becomes a new
  * track (refound_track). An entry is dropped when found, when its landmark left the map, is behind the
  * camera or is carried again, or after TVO_VO_REFIND_MISSES failed searches; one out of view waits.
  * With cfg.map_refind_rescue the search runs only on frames with fewer than 2 x map_min_points PnP
  * inliers (the waits and the drops on every frame). Returns the landmarks found. */
 static int32_t refind(tvo_vo *vo, const frame_ctx *fc, const tvo_vo_result *res)
 {
-    const int32_t side = vo->cfg.affine_win_size;
     const float clear2 = TVO_VO_REFIND_CLEAR_PX * TVO_VO_REFIND_CLEAR_PX;
     /* cfg.map_refind_rescue: only while the map runs short of points (the keyframe rule's test) */
     const int search = !vo->cfg.map_refind_rescue || res->map_points < 2 * vo->cfg.map_min_points;
@@ -1812,14 +1817,13 @@ static int32_t refind(tvo_vo *vo, const frame_ctx *fc, const tvo_vo_result *res)
     if (vo->rf_lm == NULL || res->map_state != TVO_MAP_TRACKING)
         return 0;
     const tvo_image l0 = tvo_pyramid_level(fc->pc, 0);
-    const size_t tb = tvo_aff_template_bytes(side);
+    const size_t tb = tvo_aff_template_bytes(vo->cfg.affine_win_size);
     for (int32_t e = 0; e < vo->cfg.map_refind && vo->n < vo->cfg.max_tracks; ++e) {
         const int32_t j = vo->rf_lm[e];
         tvo_point2d xn, xk;
         tvo_point2f q, p;
         tvo_aff_warp aw;
         double u, v;
-        float ox, oy, ncc = 0.0f;
         int near = 0, r;
         if (j < 0)
             continue;
@@ -1846,19 +1850,11 @@ static int32_t refind(tvo_vo *vo, const frame_ctx *fc, const tvo_vo_result *res)
         if (near)
             continue;
         aw = vo->rf_aw[e];
-        tvo_aff_point(&aw, &ox, &oy);
-        aw.t[0] += q.x - ox;
-        aw.t[1] += q.y - oy;
-        r = tvo_aff_refine(vo->rf_tpl + (size_t)e * tb, &vo->rf_am[e], side, vo->cfg.affine_step, &l0, &aw,
-                           TVO_VO_AFF_ITERS, TVO_VO_AFF_EPS, vo->scratch, vo->scratch_size, &ncc);
+        r = align_template(vo, vo->rf_tpl + (size_t)e * tb, &vo->rf_am[e], &l0, q, &aw, &p);
         if (r == TVO_AFF_AT_BORDER)
             continue;
-        if (r == 1)
-            tvo_aff_point(&aw, &p.x, &p.y);
-        if (r != 1 || !(ncc >= TVO_VO_AFF_MIN_NCC) ||
-            !((p.x - q.x) * (p.x - q.x) + (p.y - q.y) * (p.y - q.y) <
-              TVO_VO_AFF_MAX_MOVE * TVO_VO_AFF_MAX_MOVE) ||
-            !in_image(vo, p) || tvo_camera_undistort_point(&vo->cfg.camera, p.x, p.y, &xk) != TVO_OK) {
+        if (r != 1 || !in_image(vo, p) ||
+            tvo_camera_undistort_point(&vo->cfg.camera, p.x, p.y, &xk) != TVO_OK) {
             if (++vo->rf_miss[e] >= TVO_VO_REFIND_MISSES)
                 vo->rf_lm[e] = -1;
             continue;

@@ -586,6 +586,13 @@ static void room_project(const tvo_pose *T_w_c, const double X[3], double *x, do
  * the median of those distances and their count. */
 #define AFF_FRAMES 60
 #define AFF_MAX_IDS 4096
+
+/* The walk's camera at frame k. */
+static tvo_pose walk_pose(int k)
+{
+    const double dir[3] = {0.1, 0.05, 1.0};
+    return motion(k, dir, 0.02, 0.2);
+}
 static double run_walk_tracks(int32_t affine, int32_t at_keyframes, double end_share, int *count, long aff[3])
 {
     static double X0[AFF_MAX_IDS][3];
@@ -605,10 +612,9 @@ static double run_walk_tracks(int32_t affine, int32_t at_keyframes, double end_s
     f.cfg.affine_end_share = end_share;
     open_vo(&f);
     for (int k = 0; k < AFF_FRAMES; ++k) {
-        const double dir[3] = {0.1, 0.05, 1.0};
         tvo_vo_result res;
         tvo_image img = tvo_image_make(W, H, W, f.img);
-        T = motion(k, dir, 0.02, 0.2);
+        T = walk_pose(k);
         render(&T, f.img);
         assert_int_equal(tvo_vo_process(f.vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
         assert_true(res.affine_refined >= 0 && res.affine_refined <= res.affine_tried);
@@ -715,10 +721,9 @@ static void run_occluded_walk(int32_t refind, int32_t rescue, int bar, long *ref
     f.cfg.map_refind_rescue = rescue;
     open_vo(&f);
     for (int k = 0; k < AFF_FRAMES; ++k) {
-        const double dir[3] = {0.1, 0.05, 1.0};
         tvo_vo_result res;
         tvo_image img = tvo_image_make(W, H, W, f.img);
-        const tvo_pose T = motion(k, dir, 0.02, 0.2);
+        const tvo_pose T = walk_pose(k);
         render(&T, f.img);
         if (k >= OCC_FIRST && k < OCC_FIRST + OCC_FRAMES)
             for (int y = 0; y < H; ++y)
