@@ -988,9 +988,33 @@ static int need_keyframe(const tvo_map *m, const tvo_vo_config *cfg, const tvo_p
     return base > cfg->map_kf_baseline * depth_med;
 }
 
+/* At a keyframe made while the map runs out of points (rescue): track i, first seen since the last
+ * keyframe in a frame whose pose the ring still holds (T0), triangulated from that frame and kn with the
+ * tests of any landmark; its landmark gets one observation, in kn (the next keyframe adds the second, and
+ * the bundle adjustment takes it from then on; PnP uses it at once). In a turn that takes the landmarks
+ * out of view faster than the baseline grows, these tracks are the only new points the map can get
+ * before it is lost (docs/budget.md, "A thirty-seventh rule"). 1 when a landmark was made. */
+static int triangulate_recent(tvo_map *m, tvo_map_tracks *tr, tvo_map_kf *kn, int32_t i, const tvo_pose *T0,
+                              double min_cos, double max_err)
+{
+    double X[3];
+    int32_t j;
+    if (!triangulate(T0, &kn->T_c_w, tr->tri_x[i], tr->x[i], min_cos, max_err, X) ||
+        kn->n_obs >= m->max_tracks || (j = lm_alloc(m)) < 0)
+        return 0;
+    memcpy(m->lm[j].X, X, sizeof(X));
+    (void)kf_add_obs(m, kn, j, tr->x[i]);
+    m->lm[j].tracked = 1;
+    tr->lm[i] = j;
+    tr->inlier[i] = 1;
+    return 1;
+}
+
 /* Triangulate the waiting tracks against the new keyframe kn; tracks whose first keyframe left the window
- * (or that had none) start waiting in kn. Returns the landmarks made. */
-static int32_t triangulate_new(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, tvo_map_kf *kn)
+ * (or that had none) start waiting in kn, or at a rescue keyframe are triangulated from their first
+ * frame (triangulate_recent). Returns the landmarks made. */
+static int32_t triangulate_new(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, tvo_map_kf *kn,
+                               int rescue)
 {
     const double min_cos = tvo_dm_cos(deg2rad(cfg->map_tri_parallax_deg));
     const double max_err = TVO_MAP_TRI_MAX_ERR_PX / focal(cfg);
@@ -1002,6 +1026,11 @@ static int32_t triangulate_new(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tra
         if (tr->lm[i] >= 0 || !tr->x_ok[i])
             continue;
         const tvo_pose *T0 = frame_pose(m, tr->tri_fr[i], &k0);
+        if (rescue && T0 != NULL && k0 == NULL && tr->tri_fr[i] != m->serial &&
+            triangulate_recent(m, tr, kn, i, T0, min_cos, max_err)) {
+            ++made;
+            continue;
+        }
         if (T0 == NULL || k0 == NULL || tr->tri_fr[i] == m->serial) {
             /* first seen in a frame that is not a keyframe of the window (or now): wait from this
                keyframe, so that every landmark starts with two observations the adjustment refines */
@@ -1237,8 +1266,9 @@ static void bundle_adjust(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *
     release_unobserved(m, tr);
 }
 
+/* A keyframe at pose *T (adjusted on return); rescue: the map runs out of points (triangulate_new). */
 static void add_keyframe(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns, tvo_pose *T,
-                         void *scratch, size_t scratch_size, tvo_map_frame *out)
+                         int rescue, void *scratch, size_t scratch_size, tvo_map_frame *out)
 {
     tvo_map_kf *kn;
     int32_t seen = 0;
@@ -1253,7 +1283,7 @@ static void add_keyframe(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
         if (tr->lm[i] >= 0 && tr->inlier[i] && kf_add_obs(m, kn, tr->lm[i], tr->x[i]))
             ++seen;
     }
-    out->new_points = triangulate_new(m, cfg, tr, kn);
+    out->new_points = triangulate_new(m, cfg, tr, kn, rescue);
     bundle_adjust(m, cfg, tr, scratch, scratch_size, out);
     kn = kf_at(m, m->n_kf - 1);
     *T = kn->T_c_w;
@@ -1356,7 +1386,8 @@ static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
            adjusted keyframe, on which the next frames are posed (reporting the adjusted pose instead
            puts each correction into one frame's step: a jump in the per-frame rotation) */
         tvo_pose Tk = T;
-        add_keyframe(m, cfg, tr, t_ns, &Tk, scratch, scratch_size, out);
+        add_keyframe(m, cfg, tr, t_ns, &Tk, n_in < TVO_MAP_KF_RESCUE_POINTS * cfg->map_min_points, scratch,
+                     scratch_size, out);
     } else {
         m->frames_since_kf++;
     }

@@ -20,8 +20,10 @@
  * the last one, when fewer than cfg.map_kf_points_ratio of its landmarks remain, or after
  * cfg.map_kf_max_frames frames, and not when it barely moved (a turn on the spot adds little structure)
  * unless fewer than 2 x cfg.map_min_points landmarks are left (the map is about to be lost).
- * At each keyframe: new landmarks, then a bundle adjustment of the window (ba.h: Huber reprojection error
- * in normalised coordinates, Levenberg-Marquardt with the Schur complement on the poses, at most
+ * At each keyframe: new landmarks (at a keyframe of a map running out of points, also from the tracks
+ * born since the last keyframe, triangulated from the frame they were born in), then a bundle adjustment
+ * of the window (ba.h: Huber reprojection error in normalised coordinates, Levenberg-Marquardt with the
+ * Schur complement on the poses, at most
  * cfg.map_ba_iterations iterations, the cfg.map_ba_fixed (default 4) oldest keyframes fixed to hold the
  * gauge and the scale: they are fixed, not marginalised), after which observations above 2.5 px are
  * dropped.
