@@ -339,6 +339,26 @@ static int kf_add_obs(tvo_map *m, tvo_map_kf *k, int32_t j, tvo_point2d x)
     return 1;
 }
 
+/* A landmark at X for track i (when i >= 0: the track carries it), observed at x0 in k0 (when not NULL) and
+ * at x1 in k1; -1 when the store is full. */
+static int32_t lm_make(tvo_map *m, tvo_map_tracks *tr, int32_t i, const double X[3], tvo_map_kf *k0,
+                       tvo_point2d x0, tvo_map_kf *k1, tvo_point2d x1)
+{
+    const int32_t j = lm_alloc(m);
+    if (j < 0)
+        return -1;
+    memcpy(m->lm[j].X, X, sizeof(m->lm[j].X));
+    if (k0 != NULL)
+        (void)kf_add_obs(m, k0, j, x0);
+    (void)kf_add_obs(m, k1, j, x1);
+    if (i >= 0) {
+        m->lm[j].tracked = 1;
+        tr->lm[i] = j;
+        tr->inlier[i] = 1;
+    }
+    return j;
+}
+
 /* Drop the oldest keyframe of the window: its observations go, and landmarks nobody observes or tracks
  * any more are freed. */
 static void kf_drop_oldest(tvo_map *m)
@@ -582,12 +602,9 @@ static int32_t init_landmarks(tvo_map *m, const tvo_vo_config *cfg, tvo_map_trac
         int32_t j;
         if (!ip->mask[q] || !triangulate(&k0->T_c_w, &k1->T_c_w, ip->xa[q], ip->xb[q], min_cos, max_err, X))
             continue;
-        j = lm_alloc(m);
+        j = lm_make(m, tr, -1, X, k0, ip->xa[q], k1, ip->xb[q]);
         if (j < 0)
             break;
-        memcpy(m->lm[j].X, X, sizeof(X));
-        (void)kf_add_obs(m, k0, j, ip->xa[q]);
-        (void)kf_add_obs(m, k1, j, ip->xb[q]);
         tr->lm[ip->idx[q]] = j;
         ++made;
     }
@@ -988,31 +1005,15 @@ static int need_keyframe(const tvo_map *m, const tvo_vo_config *cfg, const tvo_p
     return base > cfg->map_kf_baseline * depth_med;
 }
 
-/* At a keyframe made while the map runs out of points (rescue): track i, first seen since the last
- * keyframe in a frame whose pose the ring still holds (T0), triangulated from that frame and kn with the
- * tests of any landmark; its landmark gets one observation, in kn (the next keyframe adds the second, and
- * the bundle adjustment takes it from then on; PnP uses it at once). In a turn that takes the landmarks
- * out of view faster than the baseline grows, these tracks are the only new points the map can get
- * before it is lost (docs/budget.md, "A thirty-seventh rule"). 1 when a landmark was made. */
-static int triangulate_recent(tvo_map *m, tvo_map_tracks *tr, tvo_map_kf *kn, int32_t i, const tvo_pose *T0,
-                              double min_cos, double max_err)
-{
-    double X[3];
-    int32_t j;
-    if (!triangulate(T0, &kn->T_c_w, tr->tri_x[i], tr->x[i], min_cos, max_err, X) ||
-        kn->n_obs >= m->max_tracks || (j = lm_alloc(m)) < 0)
-        return 0;
-    memcpy(m->lm[j].X, X, sizeof(X));
-    (void)kf_add_obs(m, kn, j, tr->x[i]);
-    m->lm[j].tracked = 1;
-    tr->lm[i] = j;
-    tr->inlier[i] = 1;
-    return 1;
-}
-
 /* Triangulate the waiting tracks against the new keyframe kn; tracks whose first keyframe left the window
- * (or that had none) start waiting in kn, or at a rescue keyframe are triangulated from their first
- * frame (triangulate_recent). Returns the landmarks made. */
+ * (or that had none) start waiting in kn. At a keyframe made while the map runs out of points (rescue), a
+ * track first seen since the last keyframe, in a frame whose pose the ring still holds, is triangulated
+ * from that frame with the tests of any landmark, and its landmark gets one observation, in kn (the next
+ * keyframe adds the second, and the bundle adjustment takes it from then on; PnP uses it at once): in a
+ * turn that takes the landmarks out of view faster than the baseline grows, these tracks are the only new
+ * points the map can get before it is lost (docs/budget.md, "A thirty-seventh rule"). kn never holds
+ * max_tracks observations here (each track adds at most one), so only the first keyframe's count is
+ * checked; a full store ends the keyframe's landmarks. Returns the landmarks made. */
 static int32_t triangulate_new(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, tvo_map_kf *kn,
                                int rescue)
 {
@@ -1022,37 +1023,24 @@ static int32_t triangulate_new(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tra
     for (int32_t i = 0; i < tr->n; ++i) {
         tvo_map_kf *k0;
         double X[3];
-        int32_t j;
         if (tr->lm[i] >= 0 || !tr->x_ok[i])
             continue;
         const tvo_pose *T0 = frame_pose(m, tr->tri_fr[i], &k0);
-        if (rescue && T0 != NULL && k0 == NULL && tr->tri_fr[i] != m->serial &&
-            triangulate_recent(m, tr, kn, i, T0, min_cos, max_err)) {
+        const int now = tr->tri_fr[i] == m->serial, recent = rescue && T0 != NULL && k0 == NULL && !now;
+        if (T0 != NULL && (k0 != NULL || recent) && !now &&
+            triangulate(T0, &kn->T_c_w, tr->tri_x[i], tr->x[i], min_cos, max_err, X)) {
+            if (k0 != NULL && k0->n_obs >= m->max_tracks)
+                continue;
+            /* first seen in a keyframe of the window (k0): observed there too */
+            if (lm_make(m, tr, i, X, k0, tr->tri_x[i], kn, tr->x[i]) < 0)
+                break; /* the store is full: the keyframe's other tracks wait for the next one */
             ++made;
-            continue;
-        }
-        if (T0 == NULL || k0 == NULL || tr->tri_fr[i] == m->serial) {
+        } else if (k0 == NULL || now) {
             /* first seen in a frame that is not a keyframe of the window (or now): wait from this
                keyframe, so that every landmark starts with two observations the adjustment refines */
             tr->tri_fr[i] = m->serial;
             tr->tri_x[i] = tr->x[i];
-            continue;
-        }
-        if (!triangulate(T0, &kn->T_c_w, tr->tri_x[i], tr->x[i], min_cos, max_err, X))
-            continue; /* not enough parallax yet (or a bad track): wait for the next keyframe */
-        if (k0->n_obs >= m->max_tracks || kn->n_obs >= m->max_tracks)
-            continue;
-        j = lm_alloc(m);
-        if (j < 0)
-            break; /* the store is full: the keyframe's other tracks wait for the next one */
-        memcpy(m->lm[j].X, X, sizeof(X));
-        (void)kf_add_obs(m, k0, j,
-                         tr->tri_x[i]); /* first seen in a keyframe of the window: observed there too */
-        (void)kf_add_obs(m, kn, j, tr->x[i]);
-        m->lm[j].tracked = 1;
-        tr->lm[i] = j;
-        tr->inlier[i] = 1;
-        ++made;
+        } /* else not enough parallax yet (or a bad track): wait for the next keyframe */
     }
     return made;
 }
