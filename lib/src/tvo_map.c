@@ -984,6 +984,12 @@ static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr,
 
 /* ---- keyframes ---------------------------------------------------------------------------------- */
 
+/* The map is running out of points: fewer PnP inliers than TVO_MAP_KF_RESCUE_POINTS x map_min_points. */
+static int running_out(const tvo_vo_config *cfg, int32_t n_in)
+{
+    return n_in < TVO_MAP_KF_RESCUE_POINTS * cfg->map_min_points;
+}
+
 static int need_keyframe(const tvo_map *m, const tvo_vo_config *cfg, const tvo_pose *T, int32_t n_in,
                          double depth_med)
 {
@@ -994,9 +1000,8 @@ static int need_keyframe(const tvo_map *m, const tvo_vo_config *cfg, const tvo_p
        running out of points (a turn, or a camera backing away from what it sees, takes them out of view
        faster than the baseline grows): then a keyframe is the only way to new landmarks, and the tracks
        that wait since an older keyframe count their parallax from there, not from the last keyframe */
-    const int running_out = n_in < TVO_MAP_KF_RESCUE_POINTS * cfg->map_min_points;
     if (!(depth_med > 0.0) ||
-        (!running_out && base < TVO_MAP_KF_MIN_BASELINE * cfg->map_kf_baseline * depth_med))
+        (!running_out(cfg, n_in) && base < TVO_MAP_KF_MIN_BASELINE * cfg->map_kf_baseline * depth_med))
         return 0;
     if (m->frames_since_kf + 1 >= cfg->map_kf_max_frames)
         return 1;
@@ -1026,8 +1031,8 @@ static int32_t triangulate_new(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tra
         if (tr->lm[i] >= 0 || !tr->x_ok[i])
             continue;
         const tvo_pose *T0 = frame_pose(m, tr->tri_fr[i], &k0);
-        const int now = tr->tri_fr[i] == m->serial, recent = rescue && T0 != NULL && k0 == NULL && !now;
-        if (T0 != NULL && (k0 != NULL || recent) && !now &&
+        const int now = tr->tri_fr[i] == m->serial;
+        if (!now && (k0 != NULL || (rescue && T0 != NULL)) &&
             triangulate(T0, &kn->T_c_w, tr->tri_x[i], tr->x[i], min_cos, max_err, X)) {
             if (k0 != NULL && k0->n_obs >= m->max_tracks)
                 continue;
@@ -1374,8 +1379,7 @@ static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
            adjusted keyframe, on which the next frames are posed (reporting the adjusted pose instead
            puts each correction into one frame's step: a jump in the per-frame rotation) */
         tvo_pose Tk = T;
-        add_keyframe(m, cfg, tr, t_ns, &Tk, n_in < TVO_MAP_KF_RESCUE_POINTS * cfg->map_min_points, scratch,
-                     scratch_size, out);
+        add_keyframe(m, cfg, tr, t_ns, &Tk, running_out(cfg, n_in), scratch, scratch_size, out);
     } else {
         m->frames_since_kf++;
     }

@@ -497,22 +497,29 @@ static void test_nn(void **state)
     assert_true(check_digest("nn", "EXPECT_NN", d.h, EXPECT_NN));
 }
 
-static void test_vo(void **state)
+/* The default VO for the pinhole camera, in memory the caller frees. */
+static void *open_default_vo(tvo_vo **vo)
 {
-    seq *s = *state;
     const tvo_camera cam = pinhole();
     tvo_vo_config cfg;
-    tvo_vo *vo = NULL;
     size_t need;
     void *mem;
-    tvo_traj traj;
-    digest d, dm;
-    int ok_frames = 0, map_frames = 0;
     tvo_vo_config_default(&cfg, &cam);
     need = tvo_vo_required_size(&cfg);
     mem = malloc(need);
     assert_non_null(mem);
-    assert_int_equal(tvo_vo_init(&vo, &cfg, mem, need), TVO_OK);
+    assert_int_equal(tvo_vo_init(vo, &cfg, mem, need), TVO_OK);
+    return mem;
+}
+
+static void test_vo(void **state)
+{
+    seq *s = *state;
+    tvo_vo *vo = NULL;
+    void *mem = open_default_vo(&vo);
+    tvo_traj traj;
+    digest d, dm;
+    int ok_frames = 0, map_frames = 0;
     tvo_traj_init(&traj, &s->gt[0]);
     dg_init(&d);
     dg_init(&dm);
@@ -589,20 +596,12 @@ static void test_vo(void **state)
 static void test_vo_refind(void **state)
 {
     seq *s = *state;
-    const tvo_camera cam = pinhole();
-    tvo_vo_config cfg;
     tvo_vo *vo = NULL;
-    size_t need;
-    void *mem;
+    void *mem = open_default_vo(&vo);
     uint8_t *img = malloc((size_t)W * H);
     digest d;
     long refound = 0;
     assert_non_null(img);
-    tvo_vo_config_default(&cfg, &cam);
-    need = tvo_vo_required_size(&cfg);
-    mem = malloc(need);
-    assert_non_null(mem);
-    assert_int_equal(tvo_vo_init(&vo, &cfg, mem, need), TVO_OK);
     dg_init(&d);
     for (int k = 0; k < FRAMES; ++k) {
         tvo_vo_result res;
