@@ -167,8 +167,10 @@ typedef struct tvo_vo_config {
     int32_t pred_rescue;          /* 1 (with map_prediction): when LK loses more than half of the tracks
                                    the map predicted in a frame (a jerk, a velocity the motion model did
                                    not foresee), those lost are tracked again the full way (lk's full
-                                   levels and window, as lk.pred_retry would) from the same guesses
-                                   (result.pred_rescue); frames that lose fewer are left as they are.
+                                   levels and window) from where the shorter way left them, LK's last
+                                   estimate for a lost track (result.pred_rescue); frames that lose
+                                   fewer are left as they are. Starting from the guesses instead was
+                                   measured and is not kept (docs/budget.md, "A thirty-ninth rule").
                                    0: off; default 1 */
     int32_t affine_win_size;      /* affine track refinement: each track keeps the affine_win_size^2 pixels
                                    around where it was detected (its template), and every frame the
