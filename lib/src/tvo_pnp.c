@@ -4,6 +4,7 @@
 #include "tinyvo/pnp.h"
 #include "tinyvo/dmath.h"
 #include "tinyvo/linalg.h"
+#include "tinyvo/ransac.h"
 
 #include <float.h>
 #include <math.h>
@@ -26,80 +27,6 @@
 #define PNP_MU_MAX 1e8
 #define PNP_TINY 1e-9 /* LM: a step below this (rad; m relative to 1 + |t|) ends it */
 #define PNP_MAX_POINTS (1 << 28)
-
-/* ---- deterministic generator (relpose's scheme) ---------------------------------------------- */
-
-typedef struct pnp_rng {
-    uint64_t s;
-} pnp_rng;
-
-static void rng_seed(pnp_rng *r, uint64_t seed)
-{
-    uint64_t z = seed + 0x9E3779B97F4A7C15ULL; /* splitmix64 step: never a zero state */
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    z ^= z >> 31;
-    r->s = z != 0 ? z : 0x2545F4914F6CDD1DULL;
-}
-
-static uint32_t rng_next(pnp_rng *r)
-{
-    uint64_t x = r->s;
-    x ^= x >> 12;
-    x ^= x << 25;
-    x ^= x >> 27;
-    r->s = x;
-    return (uint32_t)((x * 0x2545F4914F6CDD1DULL) >> 32);
-}
-
-/* k distinct indices in [0, n), n >= k; bounded retries (then the next free index) */
-static void rng_sample(pnp_rng *r, int32_t n, int k, int32_t *idx)
-{
-    for (int i = 0; i < k; ++i) {
-        int32_t v = 0;
-        int ok = 0;
-        for (int tries = 0; tries < 64 && !ok; ++tries) {
-            v = (int32_t)(((uint64_t)rng_next(r) * (uint64_t)n) >> 32);
-            ok = 1;
-            for (int j = 0; j < i; ++j)
-                if (idx[j] == v)
-                    ok = 0;
-        }
-        if (!ok) {
-            v = 0;
-            for (;;) {
-                int used = 0;
-                for (int j = 0; j < i; ++j)
-                    if (idx[j] == v)
-                        used = 1;
-                if (!used)
-                    break;
-                ++v;
-            }
-        }
-        idx[i] = v;
-    }
-}
-
-/* iterations needed for the confidence with inlier ratio inliers / n and sample size s */
-static int32_t ransac_needed(double confidence, int32_t inliers, int32_t n, int s, int32_t max_iters)
-{
-    if (inliers <= 0)
-        return max_iters;
-    double w = (double)inliers / (double)n;
-    if (w >= 1.0)
-        return 1;
-    double ws = w;
-    for (int k = 1; k < s; ++k)
-        ws *= w;
-    double denom = tvo_dm_log1p(-ws);
-    if (!(denom < 0.0))
-        return max_iters;
-    double need = ceil(tvo_dm_log1p(-confidence) / denom);
-    if (!(need < (double)max_iters))
-        return max_iters;
-    return need < 1.0 ? 1 : (int32_t)need;
-}
 
 /* ---- small helpers ---------------------------------------------------------------------------- */
 
@@ -1020,8 +947,8 @@ static tvo_status ransac_search(const tvo_pnp_config *cfg, const double (*X)[3],
                                 double *best_cost)
 {
     const double th = cfg->threshold, th2 = th * th;
-    pnp_rng rng;
-    rng_seed(&rng, cfg->seed);
+    tvo_rng rng;
+    tvo_rng_seed(&rng, cfg->seed);
     *best_cost = DBL_MAX;
     int32_t best_inl = 0, need_it = cfg->max_iterations;
     int have = 0, any = 0;
@@ -1032,14 +959,14 @@ static tvo_status ransac_search(const tvo_pnp_config *cfg, const double (*X)[3],
             *best_cost = cost;
             best_inl = cnt;
             have = 1;
-            need_it = ransac_needed(cfg->confidence, best_inl, m, PNP_SAMPLE, cfg->max_iterations);
+            need_it = tvo_ransac_needed(cfg->confidence, best_inl, m, PNP_SAMPLE, cfg->max_iterations);
         }
     }
     for (int32_t it = 0; it < need_it; ++it) {
         int32_t s[PNP_SAMPLE] = {0, 0, 0, 0};
         double Xs[3][3], xs[3][2];
         tvo_pose sol[4];
-        rng_sample(&rng, m, PNP_SAMPLE, s);
+        tvo_rng_sample(&rng, m, PNP_SAMPLE, s);
         for (int j = 0; j < 3; ++j) {
             int32_t i = idx[s[j]];
             memcpy(Xs[j], X[i], sizeof Xs[j]);
@@ -1063,7 +990,7 @@ static tvo_status ransac_search(const tvo_pnp_config *cfg, const double (*X)[3],
                 *best_cost = cost;
                 best_inl = cnt;
                 have = 1;
-                need_it = ransac_needed(cfg->confidence, best_inl, m, PNP_SAMPLE, cfg->max_iterations);
+                need_it = tvo_ransac_needed(cfg->confidence, best_inl, m, PNP_SAMPLE, cfg->max_iterations);
             }
         }
     }

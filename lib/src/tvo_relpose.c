@@ -6,6 +6,7 @@
 #include "tinyvo/dmath.h"
 #include "tinyvo/arena.h"
 #include "tinyvo/linalg.h"
+#include "tinyvo/ransac.h"
 
 #include <math.h>
 #include <string.h>
@@ -69,79 +70,6 @@
 #if (RP_PRE_N % 2) != 0 || (RP_BAIL_STEP % 2) != 0
 #error "msac_cost (SSE2) tests after pairs of points: RP_PRE_N and RP_BAIL_STEP must be even"
 #endif
-
-/* ---- deterministic generator ---------------------------------------------------------------- */
-
-typedef struct rp_rng {
-    uint64_t s;
-} rp_rng;
-
-static void rng_seed(rp_rng *r, uint64_t seed)
-{
-    uint64_t z = seed + 0x9E3779B97F4A7C15ULL; /* splitmix64 step: never a zero state */
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    z ^= z >> 31;
-    r->s = z != 0 ? z : 0x2545F4914F6CDD1DULL;
-}
-
-static uint32_t rng_next(rp_rng *r)
-{
-    uint64_t x = r->s;
-    x ^= x >> 12;
-    x ^= x << 25;
-    x ^= x >> 27;
-    r->s = x;
-    return (uint32_t)((x * 0x2545F4914F6CDD1DULL) >> 32);
-}
-
-/* k distinct indices in [0, n), n >= k; bounded retries (falls back to consecutive indices) */
-static void rng_sample(rp_rng *r, int32_t n, int k, int32_t *idx)
-{
-    for (int i = 0; i < k; ++i) {
-        int32_t v = 0;
-        int ok = 0;
-        for (int tries = 0; tries < 64 && !ok; ++tries) {
-            v = (int32_t)(((uint64_t)rng_next(r) * (uint64_t)n) >> 32);
-            ok = 1;
-            for (int j = 0; j < i; ++j)
-                if (idx[j] == v)
-                    ok = 0;
-        }
-        if (!ok) { /* practically unreachable: pick the next free index */
-            v = 0;
-            for (;;) {
-                int used = 0;
-                for (int j = 0; j < i; ++j)
-                    if (idx[j] == v)
-                        used = 1;
-                if (!used)
-                    break;
-                ++v;
-            }
-        }
-        idx[i] = v;
-    }
-}
-
-static int32_t ransac_needed(double confidence, int32_t inliers, int32_t n, int s, int32_t max_iters)
-{
-    if (inliers <= 0)
-        return max_iters;
-    double w = (double)inliers / (double)n;
-    if (w >= 1.0)
-        return 1;
-    double ws = w; /* w^s by multiplication: no libm pow (determinism across targets) */
-    for (int k = 1; k < s; ++k)
-        ws *= w;
-    double denom = tvo_dm_log1p(-ws);
-    if (!(denom < 0.0))
-        return max_iters;
-    double need = ceil(tvo_dm_log1p(-confidence) / denom);
-    if (!(need < (double)max_iters))
-        return max_iters;
-    return need < 1.0 ? 1 : (int32_t)need;
-}
 
 /* ---- small helpers -------------------------------------------------------------------------- */
 
@@ -809,8 +737,8 @@ static int32_t rot_inliers(const double R[9], const tvo_point2d *x1, const tvo_p
 static int32_t rotation_ransac(const tvo_relpose_config *cfg, const tvo_point2d *x1, const tvo_point2d *x2,
                                int32_t n, double thr2, double R[9], uint8_t *mask)
 {
-    rp_rng rng;
-    rng_seed(&rng, cfg->seed ^ 0x526F74ULL);
+    tvo_rng rng;
+    tvo_rng_seed(&rng, cfg->seed ^ 0x526F74ULL);
     /* the rotation model only matters when it explains most points (low parallax), where a
      * 2-point RANSAC converges in a few iterations: bounded by RP_ROT_MAX_ITERS */
     int32_t cap = cfg->max_iters < RP_ROT_MAX_ITERS ? cfg->max_iters : RP_ROT_MAX_ITERS;
@@ -819,13 +747,13 @@ static int32_t rotation_ransac(const tvo_relpose_config *cfg, const tvo_point2d 
     for (int32_t it = 0; it < need && it < cap; ++it) {
         int32_t idx[2];
         double Rc[9];
-        rng_sample(&rng, n, 2, idx);
+        tvo_rng_sample(&rng, n, 2, idx);
         kabsch(x1, x2, n, NULL, idx, 2, Rc);
         int32_t c = rot_inliers(Rc, x1, x2, n, thr2, NULL);
         if (c > best) {
             best = c;
             memcpy(Rb, Rc, sizeof Rc);
-            need = ransac_needed(cfg->confidence, best, n, 2, cap);
+            need = tvo_ransac_needed(cfg->confidence, best, n, 2, cap);
         }
     }
     int32_t cnt = rot_inliers(Rb, x1, x2, n, thr2, mask);
@@ -1349,8 +1277,8 @@ static int lo_refine(const double E[9], const tvo_point2d *x1, const tvo_point2d
 static int32_t essential_ransac(const tvo_relpose_config *cfg, const tvo_point2d *x1, const tvo_point2d *x2,
                                 int32_t n, double thr2, double Ebest[9], int32_t *iters_out, uint8_t *mask)
 {
-    rp_rng rng;
-    rng_seed(&rng, cfg->seed);
+    tvo_rng rng;
+    tvo_rng_seed(&rng, cfg->seed);
     int s = cfg->method == TVO_RELPOSE_8PT ? 8 : 5;
     double best_cost = INFINITY, eps = 0.0;
     int32_t best_inl = 0, need = cfg->max_iters, it;
@@ -1359,7 +1287,7 @@ static int32_t essential_ransac(const tvo_relpose_config *cfg, const tvo_point2d
     for (it = 0; it < need && it < cfg->max_iters; ++it) {
         int32_t idx[8];
         double a[8][2], b[8][2];
-        rng_sample(&rng, n, s, idx);
+        tvo_rng_sample(&rng, n, s, idx);
         int degenerate = 0;
         for (int k = 0; k < s; ++k) {
             a[k][0] = x1[idx[k]].x;
@@ -1403,7 +1331,7 @@ static int32_t essential_ransac(const tvo_relpose_config *cfg, const tvo_point2d
                 }
             }
             eps = (double)best_inl / (double)n;
-            need = ransac_needed(cfg->confidence, best_inl, n, s, cfg->max_iters);
+            need = tvo_ransac_needed(cfg->confidence, best_inl, n, s, cfg->max_iters);
         }
     }
     *iters_out = it;
@@ -1596,12 +1524,12 @@ static void epipolar_pose(const rp_work *w, const double E[9], rp_choice *c)
 }
 
 /* A 4-point sample with each index moved to an epipolar inlier (bounded tries, no duplicates) */
-static void sample_from_inliers(rp_rng *rng, int32_t n, const uint8_t *mask, int32_t idx[4])
+static void sample_from_inliers(tvo_rng *rng, int32_t n, const uint8_t *mask, int32_t idx[4])
 {
-    rng_sample(rng, n, 4, idx);
+    tvo_rng_sample(rng, n, 4, idx);
     for (int k = 0; k < 4; ++k)
         for (int tries = 0; tries < RP_H_SAMPLE_TRIES && !mask[idx[k]]; ++tries) {
-            int32_t v = (int32_t)(((uint64_t)rng_next(rng) * (uint64_t)n) >> 32);
+            int32_t v = tvo_rng_index(rng, n);
             int dup = 0;
             for (int j = 0; j < 4; ++j)
                 dup |= j != k && idx[j] == v;
@@ -1623,10 +1551,10 @@ static double homography_ransac(const rp_work *w, int32_t inl, double Hb[9])
     const tvo_relpose_config *cfg = w->cfg;
     const int32_t n = w->n, stride = visit_stride(n);
     memset(Hb, 0, 9 * sizeof(double)); /* written with the first model that scores above -1 */
-    rp_rng rng;
-    rng_seed(&rng, cfg->seed ^ RP_H_SEED_SALT);
+    tvo_rng rng;
+    tvo_rng_seed(&rng, cfg->seed ^ RP_H_SEED_SALT);
     double inv_s2 = 1.0 / w->thr2, best = -1.0;
-    int32_t cap = ransac_needed(cfg->confidence, inl, n, 4, cfg->max_iters);
+    int32_t cap = tvo_ransac_needed(cfg->confidence, inl, n, 4, cfg->max_iters);
     if (cap < RP_H_MIN_ITERS)
         cap = RP_H_MIN_ITERS < cfg->max_iters ? RP_H_MIN_ITERS : cfg->max_iters;
     int32_t need = cap, h_inl = 0;
@@ -1645,7 +1573,7 @@ static double homography_ransac(const rp_work *w, int32_t inl, double Hb[9])
             best = sc;
             h_inl = c;
             memcpy(Hb, H, sizeof H);
-            need = ransac_needed(cfg->confidence, h_inl, inl > 0 ? inl : n, 4, cap);
+            need = tvo_ransac_needed(cfg->confidence, h_inl, inl > 0 ? inl : n, 4, cap);
         }
     }
     return best;
