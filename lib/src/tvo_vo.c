@@ -1543,20 +1543,22 @@ static int32_t gain_retry(tvo_vo *vo, const frame_ctx *fc, int32_t tracked)
     return 0;
 }
 
-/* Track again the full way (every level, the full window) the lost tracks flagged in vo->ok2: rescue 1,
- * the predicted ones (ok2 carries the predicted flags to LK), from where the shorter way left them (LK's
- * last estimate for a lost track, not its guess: docs/budget.md, "A thirty-ninth rule"), and only when
- * more than half of them are lost (else returns -1); rescue 0, from where they were in the previous frame.
- * They wait in the keyframe rotation's buffers, free until the pose stage: kx1 holds 2 n points (starts,
- * then where LK starts from), kmask n flags. Returns the tracks found. */
-static int32_t retrack(tvo_vo *vo, const frame_ctx *fc, const tvo_lk_config *lkc, int32_t rescue)
+/* cfg.pred_rescue: LK lost more than half of the tracks the map predicted (pred[i] nonzero) - the motion
+ * model was wrong, not the tracks - so those lost are tracked again the full way (every level, the
+ * full window) from where the shorter way left them (LK's last estimate for a lost track, not its guess:
+ * docs/budget.md, "A thirty-ninth rule"). They wait in the keyframe rotation's
+ * buffers, free until the pose stage: kx1 holds 2 n points (starts, then where LK starts from), kmask n
+ * flags.
+ * Returns the tracks kept; *rescued is 1 when the second pass ran. */
+static int32_t pred_rescue(tvo_vo *vo, const frame_ctx *fc, const tvo_lk_config *lkc, const uint8_t *pred,
+                           int32_t tracked, int32_t *rescued)
 {
     const int32_t n = vo->n;
     tvo_point2f *from = (tvo_point2f *)(void *)vo->kx1, *to = from + n;
     tvo_lk_config full = *lkc;
-    int32_t np = 0, k = 0, found = 0;
+    int32_t np = 0, k = 0;
     for (int32_t i = 0; i < n; ++i) {
-        if (!vo->ok2[i])
+        if (!pred[i])
             continue;
         ++np;
         if (!vo->st[i]) {
@@ -1565,55 +1567,26 @@ static int32_t retrack(tvo_vo *vo, const frame_ctx *fc, const tvo_lk_config *lkc
             ++k;
         }
     }
-    if (rescue && 2 * k <= np)
-        return -1;
-    full.use_initial_flow = rescue; /* tvo_lk_track: every point the full way, whatever lk.pred_* say */
-    if (k == 0 ||
-        tvo_lk_track(&full, fc->pp, fc->pc, from, to, vo->kmask, NULL, k, vo->scratch, vo->scratch_size) !=
-                TVO_OK)
-        return 0;
+    if (k == 0 || 2 * k <= np)
+        return tracked;
+    full.use_initial_flow = 1;
+    full.pred_levels = full.pred_win_size = full.pred_fb_levels = full.pred_retry = 0;
+    if (tvo_lk_track(&full, fc->pp, fc->pc, from, to, vo->kmask, NULL, k, vo->scratch, vo->scratch_size) !=
+        TVO_OK)
+        return tracked;
+    *rescued = 1;
     k = 0;
     for (int32_t i = 0; i < n; ++i) {
-        if (!vo->ok2[i] || vo->st[i])
+        if (!pred[i] || vo->st[i])
             continue;
         const tvo_point2f q = to[k];
         if (vo->kmask[k] && in_image(vo, q)) {
             vo->next[i] = q;
             vo->st[i] = 1;
-            ++found;
+            ++tracked;
         }
         ++k;
     }
-    return found;
-}
-
-/* cfg.pred_rescue: LK lost more than half of the tracks the map predicted - the motion model was wrong,
- * not the tracks - so those lost are tracked again the full way (retrack). If the map's tracks are then
- * still too few for it (fewer than 2 x map_min_points, as its keyframe rule counts), its lost ones are
- * tracked once more from where they were: a jerk can throw the motion model's guesses beyond the shorter
- * way's reach and its estimates with them (docs/budget.md, "A fortieth rule"). Returns the tracks kept;
- * *rescued is 1 when the second pass ran. */
-static int32_t pred_rescue(tvo_vo *vo, const frame_ctx *fc, const tvo_lk_config *lkc, int32_t tracked,
-                           int32_t *rescued)
-{
-    int32_t got = retrack(vo, fc, lkc, 1), nl = 0;
-    if (got >= 0) {
-        tracked += got;
-        *rescued = 1;
-    }
-    for (int32_t i = 0; i < vo->n; ++i) {
-        /* a landmark's track whose guess is in the frame, half a window from its border (the motion
-           model sees it in view: a track that leaves the view is lost for good); the predicted flags
-           are not needed any more */
-        const tvo_point2f g = ((const tvo_point2f *)(const void *)vo->kx2)[i];
-        const float h = (float)(vo->cfg.lk.win_size / 2);
-        vo->ok2[i] = (uint8_t)(vo->lm[i] >= 0 && g.x >= h && g.y >= h &&
-                               g.x <= (float)vo->cfg.camera.width - 1.f - h &&
-                               g.y <= (float)vo->cfg.camera.height - 1.f - h);
-        nl += vo->lm[i] >= 0 && vo->st[i];
-    }
-    if (nl < 2 * vo->cfg.map_min_points)
-        tracked += retrack(vo, fc, lkc, 0);
     return tracked;
 }
 
@@ -1626,11 +1599,9 @@ static void stage_track(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
     fc->predicted = predict_tracks(vo, res->dt_ns, vo->ok2);
     if (fc->predicted)
         lkc.use_initial_flow = 1;
-    if (fc->predicted && vo->cfg.pred_rescue) /* the guesses, for the map's tracks (pred_rescue) */
-        memcpy(vo->kx2, vo->next, (size_t)vo->n * sizeof(tvo_point2f));
     tracked = lk_pass(vo, fc, &lkc, vo->ok2);
     if (fc->predicted && vo->cfg.pred_rescue)
-        tracked = pred_rescue(vo, fc, &lkc, tracked, &res->pred_rescue);
+        tracked = pred_rescue(vo, fc, &lkc, vo->ok2, tracked, &res->pred_rescue);
     if (vo->cfg.gain_retry && vo->n >= vo->cfg.min_pose_tracks && 2 * tracked < vo->n)
         res->gain_retry = gain_retry(vo, fc, tracked);
     if (!vo->cfg.affine_at_keyframes)
