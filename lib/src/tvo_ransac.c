@@ -14,7 +14,8 @@ void tvo_rng_seed(tvo_rng *r, uint64_t seed)
     r->s = z != 0 ? z : 0x2545F4914F6CDD1DULL;
 }
 
-uint32_t tvo_rng_next(tvo_rng *r)
+/* The next 32 random bits (xorshift64*). */
+static uint32_t rng_next(tvo_rng *r)
 {
     uint64_t x = r->s;
     x ^= x >> 12;
@@ -26,7 +27,7 @@ uint32_t tvo_rng_next(tvo_rng *r)
 
 int32_t tvo_rng_index(tvo_rng *r, int32_t n)
 {
-    return (int32_t)(((uint64_t)tvo_rng_next(r) * (uint64_t)n) >> 32);
+    return (int32_t)(((uint64_t)rng_next(r) * (uint64_t)n) >> 32);
 }
 
 void tvo_rng_sample(tvo_rng *r, int32_t n, int k, int32_t *idx)

@@ -13,8 +13,6 @@ typedef struct tvo_rng {
 
 /* The state from a seed (a splitmix64 step, so that any seed, 0 included, gives a good start). */
 void tvo_rng_seed(tvo_rng *r, uint64_t seed);
-/* The next 32 random bits. */
-uint32_t tvo_rng_next(tvo_rng *r);
 /* An index in [0, n), n >= 1, from the next draw. */
 int32_t tvo_rng_index(tvo_rng *r, int32_t n);
 /* k distinct indices in [0, n), n >= k: up to 64 draws for each; after that (practically never) the
@@ -22,8 +20,9 @@ int32_t tvo_rng_index(tvo_rng *r, int32_t n);
 void tvo_rng_sample(tvo_rng *r, int32_t n, int k, int32_t *idx);
 
 /* The iterations needed to draw one all-inlier sample of s points with the given confidence when
- * inliers of n points are inliers, at most max_iters (and at least 1 once any inlier is known). w^s is
- * taken by multiplication and the logarithms from dmath.h: the same count on every target. */
+ * `inliers` of the n points are inliers (w = inliers / n), at most max_iters (and at least 1 once any
+ * inlier is known). w^s is taken by multiplication and the logarithm from dmath.h: the same count on
+ * every target. */
 int32_t tvo_ransac_needed(double confidence, int32_t inliers, int32_t n, int s, int32_t max_iters);
 
 #endif /* TVO_RANSAC_H */
