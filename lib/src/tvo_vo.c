@@ -1546,10 +1546,9 @@ static int32_t gain_retry(tvo_vo *vo, const frame_ctx *fc, int32_t tracked)
 /* cfg.pred_rescue: LK lost more than half of the tracks the map predicted (pred[i] nonzero) - the motion
  * model was wrong, not the tracks - so those lost are tracked again the full way (every level, the
  * full window) from where the shorter way left them (LK's last estimate for a lost track, not its guess:
- * docs/budget.md, "A thirty-ninth rule"). They wait in the keyframe rotation's
- * buffers, free until the pose stage: kx1 holds 2 n points (starts, then where LK starts from), kmask n
- * flags.
- * Returns the tracks kept; *rescued is 1 when the second pass ran. */
+ * docs/budget.md, "A thirty-ninth rule"). They wait in the keyframe rotation's buffers, free until the
+ * pose stage: kx1 holds 2 n points (starts, then where LK starts from), kmask n flags. Returns the tracks
+ * kept; *rescued is 1 when the second pass ran. */
 static int32_t pred_rescue(tvo_vo *vo, const frame_ctx *fc, const tvo_lk_config *lkc, const uint8_t *pred,
                            int32_t tracked, int32_t *rescued)
 {
