@@ -81,6 +81,7 @@
 
 #include "tinyvo/se3.h"
 #include "tinyvo/types.h"
+#include "tinyvo/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -116,7 +117,7 @@ typedef struct tvo_ba_config {
 } tvo_ba_config;
 
 /* Fills the defaults listed above. cfg == NULL does nothing. */
-void tvo_ba_config_default(tvo_ba_config *cfg);
+TVO_API void tvo_ba_config_default(tvo_ba_config *cfg);
 
 /* A prior on the rotation between two poses (a gyroscope's, or a chain of two-view rotations): cost
  * 1/2 weight |log(R_b R_a^T R_ba^T)|^2 (rad^2, the unit of the normalised reprojection errors' squares)
@@ -169,7 +170,7 @@ typedef struct tvo_ba_report {
  * NULL) config. 5 B per max_obs + 129 B per max_points + 832 B per max_poses + (6 max_poses)^2 doubles
  * (the reduced system), each array rounded up to 16 B, + 16 B: 60,128 B for 6 poses, 300 points, 1200
  * observations; 39,296 B for 6 / 150 / 900; 189,760 B for the defaults. */
-size_t tvo_ba_scratch_size(const tvo_ba_config *cfg);
+TVO_API size_t tvo_ba_scratch_size(const tvo_ba_config *cfg);
 
 /* Runs the bundle adjustment on p (poses and points updated in place; on any error status or with
  * TVO_BA_FLAG_COST_ROSE nothing is written). scratch: at least tvo_ba_scratch_size(cfg) bytes, any
@@ -182,15 +183,15 @@ size_t tvo_ba_scratch_size(const tvo_ba_config *cfg);
  *   TVO_ERR_NOT_FINITE a pose or point with a non-finite entry
  *   TVO_ERR_TOO_FEW    no free pose and no free point, or n_obs == 0
  * Non-finite observations are not an error: they are left out and counted in rep->obs_skipped. */
-tvo_status tvo_ba_solve(const tvo_ba_config *cfg, tvo_ba_problem *p, void *scratch, size_t scratch_size,
-                        tvo_ba_report *rep);
+TVO_API tvo_status tvo_ba_solve(const tvo_ba_config *cfg, tvo_ba_problem *p, void *scratch,
+                                size_t scratch_size, tvo_ba_report *rep);
 
 /* Squared reprojection error |predicted - (x, y)|^2 of each observation (normalised units^2) to
  * err2[n_obs], so that the caller can drop outliers; TVO_BA_ERR_INVALID for a point at Z_c <= 0 in that
  * camera or a non-finite observation. No capacity limits, O(n_obs), no scratch.
  * Returns TVO_ERR_NULL (p, err2, T_c_w, or X / obs with n > 0), TVO_ERR_ARG (negative counts, an index out
  * of range: nothing written). */
-tvo_status tvo_ba_obs_errors(const tvo_ba_problem *p, double *err2);
+TVO_API tvo_status tvo_ba_obs_errors(const tvo_ba_problem *p, double *err2);
 
 #ifdef __cplusplus
 }

@@ -33,6 +33,7 @@
 #define TINYVO_CAMERA_H
 
 #include "tinyvo/types.h"
+#include "tinyvo/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -65,10 +66,11 @@ typedef struct tvo_camera {
 /* TVO_OK when cam is usable: TVO_ERR_NULL for NULL; TVO_ERR_SIZE for a width/height outside
  * 1..TVO_MAX_IMAGE_DIM; TVO_ERR_NOT_FINITE for a NaN/inf intrinsic or coefficient; TVO_ERR_ARG for
  * fx or fy <= 0 or an unknown model. */
-tvo_status tvo_camera_check(const tvo_camera *cam);
+TVO_API tvo_status tvo_camera_check(const tvo_camera *cam);
 
 /* A pinhole camera without distortion (k all zero). Does not validate: use tvo_camera_check. */
-tvo_camera tvo_camera_make_pinhole(int32_t width, int32_t height, double fx, double fy, double cx, double cy);
+TVO_API tvo_camera tvo_camera_make_pinhole(int32_t width, int32_t height, double fx, double fy, double cx,
+                                           double cy);
 
 /* Pixels -> undistorted normalised coordinates (z = 1), for n points (n >= 0; px and xn must not
  * overlap). Points need not lie inside the image.
@@ -78,17 +80,19 @@ tvo_camera tvo_camera_make_pinhole(int32_t width, int32_t height, double fx, dou
  * input) or TVO_ERR_NO_CONVERGENCE (no root within TVO_CAMERA_MAX_ITERS, or the root lies beyond
  * the fold of the distortion map, or for EQUIDISTANT a ray at or beyond 90 degrees).
  * Argument errors: TVO_ERR_NULL, TVO_ERR_ARG (n < 0), and tvo_camera_check's codes. */
-tvo_status tvo_camera_undistort(const tvo_camera *cam, const tvo_point2f *px, tvo_point2d *xn, uint8_t *ok,
-                                int32_t n);
+TVO_API tvo_status tvo_camera_undistort(const tvo_camera *cam, const tvo_point2f *px, tvo_point2d *xn,
+                                        uint8_t *ok, int32_t n);
 
 /* Normalised (undistorted) coordinates -> distorted pixels, for n >= 0 points. Fails with
  * TVO_ERR_NOT_FINITE at the first point that is not finite or whose pixel position is not finite
  * or not representable as float; the points before it are written. Other errors as undistort. */
-tvo_status tvo_camera_distort(const tvo_camera *cam, const tvo_point2d *xn, tvo_point2f *px, int32_t n);
+TVO_API tvo_status tvo_camera_distort(const tvo_camera *cam, const tvo_point2d *xn, tvo_point2f *px,
+                                      int32_t n);
 
 /* One point in double precision (same semantics as the array versions, ok == NULL). */
-tvo_status tvo_camera_undistort_point(const tvo_camera *cam, double u, double v, tvo_point2d *xn);
-tvo_status tvo_camera_distort_point(const tvo_camera *cam, const tvo_point2d *xn, double *u, double *v);
+TVO_API tvo_status tvo_camera_undistort_point(const tvo_camera *cam, double u, double v, tvo_point2d *xn);
+TVO_API tvo_status tvo_camera_distort_point(const tvo_camera *cam, const tvo_point2d *xn, double *u,
+                                            double *v);
 
 #ifdef __cplusplus
 }

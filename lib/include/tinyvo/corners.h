@@ -14,6 +14,7 @@
 
 #include "tinyvo/image.h"
 #include "tinyvo/types.h"
+#include "tinyvo/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -42,10 +43,10 @@ typedef struct tvo_corner {
 /* Which FAST-9 block this build runs: "sse2" (x86), "neon" (aarch64, or 32-bit ARM built with NEON) or
  * "portable" (no SIMD in this build, or built with TVO_CORNERS_NO_SIMD). All give the same corners.
  * Never NULL. */
-const char *tvo_fast_kernel_name(void);
+TVO_API const char *tvo_fast_kernel_name(void);
 
 /* Bytes of scratch tvo_fast9_detect* needs for images `width` pixels wide (0 when width < 1). */
-size_t tvo_fast_scratch_size(int32_t width);
+TVO_API size_t tvo_fast_scratch_size(int32_t width);
 
 /* FAST-9 corners of the whole image into out[0 .. *count).
  * threshold in [0, 255] (OpenCV clamps; tinyvo returns TVO_ERR_ARG).
@@ -53,16 +54,16 @@ size_t tvo_fast_scratch_size(int32_t width);
  * TVO_ERR_ARG (threshold out of range, capacity < 0); TVO_ERR_NO_MEMORY when scratch_size is too small
  * (then *count = 0), or when there are more corners than `capacity`: then out holds the first `capacity`
  * corners in row-major order and *count = capacity. */
-tvo_status tvo_fast9_detect(const tvo_image *img, int32_t threshold, int nonmax, tvo_corner *out,
-                            int32_t capacity, int32_t *count, void *scratch, size_t scratch_size);
+TVO_API tvo_status tvo_fast9_detect(const tvo_image *img, int32_t threshold, int nonmax, tvo_corner *out,
+                                    int32_t capacity, int32_t *count, void *scratch, size_t scratch_size);
 
 /* The same, restricted to the corners with y_begin <= y < y_end: exactly the corners (and scores, and
  * non-max decisions) that tvo_fast9_detect reports in those rows. Lets callers bound memory by detecting in
  * horizontal bands (tvo_detect does). Rows are clamped to the image; an empty range gives 0 corners.
  * Cost: rows y_begin-4 .. y_end+3 are read. Same statuses as tvo_fast9_detect. */
-tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int nonmax, int32_t y_begin,
-                                 int32_t y_end, tvo_corner *out, int32_t capacity, int32_t *count,
-                                 void *scratch, size_t scratch_size);
+TVO_API tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int nonmax, int32_t y_begin,
+                                         int32_t y_end, tvo_corner *out, int32_t capacity, int32_t *count,
+                                         void *scratch, size_t scratch_size);
 
 /* The same, restricted to the corners with x_begin <= x < x_end and y_begin <= y < y_end: exactly the
  * corners (and scores, and non-max decisions) that tvo_fast9_detect reports in that rectangle, in
@@ -70,14 +71,15 @@ tvo_status tvo_fast9_detect_rows(const tvo_image *img, int32_t threshold, int no
  * its full cells). The range is clamped to the image; an empty range gives 0 corners. Cost: the pixels
  * of columns x_begin-4 .. x_end+3 in rows y_begin-4 .. y_end+3 are read. Same statuses as
  * tvo_fast9_detect. */
-tvo_status tvo_fast9_detect_rect(const tvo_image *img, int32_t threshold, int nonmax, int32_t x_begin,
-                                 int32_t x_end, int32_t y_begin, int32_t y_end, tvo_corner *out,
-                                 int32_t capacity, int32_t *count, void *scratch, size_t scratch_size);
+TVO_API tvo_status tvo_fast9_detect_rect(const tvo_image *img, int32_t threshold, int nonmax, int32_t x_begin,
+                                         int32_t x_end, int32_t y_begin, int32_t y_end, tvo_corner *out,
+                                         int32_t capacity, int32_t *count, void *scratch,
+                                         size_t scratch_size);
 
 /* OpenCV's FAST-9 score (definition above) of pixel (x, y); x, y must be >= 3 inside the image (no check
  * beyond that; returns -1 for a pixel outside that range or a bad view). Meaningful for corners only:
  * for a non-corner it returns max(..)-1 over the arcs, which may be below any threshold. */
-int32_t tvo_fast9_score_at(const tvo_image *img, int32_t x, int32_t y);
+TVO_API int32_t tvo_fast9_score_at(const tvo_image *img, int32_t x, int32_t y);
 
 /* ---- Harris / Shi-Tomasi -------------------------------------------------------------------------- */
 typedef enum tvo_score_kind {
@@ -104,17 +106,18 @@ typedef enum tvo_score_kind {
  * harris_k finite (ignored for Shi-Tomasi); kind HARRIS or SHI_TOMASI (FAST -> TVO_ERR_ARG).
  * out: width*height floats, row y at out + y*out_stride, out_stride >= width (floats).
  * Cost: O(width*height), independent of block_size. */
-size_t tvo_corner_response_scratch_size(int32_t width, int32_t block_size);
-tvo_status tvo_corner_response(const tvo_image *img, tvo_score_kind kind, int32_t block_size, float harris_k,
-                               float *out, int32_t out_stride, void *scratch, size_t scratch_size);
+TVO_API size_t tvo_corner_response_scratch_size(int32_t width, int32_t block_size);
+TVO_API tvo_status tvo_corner_response(const tvo_image *img, tvo_score_kind kind, int32_t block_size,
+                                       float harris_k, float *out, int32_t out_stride, void *scratch,
+                                       size_t scratch_size);
 
 /* The same response at one pixel (for scoring FAST corners cheaply): exactly the value
  * tvo_corner_response writes at (x, y). The pixel must be at least block_size/2 + 1 inside the image
  * (x - block_size/2 - 1 >= 0 and x + (block_size-1-block_size/2) + 1 < width, same for y), where no border
  * reflection happens. Returns 0.0f for a bad view, kind, block_size, non-finite k or a pixel too close to the
  * border. Cost: O(block_size^2). */
-float tvo_corner_score_at(const tvo_image *img, int32_t x, int32_t y, tvo_score_kind kind, int32_t block_size,
-                          float harris_k);
+TVO_API float tvo_corner_score_at(const tvo_image *img, int32_t x, int32_t y, tvo_score_kind kind,
+                                  int32_t block_size, float harris_k);
 
 /* ---- bucketed detector ----------------------------------------------------------------------------- */
 typedef struct tvo_detect_config {
@@ -135,13 +138,13 @@ typedef struct tvo_detect_config {
 } tvo_detect_config;
 
 /* Fill *cfg with the defaults above. */
-void tvo_detect_config_default(tvo_detect_config *cfg);
+TVO_API void tvo_detect_config_default(tvo_detect_config *cfg);
 
 /* TVO_OK when every field of *cfg is in range; TVO_ERR_NULL / TVO_ERR_ARG / TVO_ERR_NOT_FINITE otherwise. */
-tvo_status tvo_detect_config_check(const tvo_detect_config *cfg);
+TVO_API tvo_status tvo_detect_config_check(const tvo_detect_config *cfg);
 
 /* Bytes of scratch tvo_detect needs for this config and image size; 0 for a bad config or size. */
-size_t tvo_detect_scratch_size(const tvo_detect_config *cfg, int32_t width, int32_t height);
+TVO_API size_t tvo_detect_scratch_size(const tvo_detect_config *cfg, int32_t width, int32_t height);
 
 /* FAST-9 + non-max suppression + ranking score + grid bucketing. Returns up to min(capacity, max_corners)
  * NEW corners in out[0 .. *count):
@@ -164,9 +167,9 @@ size_t tvo_detect_scratch_size(const tvo_detect_config *cfg, int32_t width, int3
  * TVO_ERR_ARG (bad config, capacity < 0, n_existing < 0); TVO_ERR_SIZE (bad view);
  * TVO_ERR_NO_MEMORY (scratch_size < tvo_detect_scratch_size()). *count is 0 on any error.
  * Cost: one FAST pass plus about grid_cols*grid_rows*candidates_per_cell score evaluations. */
-tvo_status tvo_detect(const tvo_detect_config *cfg, const tvo_image *img, const tvo_point2f *existing,
-                      int32_t n_existing, tvo_corner *out, int32_t capacity, int32_t *count, void *scratch,
-                      size_t scratch_size);
+TVO_API tvo_status tvo_detect(const tvo_detect_config *cfg, const tvo_image *img, const tvo_point2f *existing,
+                              int32_t n_existing, tvo_corner *out, int32_t capacity, int32_t *count,
+                              void *scratch, size_t scratch_size);
 
 #ifdef __cplusplus
 }

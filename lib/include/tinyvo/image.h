@@ -10,6 +10,7 @@
 #define TINYVO_IMAGE_H
 
 #include "tinyvo/types.h"
+#include "tinyvo/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -26,10 +27,10 @@ typedef struct tvo_image {
 } tvo_image;
 
 /* Make a view. Does not validate: pass the result to tvo_image_check(). */
-tvo_image tvo_image_make(int32_t width, int32_t height, int32_t stride, uint8_t *data);
+TVO_API tvo_image tvo_image_make(int32_t width, int32_t height, int32_t stride, uint8_t *data);
 
 /* TVO_OK for a valid view; TVO_ERR_NULL for a NULL view or data; TVO_ERR_SIZE for a bad size/stride. */
-tvo_status tvo_image_check(const tvo_image *img);
+TVO_API tvo_status tvo_image_check(const tvo_image *img);
 
 #ifdef __cplusplus
 }

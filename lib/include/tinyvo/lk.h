@@ -32,6 +32,7 @@
 
 #include "tinyvo/pyramid.h"
 #include "tinyvo/types.h"
+#include "tinyvo/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -82,21 +83,21 @@ typedef struct tvo_lk_config {
 } tvo_lk_config;
 
 /* The defaults above (OpenCV's defaults for win 21, 3 levels, fb check off). */
-void tvo_lk_config_default(tvo_lk_config *cfg);
+TVO_API void tvo_lk_config_default(tvo_lk_config *cfg);
 
 /* Which window kernels tvo_lk_track() runs with cfg: "sse2" (x86), "neon" (aarch64, or 32-bit ARM built
  * with -mfpu=neon), or "portable" (the C kernels: force_portable, win_size < 8, no SIMD in this build,
  * or built with -DTVO_LK_NO_SIMD). All give the same results. cfg == NULL: the SIMD kernels compiled
  * in ("portable" when none). Never NULL. */
-const char *tvo_lk_kernel_name(const tvo_lk_config *cfg);
+TVO_API const char *tvo_lk_kernel_name(const tvo_lk_config *cfg);
 
 /* TVO_OK, TVO_ERR_NULL, TVO_ERR_ARG (a field out of its range, even win_size) or TVO_ERR_NOT_FINITE
  * (NaN / infinite epsilon, threshold or fb_max_error). */
-tvo_status tvo_lk_config_check(const tvo_lk_config *cfg);
+TVO_API tvo_status tvo_lk_config_check(const tvo_lk_config *cfg);
 
 /* Bytes of scratch tvo_lk_track() needs (independent of image size and point count; about
  * 8 * (w + 3)^2 bytes, w the larger of win_size and pred_win_size: 3.9 KB for 21). 0 for an invalid cfg. */
-size_t tvo_lk_scratch_size(const tvo_lk_config *cfg);
+TVO_API size_t tvo_lk_scratch_size(const tvo_lk_config *cfg);
 
 /* Track n points from prev to next.
  *   prev_pts[n]  level-0 pixel positions in prev (read only).
@@ -113,16 +114,17 @@ size_t tvo_lk_scratch_size(const tvo_lk_config *cfg);
  * infinite prev point, or guess when use_initial_flow). Finite points far outside are just lost.
  * Cost: per point and level about win_size^2 * (30 + 10 * iterations) integer operations; twice
  * that with fb_check. Thread-safe for distinct scratch/outputs; pyramids are only read. */
-tvo_status tvo_lk_track(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,
-                        const tvo_point2f *prev_pts, tvo_point2f *next_pts, uint8_t *status, float *err,
-                        int32_t n, void *scratch, size_t scratch_size);
+TVO_API tvo_status tvo_lk_track(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,
+                                const tvo_point2f *prev_pts, tvo_point2f *next_pts, uint8_t *status,
+                                float *err, int32_t n, void *scratch, size_t scratch_size);
 
 /* tvo_lk_track() with a per-point flag: pred[n] nonzero marks a point whose guess (next_pts, with
  * use_initial_flow) is a trusted prediction; those points are tracked with the pred_* fields of cfg, the
  * others as by tvo_lk_track(). pred == NULL, or all pred_* fields 0: exactly tvo_lk_track(). */
-tvo_status tvo_lk_track_pred(const tvo_lk_config *cfg, const tvo_pyramid *prev, const tvo_pyramid *next,
-                             const tvo_point2f *prev_pts, tvo_point2f *next_pts, const uint8_t *pred,
-                             uint8_t *status, float *err, int32_t n, void *scratch, size_t scratch_size);
+TVO_API tvo_status tvo_lk_track_pred(const tvo_lk_config *cfg, const tvo_pyramid *prev,
+                                     const tvo_pyramid *next, const tvo_point2f *prev_pts,
+                                     tvo_point2f *next_pts, const uint8_t *pred, uint8_t *status, float *err,
+                                     int32_t n, void *scratch, size_t scratch_size);
 
 #ifdef __cplusplus
 }

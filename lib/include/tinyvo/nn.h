@@ -21,6 +21,7 @@
 #define TINYVO_NN_H
 
 #include "tinyvo/types.h"
+#include "tinyvo/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -103,7 +104,7 @@ typedef struct tvo_nn tvo_nn;
 
 /* Validates the file completely (see tvo_nn_load for the statuses) and returns in *bytes the memory
  * tvo_nn_load() needs for it (alignment slack included). Cost: one pass over the file (CRC32). */
-tvo_status tvo_nn_required_size(const void *file, size_t file_size, size_t *bytes);
+TVO_API tvo_status tvo_nn_required_size(const void *file, size_t file_size, size_t *bytes);
 
 /* Validates a weights file and builds a runnable model in [mem, mem + mem_size). On success *nn points
  * into mem; the file buffer is not referenced afterwards (it may be freed, it need not be aligned).
@@ -129,7 +130,7 @@ tvo_status tvo_nn_required_size(const void *file, size_t file_size, size_t *byte
  *   TVO_ERR_NOT_FINITE a scale or offset that is NaN/inf, or a scale that is zero or negative
  *   TVO_ERR_NO_MEMORY  mem_size below tvo_nn_required_size()
  * Cost: one CRC pass plus one copy of the weights. */
-tvo_status tvo_nn_load(tvo_nn **nn, const void *file, size_t file_size, void *mem, size_t mem_size);
+TVO_API tvo_status tvo_nn_load(tvo_nn **nn, const void *file, size_t file_size, void *mem, size_t mem_size);
 
 /* Runs every branch. features[TVO_FEAT_COUNT] as in enum tvo_feature; out[6] receives tx ty tz rx ry
  * rz for the DoFs in tvo_nn_output_mask(); the others are set to NaN. No allocation; uses scratch
@@ -138,28 +139,28 @@ tvo_status tvo_nn_load(tvo_nn **nn, const void *file, size_t file_size, void *me
  * infinite, or if an output overflows float (possible with extreme but finite scales in the file);
  * out is then all NaN. On TVO_OK every provided output is finite.
  * Cost: sum over layers of n_in * n_out MACs (tvo_nn_macs()). */
-tvo_status tvo_nn_run(const tvo_nn *nn, const float features[TVO_FEAT_COUNT], float out[6]);
+TVO_API tvo_status tvo_nn_run(const tvo_nn *nn, const float features[TVO_FEAT_COUNT], float out[6]);
 
 /* Same as tvo_nn_run with the seven outputs: out[TVO_NN_STEP] is the step length (m) of a model with a
  * step-length branch (code 6: the branch's value, any sign; code 7: exp of the clamped value, > 0), NaN
  * otherwise. tvo_nn_run gives the first six of these. */
-tvo_status tvo_nn_run_all(const tvo_nn *nn, const float features[TVO_FEAT_COUNT],
-                          float out[TVO_NN_OUT_COUNT]);
+TVO_API tvo_status tvo_nn_run_all(const tvo_nn *nn, const float features[TVO_FEAT_COUNT],
+                                  float out[TVO_NN_OUT_COUNT]);
 
 /* Bit d (0..6) set when the model provides output d (bit 6: a step-length branch). 0 for NULL. */
-int32_t tvo_nn_output_mask(const tvo_nn *nn);
+TVO_API int32_t tvo_nn_output_mask(const tvo_nn *nn);
 
 /* Multiply-accumulates per tvo_nn_run() call. 0 for NULL. */
-uint32_t tvo_nn_macs(const tvo_nn *nn);
+TVO_API uint32_t tvo_nn_macs(const tvo_nn *nn);
 
 /* Number of branches, and the activation of branch i's first hidden layer (TVO_NN_ACT_NONE for a
  * NULL model or i out of range): for reports. */
-int32_t tvo_nn_branch_count(const tvo_nn *nn);
-tvo_nn_act tvo_nn_branch_activation(const tvo_nn *nn, int32_t i);
+TVO_API int32_t tvo_nn_branch_count(const tvo_nn *nn);
+TVO_API tvo_nn_act tvo_nn_branch_activation(const tvo_nn *nn, int32_t i);
 
 /* CRC-32 (IEEE 802.3: reflected polynomial 0xEDB88320, init and final xor 0xFFFFFFFF), as zlib's
  * crc32(). crc is the value of the previous call, 0 to start. */
-uint32_t tvo_nn_crc32(uint32_t crc, const void *data, size_t size);
+TVO_API uint32_t tvo_nn_crc32(uint32_t crc, const void *data, size_t size);
 
 /* ---- kernels (CMSIS-NN style; one per file; usable on their own) ------------------------------ */
 
@@ -179,31 +180,31 @@ static inline int32_t tvo_nn_requantize(int32_t acc, int32_t mult, int32_t shift
  *   y[o] = clamp(tvo_nn_requantize(acc, mult[o], shift[o]) + out_zp, -128, 127)
  * x are raw int8 activations: fold the input zero point into bias (bias - in_zp * sum_i w[o][i]).
  * The caller guarantees the sums fit int32 (the loader checks the worst case). Cost n_in * n_out MACs. */
-void tvo_nn_fc_s8(const int8_t *x, const int8_t *w, const int32_t *bias, const int32_t *mult,
-                  const int32_t *shift, int32_t out_zp, int32_t n_in, int32_t n_out, int8_t *y);
+TVO_API void tvo_nn_fc_s8(const int8_t *x, const int8_t *w, const int32_t *bias, const int32_t *mult,
+                          const int32_t *shift, int32_t out_zp, int32_t n_in, int32_t n_out, int8_t *y);
 
 /* Same as tvo_nn_fc_s8 with column-major weights wt[i * n_out + o]: faster for short inputs (the
  * loader uses it when n_in < TVO_NN_COLS_MAX_IN), same results. */
-void tvo_nn_fc_s8_cols(const int8_t *x, const int8_t *wt, const int32_t *bias, const int32_t *mult,
-                       const int32_t *shift, int32_t out_zp, int32_t n_in, int32_t n_out, int8_t *y);
+TVO_API void tvo_nn_fc_s8_cols(const int8_t *x, const int8_t *wt, const int32_t *bias, const int32_t *mult,
+                               const int32_t *shift, int32_t out_zp, int32_t n_in, int32_t n_out, int8_t *y);
 #ifndef TVO_NN_COLS_MAX_IN
 #define TVO_NN_COLS_MAX_IN 16
 #endif
 
 /* Fully connected int8 layer with float output: y[o] = (float)acc * scale[o], acc as above. */
-void tvo_nn_fc_s8_f32(const int8_t *x, const int8_t *w, const int32_t *bias, const float *scale, int32_t n_in,
-                      int32_t n_out, float *y);
+TVO_API void tvo_nn_fc_s8_f32(const int8_t *x, const int8_t *w, const int32_t *bias, const float *scale,
+                              int32_t n_in, int32_t n_out, float *y);
 
 /* Lookup-table activation in place: x[i] = lut[x[i] + 128]. */
-void tvo_nn_lut_s8(int8_t *x, int32_t n, const int8_t lut[256]);
+TVO_API void tvo_nn_lut_s8(int8_t *x, int32_t n, const int8_t lut[256]);
 
 /* Input stage of a branch: for i < n, with f = features[ids[i]] (float32 arithmetic throughout):
  *   t = rint((f * norm_scale[i] + norm_offset[i]) / in_scale)   (ties to even)
  *   x[i] = clamp(t + in_zp, -128, 127)
  * TVO_ERR_NOT_FINITE if a read feature is NaN or infinite. */
-tvo_status tvo_nn_quantize_input_f32(const float *features, const uint8_t *ids, const float *norm_scale,
-                                     const float *norm_offset, float in_scale, int32_t in_zp, int32_t n,
-                                     int8_t *x);
+TVO_API tvo_status tvo_nn_quantize_input_f32(const float *features, const uint8_t *ids,
+                                             const float *norm_scale, const float *norm_offset,
+                                             float in_scale, int32_t in_zp, int32_t n, int8_t *x);
 
 #ifdef __cplusplus
 }

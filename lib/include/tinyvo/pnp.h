@@ -61,6 +61,7 @@
 
 #include "tinyvo/types.h"
 #include "tinyvo/se3.h"
+#include "tinyvo/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -91,18 +92,18 @@ typedef struct tvo_pnp_config {
 } tvo_pnp_config;
 
 /* Fill cfg with the defaults above. NULL is ignored. */
-void tvo_pnp_config_default(tvo_pnp_config *cfg);
+TVO_API void tvo_pnp_config_default(tvo_pnp_config *cfg);
 
 /* Bytes of scratch tvo_pnp_ransac needs for up to max_points points (6 bytes per point plus 16;
  * any alignment). 0 for max_points < 0 or > 2^28. */
-size_t tvo_pnp_scratch_size(int32_t max_points);
+TVO_API size_t tvo_pnp_scratch_size(int32_t max_points);
 
 /* Minimal solver: 3 world points X (metres) and their normalised image points x -> up to 4 poses
  * T_c_w (every one places the three points in front of the camera and reprojects them exactly).
  * Returns the count, 0 when degenerate: NULL pointers, non-finite input, coincident or collinear
  * world points (|d12 x d13| < 1e-10 |d12| |d13|), coincident image rays, or no real solution. Entries
  * of T_c_w beyond the count are not written. Cost ~2.6k instructions. */
-int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4]);
+TVO_API int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4]);
 
 /* RANSAC over P3P, then refinement of the best hypothesis on its inliers (see above). cfg: NULL ->
  * the defaults. X[n], x[n]: correspondences (n >= 4 usable ones needed). *T_c_w: output only (the
@@ -117,9 +118,9 @@ int tvo_p3p(const double X[3][3], const double x[3][2], tvo_pose T_c_w[4]);
  * no guess was scored). On error *T_c_w is left as given when it is finite, else set to the
  * identity. The output pose is never NaN. Cost: bounded by max_iterations samples (each a P3P and
  * at most 4 scorings of O(n)) and 3 refinements. */
-tvo_status tvo_pnp_ransac(const tvo_pnp_config *cfg, const double (*X)[3], const tvo_point2d *x, int32_t n,
-                          tvo_pose *T_c_w, uint8_t *inliers, int32_t *n_inliers, void *scratch,
-                          size_t scratch_size);
+TVO_API tvo_status tvo_pnp_ransac(const tvo_pnp_config *cfg, const double (*X)[3], const tvo_point2d *x,
+                                  int32_t n, tvo_pose *T_c_w, uint8_t *inliers, int32_t *n_inliers,
+                                  void *scratch, size_t scratch_size);
 
 /* Refinement from an initial pose (*T_c_w in, refined out; see above).
  * cfg: NULL -> the defaults (threshold, huber, refine_iterations, min_inliers are used). use[n] (may be
@@ -132,9 +133,9 @@ tvo_status tvo_pnp_ransac(const tvo_pnp_config *cfg, const double (*X)[3], const
  * points, or fewer than min_inliers inliers at the output pose, e.g. all points behind the camera).
  * On error *T_c_w is left as given when finite (the identity when it was not), *n_inliers = 0 and the
  * inlier flags are 0. Cost: O(n) per iteration, at most refine_iterations iterations. */
-tvo_status tvo_pnp_refine(const tvo_pnp_config *cfg, const double (*X)[3], const tvo_point2d *x,
-                          const uint8_t *use, int32_t n, tvo_pose *T_c_w, uint8_t *inliers,
-                          int32_t *n_inliers, double *rms);
+TVO_API tvo_status tvo_pnp_refine(const tvo_pnp_config *cfg, const double (*X)[3], const tvo_point2d *x,
+                                  const uint8_t *use, int32_t n, tvo_pose *T_c_w, uint8_t *inliers,
+                                  int32_t *n_inliers, double *rms);
 
 #ifdef __cplusplus
 }

@@ -20,6 +20,7 @@
 
 #include "tinyvo/image.h"
 #include "tinyvo/types.h"
+#include "tinyvo/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -42,19 +43,19 @@ typedef struct tvo_pyramid {
 /* Bytes of memory tvo_pyramid_init() needs for this geometry (any alignment of mem is fine: the
  * figure includes the slack to align). 0 when the geometry is invalid (size out of range, levels
  * out of range, or a level l >= 1 smaller than TVO_PYR_MIN_LEVEL_DIM). */
-size_t tvo_pyramid_required_size(int32_t width, int32_t height, int32_t levels);
+TVO_API size_t tvo_pyramid_required_size(int32_t width, int32_t height, int32_t levels);
 
 /* Lay out a pyramid for width x height images with `levels` levels in [mem, mem + mem_size).
  * Errors: TVO_ERR_NULL (p or mem NULL), TVO_ERR_SIZE (width/height out of 1..TVO_MAX_IMAGE_DIM),
  * TVO_ERR_ARG (levels out of 1..TVO_MAX_PYR_LEVELS, or deeper than the image allows),
  * TVO_ERR_NO_MEMORY (mem_size < tvo_pyramid_required_size()). On error *p is zeroed (levels = 0). */
-tvo_status tvo_pyramid_init(tvo_pyramid *p, int32_t width, int32_t height, int32_t levels, void *mem,
-                            size_t mem_size);
+TVO_API tvo_status tvo_pyramid_init(tvo_pyramid *p, int32_t width, int32_t height, int32_t levels, void *mem,
+                                    size_t mem_size);
 
 /* Copy img into level 0 and compute every further level. img must be a valid view of exactly the
  * size given to init (TVO_ERR_MISMATCH otherwise); TVO_ERR_NULL / TVO_ERR_SIZE for a bad view,
  * TVO_ERR_STATE for a pyramid that was not initialised. img may not overlap the pyramid memory. */
-tvo_status tvo_pyramid_build(tvo_pyramid *p, const tvo_image *img);
+TVO_API tvo_status tvo_pyramid_build(tvo_pyramid *p, const tvo_image *img);
 
 /* A pyramid with a borrowed level 0: the caller holds level 0, the pyramid's memory only levels 1.. and
  * the row buffer (tvo_pyramid_required_size_borrowed: the full size less one width x height level, e.g.
@@ -68,20 +69,20 @@ tvo_status tvo_pyramid_build(tvo_pyramid *p, const tvo_image *img);
  *     points level 0 there, so p no longer depends on img. TVO_ERR_NULL, TVO_ERR_STATE (not a borrowed
  *     pyramid, or not built), TVO_ERR_SIZE (dst_stride below width or above TVO_IMAGE_MAX_STRIDE).
  * tvo_pyramid_build on a borrowed pyramid returns TVO_ERR_STATE. */
-size_t tvo_pyramid_required_size_borrowed(int32_t width, int32_t height, int32_t levels);
-tvo_status tvo_pyramid_init_borrowed(tvo_pyramid *p, int32_t width, int32_t height, int32_t levels, void *mem,
-                                     size_t mem_size);
-tvo_status tvo_pyramid_build_borrowed(tvo_pyramid *p, const tvo_image *img);
-tvo_status tvo_pyramid_keep_level0(tvo_pyramid *p, uint8_t *dst, int32_t dst_stride);
+TVO_API size_t tvo_pyramid_required_size_borrowed(int32_t width, int32_t height, int32_t levels);
+TVO_API tvo_status tvo_pyramid_init_borrowed(tvo_pyramid *p, int32_t width, int32_t height, int32_t levels,
+                                             void *mem, size_t mem_size);
+TVO_API tvo_status tvo_pyramid_build_borrowed(tvo_pyramid *p, const tvo_image *img);
+TVO_API tvo_status tvo_pyramid_keep_level0(tvo_pyramid *p, uint8_t *dst, int32_t dst_stride);
 
 /* A view of one level (its pixels stay owned by the pyramid's memory). An invalid pyramid or a level
  * outside 0..levels-1 gives an empty view (all fields 0, data NULL) that tvo_image_check() refuses. */
-tvo_image tvo_pyramid_level(const tvo_pyramid *p, int32_t level);
+TVO_API tvo_image tvo_pyramid_level(const tvo_pyramid *p, int32_t level);
 
 /* One 2x downsampling step as cv::pyrDown (see above), usable without a pyramid: src (w x h) ->
  * dst ((w+1)/2 x (h+1)/2). row_tmp must hold at least w uint16 values. Errors: TVO_ERR_NULL,
  * TVO_ERR_SIZE (bad views), TVO_ERR_MISMATCH (dst size is not ((w+1)/2, (h+1)/2)). */
-tvo_status tvo_pyr_down(const tvo_image *src, tvo_image *dst, uint16_t *row_tmp);
+TVO_API tvo_status tvo_pyr_down(const tvo_image *src, tvo_image *dst, uint16_t *row_tmp);
 
 #ifdef __cplusplus
 }

@@ -37,6 +37,7 @@
 #define TINYVO_RELPOSE_H
 
 #include "tinyvo/types.h"
+#include "tinyvo/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -64,7 +65,7 @@ typedef struct tvo_relpose_config {
 } tvo_relpose_config;
 
 /* Fill cfg with the defaults above. NULL is ignored. */
-void tvo_relpose_config_default(tvo_relpose_config *cfg);
+TVO_API void tvo_relpose_config_default(tvo_relpose_config *cfg);
 
 enum {
     TVO_RELPOSE_FLAG_LOW_PARALLAX = 1,   /* parallax below cfg->min_parallax_deg */
@@ -99,7 +100,7 @@ typedef struct tvo_relpose {
  * Writes up to 10 essential matrices (row-major, Frobenius norm 1) to E and returns how many;
  * 0 for a degenerate sample or NULL pointers. Cost: about 19k instructions (x86-64 with SSE2), no
  * memory beyond the arguments. */
-int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10][9]);
+TVO_API int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10][9]);
 
 /* Normalised 8-point: E from >= 8 correspondences (Hartley-normalised; exactly 8: null vector of
  * the 8x9 system by Gaussian elimination with complete pivoting, refused below rank 8; more:
@@ -108,11 +109,11 @@ int tvo_essential_5pt(const double x1[5][2], const double x2[5][2], double E[10]
  * 1 on success, 0 for n < 8, NULL pointers or degenerate input. Cost: n = 8, one elimination of the
  * 8x9 system; n > 8, O(n) to build the 9x9 normal matrix plus its Jacobi eigen-decomposition, about
  * 15 times the cost of n = 8. */
-int tvo_essential_8pt(const double (*x1)[2], const double (*x2)[2], int32_t n, double E[9]);
+TVO_API int tvo_essential_8pt(const double (*x1)[2], const double (*x2)[2], int32_t n, double E[9]);
 
 /* Bytes of scratch memory tvo_relpose_estimate needs for up to max_points correspondences
  * (saturates at SIZE_MAX; 12 bytes per point plus 80). */
-size_t tvo_relpose_scratch_size(int32_t max_points);
+TVO_API size_t tvo_relpose_scratch_size(int32_t max_points);
 
 /* Estimate the relative pose of frame 2 with respect to frame 1.
  * x1[i], x2[i]: undistorted NORMALISED coordinates (z = 1) of the same point in frames 1 and 2.
@@ -125,9 +126,9 @@ size_t tvo_relpose_scratch_size(int32_t max_points);
  * points collinear in one image); on error *out is R = I, t = 0, LOW_CONFIDENCE and the mask is 0.
  * Cost: about 2.75M instructions (x86-64 with SSE2) for 300 points with 30 % outliers and the default
  * configuration (docs/evaluation.md); at most cfg->max_iters RANSAC iterations, each linear in n. */
-tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg, const tvo_point2d *x1, const tvo_point2d *x2,
-                                int32_t n, tvo_relpose *out, uint8_t *inlier_mask, void *scratch,
-                                size_t scratch_size);
+TVO_API tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg, const tvo_point2d *x1,
+                                        const tvo_point2d *x2, int32_t n, tvo_relpose *out,
+                                        uint8_t *inlier_mask, void *scratch, size_t scratch_size);
 
 /* Which of an AMBIGUOUS result's twins the correspondences favour. The twins explain the plane's
  * points equally well, but points off the plane fit only the true twin's epipolar geometry: each
@@ -143,8 +144,8 @@ tvo_status tvo_relpose_estimate(const tvo_relpose_config *cfg, const tvo_point2d
  * Cost: two Sampson distances per correspondence, about 140 instructions (33 K per call on the V1_01
  * render, callgrind). Over two runs of each of the 8 EuRoC renders and KITTI 07 it chose in 3,147 of
  * 3,366 ambiguous frames, each time the twin nearer the ground truth (docs/design.md, "Plane twins"). */
-int tvo_relpose_twin_choice(const tvo_relpose *r, const tvo_point2d *x1, const tvo_point2d *x2, int32_t n,
-                            double threshold);
+TVO_API int tvo_relpose_twin_choice(const tvo_relpose *r, const tvo_point2d *x1, const tvo_point2d *x2,
+                                    int32_t n, double threshold);
 
 #ifdef __cplusplus
 }

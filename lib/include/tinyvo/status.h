@@ -6,6 +6,8 @@
 #ifndef TINYVO_STATUS_H
 #define TINYVO_STATUS_H
 
+#include "tinyvo/export.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -36,7 +38,7 @@ typedef enum tvo_status {
 } tvo_status;
 
 /* A static English description of a status code ("ok", "null pointer", ...). Never NULL. */
-const char *tvo_status_str(tvo_status status);
+TVO_API const char *tvo_status_str(tvo_status status);
 
 #ifdef __cplusplus
 }

@@ -8,6 +8,8 @@
 #ifndef TINYVO_VERSION_H
 #define TINYVO_VERSION_H
 
+#include "tinyvo/export.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -22,10 +24,10 @@ extern "C" {
 
 /* The version of the library linked in, "MAJOR.MINOR.PATCH" (a static string, never NULL). Compare it
  * with TVO_VERSION_STRING to detect a header/library mismatch, e.g. with a shared library. */
-const char *tvo_version(void);
+TVO_API const char *tvo_version(void);
 
 /* The same as TVO_VERSION_NUMBER, of the library linked in. */
-long tvo_version_number(void);
+TVO_API long tvo_version_number(void);
 
 #ifdef __cplusplus
 }

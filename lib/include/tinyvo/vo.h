@@ -55,6 +55,7 @@
 #include "tinyvo/nn.h"
 #include "tinyvo/relpose.h"
 #include "tinyvo/se3.h"
+#include "tinyvo/export.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -305,7 +306,7 @@ typedef struct tvo_vo_config {
 /* Fill cfg with defaults for `camera` (copied): the balanced preset's tracker and window below (the
  * affine refinement, the map's predicted tracks, 8 keyframes with 4 fixed) in a build with the affine
  * refinement (TVO_WITH_AFFINE, the default build), the basic preset's in a build without it. */
-void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
+TVO_API void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
 
 /* Named configurations (docs/camera.md, "Presets"):
  * TVO_VO_PRESET_DEFAULT    the defaults (tvo_vo_config_default): TVO_VO_PRESET_BALANCED in a build with the
@@ -347,7 +348,7 @@ typedef enum tvo_vo_preset {
 /* Fill cfg with the preset's configuration for `camera` (copied). TVO_OK; TVO_ERR_NULL when cfg is NULL;
  * TVO_ERR_ARG for an unknown preset and TVO_ERR_UNSUPPORTED for TVO_VO_PRESET_ACCURATE or _BALANCED in a build
  * without the affine refinement, both leaving cfg filled with the defaults. */
-tvo_status tvo_vo_config_preset(tvo_vo_config *cfg, const tvo_camera *camera, tvo_vo_preset preset);
+TVO_API tvo_status tvo_vo_config_preset(tvo_vo_config *cfg, const tvo_camera *camera, tvo_vo_preset preset);
 
 /* tvo_vo_result.rel_scale when the relative scale is not available. */
 #define TVO_VO_REL_SCALE_NONE 0.0
@@ -425,25 +426,25 @@ typedef struct tvo_vo_track {
 typedef struct tvo_vo tvo_vo;
 
 /* Bytes of memory tvo_vo_init() needs for `cfg`, or 0 if cfg is invalid. */
-size_t tvo_vo_required_size(const tvo_vo_config *cfg);
+TVO_API size_t tvo_vo_required_size(const tvo_vo_config *cfg);
 
 /* Lay the VO out in mem (which must stay valid while *vo is used). Copies cfg. */
-tvo_status tvo_vo_init(tvo_vo **vo, const tvo_vo_config *cfg, void *mem, size_t mem_size);
+TVO_API tvo_status tvo_vo_init(tvo_vo **vo, const tvo_vo_config *cfg, void *mem, size_t mem_size);
 
 /* Process one grey frame of exactly camera.width x camera.height. t_ns must increase; a frame
  * whose timestamp does not increase is refused with TVO_ERR_ARG and leaves the VO unchanged.
  * On any error the VO is unchanged and *res holds state LOST with an identity pose.
  * res->T_prev_cur is always finite. */
-tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_vo_result *res);
+TVO_API tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_vo_result *res);
 
 /* Forget the tracks and the map: the object behaves as after tvo_vo_init() (the next frame initialises
  * again, T_w_c starts from the identity in a new unit of length). For a gap or a bad frame; a caller that
  * chains trajectories across the reset (as tvo_replay does) composes the new T_w_c onto its last pose. */
-void tvo_vo_reset(tvo_vo *vo);
+TVO_API void tvo_vo_reset(tvo_vo *vo);
 
 /* Read-only view of the current tracks (for drawing or logging): copies min(count, capacity) of them into
  * out and writes the number the VO holds into *count. TVO_ERR_NULL; out may be NULL with capacity 0. */
-tvo_status tvo_vo_tracks(const tvo_vo *vo, tvo_vo_track *out, int32_t capacity, int32_t *count);
+TVO_API tvo_status tvo_vo_tracks(const tvo_vo *vo, tvo_vo_track *out, int32_t capacity, int32_t *count);
 
 /* The per-DoF networks' refinement of a frame's raw step: *step = res->T_prev_cur with its translation
  * (metres) replaced by the model's tx ty tz when the model provides all three, or by the model's step
@@ -451,7 +452,7 @@ tvo_status tvo_vo_tracks(const tvo_vo *vo, tvo_vo_track *out, int32_t capacity, 
  * rotation by the model's rotation vector when it provides rx ry rz. Integrate the result with scale 1. On an error of
  * tvo_nn_run (e.g. a non-finite feature) *step is the raw step and the status is returned: integrate it
  * with scale 0. */
-tvo_status tvo_vo_refine(const tvo_nn *nn, const tvo_vo_result *res, tvo_pose *step);
+TVO_API tvo_status tvo_vo_refine(const tvo_nn *nn, const tvo_vo_result *res, tvo_pose *step);
 
 /* Step-length filter: the metric length of each OK frame's unit translation from the VO's relative scale
  * (tvo_vo_result.rel_scale) and an absolute step-length prior n_k (e.g. the per-DoF networks' |t|, or a
@@ -470,24 +471,24 @@ typedef struct tvo_scale_filter {
 
 /* TVO_ERR_NULL, or TVO_ERR_ARG for alpha outside [0, 1] (or NaN): f is then unusable (its updates return
  * TVO_ERR_ARG with a zero step). */
-tvo_status tvo_scale_filter_init(tvo_scale_filter *f, double alpha);
+TVO_API tvo_status tvo_scale_filter_init(tvo_scale_filter *f, double alpha);
 /* Set the current step length (m, finite, > 0; else TVO_ERR_ARG and f unchanged), e.g. from ground truth. */
-tvo_status tvo_scale_filter_seed(tvo_scale_filter *f, double step);
+TVO_API tvo_status tvo_scale_filter_seed(tvo_scale_filter *f, double step);
 /* One frame with a translation: rel_scale r_k (TVO_VO_REL_SCALE_NONE when not available; other values
  * <= 0 or not finite are treated the same), prior n_k in metres (<= 0 or not finite: none). *step gets
  * s_k (finite, in [1e-9, 1e3] m). Without a state and without a prior there is nothing to start from:
  * *step = 0 and TVO_ERR_RANGE (integrate a zero step). */
-tvo_status tvo_scale_filter_update(tvo_scale_filter *f, double rel_scale, double prior, double *step);
+TVO_API tvo_status tvo_scale_filter_update(tvo_scale_filter *f, double rel_scale, double prior, double *step);
 
 /* Trajectory integration: T_w_c(k+1) = T_w_c(k) * [R | scale * t]. */
 typedef struct tvo_traj {
     tvo_pose T_w_c; /* current camera pose in the world */
     int32_t steps;
 } tvo_traj;
-void tvo_traj_init(tvo_traj *traj, const tvo_pose *T_w_c0);
+TVO_API void tvo_traj_init(tvo_traj *traj, const tvo_pose *T_w_c0);
 /* scale in metres for the unit translation of T_prev_cur; refuses non-finite input (TVO_ERR_NOT_FINITE)
  * and leaves the trajectory unchanged. */
-tvo_status tvo_traj_step(tvo_traj *traj, const tvo_pose *T_prev_cur, double scale);
+TVO_API tvo_status tvo_traj_step(tvo_traj *traj, const tvo_pose *T_prev_cur, double scale);
 
 #ifdef __cplusplus
 }
