@@ -12,7 +12,11 @@
 #      `pkg-config tinyvo-port`, each run (test/external/main.c: version, PNG round trip, 8 VO frames, model);
 #   5. the installed programs (tvo_replay, tvo_track_pair, tvo_live) run from the moved tree (shared: through
 #      their $ORIGIN-relative RPATH); shared only: SONAME libtinyvo.so.<SOVERSION> (and _port, _v4l2), the
-#      programs need those names; static only: the programs need no libtinyvo*.so.
+#      programs need those names; static only: the programs need no libtinyvo*.so;
+#   6. the library's symbols against the functions the installed headers declare
+#      (test/external/public_functions.py): every declaration carries TVO_API; shared: libtinyvo.so
+#      exports exactly those functions (nm -D), no other function and no variable; static: libtinyvo.a
+#      defines every one of them.
 # Usage: test/external/run.sh [static|shared ...]   (default: static shared)
 # Environment: TVO_EXT_PREFIX (default /tmp/tvo-prefix: $TVO_EXT_PREFIX-<kind>, moved to ...-<kind>-moved),
 # TVO_EXT_BUILD (build folders $TVO_EXT_BUILD-<kind>, default build/external), JOBS.
@@ -114,6 +118,44 @@ for kind in "${KINDS[@]}"; do
     for exe in "$E/tvo_external" "$B/ext-pkgconfig"; do
       if readelf -d "$exe" | grep -q "NEEDED.*libtinyvo"; then fail "$exe needs a shared libtinyvo in a static build"; fi
     done
+  fi
+
+  # 6. the exported symbols are the public API
+  api="$B/ext-api"
+  mkdir -p "$api"
+  python3 test/external/public_functions.py cc "$P/include" >"$api/declared.txt" \
+    || fail "could not list the functions the installed headers declare"
+  awk '{print $1}' "$api/declared.txt" | sort -u >"$api/public.txt"
+  [ -s "$api/public.txt" ] || fail "no function found in the installed headers"
+  errors=()
+  unmarked=$(awk '$2 == "unmarked" {print $1}' "$api/declared.txt")
+  [ -z "$unmarked" ] || errors+=("declared without TVO_API in the installed headers: ${unmarked//$'\n'/ }")
+  if [ "$shared" = ON ]; then
+    core=$(ls "$LIBDIR/libtinyvo.so."*.*.* | head -n 1)
+    nm -D --defined-only "$core" >"$api/dynsym.txt" || fail "nm -D $core failed"
+    # functions: T (W weak, i indirect); anything else defined is data (the linker's own markers aside)
+    awk 'NF == 3 && $2 ~ /^[TWi]$/ {sub(/@.*/, "", $3); print $3}' "$api/dynsym.txt" | sort -u >"$api/exported.txt"
+    data=$(awk 'NF == 3 && $2 !~ /^[TWi]$/ && $3 !~ /^(_init|_fini|_edata|_end|__bss_start)$/ {print $3}' \
+           "$api/dynsym.txt")
+    extra=$(comm -13 "$api/public.txt" "$api/exported.txt")
+    missing=$(comm -23 "$api/public.txt" "$api/exported.txt")
+    [ -z "$extra" ] || errors+=("$(basename "$core") exports functions no installed header declares: ${extra//$'\n'/ }")
+    [ -z "$missing" ] || errors+=("$(basename "$core") does not export these public functions: ${missing//$'\n'/ }")
+    [ -z "$data" ] || errors+=("$(basename "$core") exports symbols that are not functions: ${data//$'\n'/ }")
+  else
+    core="$LIBDIR/libtinyvo.a"
+    nm --defined-only "$core" | awk 'NF == 3 && $2 ~ /^[TWi]$/ {print $3}' | sort -u >"$api/defined.txt"
+    missing=$(comm -23 "$api/public.txt" "$api/defined.txt")
+    [ -z "$missing" ] || errors+=("$(basename "$core") does not define these public functions: ${missing//$'\n'/ }")
+  fi
+  if [ ${#errors[@]} -gt 0 ]; then
+    printf '[external] FAIL: %s\n' "${errors[@]}" >&2
+    exit 1
+  fi
+  if [ "$shared" = ON ]; then
+    echo "[external] $(basename "$core") exports the $(wc -l <"$api/public.txt") public functions and nothing else"
+  else
+    echo "[external] $(basename "$core") defines the $(wc -l <"$api/public.txt") public functions"
   fi
   echo "[external] $kind: find_package and pkg-config builds pass"
 done
