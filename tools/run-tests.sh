@@ -8,7 +8,8 @@
 #      and every console script's --help (tools/check-pip-install.sh)
 #   3. an ASan+UBSan build running the ctest tests again
 #   4. a -Os (MinSizeRel) build running the ctest tests again, a build without the affine track
-#      refinement (-DTVO_WITH_AFFINE=OFF) running them again, and the Cortex-M size report
+#      refinement (-DTVO_WITH_AFFINE=OFF) running them again, a shared-library build
+#      (-DBUILD_SHARED_LIBS=ON) running them again, and the Cortex-M size report
 #      (tools/size-report.sh: arm-none-eabi core builds, link check, Cortex-M7 .text <= 96 KiB)
 #   5. cppcheck + clang-tidy with the checked-in configuration (tools/run-static.sh)
 #   6. aarch64 / armhf cross builds, their tests under qemu-user (tools/run-cross.sh)
@@ -54,6 +55,14 @@ cmake -S . -B build/noaffine -G Ninja -DCMAKE_BUILD_TYPE=Release -DTVO_WITH_AFFI
       -DTVO_BUILD_BENCH=OFF >/dev/null
 cmake --build build/noaffine -j$JOBS
 ctest --test-dir build/noaffine -j$JOBS --output-on-failure
+
+echo "== a shared build (BUILD_SHARED_LIBS=ON) + unit tests"
+# the unit tests link a test-only static copy of the core (test/CMakeLists.txt: TVO_TEST_CORE), the port,
+# guarantee and fuzz-corpus tests and the examples the shared libraries
+cmake -S . -B build/shared -G Ninja -DCMAKE_BUILD_TYPE=Release -DBUILD_SHARED_LIBS=ON -DTVO_WERROR=ON \
+      -DTVO_BUILD_BENCH=OFF >/dev/null
+cmake --build build/shared -j$JOBS
+ctest --test-dir build/shared -j$JOBS --output-on-failure
 
 echo "== Cortex-M7 / M4 core builds, link check, M7 .text <= 96 KiB (tools/size-report.sh)"
 TVO_WERROR=ON bash tools/size-report.sh
