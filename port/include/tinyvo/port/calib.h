@@ -42,6 +42,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include "tinyvo/camera.h"
+#include "tinyvo/export.h"
 #include "tinyvo/se3.h"
 #include "tinyvo/status.h"
 
@@ -78,16 +79,17 @@ typedef struct tvo_calib {
  * TVO_ERR_FORMAT naming the key that is missing; TVO_CALIB_EUROC also requires T_BS, as a EuRoC
  * sensor.yaml always has one). camera: the camchain entry to read (NULL: "cam0"); must be NULL for
  * the single-camera formats. out is written only on success. */
-tvo_status tvo_calib_parse(const char *text, size_t len, tvo_calib_format format, const char *camera,
-                           tvo_calib *out, char *err, size_t err_size);
+TVO_API tvo_status tvo_calib_parse(const char *text, size_t len, tvo_calib_format format, const char *camera,
+                                   tvo_calib *out, char *err, size_t err_size);
 
 /* Read and parse the file at path (at most TVO_CALIB_MAX_FILE bytes) with format detection. Errors
  * as tvo_calib_parse plus TVO_ERR_NOT_FOUND / TVO_ERR_IO for the file; parse messages are prefixed
  * with "path: ". */
-tvo_status tvo_calib_load(const char *path, const char *camera, tvo_calib *out, char *err, size_t err_size);
+TVO_API tvo_status tvo_calib_load(const char *path, const char *camera, tvo_calib *out, char *err,
+                                  size_t err_size);
 
 /* "euroc", "kalibr-camchain", "kalibr", "opencv", "ros", "auto"; "unknown" for other values. */
-const char *tvo_calib_format_name(tvo_calib_format format);
+TVO_API const char *tvo_calib_format_name(tvo_calib_format format);
 
 #ifdef __cplusplus
 }

@@ -4,13 +4,14 @@
 #define TINYVO_PORT_CLOCK_H
 
 #include <stdint.h>
+#include "tinyvo/export.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
 /* Nanoseconds of CLOCK_MONOTONIC (arbitrary origin, never goes backwards); 0 if the clock fails. */
-int64_t tvo_clock_now_ns(void);
+TVO_API int64_t tvo_clock_now_ns(void);
 
 #ifdef __cplusplus
 }

@@ -39,6 +39,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include "tinyvo/camera.h"
+#include "tinyvo/export.h"
 #include "tinyvo/port/euroc.h"
 #include "tinyvo/se3.h"
 #include "tinyvo/status.h"
@@ -50,33 +51,34 @@ extern "C" {
 /* The published calibration of the TUM RGB-D colour camera named in dir's last path component
  * ("freiburg1" / "freiburg2": 640x480 with 5 radial-tangential coefficients; "freiburg3": 640x480, no
  * distortion, the images are undistorted). TVO_ERR_NULL, TVO_ERR_NOT_FOUND (no such name). */
-tvo_status tvo_tum_camera(const char *dir, tvo_camera *cam);
+TVO_API tvo_status tvo_tum_camera(const char *dir, tvo_camera *cam);
 
 /* Open a TUM RGB-D folder. camera: the calibration (its size must be the frames'), or NULL for
  * tvo_tum_camera(dir). */
-tvo_status tvo_tum_open(tvo_euroc **seq, const char *dir, const tvo_camera *camera, unsigned flags, char *err,
-                        size_t err_size);
+TVO_API tvo_status tvo_tum_open(tvo_euroc **seq, const char *dir, const tvo_camera *camera, unsigned flags,
+                                char *err, size_t err_size);
 
 /* Open a KITTI odometry sequence folder. poses: the poses file, or NULL to look for one. */
-tvo_status tvo_kitti_open(tvo_euroc **seq, const char *dir, const char *poses, unsigned flags, char *err,
-                          size_t err_size);
+TVO_API tvo_status tvo_kitti_open(tvo_euroc **seq, const char *dir, const char *poses, unsigned flags,
+                                  char *err, size_t err_size);
 
 /* ---- parsers on memory buffers (also for fuzzing); capacity semantics as tvo_euroc_parse_groundtruth */
 
 /* TUM groundtruth.txt: fields separated by blanks (or ','), the first 8 required: t [s] tx ty tz qx qy
  * qz qw; quaternion norm 1 +- 0.01 (normalised); strictly increasing times; positions within
  * +-TVO_EUROC_MAX_COORD. Rows come out as tvo_euroc_gt_row (t in ns, q reordered to w x y z). */
-tvo_status tvo_tum_parse_groundtruth(const char *text, size_t len, tvo_euroc_gt_row *rows, int32_t capacity,
-                                     int32_t *count, char *err, size_t err_size);
+TVO_API tvo_status tvo_tum_parse_groundtruth(const char *text, size_t len, tvo_euroc_gt_row *rows,
+                                             int32_t capacity, int32_t *count, char *err, size_t err_size);
 
 /* KITTI calib.txt: the 12 numbers of the "P0:" line into P0 (row-major 3x4). Checked: fx, fy > 0,
  * no skew, last row 0 0 1 0, no translation column (P0[3] = P0[7] = 0). */
-tvo_status tvo_kitti_parse_calib(const char *text, size_t len, double P0[12], char *err, size_t err_size);
+TVO_API tvo_status tvo_kitti_parse_calib(const char *text, size_t len, double P0[12], char *err,
+                                         size_t err_size);
 
 /* A KITTI poses file: 12 numbers per line (blank lines skipped), each a rigid 3x4 T_w_c (rotation
  * orthonormal to 1e-3, re-orthonormalised; translation within +-TVO_EUROC_MAX_COORD). */
-tvo_status tvo_kitti_parse_poses(const char *text, size_t len, tvo_pose *poses, int32_t capacity,
-                                 int32_t *count, char *err, size_t err_size);
+TVO_API tvo_status tvo_kitti_parse_poses(const char *text, size_t len, tvo_pose *poses, int32_t capacity,
+                                         int32_t *count, char *err, size_t err_size);
 
 #ifdef __cplusplus
 }

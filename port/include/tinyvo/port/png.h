@@ -21,6 +21,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include "tinyvo/export.h"
 #include "tinyvo/status.h"
 
 #ifdef __cplusplus
@@ -34,21 +35,21 @@ extern "C" {
  * such file), TVO_ERR_IO (cannot open/read), TVO_ERR_FORMAT (not a PNG, corrupt, truncated, bad CRC),
  * TVO_ERR_NO_MEMORY (capacity < width * height, or a temporary allocation failed), TVO_ERR_SIZE (a
  * dimension above TVO_MAX_IMAGE_DIM). */
-tvo_status tvo_png_read_gray8(const char *path, uint8_t *buf, size_t capacity, int32_t *width,
-                              int32_t *height);
+TVO_API tvo_status tvo_png_read_gray8(const char *path, uint8_t *buf, size_t capacity, int32_t *width,
+                                      int32_t *height);
 
 /* Same, from a PNG held in memory (png_size bytes at png). */
-tvo_status tvo_png_decode_gray8(const void *png, size_t png_size, uint8_t *buf, size_t capacity,
-                                int32_t *width, int32_t *height);
+TVO_API tvo_status tvo_png_decode_gray8(const void *png, size_t png_size, uint8_t *buf, size_t capacity,
+                                        int32_t *width, int32_t *height);
 
 /* Width and height of the PNG file at path, reading only its header. Errors as tvo_png_read_gray8. */
-tvo_status tvo_png_size(const char *path, int32_t *width, int32_t *height);
+TVO_API tvo_status tvo_png_size(const char *path, int32_t *width, int32_t *height);
 
 /* Write an 8-bit grey image (row y at img + y * stride, stride >= width) as a grey 8-bit PNG.
  * Errors: TVO_ERR_NULL, TVO_ERR_SIZE (width/height outside 1..TVO_MAX_IMAGE_DIM, stride < width),
  * TVO_ERR_NOT_FOUND (the folder does not exist), TVO_ERR_IO (cannot create/write the file). */
-tvo_status tvo_png_write_gray8(const char *path, const uint8_t *img, int32_t width, int32_t height,
-                               int32_t stride);
+TVO_API tvo_status tvo_png_write_gray8(const char *path, const uint8_t *img, int32_t width, int32_t height,
+                                       int32_t stride);
 
 #ifdef __cplusplus
 }

@@ -45,6 +45,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include "tinyvo/export.h"
 #include "tinyvo/types.h" /* tvo_status, TVO_MAX_IMAGE_DIM */
 
 #ifdef __cplusplus
@@ -78,7 +79,7 @@ typedef struct tvo_v4l2_sys {
 
 #define TVO_V4L2_MAP_FAILED ((void *)-1)
 
-const tvo_v4l2_sys *tvo_v4l2_sys_libc(void);
+TVO_API const tvo_v4l2_sys *tvo_v4l2_sys_libc(void);
 
 typedef struct tvo_v4l2_config {
     const char *device; /* device path, e.g. "/dev/video0"; must stay valid during open */
@@ -155,32 +156,32 @@ typedef struct tvo_v4l2 {
 } tvo_v4l2;
 
 /* Fill cfg with the defaults above (device "/dev/video0"). */
-void tvo_v4l2_config_default(tvo_v4l2_config *cfg);
+TVO_API void tvo_v4l2_config_default(tvo_v4l2_config *cfg);
 
 /* Open, check capabilities (capture + streaming), set the format and rate, request and map
  * buffers, queue them and start streaming. On failure everything acquired is released, cam is
  * left closed and tvo_v4l2_message(cam) tells why. TVO_ERR_NULL / TVO_ERR_ARG for bad arguments. */
-tvo_status tvo_v4l2_open(tvo_v4l2 *cam, const tvo_v4l2_config *cfg);
+TVO_API tvo_status tvo_v4l2_open(tvo_v4l2 *cam, const tvo_v4l2_config *cfg);
 
 /* Wait (poll, at most timeout_ms per attempt) for the next good frame and hand its buffer to the
  * caller. At most buffer_count - 1 frames may be held at once (TVO_ERR_STATE beyond). */
-tvo_status tvo_v4l2_dequeue(tvo_v4l2 *cam, tvo_v4l2_frame *frame);
+TVO_API tvo_status tvo_v4l2_dequeue(tvo_v4l2 *cam, tvo_v4l2_frame *frame);
 
 /* Give a dequeued buffer back to the driver. */
-tvo_status tvo_v4l2_requeue(tvo_v4l2 *cam, const tvo_v4l2_frame *frame);
+TVO_API tvo_status tvo_v4l2_requeue(tvo_v4l2 *cam, const tvo_v4l2_frame *frame);
 
 /* Copy the luma of a frame to dst (width x height bytes, rows dst_stride >= width apart).
  * Cost: one pass over the image. */
-tvo_status tvo_v4l2_frame_luma(const tvo_v4l2_frame *frame, uint8_t *dst, int32_t dst_stride);
+TVO_API tvo_status tvo_v4l2_frame_luma(const tvo_v4l2_frame *frame, uint8_t *dst, int32_t dst_stride);
 
 /* Stop streaming, unmap, close. Safe on a closed or failed camera and when called twice.
  * Errors while stopping a lost device are ignored; the fd is always closed. */
-void tvo_v4l2_close(tvo_v4l2 *cam);
+TVO_API void tvo_v4l2_close(tvo_v4l2 *cam);
 
 /* Granted format (valid after a successful open), counters, last error message (never NULL). */
-const tvo_v4l2_format *tvo_v4l2_get_format(const tvo_v4l2 *cam);
-const tvo_v4l2_stats *tvo_v4l2_get_stats(const tvo_v4l2 *cam);
-const char *tvo_v4l2_message(const tvo_v4l2 *cam);
+TVO_API const tvo_v4l2_format *tvo_v4l2_get_format(const tvo_v4l2 *cam);
+TVO_API const tvo_v4l2_stats *tvo_v4l2_get_stats(const tvo_v4l2 *cam);
+TVO_API const char *tvo_v4l2_message(const tvo_v4l2 *cam);
 
 #ifdef __cplusplus
 }
