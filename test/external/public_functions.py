@@ -1,16 +1,17 @@
 # SPDX-License-Identifier: Apache-2.0
 """The functions that the installed public headers declare, for test/external/run.sh.
 
-    python3 test/external/public_functions.py CC INCLUDE_DIR
+    python3 test/external/public_functions.py CC INCLUDE_DIR [HEADER ...]
 
-Includes every header of the core, INCLUDE_DIR/tinyvo/*.h (the port layer's, in tinyvo/port/, belong to
-libtinyvo_port), in one translation unit, preprocesses it with CC (C99, TVO_API defined as a marker word:
-the compiler deals with the comments and #if branches) and reads the file-scope declarations that come
-from those headers. Prints one line per function with external linkage, sorted: "<name> marked" when its
-declaration carries TVO_API, "<name> unmarked" otherwise. Left out: typedefs, variables, and static
-(inline) functions, which a library never exports. Exit 1 when the preprocessor fails, or when a TVO_API
-mark is not on a function declaration this script recognises (so that a declaration it misreads cannot
-go unnoticed).
+Includes the headers of one library in one translation unit: the HEADERs, paths under INCLUDE_DIR (e.g.
+tinyvo/port/png.h), or without any every header of the core, INCLUDE_DIR/tinyvo/*.h (the port layer's, in
+tinyvo/port/, belong to libtinyvo_port and libtinyvo_v4l2). Preprocesses it with CC (C99, TVO_API defined
+as a marker word: the compiler deals with the comments and #if branches) and reads the file-scope
+declarations that come from those headers, not from the headers they include. Prints one line per
+function with external linkage, sorted: "<name> marked" when its declaration carries TVO_API, "<name>
+unmarked" otherwise. Left out: typedefs, variables, and static (inline) functions, which a library never
+exports. Exit 1 when the preprocessor fails, when a HEADER does not exist, or when a TVO_API mark is not on
+a function declaration this script recognises (so that a declaration it misreads cannot go unnoticed).
 """
 from __future__ import annotations
 
@@ -28,23 +29,27 @@ KEYWORDS = {
 }
 
 
-def preprocessed(cc: str, include: pathlib.Path) -> str:
-    """The text of the headers in include/tinyvo after preprocessing, without what other files bring."""
-    headers = sorted(include.glob("tinyvo/*.h"))
+def preprocessed(cc: str, include: pathlib.Path, names: list[str]) -> str:
+    """The text of the headers (names under include; none: include/tinyvo/*.h) after preprocessing,
+    without what other files bring."""
+    headers = [include / n for n in names] if names else sorted(include.glob("tinyvo/*.h"))
     if not headers:
         sys.exit(f"public_functions.py: no header in {include}/tinyvo")
-    tu = "".join(f'#include "tinyvo/{h.name}"\n' for h in headers)
+    for h in headers:
+        if not h.is_file():
+            sys.exit(f"public_functions.py: no header {h}")
+    tu = "".join(f'#include "{h.relative_to(include).as_posix()}"\n' for h in headers)
     run = subprocess.run([cc, "-std=c99", "-E", f"-DTVO_API={MARK}", f"-I{include}", "-x", "c", "-"],
                          input=tu, capture_output=True, text=True, check=False)
     if run.returncode != 0:
         sys.stderr.write(run.stderr)
         sys.exit(f"public_functions.py: {cc} -E failed on the headers of {include}")
-    root = (include / "tinyvo").resolve()
+    wanted = {h.resolve() for h in headers}
     keep, out = False, []
     for line in run.stdout.splitlines():
         marker = re.match(r'#\s*(?:line\s+)?\d+\s+"(.*)"', line)
         if marker:
-            keep = pathlib.Path(marker.group(1)).resolve().parent == root
+            keep = pathlib.Path(marker.group(1)).resolve() in wanted
         elif keep and not line.startswith("#"):
             out.append(line)
     return "\n".join(out)
@@ -112,9 +117,9 @@ def declared(text: str) -> tuple[dict[str, bool], int]:
 
 
 def main() -> int:
-    if len(sys.argv) != 3:
-        sys.exit("usage: public_functions.py CC INCLUDE_DIR")
-    text = preprocessed(sys.argv[1], pathlib.Path(sys.argv[2]))
+    if len(sys.argv) < 3:
+        sys.exit("usage: public_functions.py CC INCLUDE_DIR [HEADER ...]")
+    text = preprocessed(sys.argv[1], pathlib.Path(sys.argv[2]), sys.argv[3:])
     functions, marks = declared(text)
     total = len(re.findall(rf"\b{MARK}\b", text))
     if marks != total:

@@ -13,10 +13,11 @@
 #   5. the installed programs (tvo_replay, tvo_track_pair, tvo_live) run from the moved tree (shared: through
 #      their $ORIGIN-relative RPATH); shared only: SONAME libtinyvo.so.<SOVERSION> (and _port, _v4l2), the
 #      programs need those names; static only: the programs need no libtinyvo*.so;
-#   6. the library's symbols against the functions the installed headers declare
-#      (test/external/public_functions.py): every declaration carries TVO_API; shared: libtinyvo.so
-#      exports exactly those functions (nm -D), no other function and no variable; static: libtinyvo.a
-#      defines every one of them.
+#   6. each library's symbols against the functions its installed headers declare
+#      (test/external/public_functions.py; libtinyvo: tinyvo/*.h, libtinyvo_port: tinyvo/port/*.h but
+#      v4l2.h, libtinyvo_v4l2: tinyvo/port/v4l2.h): every declaration carries TVO_API; shared: the
+#      library exports exactly those functions (nm -D), no other function and no variable; static: the
+#      archive defines every one of them.
 # Usage: test/external/run.sh [static|shared ...]   (default: static shared)
 # Environment: TVO_EXT_PREFIX (default /tmp/tvo-prefix: $TVO_EXT_PREFIX-<kind>, moved to ...-<kind>-moved),
 # TVO_EXT_BUILD (build folders $TVO_EXT_BUILD-<kind>, default build/external), JOBS.
@@ -29,6 +30,41 @@ KINDS=("$@")
 PREFIX_BASE="${TVO_EXT_PREFIX:-/tmp/tvo-prefix}"
 BUILD_BASE="${TVO_EXT_BUILD:-$ROOT/build/external}"
 fail() { echo "[external] FAIL: $*" >&2; exit 1; }
+
+# Step 6 for one library: check_api LIB [HEADER ...] (paths under $P/include; none: the core's tinyvo/*.h).
+# Appends what is wrong to errors, what was checked to checked.
+check_api() {
+  local lib="$1" d="$api/$1" unmarked lib_file name extra missing data
+  shift
+  python3 test/external/public_functions.py cc "$P/include" "$@" >"$d.declared" \
+    || fail "could not list the functions the installed headers of lib$lib declare"
+  awk '{print $1}' "$d.declared" | sort -u >"$d.public"
+  [ -s "$d.public" ] || fail "no function found in the installed headers of lib$lib"
+  unmarked=$(awk '$2 == "unmarked" {print $1}' "$d.declared")
+  [ -z "$unmarked" ] || errors+=("declared without TVO_API in the installed headers of lib$lib: ${unmarked//$'\n'/ }")
+  if [ "$shared" = ON ]; then
+    lib_file=$(ls "$LIBDIR/lib$lib.so."*.*.* | head -n 1)
+    name=$(basename "$lib_file")
+    nm -D --defined-only "$lib_file" >"$d.dynsym" || fail "nm -D $lib_file failed"
+    # functions: T (W weak, i indirect); anything else defined is data (the linker's own markers aside)
+    awk 'NF == 3 && $2 ~ /^[TWi]$/ {sub(/@.*/, "", $3); print $3}' "$d.dynsym" | sort -u >"$d.exported"
+    data=$(awk 'NF == 3 && $2 !~ /^[TWi]$/ && $3 !~ /^(_init|_fini|_edata|_end|__bss_start)$/ {print $3}' \
+           "$d.dynsym")
+    extra=$(comm -13 "$d.public" "$d.exported")
+    missing=$(comm -23 "$d.public" "$d.exported")
+    [ -z "$extra" ] || errors+=("$name exports functions its installed headers do not declare: ${extra//$'\n'/ }")
+    [ -z "$missing" ] || errors+=("$name does not export these public functions: ${missing//$'\n'/ }")
+    [ -z "$data" ] || errors+=("$name exports symbols that are not functions: ${data//$'\n'/ }")
+    checked+=("$name exports the $(wc -l <"$d.public") public functions of its headers and nothing else")
+  else
+    lib_file="$LIBDIR/lib$lib.a"
+    name=$(basename "$lib_file")
+    nm --defined-only "$lib_file" | awk 'NF == 3 && $2 ~ /^[TWi]$/ {print $3}' | sort -u >"$d.defined"
+    missing=$(comm -23 "$d.public" "$d.defined")
+    [ -z "$missing" ] || errors+=("$name does not define these public functions: ${missing//$'\n'/ }")
+    checked+=("$name defines the $(wc -l <"$d.public") public functions of its headers")
+  fi
+}
 
 for kind in "${KINDS[@]}"; do
   case "$kind" in
@@ -120,42 +156,25 @@ for kind in "${KINDS[@]}"; do
     done
   fi
 
-  # 6. the exported symbols are the public API
+  # 6. the exported symbols are the public API, library by library
   api="$B/ext-api"
+  rm -rf "$api"
   mkdir -p "$api"
-  python3 test/external/public_functions.py cc "$P/include" >"$api/declared.txt" \
-    || fail "could not list the functions the installed headers declare"
-  awk '{print $1}' "$api/declared.txt" | sort -u >"$api/public.txt"
-  [ -s "$api/public.txt" ] || fail "no function found in the installed headers"
   errors=()
-  unmarked=$(awk '$2 == "unmarked" {print $1}' "$api/declared.txt")
-  [ -z "$unmarked" ] || errors+=("declared without TVO_API in the installed headers: ${unmarked//$'\n'/ }")
-  if [ "$shared" = ON ]; then
-    core=$(ls "$LIBDIR/libtinyvo.so."*.*.* | head -n 1)
-    nm -D --defined-only "$core" >"$api/dynsym.txt" || fail "nm -D $core failed"
-    # functions: T (W weak, i indirect); anything else defined is data (the linker's own markers aside)
-    awk 'NF == 3 && $2 ~ /^[TWi]$/ {sub(/@.*/, "", $3); print $3}' "$api/dynsym.txt" | sort -u >"$api/exported.txt"
-    data=$(awk 'NF == 3 && $2 !~ /^[TWi]$/ && $3 !~ /^(_init|_fini|_edata|_end|__bss_start)$/ {print $3}' \
-           "$api/dynsym.txt")
-    extra=$(comm -13 "$api/public.txt" "$api/exported.txt")
-    missing=$(comm -23 "$api/public.txt" "$api/exported.txt")
-    [ -z "$extra" ] || errors+=("$(basename "$core") exports functions no installed header declares: ${extra//$'\n'/ }")
-    [ -z "$missing" ] || errors+=("$(basename "$core") does not export these public functions: ${missing//$'\n'/ }")
-    [ -z "$data" ] || errors+=("$(basename "$core") exports symbols that are not functions: ${data//$'\n'/ }")
-  else
-    core="$LIBDIR/libtinyvo.a"
-    nm --defined-only "$core" | awk 'NF == 3 && $2 ~ /^[TWi]$/ {print $3}' | sort -u >"$api/defined.txt"
-    missing=$(comm -23 "$api/public.txt" "$api/defined.txt")
-    [ -z "$missing" ] || errors+=("$(basename "$core") does not define these public functions: ${missing//$'\n'/ }")
+  checked=()
+  check_api tinyvo
+  port_headers=()
+  for h in "$P/include/tinyvo/port/"*.h; do
+    [ "$(basename "$h")" = v4l2.h ] || port_headers+=("tinyvo/port/$(basename "$h")")
+  done
+  check_api tinyvo_port "${port_headers[@]}"
+  if [ -f "$P/include/tinyvo/port/v4l2.h" ]; then
+    check_api tinyvo_v4l2 tinyvo/port/v4l2.h
   fi
   if [ ${#errors[@]} -gt 0 ]; then
     printf '[external] FAIL: %s\n' "${errors[@]}" >&2
     exit 1
   fi
-  if [ "$shared" = ON ]; then
-    echo "[external] $(basename "$core") exports the $(wc -l <"$api/public.txt") public functions and nothing else"
-  else
-    echo "[external] $(basename "$core") defines the $(wc -l <"$api/public.txt") public functions"
-  fi
+  printf '[external] %s\n' "${checked[@]}"
   echo "[external] $kind: find_package and pkg-config builds pass"
 done
