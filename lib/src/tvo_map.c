@@ -130,7 +130,7 @@ static size_t track_scratch(const tvo_vo_config *cfg)
     const size_t n = (size_t)cfg->max_tracks;
     size_t s = tvo_arena_round(tvo_size_mul(n, 3 * sizeof(double)));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d))));
-    s = tvo_size_add(s, tvo_arena_round(n) * 2);
+    s = tvo_size_add(s, tvo_arena_round(n) * 3);
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(int32_t))));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(n, sizeof(double))));
     return tvo_size_add(s, tvo_arena_round(tvo_pnp_scratch_size(cfg->max_tracks)));
@@ -835,21 +835,23 @@ static double rot_chi2(const double Sig[9], double v, const double d[3])
 }
 
 /* The rotation prior of pc against the landmarks (*T: the pose refined with the prior): the pose refined
- * without it gives the landmarks' own rotation and its covariance (landmark_rot_cov); when the prior's
+ * without it on the landmarks use selects (NULL: all) gives the landmarks' own rotation and its covariance
+ * (landmark_rot_cov); when the prior's
  * rotation is further from it than TVO_MAP_ROT_PRIOR_GATE allows under the two covariances (the
  * prior's being rms^2 / w per axis: pnp.h, a weight w counts as one point's error per rad^2), the
  * weight is halved until they agree and the pose refined again with it. 1 when *T, *ni and inl were
  * replaced (inl: the inliers of the new pose, k entries). *rms_out gets the landmarks-only pose's
  * reprojection RMS when it was computed. */
 static int consistent_prior(const tvo_pnp_config *pc, const double (*X)[3], const tvo_point2d *x, int32_t k,
-                            int32_t min_points, uint8_t *inl, tvo_pose *T, int32_t *ni, double *rms_out)
+                            int32_t min_points, const uint8_t *use, uint8_t *inl, tvo_pose *T, int32_t *ni,
+                            double *rms_out)
 {
     tvo_pnp_config pf = *pc;
     tvo_pose Tf = *T, Tw;
     int32_t nf = 0, nw = 0;
     double rms = 0.0, Sig[9], d[3], Rd[9], v, w = pc->rot_prior_weight;
     pf.rot_prior_weight = 0.0;
-    if (tvo_pnp_refine(&pf, X, x, NULL, k, &Tf, inl, &nf, &rms) != TVO_OK || nf < min_points || !(rms > 0.0))
+    if (tvo_pnp_refine(&pf, X, x, use, k, &Tf, inl, &nf, &rms) != TVO_OK || nf < min_points || !(rms > 0.0))
         return 0;
     *rms_out = rms;
     if (!landmark_rot_cov(X, inl, k, &Tf, rms, Sig))
@@ -880,6 +882,23 @@ static int consistent_prior(const tvo_pnp_config *pc, const double (*X)[3], cons
     return 1;
 }
 
+/* The landmarks that judge a weak rotation prior (cfg.map_rot_prior_obs): NULL for all of them, or judge
+ * (k flags, for the k landmarks idx names) marking those observed in at least map_rot_prior_obs keyframes
+ * when map_min_points of them are tracked. A landmark in two keyframes fits both by construction, whatever
+ * its depth along their baseline; a third view has checked the others'. */
+static const uint8_t *prior_judges(const tvo_map *m, const tvo_vo_config *cfg, const tvo_map_tracks *tr,
+                                   const int32_t *idx, int32_t k, uint8_t *judge)
+{
+    int32_t nj = 0;
+    if (cfg->map_rot_prior_obs <= 0)
+        return NULL;
+    for (int32_t q = 0; q < k; ++q) {
+        judge[q] = (uint8_t)(m->lm[tr->lm[idx[q]]].n_obs >= cfg->map_rot_prior_obs);
+        nj += judge[q];
+    }
+    return nj >= cfg->map_min_points ? judge : NULL;
+}
+
 /* Pose this frame on the landmarks the tracks carry. 1 when posed (T written, tr->inlier set, the
  * outliers' landmarks unlinked from their tracks); *depth_med gets the inliers' median depth. */
 static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
@@ -890,7 +909,7 @@ static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr,
     carve c;
     double(*X)[3], *depth;
     tvo_point2d *x;
-    uint8_t *inl, *inl_free;
+    uint8_t *inl, *inl_free, *judge;
     int32_t *idx, k = 0, ni = 0, nd = 0;
     void *ps;
     const size_t ps_size = tvo_pnp_scratch_size(cfg->max_tracks);
@@ -903,11 +922,12 @@ static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr,
     x = (tvo_point2d *)take(&c, (size_t)n * sizeof(tvo_point2d));
     inl = (uint8_t *)take(&c, (size_t)n);
     inl_free = (uint8_t *)take(&c, (size_t)n);
+    judge = (uint8_t *)take(&c, (size_t)n);
     idx = (int32_t *)take(&c, (size_t)n * sizeof(int32_t));
     depth = (double *)take(&c, (size_t)n * sizeof(double));
     ps = take(&c, ps_size);
-    if (X == NULL || x == NULL || inl == NULL || inl_free == NULL || idx == NULL || depth == NULL ||
-        ps == NULL)
+    if (X == NULL || x == NULL || inl == NULL || inl_free == NULL || judge == NULL || idx == NULL ||
+        depth == NULL || ps == NULL)
         return 0;
     for (int32_t i = 0; i < n; ++i) {
         tr->inlier[i] = 0;
@@ -949,8 +969,8 @@ static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr,
            parallax); a well-conditioned two-view rotation is better than the landmarks' own */
         tvo_pose Tc = *T;
         int32_t nc = ni;
-        if (consistent_prior(&pc, (const double(*)[3])X, x, k, cfg->map_min_points, inl_free, &Tc, &nc,
-                             &m->rms)) {
+        if (consistent_prior(&pc, (const double(*)[3])X, x, k, cfg->map_min_points,
+                             prior_judges(m, cfg, tr, idx, k, judge), inl_free, &Tc, &nc, &m->rms)) {
             *T = Tc;
             ni = nc;
             memcpy(inl, inl_free, (size_t)k);

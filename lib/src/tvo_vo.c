@@ -239,6 +239,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->map_ba_huber_px = 2.5;
     cfg->map_ba_rot_prior = 0.0;
     cfg->map_rot_prior = 100.0;
+    cfg->map_rot_prior_obs = 0;
     cfg->clock = NULL;
     cfg->clock_user = NULL;
     /* the tracker, window and chain step: the balanced preset's (docs/budget.md, "A ninth rule"), or
@@ -368,6 +369,9 @@ static int config_valid(const tvo_vo_config *cfg)
     if (cfg->map_ba_fixed < 2 || cfg->map_ba_fixed > cfg->map_window - 1)
         return 0;
     if (!(cfg->map_rot_prior >= 0.0 && cfg->map_rot_prior <= 1e12))
+        return 0;
+    if (cfg->map_rot_prior_obs != 0 &&
+        (cfg->map_rot_prior_obs < 2 || cfg->map_rot_prior_obs > TVO_VO_MAX_WINDOW))
         return 0;
     return 1;
 }

@@ -30,7 +30,8 @@
 typedef struct tvo_road {
     int32_t frames, max_tracks, n_points;
     double noise_px, drift_px, jump_prob;
-    uint32_t seed; /* the generator's state */
+    int prior_flags; /* TVO_MAP_PRIOR_* bits of the next frames' two-view rotation (0 after open) */
+    uint32_t seed;   /* the generator's state */
     double (*pts)[3];
     /* the tracks, n of them, in the layout tvo_map_tracks views */
     int32_t n, next_point;
@@ -165,8 +166,8 @@ static inline tvo_status tvo_road_frame(tvo_road *r, tvo_map *m, const tvo_vo_co
         memcpy(R_cur_prev, d.R, sizeof(R_cur_prev));
     }
     tr = tvo_road_tracks(r);
-    st = tvo_map_process(m, cfg, &tr, 1000000000LL + k * TVO_ROAD_DT_NS, k > 0 ? R_cur_prev : NULL, 0, &T,
-                         scratch, scratch_size, out);
+    st = tvo_map_process(m, cfg, &tr, 1000000000LL + k * TVO_ROAD_DT_NS, k > 0 ? R_cur_prev : NULL,
+                         r->prior_flags, &T, scratch, scratch_size, out);
     if (st != TVO_OK)
         return st;
     first = r->n;

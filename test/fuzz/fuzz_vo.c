@@ -207,6 +207,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             ? 1 + (int32_t)(hdr[5] & 15u)
             : 0;
     cfg.map_refind_rescue = (hdr[5] >> 4) & 1; /* ...looking on every frame or only when the map runs short */
+    cfg.map_rot_prior_obs = ((hdr[6] >> 2) ^ (hdr[5] >> 5)) & 1
+            ? 3
+            : 0; /* a weak prior judged by checked landmarks */
     while ((need = tvo_vo_required_size(&cfg)) == 0 && cfg.lk.max_level > 0)
         cfg.lk.max_level--;
     TVO_FUZZ_CHECK(need > 0); /* every size from 16x16 up is valid with one level */

@@ -1290,6 +1290,17 @@ static void test_bad_input(void **state)
                 bad.map_refind = v[i];
                 assert_refused(&bad, f->mem);
             }
+            /* the landmarks that judge a weak rotation prior: 0 (all) or [2, TVO_VO_MAX_WINDOW] */
+            assert_int_equal(f->cfg.map_rot_prior_obs, 0);
+            for (int i = 0; i < 4; ++i) {
+                const int32_t o[4] = {-1, 1, TVO_VO_MAX_WINDOW + 1, INT32_MAX};
+                bad = f->cfg;
+                bad.map_rot_prior_obs = o[i];
+                assert_refused(&bad, f->mem);
+            }
+            bad = f->cfg;
+            bad.map_rot_prior_obs = 3;
+            assert_true(tvo_vo_required_size(&bad) == tvo_vo_required_size(&f->cfg));
             /* the rescue: 0 or 1 */
             assert_int_equal(f->cfg.map_refind_rescue, 0);
             for (int i = 0; i < 3; ++i) {

@@ -299,6 +299,12 @@ typedef struct tvo_vo_config {
                                    (rotation-only, a plane's twin, below 0.2 deg of parallax) whose
                                    landmarks alone give a rotation that disagrees with the prior beyond
                                    the two estimates' noise (a chi-square test at 99 %); docs/design.md */
+    int32_t map_rot_prior_obs;    /* the landmarks whose own rotation that test compares with the prior: 0
+                                   all of them (default); N in [2, TVO_VO_MAX_WINDOW] those observed in at
+                                   least N keyframes of the window, when map_min_points of them are
+                                   tracked (else all). 3 keeps a fast-turning camera's frames off
+                                   landmarks of two keyframes whose depths the turn got wrong
+                                   (docs/camera.md; docs/budget.md, "A forty-fourth rule") */
     tvo_clock_fn clock;           /* optional (NULL: no timings) */
     void *clock_user;
 } tvo_vo_config;
