@@ -43,48 +43,83 @@ static int count_inconsistencies(const tvo_map *m)
     return bad;
 }
 
+/* The map driven along the road: its configuration, the road, the map and their memory. */
+typedef struct road_map {
+    tvo_vo_config cfg;
+    tvo_road r;
+    tvo_map m;
+    void *mem, *scratch;
+    size_t ss;
+} road_map;
+
+/* The defaults for the road's camera with MAX_TRACKS tracks, for the caller to adjust before
+ * road_map_open. */
+static void road_config(tvo_vo_config *cfg)
+{
+    tvo_camera cam = tvo_camera_make_pinhole(TVO_ROAD_WIDTH, TVO_ROAD_HEIGHT, TVO_ROAD_FOCAL, TVO_ROAD_FOCAL,
+                                             (TVO_ROAD_WIDTH - 1) / 2.0, (TVO_ROAD_HEIGHT - 1) / 2.0);
+    tvo_vo_config_default(cfg, &cam);
+    cfg->max_tracks = MAX_TRACKS;
+    cfg->min_tracks = MAX_TRACKS / 2;
+}
+
+/* rm->cfg (set by the caller) checked, the road of FRAMES frames opened (noise in px, the tracks' jump
+ * chance, the generator's seed), the map's memory allocated and the map made. */
+static void road_map_open(road_map *rm, double noise_px, double jump, uint32_t seed)
+{
+    tvo_arena ar;
+    const size_t ls = tvo_map_layout_size(&rm->cfg) + TVO_ARENA_ALIGN;
+    assert_true(tvo_vo_required_size(&rm->cfg) > 0);
+    assert_true(tvo_road_open(&rm->r, FRAMES, rm->cfg.max_tracks, N_POINTS, noise_px, 0.0, jump, seed));
+    rm->ss = tvo_map_scratch_size(&rm->cfg);
+    rm->mem = malloc(ls);
+    rm->scratch = malloc(rm->ss);
+    assert_non_null(rm->mem);
+    assert_non_null(rm->scratch);
+    tvo_arena_init(&ar, rm->mem, ls);
+    assert_int_equal(tvo_map_init(&rm->m, &rm->cfg, &ar), TVO_OK);
+}
+
+static void road_map_close(road_map *rm)
+{
+    tvo_road_close(&rm->r);
+    free(rm->mem);
+    free(rm->scratch);
+}
+
+/* Frame k along the road: TVO_OK. */
+static tvo_map_frame road_map_frame(road_map *rm, int k)
+{
+    tvo_map_frame out;
+    assert_int_equal(tvo_road_frame(&rm->r, &rm->m, &rm->cfg, k, rm->scratch, rm->ss, &out), TVO_OK);
+    return out;
+}
+
 /* Drives the map along the road (tvo_road.h: 0.1 px of noise); jump: the chance per frame that a track
  * slides off its point by up to +-8 px in each axis (and stays off: a track that locked onto something
  * else). Asserts the store's consistency and finite poses after every frame, and that the map tracked
  * most frames. Returns the map's store_full count. */
 static int32_t run_road(double jump, int32_t max_landmarks)
 {
-    tvo_camera cam = tvo_camera_make_pinhole(TVO_ROAD_WIDTH, TVO_ROAD_HEIGHT, TVO_ROAD_FOCAL, TVO_ROAD_FOCAL,
-                                             (TVO_ROAD_WIDTH - 1) / 2.0, (TVO_ROAD_HEIGHT - 1) / 2.0);
-    tvo_vo_config cfg;
     int32_t tracking = 0, keyframes = 0, worst = 0;
-    tvo_road r;
-    tvo_map m;
-    tvo_arena ar;
-    size_t ls, ss;
-    void *mem, *scratch;
-    tvo_vo_config_default(&cfg, &cam);
-    cfg.max_tracks = MAX_TRACKS;
-    cfg.min_tracks = MAX_TRACKS / 2;
-    cfg.map_window = 4;
-    cfg.map_ba_fixed = 2;
-    cfg.map_max_landmarks = max_landmarks;
-    assert_true(tvo_vo_required_size(&cfg) > 0);
-    assert_true(tvo_road_open(&r, FRAMES, MAX_TRACKS, N_POINTS, 0.1, 0.0, jump, 12345u));
-    ls = tvo_map_layout_size(&cfg) + TVO_ARENA_ALIGN;
-    ss = tvo_map_scratch_size(&cfg);
-    mem = malloc(ls);
-    scratch = malloc(ss);
-    assert_non_null(mem);
-    assert_non_null(scratch);
-    tvo_arena_init(&ar, mem, ls);
-    assert_int_equal(tvo_map_init(&m, &cfg, &ar), TVO_OK);
+    road_map rm;
+    const tvo_road *r = &rm.r;
+    const tvo_map *m = &rm.m;
+    road_config(&rm.cfg);
+    rm.cfg.map_window = 4;
+    rm.cfg.map_ba_fixed = 2;
+    rm.cfg.map_max_landmarks = max_landmarks;
+    road_map_open(&rm, 0.1, jump, 12345u);
     for (int k = 0; k < FRAMES; ++k) {
-        tvo_map_frame out;
+        const tvo_map_frame out = road_map_frame(&rm, k);
         int bad;
-        assert_int_equal(tvo_road_frame(&r, &m, &cfg, k, scratch, ss, &out), TVO_OK);
         tracking += out.state == TVO_MAP_TRACKING;
         keyframes += out.keyframe;
         if (out.state == TVO_MAP_TRACKING || out.state == TVO_MAP_INITIALISED)
             assert_true(tvo_pose_is_finite(&out.T_c_w));
-        bad = count_inconsistencies(&m);
-        for (int32_t i = 0; i < r.n; ++i) /* a track's landmark is a live one */
-            bad += r.lm[i] >= 0 && (r.lm[i] >= m.max_lm || !m.lm[r.lm[i]].alive);
+        bad = count_inconsistencies(m);
+        for (int32_t i = 0; i < r->n; ++i) /* a track's landmark is a live one */
+            bad += r->lm[i] >= 0 && (r->lm[i] >= m->max_lm || !m->lm[r->lm[i]].alive);
         if (bad > worst)
             worst = bad;
         if (bad > 0 && getenv("TVO_MAP_TEST_VERBOSE"))
@@ -92,16 +127,14 @@ static int32_t run_road(double jump, int32_t max_landmarks)
     }
     if (getenv("TVO_MAP_TEST_VERBOSE"))
         fprintf(stderr, "  jump %.2f: tracking %d of %d frames, %d keyframes, %d losses\n", jump, tracking,
-                FRAMES, keyframes, (int)m.losses);
+                FRAMES, keyframes, (int)m->losses);
     /* the scenario exercises the store: the map tracks most frames and makes many windows' worth of
        keyframes */
     assert_true(tracking > FRAMES / 2);
-    assert_true(keyframes > 5 * cfg.map_window);
+    assert_true(keyframes > 5 * rm.cfg.map_window);
     assert_int_equal(worst, 0);
-    tvo_road_close(&r);
-    free(mem);
-    free(scratch);
-    return m.store_full;
+    road_map_close(&rm);
+    return m->store_full;
 }
 
 static void test_store_stays_consistent(void **state)
@@ -141,51 +174,33 @@ static double rot_err_deg(const tvo_pose *a, const tvo_pose *b)
  * (deg). */
 static double weak_prior_error(int32_t min_obs)
 {
-    tvo_camera cam = tvo_camera_make_pinhole(TVO_ROAD_WIDTH, TVO_ROAD_HEIGHT, TVO_ROAD_FOCAL, TVO_ROAD_FOCAL,
-                                             (TVO_ROAD_WIDTH - 1) / 2.0, (TVO_ROAD_HEIGHT - 1) / 2.0);
     const int k_turned = 80;
-    tvo_vo_config cfg;
-    tvo_road r;
-    tvo_map m;
-    tvo_arena ar;
-    size_t ls, ss;
-    void *mem, *scratch;
+    road_map rm;
+    tvo_road *r = &rm.r;
+    tvo_map *m = &rm.m;
     int32_t two = 0, more = 0;
     double err;
-    tvo_vo_config_default(&cfg, &cam);
-    cfg.max_tracks = MAX_TRACKS;
-    cfg.min_tracks = MAX_TRACKS / 2;
-    cfg.map_max_landmarks = 2 * cfg.max_tracks; /* the VO's default (0) as tvo_vo_init resolves it */
-    cfg.map_window = 8; /* the default window of a build with the affine refinement, in every build */
-    cfg.map_ba_fixed = 4;
-    cfg.map_rot_prior_obs = min_obs;
-    assert_true(tvo_vo_required_size(&cfg) > 0);
-    assert_true(tvo_road_open(&r, FRAMES, cfg.max_tracks, N_POINTS, 0.5, 0.0, 0.0, 777u));
-    ls = tvo_map_layout_size(&cfg) + TVO_ARENA_ALIGN;
-    ss = tvo_map_scratch_size(&cfg);
-    mem = malloc(ls);
-    scratch = malloc(ss);
-    assert_non_null(mem);
-    assert_non_null(scratch);
-    tvo_arena_init(&ar, mem, ls);
-    assert_int_equal(tvo_map_init(&m, &cfg, &ar), TVO_OK);
-    for (int k = 0; k < k_turned; ++k) {
-        tvo_map_frame out;
-        assert_int_equal(tvo_road_frame(&r, &m, &cfg, k, scratch, ss, &out), TVO_OK);
-    }
-    assert_int_equal(m.losses, 0);
+    road_config(&rm.cfg);
+    rm.cfg.map_max_landmarks = 2 * rm.cfg.max_tracks; /* the VO's default (0) as tvo_vo_init resolves it */
+    rm.cfg.map_window = 8; /* the default window of a build with the affine refinement, in every build */
+    rm.cfg.map_ba_fixed = 4;
+    rm.cfg.map_rot_prior_obs = min_obs;
+    road_map_open(&rm, 0.5, 0.0, 777u);
+    for (int k = 0; k < k_turned; ++k)
+        (void)road_map_frame(&rm, k);
+    assert_int_equal(m->losses, 0);
     {
         /* X <- C + R (X - C): C the last camera's centre, R a turn of 1 deg about its y axis */
         const tvo_pose Tl = tvo_road_camera(k_turned - 1), Twl = tvo_pose_inverse(&Tl);
         const double v[3] = {0.0, 3.14159265358979323846 / 180.0, 0.0};
         double R[9];
         tvo_rotvec_to_rot(v, R);
-        for (int32_t i = 0; i < r.n; ++i) {
+        for (int32_t i = 0; i < r->n; ++i) {
             tvo_map_lm *L;
             double d[3], e[3];
-            if (r.lm[i] < 0)
+            if (r->lm[i] < 0)
                 continue;
-            L = &m.lm[r.lm[i]];
+            L = &m->lm[r->lm[i]];
             if (L->n_obs >= 3) {
                 ++more;
                 continue;
@@ -200,12 +215,11 @@ static double weak_prior_error(int32_t min_obs)
     }
     /* the scene has both kinds, and enough checked landmarks to judge the prior */
     assert_true(two >= 10);
-    assert_true(more >= cfg.map_min_points);
-    r.prior_flags = TVO_MAP_PRIOR_WEAK;
+    assert_true(more >= rm.cfg.map_min_points);
+    r->prior_flags = TVO_MAP_PRIOR_WEAK;
     {
-        tvo_map_frame out;
+        const tvo_map_frame out = road_map_frame(&rm, k_turned);
         const tvo_pose T = tvo_road_camera(k_turned);
-        assert_int_equal(tvo_road_frame(&r, &m, &cfg, k_turned, scratch, ss, &out), TVO_OK);
         assert_int_equal(out.state, TVO_MAP_TRACKING);
         err = rot_err_deg(&out.T_c_w, &T);
         if (getenv("TVO_MAP_TEST_VERBOSE"))
@@ -213,9 +227,7 @@ static double weak_prior_error(int32_t min_obs)
                     "  min_obs %d: %d two-keyframe landmarks turned, %d checked: rotation error %.4f deg\n",
                     (int)min_obs, (int)two, (int)more, err);
     }
-    tvo_road_close(&r);
-    free(mem);
-    free(scratch);
+    road_map_close(&rm);
     return err;
 }
 
