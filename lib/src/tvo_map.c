@@ -835,11 +835,11 @@ static double rot_chi2(const double Sig[9], double v, const double d[3])
 }
 
 /* The rotation prior of pc against the landmarks (*T: the pose refined with the prior): the pose refined
- * without it on the landmarks use selects (NULL: all) gives the landmarks' own rotation and its covariance
- * (landmark_rot_cov); when the prior's
- * rotation is further from it than TVO_MAP_ROT_PRIOR_GATE allows under the two covariances (the
- * prior's being rms^2 / w per axis: pnp.h, a weight w counts as one point's error per rad^2), the
- * weight is halved until they agree and the pose refined again with it. 1 when *T, *ni and inl were
+ * without it on the landmarks use selects (NULL: all) gives the landmarks' own rotation and its
+ * covariance (landmark_rot_cov); when the prior's rotation is further from it than
+ * TVO_MAP_ROT_PRIOR_GATE allows under the two covariances (the prior's being rms^2 / w per axis: pnp.h,
+ * a weight w counts as one point's error per rad^2), the weight is halved until they agree and the pose
+ * refined again with it (on all the landmarks). 1 when *T, *ni and inl were
  * replaced (inl: the inliers of the new pose, k entries). *rms_out gets the landmarks-only pose's
  * reprojection RMS when it was computed. */
 static int consistent_prior(const tvo_pnp_config *pc, const double (*X)[3], const tvo_point2d *x, int32_t k,
