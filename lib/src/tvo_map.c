@@ -884,13 +884,15 @@ static int consistent_prior(const tvo_pnp_config *pc, const double (*X)[3], cons
 
 /* The landmarks that judge a weak rotation prior (cfg.map_rot_prior_obs): NULL for all of them, or judge
  * (k flags, for the k landmarks idx names) marking those observed in at least map_rot_prior_obs keyframes
- * when map_min_points of them are tracked. A landmark in two keyframes fits both by construction, whatever
- * its depth along their baseline; a third view has checked the others'. */
+ * when map_min_points of them are tracked (with map_rot_prior_obs_frames, only on a frame after a jerk:
+ * prior_flags). A landmark in two keyframes fits both by construction, whatever its depth along their
+ * baseline; a third view has checked the others'. */
 static const uint8_t *prior_judges(const tvo_map *m, const tvo_vo_config *cfg, const tvo_map_tracks *tr,
-                                   const int32_t *idx, int32_t k, uint8_t *judge)
+                                   int prior_flags, const int32_t *idx, int32_t k, uint8_t *judge)
 {
     int32_t nj = 0;
-    if (cfg->map_rot_prior_obs <= 0)
+    if (cfg->map_rot_prior_obs <= 0 ||
+        (cfg->map_rot_prior_obs_frames > 0 && !(prior_flags & TVO_MAP_PRIOR_JERK)))
         return NULL;
     for (int32_t q = 0; q < k; ++q) {
         judge[q] = (uint8_t)(m->lm[tr->lm[idx[q]]].n_obs >= cfg->map_rot_prior_obs);
@@ -970,7 +972,8 @@ static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr,
         tvo_pose Tc = *T;
         int32_t nc = ni;
         if (consistent_prior(&pc, (const double(*)[3])X, x, k, cfg->map_min_points,
-                             prior_judges(m, cfg, tr, idx, k, judge), inl_free, &Tc, &nc, &m->rms)) {
+                             prior_judges(m, cfg, tr, prior_flags, idx, k, judge), inl_free, &Tc, &nc,
+                             &m->rms)) {
             *T = Tc;
             ni = nc;
             memcpy(inl, inl_free, (size_t)k);

@@ -137,7 +137,8 @@ void tvo_map_reset(tvo_map *m);
 /* What the VO knows of its two-view rotation (the prior_flags of tvo_map_process). */
 enum {
     TVO_MAP_PRIOR_ROT_ONLY = 1, /* a rotation-only estimate (no translation seen) */
-    TVO_MAP_PRIOR_WEAK = 2 /* a poorly conditioned one (rotation-only, a plane's twin, little parallax) */
+    TVO_MAP_PRIOR_WEAK = 2, /* a poorly conditioned one (rotation-only, a plane's twin, little parallax) */
+    TVO_MAP_PRIOR_JERK = 4  /* a prediction rescue within cfg->map_rot_prior_obs_frames frames */
 };
 
 /* One frame after the VO's two-view step. R_cur_prev: the two-view rotation of this frame (NULL when

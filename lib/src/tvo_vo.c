@@ -67,7 +67,8 @@ struct tvo_vo {
     double chain_gain; /* the two-view chain's step length over its base (chain_scale_sigmas) */
     double rs_se;      /* the standard error of log(rel_scale) of this frame (with chain_scale_sigmas) */
     int32_t aff_tried, aff_refined, aff_ended; /* this frame's affine refinements (tvo_vo_result.affine_*) */
-    int32_t cover_ref; /* cells of the coverage grid the tracks covered after the last detection */
+    int32_t cover_ref;  /* cells of the coverage grid the tracks covered after the last detection */
+    int32_t rescue_age; /* frames since the last prediction rescue (0: this frame's; saturates) */
     /* affine refinement (cfg.affine_win_size > 0, else all NULL): each track's template, its model
        and warp, valid where hast[i] */
     uint8_t *tpl;      /* [max_tracks x tvo_aff_template_bytes(affine_win_size)] */
@@ -93,6 +94,9 @@ struct tvo_vo {
 
 /* A translation direction older than this many frames is not used to resolve an ambiguous pose. */
 #define TVO_VO_PRIOR_FRAMES 3
+/* The largest cfg.map_rot_prior_obs_frames, and where the frames since the last prediction rescue stop
+ * counting. */
+#define TVO_VO_MAX_RESCUE_FRAMES 100000
 /* The affine refinement (cfg.affine_win_size): at most this many Gauss-Newton steps, stopping when a
  * step moves no window corner by more than TVO_VO_AFF_EPS px; the result is taken when the patch
  * correlates with the template by at least TVO_VO_AFF_MIN_NCC and lies within TVO_VO_AFF_MAX_MOVE px
@@ -240,6 +244,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->map_ba_rot_prior = 0.0;
     cfg->map_rot_prior = 100.0;
     cfg->map_rot_prior_obs = 0;
+    cfg->map_rot_prior_obs_frames = 0;
     cfg->clock = NULL;
     cfg->clock_user = NULL;
     /* the tracker, window and chain step: the balanced preset's (docs/budget.md, "A ninth rule"), or
@@ -372,6 +377,8 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (cfg->map_rot_prior_obs != 0 &&
         (cfg->map_rot_prior_obs < 2 || cfg->map_rot_prior_obs > TVO_VO_MAX_WINDOW))
+        return 0;
+    if (cfg->map_rot_prior_obs_frames < 0 || cfg->map_rot_prior_obs_frames > TVO_VO_MAX_RESCUE_FRAMES)
         return 0;
     return 1;
 }
@@ -571,6 +578,7 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
     vo->T_c_w = tvo_pose_identity();
     vo->chain_gain = 1.0;
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
+    vo->rescue_age = TVO_VO_MAX_RESCUE_FRAMES;
     for (int i = 0; i < 4; ++i) {
         tvo_point2d c;
         if (tvo_camera_undistort_point(&cfg->camera, (i & 1) ? cfg->camera.width - 1 : 0,
@@ -608,6 +616,7 @@ void tvo_vo_reset(tvo_vo *vo)
     vo->chain_gain = 1.0;
     vo->next_id = 0;
     vo->has_pred = 0;
+    vo->rescue_age = TVO_VO_MAX_RESCUE_FRAMES;
 }
 
 static int64_t now_ns(const tvo_vo *vo)
@@ -1237,15 +1246,18 @@ static tvo_map_tracks map_tracks(tvo_vo *vo)
  * (per-frame rotation RPE 0.05-0.07 -> 0.08-0.11 deg over five RANSAC seeds). */
 #define TVO_VO_WEAK_PRIOR_PARALLAX_DEG 0.2
 
-/* The map's view of this frame's two-view rotation: rotation-only, and weak (rotation-only, a plane's
- * twin, or little parallax). */
-static int map_prior_flags(const tvo_vo_result *res)
+/* The map's view of this frame's two-view rotation: rotation-only, weak (rotation-only, a plane's
+ * twin, or little parallax), and after a jerk (a prediction rescue within cfg.map_rot_prior_obs_frames
+ * frames). */
+static int map_prior_flags(const tvo_vo *vo, const tvo_vo_result *res)
 {
     const int rot_only = res->state == TVO_VO_ROTATION_ONLY;
     int f = rot_only ? TVO_MAP_PRIOR_ROT_ONLY : 0;
     if (rot_only || (res->relpose_flags & TVO_RELPOSE_FLAG_AMBIGUOUS) ||
         res->parallax_deg < TVO_VO_WEAK_PRIOR_PARALLAX_DEG)
         f |= TVO_MAP_PRIOR_WEAK;
+    if (vo->rescue_age < vo->cfg.map_rot_prior_obs_frames)
+        f |= TVO_MAP_PRIOR_JERK;
     return f;
 }
 
@@ -1269,8 +1281,8 @@ static void map_step(tvo_vo *vo, tvo_vo_result *res, int64_t t_ns, const double 
         tr.refine = affine_refine_keyframe;
         tr.refine_ctx = vo;
     }
-    if (tvo_map_process(&vo->map, &vo->cfg, &tr, t_ns, R_cur_prev, map_prior_flags(res), &prior, vo->scratch,
-                        vo->scratch_size, &mf) != TVO_OK ||
+    if (tvo_map_process(&vo->map, &vo->cfg, &tr, t_ns, R_cur_prev, map_prior_flags(vo, res), &prior,
+                        vo->scratch, vo->scratch_size, &mf) != TVO_OK ||
         !tvo_pose_is_finite(&mf.T_c_w)) {
         mf.T_c_w = prior;
         mf.state = TVO_MAP_LOST;
@@ -1605,6 +1617,7 @@ static void stage_track(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
     tracked = lk_pass(vo, fc, &lkc, vo->ok2);
     if (fc->predicted && vo->cfg.pred_rescue)
         tracked = pred_rescue(vo, fc, &lkc, vo->ok2, tracked, &res->pred_rescue);
+    vo->rescue_age = res->pred_rescue ? 0 : vo->rescue_age + (vo->rescue_age < TVO_VO_MAX_RESCUE_FRAMES);
     if (vo->cfg.gain_retry && vo->n >= vo->cfg.min_pose_tracks && 2 * tracked < vo->n)
         res->gain_retry = gain_retry(vo, fc, tracked);
     if (!vo->cfg.affine_at_keyframes)

@@ -210,6 +210,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cfg.map_rot_prior_obs = ((hdr[6] >> 2) ^ (hdr[5] >> 5)) & 1
             ? 3
             : 0; /* a weak prior judged by checked landmarks */
+    cfg.map_rot_prior_obs_frames = ((hdr[4] >> 5) ^ (hdr[6] >> 3)) & 1 ? 1 + (int32_t)(hdr[5] & 31u)
+                                                                       : 0; /* ...after a jerk */
     while ((need = tvo_vo_required_size(&cfg)) == 0 && cfg.lk.max_level > 0)
         cfg.lk.max_level--;
     TVO_FUZZ_CHECK(need > 0); /* every size from 16x16 up is valid with one level */

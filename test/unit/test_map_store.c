@@ -172,7 +172,7 @@ static double rot_err_deg(const tvo_pose *a, const tvo_pose *b)
  * keyframes whose relative pose was off makes landmarks that fit both and agree with one another on a
  * wrong pose. The next frame's prior is flagged weak. Returns the rotation error of that frame's pose
  * (deg). */
-static double weak_prior_error(int32_t min_obs)
+static double weak_prior_error(int32_t min_obs, int32_t after_jerk, int jerk)
 {
     const int k_turned = 80;
     road_map rm;
@@ -185,6 +185,7 @@ static double weak_prior_error(int32_t min_obs)
     rm.cfg.map_window = 8; /* the default window of a build with the affine refinement, in every build */
     rm.cfg.map_ba_fixed = 4;
     rm.cfg.map_rot_prior_obs = min_obs;
+    rm.cfg.map_rot_prior_obs_frames = after_jerk;
     road_map_open(&rm, 0.5, 0.0, 777u);
     for (int k = 0; k < k_turned; ++k)
         (void)road_map_frame(&rm, k);
@@ -216,7 +217,7 @@ static double weak_prior_error(int32_t min_obs)
     /* the scene has both kinds, and enough checked landmarks to judge the prior */
     assert_true(two >= 10);
     assert_true(more >= rm.cfg.map_min_points);
-    r->prior_flags = TVO_MAP_PRIOR_WEAK;
+    r->prior_flags = TVO_MAP_PRIOR_WEAK | (jerk ? TVO_MAP_PRIOR_JERK : 0);
     {
         const tvo_map_frame out = road_map_frame(&rm, k_turned);
         const tvo_pose T = tvo_road_camera(k_turned);
@@ -224,8 +225,9 @@ static double weak_prior_error(int32_t min_obs)
         err = rot_err_deg(&out.T_c_w, &T);
         if (getenv("TVO_MAP_TEST_VERBOSE"))
             fprintf(stderr,
-                    "  min_obs %d: %d two-keyframe landmarks turned, %d checked: rotation error %.4f deg\n",
-                    (int)min_obs, (int)two, (int)more, err);
+                    "  min_obs %d, after a jerk %d, jerk %d: %d two-keyframe landmarks turned, %d checked: "
+                    "rotation error %.4f deg\n",
+                    (int)min_obs, (int)after_jerk, jerk, (int)two, (int)more, err);
     }
     road_map_close(&rm);
     return err;
@@ -238,8 +240,22 @@ static double weak_prior_error(int32_t min_obs)
 static void test_weak_prior_judged_by_checked_landmarks(void **state)
 {
     (void)state;
-    assert_true(weak_prior_error(0) > 0.5);
-    assert_true(weak_prior_error(3) < 0.3);
+    assert_true(weak_prior_error(0, 0, 0) > 0.5);
+    assert_true(weak_prior_error(3, 0, 0) < 0.3);
+}
+
+/* With cfg.map_rot_prior_obs_frames the checked landmarks judge only a frame flagged as after a jerk
+ * (TVO_MAP_PRIOR_JERK, which the VO sets within that many frames of a prediction rescue): without the
+ * flag the test is the default's (0.67 deg), with it the checked landmarks' (0.22 deg); without
+ * map_rot_prior_obs the flag changes nothing. */
+static void test_checked_landmarks_only_after_a_jerk(void **state)
+{
+    const double all = weak_prior_error(0, 0, 0), checked = weak_prior_error(3, 0, 0);
+    (void)state;
+    assert_true(weak_prior_error(3, 30, 0) == all);
+    assert_true(weak_prior_error(3, 30, 1) == checked);
+    assert_true(weak_prior_error(0, 30, 1) == all);
+    assert_true(all > 0.5 && checked < 0.3);
 }
 
 int main(void)
@@ -249,6 +265,7 @@ int main(void)
             cmocka_unit_test(test_store_with_sliding_tracks),
             cmocka_unit_test(test_store_full_counted),
             cmocka_unit_test(test_weak_prior_judged_by_checked_landmarks),
+            cmocka_unit_test(test_checked_landmarks_only_after_a_jerk),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

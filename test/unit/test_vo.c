@@ -1301,6 +1301,18 @@ static void test_bad_input(void **state)
             bad = f->cfg;
             bad.map_rot_prior_obs = 3;
             assert_true(tvo_vo_required_size(&bad) == tvo_vo_required_size(&f->cfg));
+            /* ...only after a jerk: 0 (every weak frame) or [1, 100000] frames */
+            assert_int_equal(f->cfg.map_rot_prior_obs_frames, 0);
+            for (int i = 0; i < 3; ++i) {
+                const int32_t o[3] = {-1, 100001, INT32_MIN};
+                bad = f->cfg;
+                bad.map_rot_prior_obs_frames = o[i];
+                assert_refused(&bad, f->mem);
+            }
+            bad = f->cfg;
+            bad.map_rot_prior_obs = 3;
+            bad.map_rot_prior_obs_frames = 100000;
+            assert_true(tvo_vo_required_size(&bad) == tvo_vo_required_size(&f->cfg));
             /* the rescue: 0 or 1 */
             assert_int_equal(f->cfg.map_refind_rescue, 0);
             for (int i = 0; i < 3; ++i) {

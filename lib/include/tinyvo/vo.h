@@ -305,7 +305,13 @@ typedef struct tvo_vo_config {
                                    tracked (else all). 3 keeps a fast-turning camera's frames off
                                    landmarks of two keyframes whose depths the turn got wrong
                                    (docs/camera.md; docs/budget.md, "A forty-fourth rule") */
-    tvo_clock_fn clock;           /* optional (NULL: no timings) */
+    int32_t map_rot_prior_obs_frames; /* with map_rot_prior_obs: 0 that test on every weak frame (default);
+                                   N in [1, 100000] only on the frames within N frames of a prediction
+                                   rescue (pred_rescue fired in this frame or one of the N - 1 before:
+                                   the camera's speed jumped), all the landmarks on the others. Without
+                                   pred_rescue (or map_prediction) no frame has one: the test uses all
+                                   the landmarks (docs/budget.md, "A forty-fifth rule") */
+    tvo_clock_fn clock;               /* optional (NULL: no timings) */
     void *clock_user;
 } tvo_vo_config;
 
