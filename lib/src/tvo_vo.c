@@ -243,8 +243,10 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->map_ba_huber_px = 2.5;
     cfg->map_ba_rot_prior = 0.0;
     cfg->map_rot_prior = 100.0;
-    cfg->map_rot_prior_obs = 0;
-    cfg->map_rot_prior_obs_frames = 0;
+    /* a weak prior judged by the landmarks in 3+ keyframes within 30 frames of a prediction rescue (a
+       jerk), by all of them elsewhere (docs/budget.md, "A forty-sixth rule") */
+    cfg->map_rot_prior_obs = 3;
+    cfg->map_rot_prior_obs_frames = 30;
     cfg->clock = NULL;
     cfg->clock_user = NULL;
     /* the tracker, window and chain step: the balanced preset's (docs/budget.md, "A ninth rule"), or

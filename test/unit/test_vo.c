@@ -1291,7 +1291,7 @@ static void test_bad_input(void **state)
                 assert_refused(&bad, f->mem);
             }
             /* the landmarks that judge a weak rotation prior: 0 (all) or [2, TVO_VO_MAX_WINDOW] */
-            assert_int_equal(f->cfg.map_rot_prior_obs, 0);
+            assert_int_equal(f->cfg.map_rot_prior_obs, 3);
             for (int i = 0; i < 4; ++i) {
                 const int32_t o[4] = {-1, 1, TVO_VO_MAX_WINDOW + 1, INT32_MAX};
                 bad = f->cfg;
@@ -1302,7 +1302,7 @@ static void test_bad_input(void **state)
             bad.map_rot_prior_obs = 3;
             assert_true(tvo_vo_required_size(&bad) == tvo_vo_required_size(&f->cfg));
             /* ...only after a jerk: 0 (every weak frame) or [1, 100000] frames */
-            assert_int_equal(f->cfg.map_rot_prior_obs_frames, 0);
+            assert_int_equal(f->cfg.map_rot_prior_obs_frames, 30);
             for (int i = 0; i < 3; ++i) {
                 const int32_t o[3] = {-1, 100001, INT32_MIN};
                 bad = f->cfg;

@@ -300,17 +300,19 @@ typedef struct tvo_vo_config {
                                    landmarks alone give a rotation that disagrees with the prior beyond
                                    the two estimates' noise (a chi-square test at 99 %); docs/design.md */
     int32_t map_rot_prior_obs;    /* the landmarks whose own rotation that test compares with the prior: 0
-                                   all of them (default); N in [2, TVO_VO_MAX_WINDOW] those observed in at
-                                   least N keyframes of the window, when map_min_points of them are
-                                   tracked (else all). 3 keeps a fast-turning camera's frames off
-                                   landmarks of two keyframes whose depths the turn got wrong
-                                   (docs/camera.md; docs/budget.md, "A forty-fourth rule") */
-    int32_t map_rot_prior_obs_frames; /* with map_rot_prior_obs: 0 that test on every weak frame (default);
-                                   N in [1, 100000] only on the frames within N frames of a prediction
-                                   rescue (pred_rescue fired in this frame or one of the N - 1 before:
-                                   the camera's speed jumped), all the landmarks on the others. Without
-                                   pred_rescue (or map_prediction) no frame has one: the test uses all
-                                   the landmarks (docs/budget.md, "A forty-fifth rule") */
+                                   all of them; N in [2, TVO_VO_MAX_WINDOW] those observed in at least N
+                                   keyframes of the window, when map_min_points of them are tracked (else
+                                   all), on the frames map_rot_prior_obs_frames selects; default 3: keeps
+                                   a jerking camera's frames off landmarks of two keyframes whose depths
+                                   the jerk got wrong (docs/camera.md; docs/budget.md, "A forty-fourth
+                                   rule", "A forty-sixth rule") */
+    int32_t map_rot_prior_obs_frames; /* the frames on which map_rot_prior_obs judges: 0 every weak frame;
+                                   N in [1, 100000] those within N frames of a prediction rescue
+                                   (pred_rescue fired in this frame or one of the N - 1 before: the
+                                   camera's speed jumped), all the landmarks judging the others; default
+                                   30. Without pred_rescue (or map_prediction: the basic, accurate and
+                                   small presets) no frame has a rescue, so the test uses all the
+                                   landmarks (docs/budget.md, "A forty-sixth rule") */
     tvo_clock_fn clock;               /* optional (NULL: no timings) */
     void *clock_user;
 } tvo_vo_config;
@@ -327,7 +329,10 @@ TVO_API void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
  *                          affine warp (affine_win_size 21), the tracks the local map predicts tracked on
  *                          2 pyramid levels with 11x11 windows before that (map_prediction 2,
  *                          lk.pred_levels 2, lk.pred_win_size 11; a frame that loses more than half of
- *                          them tracks those again the full way, pred_rescue), a window of 8 keyframes
+ *                          them tracks those again the full way, pred_rescue, and for 30 frames the map
+ *                          judges a weak rotation prior by its landmarks in 3 or more keyframes:
+ *                          map_rot_prior_obs 3, map_rot_prior_obs_frames 30, every preset's values, which
+ *                          act only with pred_rescue), a window of 8 keyframes
  *                          with 4 fixed (map_window 8, map_ba_fixed 4), the chain's steps following the
  *                          relative scale before the map (chain_scale_sigmas 3), and the landmarks of
  *                          64 ended tracks found again while the map runs short of points (map_refind
