@@ -1532,6 +1532,75 @@ static void run_shake(int32_t rescue, double deg, double *kept, int *rescued, in
     free(f.mem);
 }
 
+/* The shake scene of run_shake with the rescue on and the weak prior's judges set: the world poses of
+ * its frames into T (frames entries) and the frame of the first rescue into *first (-1: none). */
+static void shake_poses(double deg, int32_t prior_obs, int32_t prior_obs_frames, tvo_pose *T, int frames,
+                        int *first)
+{
+    fixture f;
+    tvo_camera cam = test_camera();
+    tvo_vo_config_default(&f.cfg, &cam);
+    f.cfg.map_prediction = 2;
+    f.cfg.lk.pred_levels = 2;
+    f.cfg.lk.pred_win_size = 11;
+    f.cfg.pred_rescue = 1;
+    f.cfg.map_rot_prior_obs = prior_obs;
+    f.cfg.map_rot_prior_obs_frames = prior_obs_frames;
+    open_vo(&f);
+    *first = -1;
+    for (int k = 0; k < frames; ++k) {
+        const double dir[3] = {0.2, 0.0, 1.0};
+        tvo_vo_result res;
+        tvo_image img = tvo_image_make(W, H, W, f.img);
+        tvo_pose P = motion(k, dir, 0.02, 0.2);
+        if (k == 24) {
+            const double v[3] = {0.0, deg * M_PI / 180.0, 0.0};
+            tvo_pose turn = tvo_pose_identity();
+            tvo_rotvec_to_rot(v, turn.R);
+            P = tvo_pose_compose(&P, &turn);
+        }
+        render(&P, f.img);
+        assert_int_equal(tvo_vo_process(f.vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
+        T[k] = res.T_w_c;
+        if (res.pred_rescue && *first < 0)
+            *first = k;
+    }
+    free(f.mem);
+}
+
+static int same_poses(const tvo_pose *a, const tvo_pose *b, int n)
+{
+    return memcmp(a, b, (size_t)n * sizeof(*a)) == 0;
+}
+
+/* cfg.map_rot_prior_obs_frames: the weak prior's test is judged by the checked landmarks only within that
+ * many frames of a prediction rescue. In the shake scene the first rescue comes at the shake (frame 24):
+ * before it the poses are those of the test judged by all the landmarks (map_rot_prior_obs 0), to the
+ * bit; the 15 frames after it lie within 30 frames of it, where the poses are those of the checked
+ * landmarks judging every weak frame (map_rot_prior_obs_frames 0), to the bit, and not all the
+ * landmarks' (a weak frame after the shake is decided otherwise). */
+static void test_prior_obs_after_a_rescue(void **state)
+{
+    enum { N = 40 };
+    tvo_pose all[N], gated[N], every[N];
+    int first_all, first_gated, first_every;
+    (void)state;
+    shake_poses(4.0, 0, 0, all, N, &first_all);
+    shake_poses(4.0, 3, 30, gated, N, &first_gated);
+    shake_poses(4.0, 3, 0, every, N, &first_every);
+    fprintf(stderr,
+            "first rescue at frame %d / %d / %d (all landmarks / after a rescue / every frame); the poses "
+            "after a rescue: %s all the landmarks' before it, %s every frame's, %s all the landmarks' over "
+            "the run\n",
+            first_all, first_gated, first_every, same_poses(all, gated, first_all) ? "the same as" : "not",
+            same_poses(gated, every, N) ? "the same as" : "not",
+            same_poses(all, gated, N) ? "the same as" : "not");
+    assert_true(first_all == 24 && first_gated == 24 && first_every == 24);
+    assert_true(same_poses(all, gated, first_all));
+    assert_true(same_poses(gated, every, N));
+    assert_false(same_poses(all, gated, N));
+}
+
 /* cfg.pred_rescue: after a shake the map's prediction misses, the short way loses most predicted tracks,
  * and the rescue tracks them again the default way: the map keeps tracking. Without it the frame keeps
  * fewer than half of its tracks and the map is lost. Smooth frames never call for it. */
@@ -1577,6 +1646,7 @@ int main(void)
       cmocka_unit_test(test_redetect_coverage),
       cmocka_unit_test(test_gain_retry),
       cmocka_unit_test(test_pred_rescue),
+      cmocka_unit_test(test_prior_obs_after_a_rescue),
       cmocka_unit_test(test_affine_refinement),
 #if TVO_WITH_AFFINE
       cmocka_unit_test(test_map_refind),
