@@ -16,13 +16,13 @@ REPLAY = pathlib.Path(os.environ.get("TVO_BUILD_DIR", ROOT / "build" / "release"
 DATA = pathlib.Path(os.environ.get("TVO_DATA_DIR", ROOT.parent / "shared" / "data"))
 
 # sequence: (max ATE Sim(3) m, max per-frame rotation RPE deg, frames, max frames before the map starts).
-# Measured with the default seed, and over 5 RANSAC seeds (tools/seed-runs.sh, docs/budget.md). KITTI 01's
+# Measured with the default seed, and over RANSAC seeds 75-89 (tools/seed-runs.sh, docs/budget.md). KITTI 01's
 # map waits for 100 landmarks (the default 300 tracks / 3) and starts at frame 33; with 40 it started at
 # frames 18-23 on a weaker pair and its ATE ranged from 0.38 to 0.80 m with the seed.
 CASES = {
-    "kitti07_160": (0.55, 0.045, 160, 15),  # measured 0.426 m, 0.036 deg (seeds: 0.426-0.447 m); map at frame 6
-    "kitti06_51": (0.07, 0.070, 51, 10),    # measured 0.046 m, 0.061 deg (seeds: 0.046-0.047 m); map at frame 1
-    "kitti01_51": (0.20, 0.055, 51, 40),    # measured 0.118 m, 0.044 deg (seeds: 0.111-0.119 m, 0.043-0.044 deg)
+    "kitti07_160": (0.55, 0.045, 160, 15),  # measured 0.423 m, 0.034 deg (15 seeds: 0.336-0.436 m); map at frame 6
+    "kitti06_51": (0.07, 0.070, 51, 10),    # measured 0.034 m, 0.058 deg (15 seeds: 0.031-0.034 m); map at frame 1
+    "kitti01_51": (0.20, 0.055, 51, 40),    # measured 0.112 m, 0.043 deg (15 seeds: 0.104-0.136 m, 0.042-0.044 deg)
 }
 
 
