@@ -1648,7 +1648,8 @@ static void stage_undistort(tvo_vo *vo, frame_ctx *fc)
  * is drawn again this many times with other seeds of RANSAC's generator before the fallbacks. */
 #define TVO_VO_POSE_REDRAWS 2
 
-/* 1 when rp (status st) is an epipolar estimate that cannot be trusted and has no twin. */
+/* 1 when rp (status st) is an epipolar estimate that cannot be trusted and has no twin (a homography's
+ * result is never rotation-only). */
 static int untrusted(tvo_status st, const tvo_relpose *rp)
 {
     return st == TVO_OK && (rp->flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE) &&
@@ -1672,9 +1673,7 @@ static tvo_status estimate_pose(tvo_vo *vo, const tvo_relpose_config *rc, int32_
             break;
         }
     }
-    if (st == TVO_OK && (rp->flags & TVO_RELPOSE_FLAG_HOMOGRAPHY) &&
-        (rp->flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE) && !(rp->flags & TVO_RELPOSE_FLAG_AMBIGUOUS) &&
-        rc->use_homography) {
+    if (untrusted(st, rp) && (rp->flags & TVO_RELPOSE_FLAG_HOMOGRAPHY) && rc->use_homography) {
         /* the homography won the model selection but none of its decompositions held up: the
            epipolar model still may, so ask for it alone before calling the frame lost (not when
            the plane's twins are both fine: the epipolar model alone would return one of them
@@ -1683,8 +1682,7 @@ static tvo_status estimate_pose(tvo_vo *vo, const tvo_relpose_config *rc, int32_
         re.use_homography = 0;
         st = relpose_tracks(vo, &re, m, rp);
     }
-    if (st == TVO_OK && (rp->flags & TVO_RELPOSE_FLAG_LOW_CONFIDENCE) &&
-        !(rp->flags & (TVO_RELPOSE_FLAG_AMBIGUOUS | TVO_RELPOSE_FLAG_ROTATION_ONLY))) {
+    if (untrusted(st, rp)) {
         /* no epipolar pose we can trust (too few cheirality-consistent inliers): the rotation
            usually still is, so ask for the rotation-only model alone rather than lose the frame */
         tvo_relpose rr;
