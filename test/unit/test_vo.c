@@ -1132,6 +1132,17 @@ static void assert_refused(const tvo_vo_config *cfg, void *mem)
     assert_int_equal(tvo_vo_init(&vo, cfg, mem, 10), TVO_ERR_ARG);
 }
 
+/* Each of the values (of type T) in field F of a copy of f's configuration is refused (assert_refused). */
+#define ASSERT_EACH_REFUSED(f, T, F, ...)                            \
+    do {                                                             \
+        const T v_[] = {__VA_ARGS__};                                \
+        for (size_t i_ = 0; i_ < sizeof(v_) / sizeof(v_[0]); ++i_) { \
+            tvo_vo_config b_ = (f)->cfg;                             \
+            b_.F = v_[i_];                                           \
+            assert_refused(&b_, (f)->mem);                           \
+        }                                                            \
+    } while (0)
+
 /* Every field out of its range, on the basic preset (setup_basic: the checks below start from its
  * values). */
 static void test_bad_input(void **state)
@@ -1228,14 +1239,9 @@ static void test_bad_input(void **state)
     }
     /* fixed keyframes of the bundle adjustment: [2, map_window - 1] */
     {
-        const int32_t nf[4] = {1, 0, -1, 6};
         assert_int_equal(f->cfg.map_ba_fixed, 2);
         assert_int_equal(f->cfg.map_window, 6);
-        for (int i = 0; i < 4; ++i) {
-            bad = f->cfg;
-            bad.map_ba_fixed = nf[i];
-            assert_refused(&bad, f->mem);
-        }
+        ASSERT_EACH_REFUSED(f, int32_t, map_ba_fixed, 1, 0, -1, 6);
         bad = f->cfg;
         bad.map_ba_fixed = 5;
         assert_int_equal(tvo_vo_required_size(&bad), tvo_vo_required_size(&f->cfg));
@@ -1262,65 +1268,35 @@ static void test_bad_input(void **state)
         }
         /* the refinement at keyframes only: 0 or 1 */
         {
-            const int32_t v[3] = {-1, 2, 255};
             assert_int_equal(f->cfg.affine_at_keyframes, 0);
-            for (int i = 0; i < 3; ++i) {
-                bad = f->cfg;
-                bad.affine_at_keyframes = v[i];
-                assert_refused(&bad, f->mem);
-            }
+            ASSERT_EACH_REFUSED(f, int32_t, affine_at_keyframes, -1, 2, 255);
         }
         /* the share of failed alignments below which their tracks are ended: [0, 1], 0 (off) by default */
         {
-            const double v[4] = {-0.01, 1.01, NAN, INFINITY};
             assert_true(f->cfg.affine_end_share == 0.0);
-            for (int i = 0; i < 4; ++i) {
-                bad = f->cfg;
-                bad.affine_end_share = v[i];
-                assert_refused(&bad, f->mem);
-            }
+            ASSERT_EACH_REFUSED(f, double, affine_end_share, -0.01, 1.01, NAN, INFINITY);
         }
         /* landmarks found again: [0, 4096], 0 (off) in the basic preset; without the map or the affine
            refinement's templates it does nothing and takes no memory */
         {
-            const int32_t v[3] = {-1, 4097, INT32_MAX};
             assert_int_equal(f->cfg.map_refind, 0);
-            for (int i = 0; i < 3; ++i) {
-                bad = f->cfg;
-                bad.map_refind = v[i];
-                assert_refused(&bad, f->mem);
-            }
-            /* the landmarks that judge a weak rotation prior: 0 (all) or [2, TVO_VO_MAX_WINDOW] */
+            ASSERT_EACH_REFUSED(f, int32_t, map_refind, -1, 4097, INT32_MAX);
+            /* the landmarks that judge a weak rotation prior: 0 (all) or [2, TVO_VO_MAX_WINDOW]; 3 by
+               default, and all of them take no other memory */
             assert_int_equal(f->cfg.map_rot_prior_obs, 3);
-            for (int i = 0; i < 4; ++i) {
-                const int32_t o[4] = {-1, 1, TVO_VO_MAX_WINDOW + 1, INT32_MAX};
-                bad = f->cfg;
-                bad.map_rot_prior_obs = o[i];
-                assert_refused(&bad, f->mem);
-            }
+            ASSERT_EACH_REFUSED(f, int32_t, map_rot_prior_obs, -1, 1, TVO_VO_MAX_WINDOW + 1, INT32_MAX);
             bad = f->cfg;
-            bad.map_rot_prior_obs = 3;
+            bad.map_rot_prior_obs = 0;
             assert_true(tvo_vo_required_size(&bad) == tvo_vo_required_size(&f->cfg));
             /* ...only after a jerk: 0 (every weak frame) or [1, 100000] frames */
             assert_int_equal(f->cfg.map_rot_prior_obs_frames, 30);
-            for (int i = 0; i < 3; ++i) {
-                const int32_t o[3] = {-1, 100001, INT32_MIN};
-                bad = f->cfg;
-                bad.map_rot_prior_obs_frames = o[i];
-                assert_refused(&bad, f->mem);
-            }
+            ASSERT_EACH_REFUSED(f, int32_t, map_rot_prior_obs_frames, -1, 100001, INT32_MIN);
             bad = f->cfg;
-            bad.map_rot_prior_obs = 3;
             bad.map_rot_prior_obs_frames = 100000;
             assert_true(tvo_vo_required_size(&bad) == tvo_vo_required_size(&f->cfg));
             /* the rescue: 0 or 1 */
             assert_int_equal(f->cfg.map_refind_rescue, 0);
-            for (int i = 0; i < 3; ++i) {
-                const int32_t r[3] = {-1, 2, 255};
-                bad = f->cfg;
-                bad.map_refind_rescue = r[i];
-                assert_refused(&bad, f->mem);
-            }
+            ASSERT_EACH_REFUSED(f, int32_t, map_refind_rescue, -1, 2, 255);
             bad = f->cfg;
             bad.affine_win_size = 0;
             bad.map_refind = 64;
@@ -1342,12 +1318,7 @@ static void test_bad_input(void **state)
         }
         /* the refinement's sampling step: [1, 15], and it divides affine_win_size / 2 */
         {
-            const int32_t steps[3] = {0, -2, 16};
-            for (int i = 0; i < 3; ++i) {
-                bad = f->cfg;
-                bad.affine_step = steps[i];
-                assert_refused(&bad, f->mem);
-            }
+            ASSERT_EACH_REFUSED(f, int32_t, affine_step, 0, -2, 16);
         }
 #if TVO_WITH_AFFINE
         bad = f->cfg;
