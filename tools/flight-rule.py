@@ -18,6 +18,7 @@ The candidate passes when, at --seeds (k of them), (a) the geometric mean over t
 ATE over DEFAULT's is at most the threshold, (b) on every flight its median is at most DEFAULT's largest run
 (4 significant digits), and (c) its map losses in total are no more than DEFAULT's. Exit status 0 when it
 passes, 1 when it fails, 2 on bad input."""
+import functools
 import glob
 import itertools
 import json
@@ -33,8 +34,9 @@ def sig4(x):
     return float(f"{x:.4g}")
 
 
+@functools.lru_cache(maxsize=None)
 def read_run(outdir, label, flight, seed):
-    """(ATE m, map losses) of one run, or None when it is missing."""
+    """(ATE m, map losses) of one run, or None when it is missing (each file read once)."""
     base = os.path.join(outdir, f"{label}_{flight}_s{seed}")
     try:
         with open(base + ".eval.json", encoding="utf-8") as f:
