@@ -39,7 +39,7 @@ static inline int16x2_t lk_pair(const int16_t *p)
     memcpy(&v, p, sizeof(v));
     return v;
 }
-/* a and b as the low and high halves of a pair (both in [0, 1 << 14]) */
+/* a and b as the low and high halves of a pair (both in [0, 1 << 14]: weights and bytes) */
 static inline int16x2_t lk_pack(int32_t a, int32_t b)
 {
     return (int16x2_t)((uint32_t)a | ((uint32_t)b << 16));
@@ -262,8 +262,18 @@ static void lk_weights(float a, float b, int32_t w[4])
 static LK_NOINLINE void lk_interp_row8(const uint8_t *s0, const uint8_t *s1, const int32_t wt[4],
                                        int16_t *out, int32_t win)
 {
-    const int32_t w00 = wt[0], w01 = wt[1], w10 = wt[2], w11 = wt[3];
     const int16_t *const end = out + win;
+#if LK_SIMD32
+    /* a column's two bytes as a pair, times the left and the right column's weights */
+    const int16x2_t left = lk_pack(wt[0], wt[2]), right = lk_pack(wt[1], wt[3]);
+    int16x2_t c = lk_pack(*s0++, *s1++);
+    do {
+        const int16x2_t n = lk_pack(*s0++, *s1++);
+        *out++ = (int16_t)((__smlad(n, right, __smuad(c, left)) + LK_I_ROUND) >> LK_I_SHIFT);
+        c = n;
+    } while (out != end);
+#else
+    const int32_t w00 = wt[0], w01 = wt[1], w10 = wt[2], w11 = wt[3];
     int32_t t0 = *s0++, t1 = *s1++;
     do {
         const int32_t u0 = *s0++, u1 = *s1++;
@@ -271,6 +281,7 @@ static LK_NOINLINE void lk_interp_row8(const uint8_t *s0, const uint8_t *s1, con
         t0 = u0;
         t1 = u1;
     } while (out != end);
+#endif
 }
 
 /* win bilinear samples of the derivative rows g0 and g1 (weights wt, descaled to integers) into out. */
