@@ -352,7 +352,7 @@ TVO_API void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
  * TVO_VO_PRESET_SMALL      sized for a QVGA (320x240) camera on a microcontroller: the basic preset with
  *                          120 tracks (min_tracks 80, keyframe_min_tracks 40, detect.max_corners 120), 3
  *                          pyramid levels (lk.max_level 2), a map of 5 keyframes and 160 landmarks. At
- *                          320x240 the VO needs 229,648 bytes on a Cortex-M7 (tools/run-mcu.sh runs it
+ *                          320x240 the VO needs 229,664 bytes on a Cortex-M7 (tools/run-mcu.sh runs it
  *                          there). */
 typedef enum tvo_vo_preset {
     TVO_VO_PRESET_DEFAULT = 0,
