@@ -13,7 +13,8 @@
 #    the VO and the shipped step model in one static block of TVO_MCU_MEM bytes, and requires the two
 #    runs' results (every field of every frame, the digest and the TUM trajectory) to be byte-identical;
 #    prints the memory figures and the guest instructions per frame counted by qemu
-#    (tools/qemu-insn-count.sh: in the tinyvo core's code, and in total), from a 30- and a 10-frame run.
+#    (tools/qemu-insn-count.sh: in the tinyvo core's code, and in total), from a 30- and a 10-frame run,
+#    and the 8 functions that run the most of them (tools/mcu-profile.sh).
 #    Without the data the replay is skipped with a message.
 # Environment: BUILD (default build/mcu), MCU_TESTS (default below), TVO_MCU_MEM (bytes, default 262144),
 # PYTHON (default .venv/bin/python, needs numpy and opencv). Exit 1 on any failure.
@@ -124,4 +125,5 @@ if [ "$t30" -gt 0 ] && [ "$t10" -gt 0 ]; then
 else
   echo "FAIL no instruction counts"; status=1
 fi
+BUILD="$BUILD" "$ROOT/tools/mcu-profile.sh" 8 || status=1
 exit $status
