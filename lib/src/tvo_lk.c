@@ -411,14 +411,14 @@ static void lk_prev_window(const lk_level *lv, int32_t ix, int32_t iy, const int
         const uint8_t *s0 = src + (size_t)(y + 1) * (size_t)sstride + 1;
         const int16_t *gx0 = wk->gx + (size_t)y * (size_t)g, *gy0 = wk->gy + (size_t)y * (size_t)g;
         const size_t o = (size_t)y * (size_t)win;
-        int32_t r[3];
+        int32_t sums[3];
         lk_interp_row8(s0, s0 + sstride, wt, wk->iwin + o, win);
         lk_interp_row16(gx0, gx0 + g, wt, wk->ixwin + o, win);
         lk_interp_row16(gy0, gy0 + g, wt, wk->iywin + o, win);
-        lk_grad_row(wk->ixwin + o, wk->iywin + o, win, r);
-        a11 += r[0];
-        a12 += r[1];
-        a22 += r[2];
+        lk_grad_row(wk->ixwin + o, wk->iywin + o, win, sums);
+        a11 += sums[0];
+        a12 += sums[1];
+        a22 += sums[2];
     }
     A[0] = a11;
     A[1] = a12;
