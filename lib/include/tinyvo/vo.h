@@ -347,7 +347,7 @@ TVO_API void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
  * TVO_VO_PRESET_BASIC      translation-only LK on every track, a window of 6 keyframes with 2 fixed, chain
  *                          steps of one length (affine_win_size 0, map_prediction 0, map_window 6,
  *                          map_ba_fixed 2, chain_scale_sigmas 0): the
- *                          defaults before version 0.x, and of a build without the affine refinement;
+ *                          default before the balanced preset, and of a build without the affine refinement;
  *                          the least memory of the full-size presets.
  * TVO_VO_PRESET_SMALL      sized for a QVGA (320x240) camera on a microcontroller: the basic preset with
  *                          120 tracks (min_tracks 80, keyframe_min_tracks 40, detect.max_corners 120), 3
