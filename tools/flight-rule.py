@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
-"""The whole-flight condition of docs/budget.md ("A forty-sixth rule"), on runs made by tools/flight-runs.sh.
+"""The whole-flight condition of docs/rules.md ("A forty-sixth rule"), on runs made by tools/flight-runs.sh.
 
     tools/flight-rule.py OUTDIR DEFAULT CANDIDATE [--seeds "80 81 82 83 84"]
                          [--null-seeds "75 76 77 78 79 80 81 82 83 84"]

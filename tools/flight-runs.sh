@@ -1,7 +1,7 @@
 #!/bin/bash
 # SPDX-License-Identifier: Apache-2.0
 # Replay a configuration over whole flights at several RANSAC seeds (the whole-flight condition of
-# docs/budget.md, "A forty-sixth rule"; tools/flight-rule.py judges the runs).
+# docs/rules.md, "A forty-sixth rule"; tools/flight-rule.py judges the runs).
 #
 #   tools/flight-runs.sh LABEL OUTDIR REPLAY FLIGHTS [--set NAME=VALUE ...]
 #

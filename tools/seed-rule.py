@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: Apache-2.0
-"""Apply the second accuracy rule of docs/budget.md to runs made by tools/seed-runs.sh.
+"""Apply the second accuracy rule of docs/rules.md to runs made by tools/seed-runs.sh.
 
     tools/seed-rule.py OUTDIR DEFAULT CANDIDATE [CANDIDATE ...] [--markdown]
     tools/seed-rule.py OUTDIR LABEL --null N
@@ -33,7 +33,7 @@ from tinyvo_tools import trajio  # noqa: E402
 
 SEEDS = tuple(int(x) for x in os.environ.get("TVO_SEEDS", "24301 1 2 3 4").split())
 EUROC = ("V1_01_easy_head", "V1_01_easy_keyframes")
-# The calibrated rule's thresholds (docs/budget.md, "The second rule measured against itself"):
+# The calibrated rule's thresholds (docs/rules.md, "The second rule measured against itself"):
 CAL_ALPHA = 0.002
 CAL_GM = {"ate": 1.03, "rot": 1.01}
 

@@ -1,6 +1,6 @@
 #!/bin/bash
 # SPDX-License-Identifier: Apache-2.0
-# Replay a configuration with 5 RANSAC seeds on the accuracy sequences of docs/budget.md (the second rule).
+# Replay a configuration with 5 RANSAC seeds on the accuracy sequences of docs/rules.md (the second rule).
 #
 #   tools/seed-runs.sh LABEL OUTDIR REPLAY RENDERS [--set NAME=VALUE ...]
 #

@@ -1039,7 +1039,7 @@ static int need_keyframe(const tvo_map *m, const tvo_vo_config *cfg, const tvo_p
  * from that frame with the tests of any landmark, and its landmark gets one observation, in kn (the next
  * keyframe adds the second, and the bundle adjustment takes it from then on; PnP uses it at once): in a
  * turn that takes the landmarks out of view faster than the baseline grows, these tracks are the only new
- * points the map can get before it is lost (docs/budget.md, "A thirty-seventh rule"). kn never holds
+ * points the map can get before it is lost (docs/rules.md, "A thirty-seventh rule"). kn never holds
  * max_tracks observations here (each track adds at most one), so only the first keyframe's count is
  * checked; a full store ends the keyframe's landmarks. Returns the landmarks made. */
 static int32_t triangulate_new(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, tvo_map_kf *kn,

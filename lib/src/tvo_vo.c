@@ -170,7 +170,7 @@ static void preset_basic(tvo_vo_config *cfg)
 
 /* TVO_VO_PRESET_ACCURATE's fields: every track re-aligned to its first patch (the affine refinement),
  * 8 keyframes with 4 fixed, the full tracker on every track, the chain's steps following the relative
- * scale (docs/budget.md, "A twenty-third rule": measured on the balanced preset; on the basic tracker it
+ * scale (docs/rules.md, "A twenty-third rule": measured on the balanced preset; on the basic tracker it
  * costs the KITTI 01 highway a quarter of its ATE, so the basic and small presets keep 0), and the
  * landmarks of 64 ended tracks found again while the map runs short of points ("A thirty-second rule"). */
 static void preset_accurate(tvo_vo_config *cfg)
@@ -244,12 +244,12 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->map_ba_rot_prior = 0.0;
     cfg->map_rot_prior = 100.0;
     /* a weak prior judged by the landmarks in 3+ keyframes within 30 frames of a prediction rescue (a
-       jerk), by all of them elsewhere (docs/budget.md, "A forty-sixth rule") */
+       jerk), by all of them elsewhere (docs/rules.md, "A forty-sixth rule") */
     cfg->map_rot_prior_obs = 3;
     cfg->map_rot_prior_obs_frames = 30;
     cfg->clock = NULL;
     cfg->clock_user = NULL;
-    /* the tracker, window and chain step: the balanced preset's (docs/budget.md, "A ninth rule"), or
+    /* the tracker, window and chain step: the balanced preset's (docs/rules.md, "A ninth rule"), or
        the basic preset's in a build without the affine refinement */
     if (TVO_WITH_AFFINE)
         preset_balanced(cfg);
@@ -1564,7 +1564,7 @@ static int32_t gain_retry(tvo_vo *vo, const frame_ctx *fc, int32_t tracked)
 /* cfg.pred_rescue: LK lost more than half of the tracks the map predicted (pred[i] nonzero) - the motion
  * model was wrong, not the tracks - so those lost are tracked again the full way (every level, the
  * full window) from where the shorter way left them (LK's last estimate for a lost track, not its guess:
- * docs/budget.md, "A thirty-ninth rule"). They wait in the keyframe rotation's buffers, free until the
+ * docs/rules.md, "A thirty-ninth rule"). They wait in the keyframe rotation's buffers, free until the
  * pose stage: kx1 holds 2 n points (starts, then where LK starts from), kmask n flags. Returns the tracks
  * kept; *rescued is 1 when the second pass ran. */
 static int32_t pred_rescue(tvo_vo *vo, const frame_ctx *fc, const tvo_lk_config *lkc, const uint8_t *pred,

@@ -2,7 +2,7 @@
 /* Benchmark: the local map's own drift, on exact tracks of a synthetic road.
  *
  * The VO's figures on renders and real frames move by chance with any change (a different RANSAC sample,
- * a different rounding, a different first map: docs/budget.md, "A second rule"), and their error is
+ * a different rounding, a different first map: docs/rules.md, "A second rule"), and their error is
  * mostly the tracks' (docs/evaluation.md, "What the tracks' errors cost the map"). This program takes
  * the front end away: it drives the map module (lib/src/tvo_map.c) alone with the exact projections of
  * a synthetic scene plus uniform noise of a chosen size, the exact two-view rotations, and the true

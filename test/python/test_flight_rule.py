@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""tools/flight-rule.py, the whole-flight condition of docs/budget.md, on synthetic runs: the threshold is
+"""tools/flight-rule.py, the whole-flight condition of docs/rules.md, on synthetic runs: the threshold is
 the 99th percentile of the default's do-nothing splits, and a candidate passes only with (a) a geometric
 mean within it, (b) every median within the default's largest run, (c) no more map losses."""
 import json

@@ -16,7 +16,7 @@ REPLAY = pathlib.Path(os.environ.get("TVO_BUILD_DIR", ROOT / "build" / "release"
 DATA = pathlib.Path(os.environ.get("TVO_DATA_DIR", ROOT.parent / "shared" / "data"))
 
 # sequence: (max ATE Sim(3) m, max per-frame rotation RPE deg, frames, max frames before the map starts).
-# Measured with the default seed, and over RANSAC seeds 75-89 (tools/seed-runs.sh, docs/budget.md). KITTI 01's
+# Measured with the default seed, and over RANSAC seeds 75-89 (tools/seed-runs.sh, docs/rules.md). KITTI 01's
 # map waits for 100 landmarks (the default 300 tracks / 3) and starts at frame 33; with 40 it started at
 # frames 18-23 on a weaker pair and its ATE ranged from 0.38 to 0.80 m with the seed.
 CASES = {
@@ -69,7 +69,7 @@ def test_kitti07_reversed_keeps_map(tmp_path):
     """KITTI 07 driven backwards (bench_degrade.py's reversed copy): backing through the first turn the
     landmarks leave the view faster than the car moves the baseline a keyframe normally needs; near a loss
     (fewer than 2 x map_min_points landmarks) the map makes a keyframe anyway and keeps going. Measured:
-    0.555 m, no loss (with the baseline rule enforced there: one loss, 1.39 m; docs/budget.md, "A
+    0.555 m, no loss (with the baseline rule enforced there: one loss, 1.39 m; docs/rules.md, "A
     twenty-first rule")."""
     seq = _kitti("kitti07_160")
     sys.path.insert(0, str(ROOT / "test" / "bench"))
@@ -87,7 +87,7 @@ def test_kitti01_untrusted_pose_drawn_again(tmp_path):
     """KITTI 01 at RANSAC seed 78: frame 22's relative pose (the highway's far points at 0.28 deg of
     parallax) comes out low-confidence from that seed's draw, and the rotation-only fallback cannot hold a
     car moving forward. The VO draws the pose again with derived seeds and keeps the frame (it was lost:
-    ATE 0.304 m, rotation RPE 0.381 deg; measured with the redraw 0.111 m, 0.043 deg; docs/budget.md, "A
+    ATE 0.304 m, rotation RPE 0.381 deg; measured with the redraw 0.111 m, 0.043 deg; docs/rules.md, "A
     forty-seventh rule")."""
     seq = _kitti("kitti01_51")
     st, e = _replay_eval(seq, tmp_path, "--set", "relpose.seed=78")

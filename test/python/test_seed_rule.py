@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: Apache-2.0
-"""tools/seed-rule.py, the second accuracy rule of docs/budget.md, on synthetic suite results: a candidate
+"""tools/seed-rule.py, the second accuracy rule of docs/rules.md, on synthetic suite results: a candidate
 passes only when its median per sequence is within the default's largest run and the geometric mean of
 the median ratios is at most 1."""
 import json

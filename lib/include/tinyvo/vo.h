@@ -171,7 +171,7 @@ typedef struct tvo_vo_config {
                                    levels and window) from where the shorter way left them, LK's last
                                    estimate for a lost track (result.pred_rescue); frames that lose
                                    fewer are left as they are. Starting from the guesses instead was
-                                   measured and is not kept (docs/budget.md, "A thirty-ninth rule").
+                                   measured and is not kept (docs/rules.md, "A thirty-ninth rule").
                                    0: off; default 1 */
     int32_t affine_win_size;      /* affine track refinement: each track keeps the affine_win_size^2 pixels
                                    around where it was detected (its template), and every frame the
@@ -183,8 +183,8 @@ typedef struct tvo_vo_config {
                                    correlation below 0.8, more than 2 px from LK's position, the window
                                    out of the image) keeps LK's position and takes a new template there.
                                    Odd, [3, 31], or 0: off; default 21 (0 in a build without the
-                                   refinement; its accuracy and cost: docs/budget.md). Memory: (w + 2)^2 + 313 bytes a
-                                   track (w = affine_win_size). A build with TVO_WITH_AFFINE 0
+                                   refinement; its accuracy: docs/rules.md, its cost: docs/budget.md).
+                                   Memory: (w + 2)^2 + 313 bytes a track (w = affine_win_size). A build with TVO_WITH_AFFINE 0
                                    (options.h) leaves the refinement out: tvo_vo_required_size() is 0
                                    and tvo_vo_init() returns TVO_ERR_UNSUPPORTED for any value but 0 */
     int32_t affine_step;          /* the affine refinement aligns every affine_step-th pixel of the window
@@ -215,7 +215,7 @@ typedef struct tvo_vo_config {
                                    on a depth edge slides along it). Not with affine_at_keyframes 1.
                                    [0, 1], 0: off; default 0 in every preset. 0.1 on the renders: 0.855
                                    times the per-frame rotation error, MH_01's ATE twice; for a sharp
-                                   global-shutter camera, not a car's (docs/budget.md, "A twenty-seventh
+                                   global-shutter camera, not a car's (docs/rules.md, "A twenty-seventh
                                    rule") */
     /* local map (vo.h header comment, "The local map"): keyframes in a sliding window, landmarks
        triangulated between them, every frame posed by PnP on the landmarks its tracks carry, and a
@@ -245,7 +245,7 @@ typedef struct tvo_vo_config {
                                    the ATE over the accuracy sequences, 0.81 times on degraded, jerky
                                    and reversed copies), 0 in the basic and small ones, whose tracker
                                    it costs the KITTI 01 highway a quarter of its ATE (docs/design.md,
-                                   "The chain's step length"; docs/budget.md, "A twenty-third rule") */
+                                   "The chain's step length"; docs/rules.md, "A twenty-third rule") */
     double map_tri_parallax_deg;  /* a track is triangulated when its rays are this far apart, (0, 30];
                                    default 0.5 (1 suits a car's camera: docs/camera.md); the first map
                                    falls back to 0.5 when too few of its points reach a higher value */
@@ -265,7 +265,7 @@ typedef struct tvo_vo_config {
     int32_t map_refind_rescue;    /* with map_refind: 1 looks for the stored landmarks only on the frames
                                    whose PnP inliers are fewer than 2 x map_min_points (the map running
                                    short of points: after a jump or a fast turn), a rescue; 0 on every
-                                   frame the map posed (worse on clean frames: docs/budget.md, "A
+                                   frame the map posed (worse on clean frames: docs/rules.md, "A
                                    thirty-first rule"). 0 or 1; default 1 (0 in the basic and small
                                    presets) */
     double map_ba_max_turn_deg;   /* the bundle adjustment's result is not taken (the window keeps its poses
@@ -280,14 +280,14 @@ typedef struct tvo_vo_config {
                                    focal length): an observation whose reprojection error is larger
                                    weighs as its error's square root, not its square. Observations left
                                    above 2.5 px after the adjustment are removed whatever the width.
-                                   (0, 100]; default 2.5 (docs/budget.md, "A tenth rule") */
+                                   (0, 100]; default 2.5 (docs/rules.md, "A tenth rule") */
     double map_ba_rot_prior;      /* the frames' two-view rotations, chained from each keyframe to the next,
                                    as priors on the relative rotation of consecutive keyframes in the
                                    bundle adjustment (ba.h, tvo_ba_rot_prior: a visual gyroscope; the
                                    per-frame two-view rotation is more accurate than the map's): their
                                    weight, as map_rot_prior's (100: as much as 100 reprojection errors
                                    of the same angle), [0, 1e12]; 0: none (no chain breaks it but a frame
-                                   without a two-view rotation); default 0 (docs/budget.md, "An eleventh
+                                   without a two-view rotation); default 0 (docs/rules.md, "An eleventh
                                    rule") */
     double map_rot_prior;         /* weight of this frame's two-view rotation (turning the last pose) as a
                                    prior on its map pose (pnp.h, rot_prior_weight), [0, 1e12]; 0: none;
@@ -304,7 +304,7 @@ typedef struct tvo_vo_config {
                                    keyframes of the window, when map_min_points of them are tracked (else
                                    all), on the frames map_rot_prior_obs_frames selects; default 3: keeps
                                    a jerking camera's frames off landmarks of two keyframes whose depths
-                                   the jerk got wrong (docs/camera.md; docs/budget.md, "A forty-fourth
+                                   the jerk got wrong (docs/camera.md; docs/rules.md, "A forty-fourth
                                    rule", "A forty-sixth rule") */
     int32_t map_rot_prior_obs_frames; /* the frames on which map_rot_prior_obs judges: 0 every weak frame;
                                    N in [1, 100000] those within N frames of a prediction rescue
@@ -312,7 +312,7 @@ typedef struct tvo_vo_config {
                                    camera's speed jumped), all the landmarks judging the others; default
                                    30. Without pred_rescue (or map_prediction: the basic, accurate and
                                    small presets) no frame has a rescue, so the test uses all the
-                                   landmarks (docs/budget.md, "A forty-sixth rule") */
+                                   landmarks (docs/rules.md, "A forty-sixth rule") */
     tvo_clock_fn clock;               /* optional (NULL: no timings) */
     void *clock_user;
 } tvo_vo_config;
@@ -336,7 +336,7 @@ TVO_API void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
  *                          with 4 fixed (map_window 8, map_ba_fixed 4), the chain's steps following the
  *                          relative scale before the map (chain_scale_sigmas 3), and the landmarks of
  *                          64 ended tracks found again while the map runs short of points (map_refind
- *                          64, map_refind_rescue 1). On the sequences of docs/budget.md 0.45 times the
+ *                          64, map_refind_rescue 1). On the sequences of docs/rules.md 0.45 times the
  *                          basic preset's ATE and 0.48 times its rotation error, for 0.55-1.05 times
  *                          its instructions; about 1,000 more bytes a track and 54 KB for the store.
  *                          Needs a build with the affine refinement (TVO_WITH_AFFINE, options.h).
