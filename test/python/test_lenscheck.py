@@ -3,6 +3,7 @@
 none when the calibration is right, refuses a run without translation, and its command line reports bad
 input. On synthetic tracks (no replay): a camera flying a curve through a field of points, the tracks the
 points' exact projections through EuRoC's lens plus 0.1 px of noise, and the trajectory the truth's."""
+import json
 import os
 import pathlib
 import subprocess
@@ -156,10 +157,18 @@ def test_end_to_end_on_a_render(tmp_path):
                                                           cam.distortion_model,
                                                           tuple(np.add(cam.distortion, [0.006, 0, 0, 0])),
                                                           cam.rate_hz, cam.T_BS, cam.comment))
-    out = tmp_path / "r.json"
-    r = _run("--seq", str(seq), "--replay", str(REPLAY), "--keyframes", "25", "--out", str(out))
+    out, fixed = tmp_path / "r.json", tmp_path / "fixed.yaml"
+    r = _run("--seq", str(seq), "--replay", str(REPLAY), "--keyframes", "25", "--out", str(out),
+             "--write-yaml", str(fixed))
     assert r.returncode == 0, r.stderr
     assert "estimated change of k1" in r.stdout
-    import json
     res = json.loads(out.read_text())
     assert res["change"]["k1"]["value"] == pytest.approx(-0.006, abs=1.5e-3), res
+    # the written calibration: the sequence's with the change applied, and the replay reads it
+    new = trajio.read_sensor_yaml(str(fixed))
+    assert new.distortion[0] == pytest.approx(cam.distortion[0] + 0.006 + res["change"]["k1"]["value"], abs=1e-12)
+    assert tuple(new.distortion[1:]) == pytest.approx(tuple(cam.distortion[1:]), abs=1e-12)
+    assert (new.width, new.height, tuple(new.intrinsics)) == (cam.width, cam.height, tuple(cam.intrinsics))
+    p = subprocess.run([str(REPLAY), "--euroc", str(seq), "--calib", str(fixed), "--max-frames", "5",
+                        "--out", str(tmp_path / "t.txt"), "--quiet"], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr

@@ -2,7 +2,8 @@
 """Check a camera's lens calibration on a recorded sequence: the VO's tracks at keyframes, adjusted once
 with the calibration as it is and once with its first radial coefficient free.
 
-    tinyvo-lenscheck --seq DIR --replay BIN [--keyframes N] [--free k1|k1k2] [--out JSON] [-- REPLAY_ARGS]
+    tinyvo-lenscheck --seq DIR --replay BIN [--keyframes N] [--free k1|k1k2] [--out JSON]
+                     [--write-yaml FILE] [-- REPLAY_ARGS]
 
 A monocular VO turns small lens errors into large trajectory errors (docs/camera.md, "How much a lens
 error costs": 0.7 px at the image's side edges made a render's ATE 4-7 times larger). This tool replays the
@@ -20,7 +21,9 @@ does not separate the lens from the motion), frames the VO poses, and the intrin
 refines the distortion only). It is a check, not a calibration: calibrate with a target, then use this to
 see whether a recorded run agrees with the result.
 
---out writes the figures as JSON. Arguments after "--" go to tvo_replay (e.g. --preset basic)."""
+--out writes the figures as JSON, --write-yaml the sensor.yaml with the estimated change applied (replay
+with it, `tvo_replay --calib FILE`, to confirm it). Arguments after "--" go to tvo_replay (e.g. --preset
+basic)."""
 from __future__ import annotations
 
 import json
@@ -391,6 +394,9 @@ def main(argv=None) -> int:
     ap.add_argument("--max-points", type=int, default=1500, help="at most this many tracks (default 1500)")
     ap.add_argument("--free", choices=("k1", "k1k2"), default="k1", help="the coefficients freed (default k1)")
     ap.add_argument("--out", help="write the figures as JSON here")
+    ap.add_argument("--write-yaml", metavar="FILE",
+                    help="write the sequence's sensor.yaml with the estimated change applied here (for "
+                         "tvo_replay --calib FILE; confirm it by replaying)")
     a = ap.parse_args(argv)
     if a.keyframes < 3:
         ap.error("--keyframes must be at least 3")
@@ -430,6 +436,15 @@ def _main(a, extra) -> int:
     if a.out:
         with open(a.out, "w") as f:
             json.dump(r, f, indent=1)
+    if a.write_yaml:
+        d = list(r["distortion"])
+        for i, c in enumerate(r["change"].values()):
+            d[i] += c["value"]
+        cam.distortion_model, cam.distortion = r["model"], tuple(d)
+        try:
+            trajio.write_sensor_yaml(a.write_yaml, cam)
+        except OSError as e:
+            raise cli.Failure(f"cannot write {a.write_yaml}: {e}") from e
     return 0
 
 
