@@ -13,8 +13,9 @@
 # Prints one line to stderr:
 #   insncount: total N range M          (M: instructions in translation blocks starting in OBJECT's .text;
 #                                        calls out of it, e.g. memcpy, count in total only)
-# Counts come from a small TCG plugin (qemu >= 7.2 with plugin support, API version 1) built here with the
-# host gcc. They count guest instructions, not time: no cache or pipeline model.
+# Counts come from a small TCG plugin (tools/qemu-count-plugin.c; qemu >= 7.2 with plugin support, API
+# version 1) built here with the host gcc. They count guest instructions, not time: no cache or pipeline
+# model.
 set -euo pipefail
 TRIPLE="${1:?usage: tools/qemu-insn-count.sh TRIPLE MAPFILE OBJECT -- PROGRAM [ARGS...]}"
 MAP="${2:?map file}"
@@ -41,56 +42,7 @@ else
 fi
 TMP="$(mktemp -d)"
 trap 'rm -rf "$TMP"' EXIT
-cat >"$TMP/insncount.c" <<'EOF'
-/* qemu TCG plugin, API version 1 (qemu 7.2): counts executed guest instructions per translation block,
- * in total and for blocks starting in [lo, hi). Only the few API declarations it uses. */
-#include <inttypes.h>
-#include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-typedef uint64_t qemu_plugin_id_t;
-typedef struct qemu_info_t qemu_info_t;
-struct qemu_plugin_tb;
-enum qemu_plugin_op { QEMU_PLUGIN_INLINE_ADD_U64 };
-#define EXPORT __attribute__((visibility("default")))
-void qemu_plugin_register_vcpu_tb_trans_cb(qemu_plugin_id_t, void (*)(qemu_plugin_id_t, struct qemu_plugin_tb *));
-void qemu_plugin_register_vcpu_tb_exec_inline(struct qemu_plugin_tb *, enum qemu_plugin_op, void *, uint64_t);
-size_t qemu_plugin_tb_n_insns(const struct qemu_plugin_tb *);
-uint64_t qemu_plugin_tb_vaddr(const struct qemu_plugin_tb *);
-void qemu_plugin_register_atexit_cb(qemu_plugin_id_t, void (*)(qemu_plugin_id_t, void *), void *);
-EXPORT int qemu_plugin_version = 1;
-static uint64_t total, inside, lo, hi;
-static void trans(qemu_plugin_id_t id, struct qemu_plugin_tb *tb)
-{
-    uint64_t n = qemu_plugin_tb_n_insns(tb), va = qemu_plugin_tb_vaddr(tb);
-    (void)id;
-    qemu_plugin_register_vcpu_tb_exec_inline(tb, QEMU_PLUGIN_INLINE_ADD_U64, &total, n);
-    if (va >= lo && va < hi)
-        qemu_plugin_register_vcpu_tb_exec_inline(tb, QEMU_PLUGIN_INLINE_ADD_U64, &inside, n);
-}
-static void done(qemu_plugin_id_t id, void *p)
-{
-    (void)id;
-    (void)p;
-    fprintf(stderr, "insncount: total %" PRIu64 " range %" PRIu64 "\n", total, inside);
-}
-EXPORT int qemu_plugin_install(qemu_plugin_id_t id, const qemu_info_t *info, int argc, char **argv)
-{
-    int i;
-    (void)info;
-    for (i = 0; i < argc; ++i) {
-        if (strncmp(argv[i], "lo=", 3) == 0)
-            lo = strtoull(argv[i] + 3, NULL, 0);
-        if (strncmp(argv[i], "hi=", 3) == 0)
-            hi = strtoull(argv[i] + 3, NULL, 0);
-    }
-    qemu_plugin_register_vcpu_tb_trans_cb(id, trans);
-    qemu_plugin_register_atexit_cb(id, done, NULL);
-    return 0;
-}
-EOF
-gcc -O2 -shared -fPIC -fvisibility=hidden -o "$TMP/libinsncount.so" "$TMP/insncount.c"
+gcc -O2 -shared -fPIC -fvisibility=hidden -o "$TMP/libinsncount.so" "$(dirname "${BASH_SOURCE[0]}")/qemu-count-plugin.c"
 if [ "$TRIPLE" = arm-none-eabi ]; then
   "${QEMU[@]}" -plugin "$TMP/libinsncount.so,lo=$lo,hi=$hi" -kernel "$@"
 else
