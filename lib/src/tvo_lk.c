@@ -476,13 +476,11 @@ static int32_t lk_abs_error(const uint8_t *src, int32_t sstride, const int32_t w
     const int32_t win = wk->win;
     int32_t x, y, s = 0;
     for (y = 0; y < win; ++y) {
-        const uint8_t *j0 = src + (size_t)y * (size_t)sstride, *j1 = j0 + sstride;
+        const uint8_t *j0 = src + (size_t)y * (size_t)sstride;
         const int16_t *iw = wk->iwin + (size_t)y * (size_t)win;
+        lk_interp_row8(j0, j0 + sstride, wt, wk->tv0, win); /* J's samples, as in lk_mismatch() */
         for (x = 0; x < win; ++x) {
-            int32_t jv = (j0[x] * wt[0] + j0[x + 1] * wt[1] + j1[x] * wt[2] + j1[x + 1] * wt[3] +
-                          LK_I_ROUND) >>
-                    LK_I_SHIFT;
-            int32_t d = jv - iw[x];
+            const int32_t d = wk->tv0[x] - iw[x];
             s += d < 0 ? -d : d;
         }
     }
