@@ -72,6 +72,16 @@ def parser(prog: str, doc: Optional[str], quiet: bool = True, **kw) -> argparse.
     return ap
 
 
+def split_passthrough(argv=None) -> tuple:
+    """(the tool's arguments, the arguments after the first "--", passed on to another program) of argv
+    (default: sys.argv[1:])."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if "--" not in argv:
+        return argv, []
+    k = argv.index("--")
+    return argv[:k], argv[k + 1:]
+
+
 def _message(e: BaseException) -> str:
     if isinstance(e, ModuleNotFoundError):
         hint = ""

@@ -35,7 +35,7 @@ import tempfile
 import numpy as np
 
 from . import cli, trajio
-from .synth import distort_equidistant, distort_radtan, undistort_equidistant, undistort_radtan
+from .synth import distort, undistort
 
 PROG = "tinyvo-lenscheck"
 
@@ -52,23 +52,6 @@ def read_tracks(path: str):
         raise cli.Failure(f"{path}: expected 6 columns (t_ns,id,x,y,age,flags), found {raw.shape[1]}")
     t = np.loadtxt(path, delimiter=",", skiprows=1, usecols=0, dtype=np.int64, ndmin=1)
     return t, raw[:, 1].astype(np.int64), raw[:, 2:4].copy()
-
-
-def _distort(cam, x, y, d):
-    if cam.distortion_model == "equidistant":
-        return distort_equidistant(x, y, d)
-    if len(d) >= 4:
-        return distort_radtan(x, y, d)
-    return x, y
-
-
-def _undistort(cam, xd, yd):
-    d = cam.distortion
-    if cam.distortion_model == "equidistant":
-        return undistort_equidistant(xd, yd, d)
-    if len(d) >= 4:
-        return undistort_radtan(xd, yd, d)
-    return xd, yd
 
 
 def _rotations(rv):
@@ -103,7 +86,7 @@ class Problem:
 
     def _pixels(self, Xc, d):
         z = Xc[:, 2]
-        xd, yd = _distort(self.cam, Xc[:, 0] / z, Xc[:, 1] / z, d)
+        xd, yd = distort(self.cam.distortion_model, Xc[:, 0] / z, Xc[:, 1] / z, d)
         fu, fv, cu, cv = self.cam.intrinsics
         return np.stack([fu * xd + cu, fv * yd + cv], axis=1)
 
@@ -244,8 +227,8 @@ def _edge_shift(cam, d_new):
     fu, fv, cu, cv = cam.intrinsics
     W, H = cam.width, cam.height
     px = np.array([[0.0, cv], [W - 1.0, cv], [0.0, 0.0], [W - 1.0, 0.0], [0.0, H - 1.0], [W - 1.0, H - 1.0]])
-    x, y = _undistort(cam, (px[:, 0] - cu) / fu, (px[:, 1] - cv) / fv)
-    xd, yd = _distort(cam, x, y, d_new)
+    x, y = undistort(cam.distortion_model, (px[:, 0] - cu) / fu, (px[:, 1] - cv) / fv, cam.distortion)
+    xd, yd = distort(cam.distortion_model, x, y, d_new)
     moved = np.hypot(fu * xd + cu - px[:, 0], fv * yd + cv - px[:, 1])
     return float(moved[:2].max()), float(moved[2:].max())
 
@@ -286,7 +269,7 @@ def triangulate(cam, T_c_w, obs_k, obs_p, obs_xy, n_points: int):
     """Each track's point from the rays of its first and last observation (midpoint of the closest
     approach); a mask of the tracks whose two rays are at least 0.5 degrees apart and in front of both."""
     fu, fv, cu, cv = cam.intrinsics
-    x, y = _undistort(cam, (obs_xy[:, 0] - cu) / fu, (obs_xy[:, 1] - cv) / fv)
+    x, y = undistort(cam.distortion_model, (obs_xy[:, 0] - cu) / fu, (obs_xy[:, 1] - cv) / fv, cam.distortion)
     rays_c = np.stack([x, y, np.ones_like(x)], axis=1)
     R = np.array([T[:3, :3] for T in T_c_w])
     t = np.array([T[:3, 3] for T in T_c_w])
@@ -381,11 +364,7 @@ def format_report(r) -> str:
 
 
 def main(argv=None) -> int:
-    argv = list(sys.argv[1:] if argv is None else argv)
-    extra = []
-    if "--" in argv:
-        i = argv.index("--")
-        argv, extra = argv[:i], argv[i + 1:]
+    argv, extra = cli.split_passthrough(argv)
     ap = cli.parser(PROG, __doc__)
     ap.add_argument("--seq", required=True, help="EuRoC/ASL sequence folder (mav0/cam0/...)")
     ap.add_argument("--replay", required=True, help="the tvo_replay binary")

@@ -186,11 +186,7 @@ def format_table(rows, tot, scale: str) -> str:
 
 
 def main(argv=None) -> int:
-    argv = list(sys.argv[1:] if argv is None else argv)
-    extra = []
-    if "--" in argv:
-        k = argv.index("--")
-        argv, extra = argv[:k], argv[k + 1:]
+    argv, extra = cli.split_passthrough(argv)
     ap = cli.parser("tinyvo-suite", __doc__)
     ap.add_argument("--replay", required=True, help="the tvo_replay binary")
     ap.add_argument("--seq", action="append", required=True,

@@ -108,14 +108,32 @@ def undistort_equidistant(xd, yd, k, iters: int = 20):
     return xd * s, yd * s
 
 
+def distort(model: str, x, y, d):
+    """Normalised undistorted (x, y) -> distorted with the sensor.yaml distortion model `model` and its
+    coefficients d (radial-tangential with at least 4 coefficients, or equidistant; any other: none)."""
+    if model.startswith("radial") and len(d) >= 4:
+        return distort_radtan(x, y, d)
+    if model == "equidistant":
+        return distort_equidistant(x, y, d)
+    return x, y
+
+
+def undistort(model: str, xd, yd, d):
+    """The inverse of :func:`distort`; ValueError for a model it does not know with coefficients that are
+    not all zero."""
+    if model.startswith("radial") and len(d) >= 4:
+        return undistort_radtan(xd, yd, d)
+    if model == "equidistant":
+        return undistort_equidistant(xd, yd, d)
+    if model in ("none", "") or not any(d):
+        return xd, yd
+    raise ValueError(f"unsupported distortion model {model}")
+
+
 def project_points(cam: CameraInfo, X_c):
     """Camera-frame points (N,3) -> distorted pixel coordinates (N,2) (pixel centres at integers)."""
     X_c = np.asarray(X_c, dtype=np.float64).reshape(-1, 3)
-    x, y = X_c[:, 0] / X_c[:, 2], X_c[:, 1] / X_c[:, 2]
-    if cam.distortion_model.startswith("radial") and len(cam.distortion) >= 4:
-        x, y = distort_radtan(x, y, cam.distortion)
-    elif cam.distortion_model == "equidistant":
-        x, y = distort_equidistant(x, y, cam.distortion)
+    x, y = distort(cam.distortion_model, X_c[:, 0] / X_c[:, 2], X_c[:, 1] / X_c[:, 2], cam.distortion)
     fu, fv, cu, cv = cam.intrinsics
     return np.stack([fu * x + cu, fv * y + cv], axis=1)
 
@@ -131,14 +149,7 @@ class PixelRays:
         fu, fv, cu, cv = cam.intrinsics
         v, u = np.mgrid[0:Hp, 0:Wp].astype(np.float64)
         xd, yd = (u - cu) / fu, (v - cv) / fv
-        if cam.distortion_model.startswith("radial") and len(cam.distortion) >= 4:
-            x, y = undistort_radtan(xd, yd, cam.distortion)
-        elif cam.distortion_model == "equidistant":
-            x, y = undistort_equidistant(xd, yd, cam.distortion)
-        elif cam.distortion_model in ("none", "") or not any(cam.distortion):
-            x, y = xd, yd
-        else:
-            raise ValueError(f"unsupported distortion model {cam.distortion_model}")
+        x, y = undistort(cam.distortion_model, xd, yd, cam.distortion)
         rays = np.stack([x, y, np.ones_like(x)], axis=-1)
         rays /= np.linalg.norm(rays, axis=-1, keepdims=True)
         # pixel angle (rad): sqrt of the solid angle of one pixel from neighbouring rays

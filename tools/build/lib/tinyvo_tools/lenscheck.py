@@ -1,0 +1,431 @@
+# SPDX-License-Identifier: Apache-2.0
+"""Check a camera's lens calibration on a recorded sequence: the VO's tracks at keyframes, adjusted once
+with the calibration as it is and once with its first radial coefficient free.
+
+    tinyvo-lenscheck --seq DIR --replay BIN [--keyframes N] [--free k1|k1k2] [--out JSON]
+                     [--write-yaml FILE] [-- REPLAY_ARGS]
+
+A monocular VO turns small lens errors into large trajectory errors (docs/camera.md, "How much a lens
+error costs": 0.7 px at the image's side edges made a render's ATE 4-7 times larger). This tool replays the
+sequence (EuRoC/ASL folder with mav0/cam0/sensor.yaml) with tvo_replay, takes N frames spread over the
+run (default 40) and the tracks seen in at least 3 of them, and runs a bundle adjustment over those
+frames' poses and the tracks' points (Levenberg-Marquardt, the points eliminated by their Schur complement,
+Huber weights of 1 px, the first frame fixed): first with the calibration of sensor.yaml, then with k1
+(or k1 and k2) free as well. It prints, for both, the reprojection error of the tracks (median and
+90th percentile, in the image's centre and its outer ring), the estimated change of k1 with its standard
+error, and how far that change moves the image's side edges and corners. A change that is several
+standard errors from zero and lowers the outer ring's error says the calibration is off there.
+
+What it needs: a sequence with translation and turns (a camera that only moves forward or only rotates
+does not separate the lens from the motion), frames the VO poses, and the intrinsics near right (it
+refines the distortion only). It is a check, not a calibration: calibrate with a target, then use this to
+see whether a recorded run agrees with the result.
+
+--out writes the figures as JSON, --write-yaml the sensor.yaml with the estimated change applied (replay
+with it, `tvo_replay --calib FILE`, to confirm it). Arguments after "--" go to tvo_replay (e.g. --preset
+basic)."""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+from . import cli, trajio
+from .synth import distort, undistort
+
+PROG = "tinyvo-lenscheck"
+
+
+def read_tracks(path: str):
+    """The --tracks CSV of tvo_replay (t_ns,id,x,y,age,flags) as arrays t (int64), id (int64), xy (N,2)."""
+    try:
+        raw = np.loadtxt(path, delimiter=",", skiprows=1, dtype=np.float64, ndmin=2)
+    except (OSError, ValueError) as e:
+        raise cli.Failure(f"cannot read tracks {path}: {e}") from e
+    if raw.size == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 2))
+    if raw.shape[1] != 6:
+        raise cli.Failure(f"{path}: expected 6 columns (t_ns,id,x,y,age,flags), found {raw.shape[1]}")
+    t = np.loadtxt(path, delimiter=",", skiprows=1, usecols=0, dtype=np.int64, ndmin=1)
+    return t, raw[:, 1].astype(np.int64), raw[:, 2:4].copy()
+
+
+def _rotations(rv):
+    """Rotation matrices (K,3,3) of rotation vectors (K,3) (Rodrigues)."""
+    th = np.linalg.norm(rv, axis=1)
+    k = np.where(th[:, None] > 1e-12, rv / np.maximum(th, 1e-300)[:, None], 0.0)
+    K = np.zeros((len(rv), 3, 3))
+    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
+    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
+    s, c = np.sin(th)[:, None, None], np.cos(th)[:, None, None]
+    return np.eye(3)[None] + s * K + (1.0 - c) * (K @ K)
+
+
+class Problem:
+    """Keyframe poses T_c_w (the first fixed), points in the world and changes of the first distortion
+    coefficients, adjusted by Levenberg-Marquardt on the reprojection errors in pixels (Huber weights of
+    width 1 px), the points eliminated by their Schur complement."""
+
+    def __init__(self, cam, T_c_w, pts, obs_k, obs_p, obs_xy):
+        self.cam = cam
+        self.R = np.array([T[:3, :3] for T in T_c_w])
+        self.t = np.array([T[:3, 3] for T in T_c_w])
+        self.X = np.array(pts, dtype=np.float64)
+        self.obs_k, self.obs_p, self.obs_xy = obs_k, obs_p, obs_xy
+        self.dk = np.zeros(2)
+
+    def distortion(self, dk=None):
+        d = np.array(self.cam.distortion, dtype=np.float64)
+        dk = self.dk if dk is None else dk
+        d[: len(dk)] += dk
+        return d
+
+    def _pixels(self, Xc, d):
+        z = Xc[:, 2]
+        xd, yd = distort(self.cam.distortion_model, Xc[:, 0] / z, Xc[:, 1] / z, d)
+        fu, fv, cu, cv = self.cam.intrinsics
+        return np.stack([fu * xd + cu, fv * yd + cv], axis=1)
+
+    def camera_points(self, R=None, t=None, X=None):
+        R = self.R if R is None else R
+        t = self.t if t is None else t
+        X = self.X if X is None else X
+        k, p = self.obs_k, self.obs_p
+        return np.einsum("nij,nj->ni", R[k], X[p]) + t[k]
+
+    def residuals(self, R=None, t=None, X=None, dk=None):
+        return self._pixels(self.camera_points(R, t, X), self.distortion(dk)) - self.obs_xy
+
+    def normal_equations(self, free: int):
+        """The weighted Gauss-Newton blocks: camera (poses 1..K-1, then the distortion changes) H_cc and
+        g_c, points H_pp and g_p, and their coupling H_cp, per point."""
+        K, P = len(self.R), len(self.X)
+        k, p = self.obs_k, self.obs_p
+        Xc = self.camera_points()
+        d = self.distortion()
+        r = self._pixels(Xc, d) - self.obs_xy
+        w = _huber_weights(r)
+        # d pixel / d camera point (central differences) and / d distortion change
+        Jx = np.zeros((len(k), 2, 3))
+        for j in range(3):
+            h = 1e-6 * np.maximum(np.abs(Xc[:, 2]), 1e-3)
+            Xp, Xm = Xc.copy(), Xc.copy()
+            Xp[:, j] += h
+            Xm[:, j] -= h
+            Jx[:, :, j] = (self._pixels(Xp, d) - self._pixels(Xm, d)) / (2.0 * h[:, None])
+        nc = 6 * (K - 1) + free
+        Jc = np.zeros((len(k), 2, nc))
+        for j in range(free):
+            dp, dm = d.copy(), d.copy()
+            dp[j] += 1e-6
+            dm[j] -= 1e-6
+            Jc[:, :, 6 * (K - 1) + j] = (self._pixels(Xc, dp) - self._pixels(Xc, dm)) / 2e-6
+        # a pose change exp(w) (R X + t) + v moves the camera point by w x Xc + v
+        skew = np.zeros((len(k), 3, 3))
+        skew[:, 0, 1], skew[:, 0, 2], skew[:, 1, 2] = Xc[:, 2], -Xc[:, 1], Xc[:, 0]
+        skew[:, 1, 0], skew[:, 2, 0], skew[:, 2, 1] = -Xc[:, 2], Xc[:, 1], -Xc[:, 0]
+        Jrot = np.einsum("nij,njk->nik", Jx, skew)
+        rows = np.nonzero(k > 0)[0]
+        cols = 6 * (k[rows] - 1)
+        for j in range(3):
+            Jc[rows, :, cols + j] = Jrot[rows, :, j]
+            Jc[rows, :, cols + 3 + j] = Jx[rows, :, j]
+        Jp = np.einsum("nij,njk->nik", Jx, self.R[k])
+        Jcw = Jc * w[:, None, None]
+        Jpw = Jp * w[:, None, None]
+        H_cc = np.einsum("nai,naj->ij", Jcw, Jc)
+        g_c = np.einsum("nai,na->i", Jcw, r)
+        H_pp = np.zeros((P, 3, 3))
+        np.add.at(H_pp, p, np.einsum("nai,naj->nij", Jpw, Jp))
+        g_p = np.zeros((P, 3))
+        np.add.at(g_p, p, np.einsum("nai,na->ni", Jpw, r))
+        H_cp = np.zeros((P, nc, 3))
+        np.add.at(H_cp, p, np.einsum("nai,naj->nij", Jcw, Jp))
+        return H_cc, g_c, H_pp, g_p, H_cp, r, w
+
+    def solve(self, free: int, iters: int = 40):
+        """Levenberg-Marquardt over poses 1..K-1, the points and `free` distortion changes."""
+        K = len(self.R)
+        lam = 1e-3
+        cost = _cost(self.residuals())
+        for _ in range(iters):
+            H_cc, g_c, H_pp, g_p, H_cp, _, _ = self.normal_equations(free)
+            improvement = 0.0
+            while True:
+                A = H_cc + lam * np.diag(np.diag(H_cc) + 1e-9)
+                Hpp = H_pp + lam * (np.einsum("pii->pi", H_pp)[:, :, None] + 1e-9) * np.eye(3)[None]
+                Hpp_inv = np.linalg.inv(Hpp)
+                HcpHinv = np.einsum("pij,pjk->pik", H_cp, Hpp_inv)
+                S = A - np.einsum("pij,pkj->ik", HcpHinv, H_cp)
+                rhs = g_c - np.einsum("pij,pj->i", HcpHinv, g_p)
+                dc = -np.linalg.lstsq(S, rhs, rcond=None)[0]
+                dp = -np.einsum("pij,pj->pi", Hpp_inv, g_p + np.einsum("pji,j->pi", H_cp, dc))
+                R_new, t_new = self.R.copy(), self.t.copy()
+                for kk in range(1, K):
+                    E = _rotations(dc[None, 6 * (kk - 1):6 * (kk - 1) + 3])[0]
+                    R_new[kk] = E @ self.R[kk]
+                    t_new[kk] = E @ self.t[kk] + dc[6 * (kk - 1) + 3:6 * kk]
+                X_new = self.X + dp
+                dk_new = self.dk.copy()
+                dk_new[:free] += dc[6 * (K - 1):]
+                new_cost = _cost(self.residuals(R_new, t_new, X_new, dk_new))
+                if np.isfinite(new_cost) and new_cost < cost:
+                    self.R, self.t, self.X, self.dk = R_new, t_new, X_new, dk_new
+                    improvement = (cost - new_cost) / max(cost, 1e-300)
+                    cost = new_cost
+                    lam = max(lam / 3.0, 1e-9)
+                    break
+                lam *= 4.0
+                if lam > 1e8:
+                    return
+            if improvement < 1e-10:
+                return
+
+    def stderr(self, free: int):
+        """Standard errors of the distortion changes: the camera block of the inverse Gauss-Newton matrix
+        (the points eliminated by their Schur complement) times the weighted residuals' variance."""
+        H_cc, _, H_pp, _, H_cp, r, w = self.normal_equations(free)
+        Hpp_inv = np.linalg.inv(H_pp + 1e-9 * np.eye(3)[None])
+        S = H_cc - np.einsum("pij,pjk,plk->il", H_cp, Hpp_inv, H_cp)
+        dof = max(r.size - S.shape[0] - 3 * len(self.X), 1)
+        sigma2 = float(np.sum(w[:, None] * r * r) / dof)
+        cov = np.linalg.pinv(S) * sigma2
+        return np.sqrt(np.maximum(np.diag(cov)[len(cov) - free:], 0.0))
+
+
+def _cost(r):
+    e = np.linalg.norm(r, axis=1)
+    return float(np.sum(np.where(e <= 1.0, 0.5 * e * e, e - 0.5)))
+
+
+def _huber_weights(r, width: float = 1.0):
+    e = np.linalg.norm(r, axis=1)
+    return np.where(e <= width, 1.0, width / np.maximum(e, 1e-12))
+
+
+def _ring_stats(prob: Problem, cam):
+    e = np.linalg.norm(prob.residuals(), axis=1)
+    fu, fv, cu, cv = cam.intrinsics
+    u, v = prob.obs_xy[:, 0], prob.obs_xy[:, 1]
+    # the outer ring: beyond 70 % of the way from the principal point to the image's border
+    rel = np.maximum(np.abs(u - cu) / max(cu, cam.width - 1 - cu), np.abs(v - cv) / max(cv, cam.height - 1 - cv))
+    out = {}
+    for name, m in (("all", np.ones_like(rel, bool)), ("centre", rel <= 0.7), ("outer", rel > 0.7)):
+        out[name] = {"n": int(m.sum()),
+                     "median_px": float(np.median(e[m])) if m.any() else None,
+                     "p90_px": float(np.percentile(e[m], 90)) if m.any() else None}
+    return out
+
+
+def _edge_shift(cam, d_new):
+    """How far the changed distortion moves the rays that the calibrated model puts at the middle of the
+    side edges and at the corners, in pixels."""
+    fu, fv, cu, cv = cam.intrinsics
+    W, H = cam.width, cam.height
+    px = np.array([[0.0, cv], [W - 1.0, cv], [0.0, 0.0], [W - 1.0, 0.0], [0.0, H - 1.0], [W - 1.0, H - 1.0]])
+    x, y = undistort(cam.distortion_model, (px[:, 0] - cu) / fu, (px[:, 1] - cv) / fv, cam.distortion)
+    xd, yd = distort(cam.distortion_model, x, y, d_new)
+    moved = np.hypot(fu * xd + cu - px[:, 0], fv * yd + cv - px[:, 1])
+    return float(moved[:2].max()), float(moved[2:].max())
+
+
+def _nearest(pose_t, frames, tol_ns: int = 1_000_000):
+    """For each frame time, the index of the nearest pose time and whether it is within tol_ns (the
+    replay writes its trajectory's times in seconds, rounded)."""
+    if len(pose_t) == 0:
+        return np.zeros(len(frames), int), np.zeros(len(frames), bool)
+    i = np.clip(np.searchsorted(pose_t, frames), 1, len(pose_t) - 1) if len(pose_t) > 1 else np.zeros(len(frames), int)
+    if len(pose_t) > 1:
+        left = np.abs(pose_t[i - 1] - frames) <= np.abs(pose_t[i] - frames)
+        i = np.where(left, i - 1, i)
+    return i, np.abs(pose_t[i] - frames) <= tol_ns
+
+
+def select(t, ids, xy, pose_t, n_key: int, min_obs: int, max_points: int):
+    """Keyframe times (n_key frames with a pose, spread evenly) and the observations of the tracks seen in
+    at least min_obs of them: (key times, obs keyframe index, obs track index, obs xy, track ids)."""
+    frames = np.unique(t)
+    posed = frames[_nearest(pose_t, frames)[1]]
+    if len(posed) < 3:
+        raise cli.Failure(f"only {len(posed)} frames with both a pose and tracks: nothing to adjust")
+    keys = posed[np.unique(np.linspace(0, len(posed) - 1, min(n_key, len(posed))).round().astype(int))]
+    sel = np.isin(t, keys)
+    kt, kid, kxy = t[sel], ids[sel], xy[sel]
+    uid, counts = np.unique(kid, return_counts=True)
+    good = uid[counts >= min_obs]
+    if len(good) > max_points:  # the longest-seen tracks first
+        order = np.argsort(-counts[counts >= min_obs], kind="stable")
+        good = np.sort(good[order[:max_points]])
+    keep = np.isin(kid, good)
+    kt, kid, kxy = kt[keep], kid[keep], kxy[keep]
+    return keys, np.searchsorted(keys, kt), np.searchsorted(good, kid), kxy, good
+
+
+def triangulate(cam, T_c_w, obs_k, obs_p, obs_xy, n_points: int):
+    """Each track's point from the rays of its first and last observation (midpoint of the closest
+    approach); a mask of the tracks whose two rays are at least 0.5 degrees apart and in front of both."""
+    fu, fv, cu, cv = cam.intrinsics
+    x, y = undistort(cam.distortion_model, (obs_xy[:, 0] - cu) / fu, (obs_xy[:, 1] - cv) / fv, cam.distortion)
+    rays_c = np.stack([x, y, np.ones_like(x)], axis=1)
+    R = np.array([T[:3, :3] for T in T_c_w])
+    t = np.array([T[:3, 3] for T in T_c_w])
+    centres = -np.einsum("kji,kj->ki", R, t)
+    rays_w = np.einsum("nji,nj->ni", R[obs_k], rays_c)
+    rays_w /= np.linalg.norm(rays_w, axis=1)[:, None]
+    pts = np.zeros((n_points, 3))
+    ok = np.zeros(n_points, bool)
+    first = np.full(n_points, -1)
+    last = np.full(n_points, -1)
+    for i, p in enumerate(obs_p):
+        if first[p] < 0:
+            first[p] = i
+        last[p] = i
+    for p in range(n_points):
+        a, b = first[p], last[p]
+        if a < 0 or a == b:
+            continue
+        c1, c2, d1, d2 = centres[obs_k[a]], centres[obs_k[b]], rays_w[a], rays_w[b]
+        cosang = float(d1 @ d2)
+        if cosang > np.cos(np.radians(0.5)):
+            continue
+        w = c2 - c1
+        A = np.array([[d1 @ d1, -d1 @ d2], [d1 @ d2, -d2 @ d2]])
+        s, u = np.linalg.solve(A, np.array([d1 @ w, d2 @ w]))
+        if s <= 0 or u <= 0:
+            continue
+        pts[p] = 0.5 * (c1 + s * d1 + c2 + u * d2)
+        ok[p] = True
+    return pts, ok
+
+
+def _normalised(cam):
+    """cam, with no distortion written as radial-tangential with zero coefficients (which the check
+    may change)."""
+    if cam.distortion_model == "equidistant":
+        return cam
+    d = tuple(float(v) for v in list(cam.distortion)[:5])
+    return trajio.CameraInfo(cam.width, cam.height, tuple(cam.intrinsics), "radial-tangential",
+                             d + (0.0,) * max(0, 4 - len(d)), cam.rate_hz, cam.T_BS, cam.comment)
+
+
+def check(cam, traj, t, ids, xy, n_key=40, min_obs=3, max_points=1500, free=1):
+    """The two adjustments and their figures, as a dict."""
+    cam = _normalised(cam)
+    pose_t = traj.t_ns
+    keys, obs_k, obs_p, obs_xy, _ = select(t, ids, xy, pose_t, n_key, min_obs, max_points)
+    T_w_c = traj.poses[_nearest(pose_t, keys)[0]]
+    T_c_w = np.array([trajio.inv_pose(T) for T in T_w_c])
+    pts, ok = triangulate(cam, T_c_w, obs_k, obs_p, obs_xy, int(obs_p.max()) + 1 if len(obs_p) else 0)
+    if ok.sum() < 20:
+        raise cli.Failure(f"only {int(ok.sum())} tracks with 0.5 degrees of parallax between keyframes: the "
+                          "sequence needs more translation")
+    keep = ok[obs_p]
+    remap = np.cumsum(ok) - 1
+    obs_k, obs_p, obs_xy, pts = obs_k[keep], remap[obs_p[keep]], obs_xy[keep], pts[ok]
+    prob = Problem(cam, T_c_w, pts, obs_k, obs_p, obs_xy)
+    prob.solve(0)
+    before = _ring_stats(prob, cam)
+    prob.solve(free)
+    after = _ring_stats(prob, cam)
+    dk = prob.dk[:free]
+    se = prob.stderr(free)
+    side, corner = _edge_shift(cam, prob.distortion())
+    names = ["k1", "k2"][:free]
+    return {
+        "keyframes": int(len(keys)), "tracks": int(len(pts)), "observations": int(len(obs_k)),
+        "model": cam.distortion_model, "distortion": [float(v) for v in cam.distortion],
+        "calibrated": before,
+        "freed": after,
+        "change": {n: {"value": float(v), "stderr": float(s)} for n, v, s in zip(names, dk, se)},
+        "shift_px": {"side_edges": side, "corners": corner},
+    }
+
+
+def format_report(r) -> str:
+    def line(name, s):
+        return (f"  {name:<22} median {s['all']['median_px']:.3f} px, p90 {s['all']['p90_px']:.3f}; "
+                f"centre {s['centre']['median_px'] or 0:.3f} / outer ring {s['outer']['median_px'] or 0:.3f} px "
+                f"(median; {s['outer']['n']} observations outside 70 %)")
+    out = [f"{r['keyframes']} keyframes, {r['tracks']} tracks, {r['observations']} observations; "
+           f"{r['model']} distortion {r['distortion']}",
+           "reprojection error after the adjustment:",
+           line("calibration as it is", r["calibrated"]),
+           line("with " + "+".join(r["change"]) + " free", r["freed"])]
+    for n, c in r["change"].items():
+        z = abs(c["value"]) / c["stderr"] if c["stderr"] > 0 else float("inf")
+        out.append(f"estimated change of {n}: {c['value']:+.5f} (standard error {c['stderr']:.5f}, {z:.1f} of them)")
+    out.append(f"the change moves the side edges by {r['shift_px']['side_edges']:.2f} px and the corners by "
+               f"{r['shift_px']['corners']:.2f} px")
+    return "\n".join(out)
+
+
+def main(argv=None) -> int:
+    argv, extra = cli.split_passthrough(argv)
+    ap = cli.parser(PROG, __doc__)
+    ap.add_argument("--seq", required=True, help="EuRoC/ASL sequence folder (mav0/cam0/...)")
+    ap.add_argument("--replay", required=True, help="the tvo_replay binary")
+    ap.add_argument("--keyframes", type=int, default=40, help="frames adjusted, spread over the run (default 40)")
+    ap.add_argument("--min-obs", type=int, default=3, help="a track is used when seen in this many of them (default 3)")
+    ap.add_argument("--max-points", type=int, default=1500, help="at most this many tracks (default 1500)")
+    ap.add_argument("--free", choices=("k1", "k1k2"), default="k1", help="the coefficients freed (default k1)")
+    ap.add_argument("--out", help="write the figures as JSON here")
+    ap.add_argument("--write-yaml", metavar="FILE",
+                    help="write the sequence's sensor.yaml with the estimated change applied here (for "
+                         "tvo_replay --calib FILE; confirm it by replaying)")
+    a = ap.parse_args(argv)
+    if a.keyframes < 3:
+        ap.error("--keyframes must be at least 3")
+    if a.min_obs < 2:
+        ap.error("--min-obs must be at least 2")
+    if a.max_points < 20:
+        ap.error("--max-points must be at least 20")
+    return cli.run(ap.prog, lambda: _main(a, extra))
+
+
+def _main(a, extra) -> int:
+    yaml = trajio.find_cam_yaml(a.seq)
+    if yaml is None:
+        raise cli.Failure(f"{a.seq}: no mav0/cam0/sensor.yaml")
+    try:
+        cam = trajio.read_sensor_yaml(yaml)
+    except (OSError, ValueError) as e:
+        raise cli.Failure(f"{yaml}: {e}") from e
+    if cam.distortion_model != "equidistant":
+        if not cam.distortion_model.startswith("radial") and cam.distortion_model not in ("none", "pinhole"):
+            raise cli.Failure(f"{yaml}: distortion model {cam.distortion_model!r} is not radial-tangential, "
+                              "equidistant or none")
+    if not os.access(a.replay, os.X_OK):
+        raise cli.Failure(f"{a.replay}: not an executable")
+    with tempfile.TemporaryDirectory() as tmp:
+        traj_p, tracks_p = os.path.join(tmp, "traj.txt"), os.path.join(tmp, "tracks.csv")
+        cmd = [a.replay, "--euroc", a.seq, "--scale", "none", "--out", traj_p, "--tracks", tracks_p, "--quiet"] + extra
+        p = subprocess.run(cmd, capture_output=True, text=True)
+        if p.returncode != 0:
+            msg = (p.stderr.strip().splitlines() or ["(no message)"])[-1]
+            raise cli.Failure(f"tvo_replay failed (exit {p.returncode}): {msg}")
+        traj = trajio.read_tum(traj_p)
+        t, ids, xy = read_tracks(tracks_p)
+    r = check(cam, traj, t, ids, xy, a.keyframes, a.min_obs, a.max_points, 2 if a.free == "k1k2" else 1)
+    if not a.quiet:
+        print(format_report(r))
+    if a.out:
+        with open(a.out, "w") as f:
+            json.dump(r, f, indent=1)
+    if a.write_yaml:
+        d = list(r["distortion"])
+        for i, c in enumerate(r["change"].values()):
+            d[i] += c["value"]
+        cam.distortion_model, cam.distortion = r["model"], tuple(d)
+        try:
+            trajio.write_sensor_yaml(a.write_yaml, cam)
+        except OSError as e:
+            raise cli.Failure(f"cannot write {a.write_yaml}: {e}") from e
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
