@@ -278,15 +278,15 @@ def triangulate(cam, T_c_w, obs_k, obs_p, obs_xy, n_points: int):
     rays_w /= np.linalg.norm(rays_w, axis=1)[:, None]
     pts = np.zeros((n_points, 3))
     ok = np.zeros(n_points, bool)
-    first = np.full(n_points, -1)
+    # each track's first and last observation (-1: none)
+    idx = np.arange(len(obs_p))
+    first = np.full(n_points, len(obs_p))
     last = np.full(n_points, -1)
-    for i, p in enumerate(obs_p):
-        if first[p] < 0:
-            first[p] = i
-        last[p] = i
+    np.minimum.at(first, obs_p, idx)
+    np.maximum.at(last, obs_p, idx)
     for p in range(n_points):
         a, b = first[p], last[p]
-        if a < 0 or a == b:
+        if b < 0 or a == b:
             continue
         c1, c2, d1, d2 = centres[obs_k[a]], centres[obs_k[b]], rays_w[a], rays_w[b]
         cosang = float(d1 @ d2)
