@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
-"""tinyvo-lenscheck (tinyvo_tools.lenscheck): the adjustment finds a radial coefficient that is off, finds
-none when the calibration is right, refuses a run without translation, and its command line reports bad
-input. On synthetic tracks (no replay): a camera flying a curve through a field of points, the tracks the
+"""tinyvo-lenscheck (tinyvo_tools.lenscheck): the adjustment finds a radial coefficient or a focal length
+that is off, finds none when the calibration is right, tells when the run's two halves disagree, refuses a
+run without translation, and its command line reports bad input. On synthetic tracks (no replay): a camera flying a curve through a field of points, the tracks the
 points' exact projections through EuRoC's lens plus 0.1 px of noise, and the trajectory the truth's."""
 import json
 import os
@@ -24,9 +24,10 @@ def _rot_y(a):
     return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
 
 
-def _scene(seed=3, frames=60, translate=True, noise=0.1):
+def _scene(seed=3, frames=60, translate=True, noise=0.1, later_lens=None):
     """(camera, trajectory of camera poses T_w_c, tracks t, id, xy) for a camera 0.1 m a frame along a
-    curve, turning 0.6 degrees a frame, among points 3-12 m ahead."""
+    curve, turning 0.6 degrees a frame, among points 3-12 m ahead; later_lens: the camera that makes the
+    second half's tracks (a lens that changed half-way)."""
     rng = np.random.default_rng(seed)
     cam = trajio.CameraInfo()
     W, H = cam.width, cam.height
@@ -40,12 +41,12 @@ def _scene(seed=3, frames=60, translate=True, noise=0.1):
         t_ns.append(1_000_000_000 + 50_000_000 * f)
     traj = trajio.Trajectory(np.array(t_ns), np.array(poses), "camera")
     rows_t, rows_id, rows_xy = [], [], []
-    for T, t in zip(poses, t_ns):
+    for f, (T, t) in enumerate(zip(poses, t_ns)):
         T_c_w = trajio.inv_pose(T)
         Xc = pts @ T_c_w[:3, :3].T + T_c_w[:3, 3]
         front = Xc[:, 2] > 0.5
         uv = np.full((len(pts), 2), -1.0)
-        uv[front] = synth.project_points(cam, Xc[front])
+        uv[front] = synth.project_points(later_lens if later_lens and f >= frames // 2 else cam, Xc[front])
         inside = front & (uv[:, 0] > 2) & (uv[:, 0] < W - 3) & (uv[:, 1] > 2) & (uv[:, 1] < H - 3)
         idx = np.nonzero(inside)[0]
         rows_t.append(np.full(len(idx), t, np.int64))
@@ -54,10 +55,12 @@ def _scene(seed=3, frames=60, translate=True, noise=0.1):
     return cam, traj, np.concatenate(rows_t), np.concatenate(rows_id), np.concatenate(rows_xy)
 
 
-def _with_k1(cam, dk1):
+def _with_k1(cam, dk1, f_scale=1.0):
     d = list(cam.distortion)
     d[0] += dk1
-    return trajio.CameraInfo(cam.width, cam.height, cam.intrinsics, cam.distortion_model, tuple(d))
+    fu, fv, cu, cv = cam.intrinsics
+    return trajio.CameraInfo(cam.width, cam.height, (f_scale * fu, f_scale * fv, cu, cv), cam.distortion_model,
+                             tuple(d))
 
 
 def test_finds_a_radial_coefficient_that_is_off():
@@ -101,6 +104,57 @@ def test_two_coefficients():
     assert r["freed"]["all"]["median_px"] < 0.125
 
 
+def test_focal_length_and_radial_coefficients():
+    """A calibration whose focal length is 1 % long and whose k1 is 0.004 off: both found, the halves agree;
+    with the calibration right, neither moves."""
+    cam, traj, t, ids, xy = _scene()
+    r = lenscheck.check(_with_k1(cam, 0.004, 1.01), traj, t, ids, xy, n_key=20, max_points=600,
+                        free=("f", "k1", "k2"))
+    assert set(r["change"]) == {"f", "k1", "k2"}
+    assert r["change"]["f"]["value"] == pytest.approx(1 / 1.01 - 1, abs=1e-3), r  # back to the true focal
+    assert r["change"]["k1"]["value"] == pytest.approx(-0.004, abs=5e-4), r
+    assert r["freed"]["all"]["median_px"] < 0.125 < r["calibrated"]["all"]["median_px"]
+    assert r["consistent"] and r["halves"]["disagreement_sigmas"] <= lenscheck.AGREE_SIGMAS
+    r = lenscheck.check(cam, traj, t, ids, xy, n_key=20, max_points=600, free=("f", "k1"))
+    assert abs(r["change"]["f"]["value"]) < 4 * r["change"]["f"]["stderr"] + 1e-5, r
+    assert abs(r["change"]["k1"]["value"]) < 4 * r["change"]["k1"]["stderr"] + 1e-5, r
+
+
+def test_halves_that_disagree():
+    """The lens changes half-way (k1 0.006 apart): the whole run's estimate is a compromise, its standard
+    error small, and only the halves show that it fits neither."""
+    cam, traj, t, ids, xy = _scene(later_lens=_with_k1(trajio.CameraInfo(), 0.006))
+    r = lenscheck.check(cam, traj, t, ids, xy, n_key=20, max_points=600)
+    first, second = (h["k1"]["value"] for h in r["halves"]["changes"])
+    assert first == pytest.approx(0.0, abs=6e-4) and second == pytest.approx(0.006, abs=6e-4), r
+    assert not r["consistent"] and r["halves"]["disagreement_sigmas"] > 10, r
+    assert r["halves"]["apart_px"] > r["halves"]["limit_px"], r
+    assert "DISAGREE" in lenscheck.format_report(r)
+    # without the halves (halves=False) nothing is said about them
+    assert "consistent" not in lenscheck.check(cam, traj, t, ids, xy, n_key=20, max_points=600, halves=False)
+
+
+def test_halves_that_differ_by_little_next_to_the_change():
+    """The lens is off by 0.0050 in the first half and 0.0044 in the second: with little noise the estimates are
+    many standard errors apart, but their models lie close next to the change itself, so they agree."""
+    off = _with_k1(trajio.CameraInfo(), 0.005)
+    cam, traj, t, ids, xy = _scene(noise=0.02, later_lens=_with_k1(trajio.CameraInfo(), 0.0006))
+    r = lenscheck.check(off, traj, t, ids, xy, n_key=20, max_points=600)
+    h = r["halves"]
+    assert h["disagreement_sigmas"] > lenscheck.AGREE_SIGMAS, r
+    assert h["apart_px"] < h["limit_px"] and r["consistent"], r
+    assert "they agree" in lenscheck.format_report(r)
+
+
+def test_parse_free():
+    assert lenscheck.parse_free("k1") == ("k1",)
+    assert lenscheck.parse_free("k1k2") == ("k1", "k2")
+    assert lenscheck.parse_free("k2, f,k1") == ("f", "k1", "k2")
+    for bad in ("k3", "", "k1,,k2"):
+        with pytest.raises(ValueError):
+            lenscheck.parse_free(bad)
+
+
 def test_a_camera_that_only_turns_is_refused():
     cam, traj, t, ids, xy = _scene(translate=False)
     with pytest.raises(cli.Failure, match="translation"):
@@ -136,6 +190,10 @@ def test_command_line_errors(tmp_path):
     assert r.returncode == 2 and r.stderr.startswith("tinyvo-lenscheck: error:") and "--seq" in r.stderr
     r = _run("--seq", str(tmp_path), "--replay", "x", "--keyframes", "2")
     assert r.returncode == 2 and "--keyframes" in r.stderr
+    r = _run("--seq", str(tmp_path), "--replay", "x", "--free", "k1,k3")
+    assert r.returncode == 2 and "unknown parameter 'k3'" in r.stderr
+    r = _run("--seq", str(tmp_path), "--replay", "x", "--free", "f")
+    assert r.returncode == 2 and "f needs k1" in r.stderr
     r = _run("--seq", str(tmp_path), "--replay", "x")
     assert r.returncode == 1 and r.stderr.count("\n") == 1 and "sensor.yaml" in r.stderr
     seq = tmp_path / "seq" / "mav0" / "cam0"
@@ -161,8 +219,9 @@ def test_end_to_end_on_a_render(tmp_path):
     r = _run("--seq", str(seq), "--replay", str(REPLAY), "--keyframes", "25", "--out", str(out),
              "--write-yaml", str(fixed))
     assert r.returncode == 0, r.stderr
-    assert "estimated change of k1" in r.stdout
+    assert "estimated change of k1" in r.stdout and "they agree" in r.stdout
     res = json.loads(out.read_text())
+    assert res["consistent"] is True
     assert res["change"]["k1"]["value"] == pytest.approx(-0.006, abs=1.5e-3), res
     # the written calibration: the sequence's with the change applied, and the replay reads it
     new = trajio.read_sensor_yaml(str(fixed))

@@ -1,8 +1,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """Check a camera's lens calibration on a recorded sequence: the VO's tracks at keyframes, adjusted once
-with the calibration as it is and once with its first radial coefficient free.
+with the calibration as it is and once with its focal length and/or first radial coefficients free.
 
-    tinyvo-lenscheck --seq DIR --replay BIN [--keyframes N] [--free k1|k1k2] [--out JSON]
+    tinyvo-lenscheck --seq DIR --replay BIN [--keyframes N] [--free f,k1,k2] [--out JSON]
                      [--write-yaml FILE] [-- REPLAY_ARGS]
 
 A monocular VO turns small lens errors into large trajectory errors (docs/camera.md, "How much a lens
@@ -10,19 +10,25 @@ error costs": 0.7 px at the image's side edges made a render's ATE 4-7 times lar
 sequence (EuRoC/ASL folder with mav0/cam0/sensor.yaml) with tvo_replay, takes N frames spread over the
 run (default 40) and the tracks seen in at least 3 of them, and runs a bundle adjustment over those
 frames' poses and the tracks' points (Levenberg-Marquardt, the points eliminated by their Schur complement,
-Huber weights of 1 px, the first frame fixed): first with the calibration of sensor.yaml, then with k1
-(or k1 and k2) free as well. It prints, for both, the reprojection error of the tracks (median and
-90th percentile, in the image's centre and its outer ring), the estimated change of k1 with its standard
-error, and how far that change moves the image's side edges and corners. A change that is several
-standard errors from zero and lowers the outer ring's error says the calibration is off there.
+Huber weights of 1 px, the first frame fixed): first with the calibration of sensor.yaml, then with the
+parameters of --free free as well: f (the focal length: fu and fv times one factor), k1, k2 (default
+k1). It prints, for both, the reprojection error of the tracks (median and 90th percentile, in the
+image's centre and its outer ring), each estimated change with its standard error, and how far the
+changes move the image's side edges and corners. A change that is several standard errors from zero and
+lowers the outer ring's error says the calibration is off there. The standard errors assume the model: the
+same adjustment on the first and on the second half of the run (half the frames each) checks it. When the
+halves' estimates differ by more than 3 standard errors of their difference and their two models put the
+image's edges further apart than half of what the whole run's change moves them, the estimate is reported
+as not to be applied. f is freed only with k1 (alone, it takes up a radial error).
 
-What it needs: a sequence with translation and turns (a camera that only moves forward or only rotates
-does not separate the lens from the motion), frames the VO poses, and the intrinsics near right (it
-refines the distortion only). It is a check, not a calibration: calibrate with a target, then use this to
-see whether a recorded run agrees with the result.
+What it needs: a sequence with translation and turns (the focal length is seen only through rotation,
+and a camera that only rotates gives no points), frames the VO poses, and the principal point near right.
+It is a check, not a calibration: calibrate with a target, then use this to see whether a recorded run
+agrees with the result; confirm an estimate by replaying with it.
 
---out writes the figures as JSON, --write-yaml the sensor.yaml with the estimated change applied (replay
-with it, `tvo_replay --calib FILE`, to confirm it). Arguments after "--" go to tvo_replay (e.g. --preset
+--out writes the figures as JSON, --write-yaml the sensor.yaml with the estimated changes applied (replay
+with it, `tvo_replay --calib FILE`, to confirm it); when the halves disagree or cannot be adjusted it
+writes nothing and exits with status 1. Arguments after "--" go to tvo_replay (e.g. --preset
 basic)."""
 from __future__ import annotations
 
@@ -65,9 +71,24 @@ def _rotations(rv):
     return np.eye(3)[None] + s * K + (1.0 - c) * (K @ K)
 
 
+# The parameters the check can free, in this order: f, a relative change of the focal length (fu and fv
+# times 1 + f), then changes of the first two distortion coefficients.
+PARAMS = ("f", "k1", "k2")
+
+
+def parse_free(text: str):
+    """The parameters named by --free (a comma-separated list of f, k1, k2; "k1k2" is k1,k2), in PARAMS'
+    order; ValueError for an unknown or empty name."""
+    names = [n.strip() for n in text.replace("k1k2", "k1,k2").split(",")]
+    bad = [n for n in names if n not in PARAMS]
+    if bad or not names:
+        raise ValueError(f"unknown parameter {bad[0]!r}" if bad else "no parameter")
+    return tuple(n for n in PARAMS if n in names)
+
+
 class Problem:
-    """Keyframe poses T_c_w (the first fixed), points in the world and changes of the first distortion
-    coefficients, adjusted by Levenberg-Marquardt on the reprojection errors in pixels (Huber weights of
+    """Keyframe poses T_c_w (the first fixed), points in the world and changes of the camera parameters
+    (PARAMS), adjusted by Levenberg-Marquardt on the reprojection errors in pixels (Huber weights of
     width 1 px), the points eliminated by their Schur complement."""
 
     def __init__(self, cam, T_c_w, pts, obs_k, obs_p, obs_xy):
@@ -76,19 +97,20 @@ class Problem:
         self.t = np.array([T[:3, 3] for T in T_c_w])
         self.X = np.array(pts, dtype=np.float64)
         self.obs_k, self.obs_p, self.obs_xy = obs_k, obs_p, obs_xy
-        self.dk = np.zeros(2)
+        self.dc = np.zeros(len(PARAMS))  # the changes, in PARAMS' order
 
-    def distortion(self, dk=None):
+    def distortion(self, dc=None):
         d = np.array(self.cam.distortion, dtype=np.float64)
-        dk = self.dk if dk is None else dk
-        d[: len(dk)] += dk
+        dc = self.dc if dc is None else dc
+        d[:2] += dc[1:3]
         return d
 
-    def _pixels(self, Xc, d):
+    def _pixels(self, Xc, d, f_change=0.0):
         z = Xc[:, 2]
         xd, yd = distort(self.cam.distortion_model, Xc[:, 0] / z, Xc[:, 1] / z, d)
         fu, fv, cu, cv = self.cam.intrinsics
-        return np.stack([fu * xd + cu, fv * yd + cv], axis=1)
+        s = 1.0 + f_change
+        return np.stack([s * fu * xd + cu, s * fv * yd + cv], axis=1)
 
     def camera_points(self, R=None, t=None, X=None):
         R = self.R if R is None else R
@@ -97,33 +119,36 @@ class Problem:
         k, p = self.obs_k, self.obs_p
         return np.einsum("nij,nj->ni", R[k], X[p]) + t[k]
 
-    def residuals(self, R=None, t=None, X=None, dk=None):
-        return self._pixels(self.camera_points(R, t, X), self.distortion(dk)) - self.obs_xy
+    def residuals(self, R=None, t=None, X=None, dc=None):
+        dc = self.dc if dc is None else dc
+        return self._pixels(self.camera_points(R, t, X), self.distortion(dc), dc[0]) - self.obs_xy
 
-    def normal_equations(self, free: int):
-        """The weighted Gauss-Newton blocks: camera (poses 1..K-1, then the distortion changes) H_cc and
-        g_c, points H_pp and g_p, and their coupling H_cp, per point."""
+    def normal_equations(self, free):
+        """The weighted Gauss-Newton blocks: camera (poses 1..K-1, then the parameters `free`, names of
+        PARAMS) H_cc and g_c, points H_pp and g_p, and their coupling H_cp, per point."""
         K, P = len(self.R), len(self.X)
         k, p = self.obs_k, self.obs_p
         Xc = self.camera_points()
-        d = self.distortion()
-        r = self._pixels(Xc, d) - self.obs_xy
+        d, fc = self.distortion(), self.dc[0]
+        r = self._pixels(Xc, d, fc) - self.obs_xy
         w = _huber_weights(r)
-        # d pixel / d camera point (central differences) and / d distortion change
+        # d pixel / d camera point (central differences) and / d parameter change
         Jx = np.zeros((len(k), 2, 3))
         for j in range(3):
             h = 1e-6 * np.maximum(np.abs(Xc[:, 2]), 1e-3)
             Xp, Xm = Xc.copy(), Xc.copy()
             Xp[:, j] += h
             Xm[:, j] -= h
-            Jx[:, :, j] = (self._pixels(Xp, d) - self._pixels(Xm, d)) / (2.0 * h[:, None])
-        nc = 6 * (K - 1) + free
+            Jx[:, :, j] = (self._pixels(Xp, d, fc) - self._pixels(Xm, d, fc)) / (2.0 * h[:, None])
+        nc = 6 * (K - 1) + len(free)
         Jc = np.zeros((len(k), 2, nc))
-        for j in range(free):
-            dp, dm = d.copy(), d.copy()
-            dp[j] += 1e-6
-            dm[j] -= 1e-6
-            Jc[:, :, 6 * (K - 1) + j] = (self._pixels(Xc, dp) - self._pixels(Xc, dm)) / 2e-6
+        for j, name in enumerate(free):
+            i = PARAMS.index(name)
+            dp, dm = self.dc.copy(), self.dc.copy()
+            dp[i] += 1e-6
+            dm[i] -= 1e-6
+            Jc[:, :, 6 * (K - 1) + j] = (self._pixels(Xc, self.distortion(dp), dp[0]) -
+                                         self._pixels(Xc, self.distortion(dm), dm[0])) / 2e-6
         # a pose change exp(w) (R X + t) + v moves the camera point by w x Xc + v
         skew = np.zeros((len(k), 3, 3))
         skew[:, 0, 1], skew[:, 0, 2], skew[:, 1, 2] = Xc[:, 2], -Xc[:, 1], Xc[:, 0]
@@ -147,9 +172,10 @@ class Problem:
         np.add.at(H_cp, p, np.einsum("nai,naj->nij", Jcw, Jp))
         return H_cc, g_c, H_pp, g_p, H_cp, r, w
 
-    def solve(self, free: int, iters: int = 40):
-        """Levenberg-Marquardt over poses 1..K-1, the points and `free` distortion changes."""
+    def solve(self, free=(), iters: int = 40):
+        """Levenberg-Marquardt over poses 1..K-1, the points and the parameters `free` (names of PARAMS)."""
         K = len(self.R)
+        idx = [PARAMS.index(n) for n in free]
         lam = 1e-3
         cost = _cost(self.residuals())
         for _ in range(iters):
@@ -170,11 +196,11 @@ class Problem:
                     R_new[kk] = E @ self.R[kk]
                     t_new[kk] = E @ self.t[kk] + dc[6 * (kk - 1) + 3:6 * kk]
                 X_new = self.X + dp
-                dk_new = self.dk.copy()
-                dk_new[:free] += dc[6 * (K - 1):]
-                new_cost = _cost(self.residuals(R_new, t_new, X_new, dk_new))
+                dc_new = self.dc.copy()
+                dc_new[idx] += dc[6 * (K - 1):]
+                new_cost = _cost(self.residuals(R_new, t_new, X_new, dc_new))
                 if np.isfinite(new_cost) and new_cost < cost:
-                    self.R, self.t, self.X, self.dk = R_new, t_new, X_new, dk_new
+                    self.R, self.t, self.X, self.dc = R_new, t_new, X_new, dc_new
                     improvement = (cost - new_cost) / max(cost, 1e-300)
                     cost = new_cost
                     lam = max(lam / 3.0, 1e-9)
@@ -185,16 +211,17 @@ class Problem:
             if improvement < 1e-10:
                 return
 
-    def stderr(self, free: int):
-        """Standard errors of the distortion changes: the camera block of the inverse Gauss-Newton matrix
-        (the points eliminated by their Schur complement) times the weighted residuals' variance."""
+    def stderr(self, free):
+        """Standard errors of the changes of the parameters `free`: the camera block of the inverse
+        Gauss-Newton matrix (the points eliminated by their Schur complement) times the weighted residuals'
+        variance."""
         H_cc, _, H_pp, _, H_cp, r, w = self.normal_equations(free)
         Hpp_inv = np.linalg.inv(H_pp + 1e-9 * np.eye(3)[None])
         S = H_cc - np.einsum("pij,pjk,plk->il", H_cp, Hpp_inv, H_cp)
         dof = max(r.size - S.shape[0] - 3 * len(self.X), 1)
         sigma2 = float(np.sum(w[:, None] * r * r) / dof)
         cov = np.linalg.pinv(S) * sigma2
-        return np.sqrt(np.maximum(np.diag(cov)[len(cov) - free:], 0.0))
+        return np.sqrt(np.maximum(np.diag(cov)[len(cov) - len(free):], 0.0))
 
 
 def _cost(r):
@@ -221,15 +248,24 @@ def _ring_stats(prob: Problem, cam):
     return out
 
 
-def _edge_shift(cam, d_new):
-    """How far the changed distortion moves the rays that the calibrated model puts at the middle of the
-    side edges and at the corners, in pixels."""
+def _edge_pixels(cam, d, f_change=0.0):
+    """Where a model (distortion d, focal length times 1 + f_change) puts the rays that the calibrated model
+    puts at the middle of the two side edges and at the four corners: (calibrated pixels, model's pixels),
+    each (6, 2)."""
     fu, fv, cu, cv = cam.intrinsics
     W, H = cam.width, cam.height
     px = np.array([[0.0, cv], [W - 1.0, cv], [0.0, 0.0], [W - 1.0, 0.0], [0.0, H - 1.0], [W - 1.0, H - 1.0]])
     x, y = undistort(cam.distortion_model, (px[:, 0] - cu) / fu, (px[:, 1] - cv) / fv, cam.distortion)
-    xd, yd = distort(cam.distortion_model, x, y, d_new)
-    moved = np.hypot(fu * xd + cu - px[:, 0], fv * yd + cv - px[:, 1])
+    xd, yd = distort(cam.distortion_model, x, y, d)
+    s = 1.0 + f_change
+    return px, np.stack([s * fu * xd + cu, s * fv * yd + cv], axis=1)
+
+
+def _edge_shift(cam, d_new, f_change=0.0):
+    """How far the changed distortion and focal length move the rays that the calibrated model puts at the
+    middle of the side edges and at the corners, in pixels."""
+    px, moved_px = _edge_pixels(cam, d_new, f_change)
+    moved = np.linalg.norm(moved_px - px, axis=1)
     return float(moved[:2].max()), float(moved[2:].max())
 
 
@@ -312,9 +348,16 @@ def _normalised(cam):
                              d + (0.0,) * max(0, 4 - len(d)), cam.rate_hz, cam.T_BS, cam.comment)
 
 
-def check(cam, traj, t, ids, xy, n_key=40, min_obs=3, max_points=1500, free=1):
-    """The two adjustments and their figures, as a dict."""
-    cam = _normalised(cam)
+# The run's halves disagree when some parameter's two values differ by more than AGREE_SIGMAS standard
+# errors of their difference (the difference is significant) and the two halves' models put the image's
+# side edges or corners further apart than AGREE_SHARE of the whole run's change moves them (it matters
+# next to the change itself).
+AGREE_SIGMAS = 3.0
+AGREE_SHARE = 0.5
+
+
+def _problem(cam, traj, t, ids, xy, n_key, min_obs, max_points):
+    """The adjustment's problem over n_key posed frames of the tracks (t, ids, xy): (problem, keyframes)."""
     pose_t = traj.t_ns
     keys, obs_k, obs_p, obs_xy, _ = select(t, ids, xy, pose_t, n_key, min_obs, max_points)
     T_w_c = traj.poses[_nearest(pose_t, keys)[0]]
@@ -326,23 +369,67 @@ def check(cam, traj, t, ids, xy, n_key=40, min_obs=3, max_points=1500, free=1):
     keep = ok[obs_p]
     remap = np.cumsum(ok) - 1
     obs_k, obs_p, obs_xy, pts = obs_k[keep], remap[obs_p[keep]], obs_xy[keep], pts[ok]
-    prob = Problem(cam, T_c_w, pts, obs_k, obs_p, obs_xy)
-    prob.solve(0)
+    return Problem(cam, T_c_w, pts, obs_k, obs_p, obs_xy), len(keys)
+
+
+def _change(prob, free):
+    dc = prob.dc[[PARAMS.index(n) for n in free]]
+    se = prob.stderr(free)
+    return {n: {"value": float(v), "stderr": float(s)} for n, v, s in zip(free, dc, se)}
+
+
+def _halves(cam, traj, t, ids, xy, n_key, min_obs, max_points, free):
+    """The estimate from the first and from the second half of the run's frames (n_key / 2 keyframes
+    each) and how far they disagree: (changes of each half, the largest |difference| / its standard error,
+    or None and the reason when a half could not be adjusted)."""
+    frames = np.unique(t)
+    mid = frames[len(frames) // 2]
+    out, models = [], []
+    for m in (t < mid, t >= mid):
+        try:
+            prob, _ = _problem(cam, traj, t[m], ids[m], xy[m], max(3, n_key // 2), min_obs, max_points)
+        except cli.Failure as e:
+            return out, None, str(e), None
+        prob.solve(free)
+        out.append(_change(prob, free))
+        models.append(_edge_pixels(cam, prob.distortion(), prob.dc[0])[1])
+    z = max(abs(out[0][n]["value"] - out[1][n]["value"]) /
+            max(np.hypot(out[0][n]["stderr"], out[1][n]["stderr"]), 1e-12) for n in free)
+    return out, float(z), None, float(np.linalg.norm(models[0] - models[1], axis=1).max())
+
+
+def check(cam, traj, t, ids, xy, n_key=40, min_obs=3, max_points=1500, free=("k1",), halves=True):
+    """The adjustments and their figures, as a dict: with the calibration as it is and with the parameters
+    `free` (names of PARAMS, or a count of distortion coefficients, 1 or 2) free, over the whole run and,
+    when halves, over each half of it ("consistent": whether the halves agree)."""
+    if isinstance(free, int):
+        free = PARAMS[1:1 + free]
+    free = tuple(n for n in PARAMS if n in free)
+    if not free:
+        raise ValueError("no parameter to free")
+    cam = _normalised(cam)
+    prob, n_keys = _problem(cam, traj, t, ids, xy, n_key, min_obs, max_points)
+    prob.solve()
     before = _ring_stats(prob, cam)
     prob.solve(free)
     after = _ring_stats(prob, cam)
-    dk = prob.dk[:free]
-    se = prob.stderr(free)
-    side, corner = _edge_shift(cam, prob.distortion())
-    names = ["k1", "k2"][:free]
-    return {
-        "keyframes": int(len(keys)), "tracks": int(len(pts)), "observations": int(len(obs_k)),
+    side, corner = _edge_shift(cam, prob.distortion(), prob.dc[0])
+    r = {
+        "keyframes": int(n_keys), "tracks": int(len(prob.X)), "observations": int(len(prob.obs_k)),
         "model": cam.distortion_model, "distortion": [float(v) for v in cam.distortion],
+        "intrinsics": [float(v) for v in cam.intrinsics],
         "calibrated": before,
         "freed": after,
-        "change": {n: {"value": float(v), "stderr": float(s)} for n, v, s in zip(names, dk, se)},
+        "change": _change(prob, free),
         "shift_px": {"side_edges": side, "corners": corner},
     }
+    if halves:
+        h, z, why, apart = _halves(cam, traj, t, ids, xy, n_key, min_obs, max_points, free)
+        limit_px = AGREE_SHARE * max(side, corner)
+        r["halves"] = {"changes": h, "disagreement_sigmas": z, "limit_sigmas": AGREE_SIGMAS, "reason": why,
+                       "apart_px": apart, "limit_px": limit_px}
+        r["consistent"] = z is not None and (z <= AGREE_SIGMAS or apart <= limit_px)
+    return r
 
 
 def format_report(r) -> str:
@@ -357,9 +444,26 @@ def format_report(r) -> str:
            line("with " + "+".join(r["change"]) + " free", r["freed"])]
     for n, c in r["change"].items():
         z = abs(c["value"]) / c["stderr"] if c["stderr"] > 0 else float("inf")
-        out.append(f"estimated change of {n}: {c['value']:+.5f} (standard error {c['stderr']:.5f}, {z:.1f} of them)")
+        if n == "f":
+            fu, fv = r["intrinsics"][:2]
+            out.append(f"estimated change of the focal length: {100 * c['value']:+.3f} % ({c['value'] * fu:+.2f} px "
+                       f"in fu; standard error {100 * c['stderr']:.3f} %, {z:.1f} of them)")
+        else:
+            out.append(f"estimated change of {n}: {c['value']:+.5f} (standard error {c['stderr']:.5f}, "
+                       f"{z:.1f} of them)")
     out.append(f"the change moves the side edges by {r['shift_px']['side_edges']:.2f} px and the corners by "
                f"{r['shift_px']['corners']:.2f} px")
+    if "halves" in r:
+        h = r["halves"]
+        if h["disagreement_sigmas"] is None:
+            out.append(f"the run's halves: not checked ({h['reason']})")
+        else:
+            def vals(c):
+                return ", ".join(f"{n} {v['value']:+.5f}" for n, v in c.items())
+            verdict = "they agree" if r["consistent"] else "they DISAGREE: do not apply this estimate"
+            out.append(f"the run's halves: {vals(h['changes'][0])} / {vals(h['changes'][1])}: "
+                       f"{h['disagreement_sigmas']:.1f} standard errors apart at most (limit {h['limit_sigmas']:g}), "
+                       f"their models {h['apart_px']:.2f} px apart at the edges (limit {h['limit_px']:.2f}): {verdict}")
     return "\n".join(out)
 
 
@@ -371,12 +475,20 @@ def main(argv=None) -> int:
     ap.add_argument("--keyframes", type=int, default=40, help="frames adjusted, spread over the run (default 40)")
     ap.add_argument("--min-obs", type=int, default=3, help="a track is used when seen in this many of them (default 3)")
     ap.add_argument("--max-points", type=int, default=1500, help="at most this many tracks (default 1500)")
-    ap.add_argument("--free", choices=("k1", "k1k2"), default="k1", help="the coefficients freed (default k1)")
+    ap.add_argument("--free", default="k1",
+                    help="the parameters freed, comma-separated: f (the focal length, fu and fv by one "
+                         "factor), k1, k2 (k1k2 is k1,k2; default k1)")
     ap.add_argument("--out", help="write the figures as JSON here")
     ap.add_argument("--write-yaml", metavar="FILE",
                     help="write the sequence's sensor.yaml with the estimated change applied here (for "
                          "tvo_replay --calib FILE; confirm it by replaying)")
     a = ap.parse_args(argv)
+    try:
+        a.free = parse_free(a.free)
+    except ValueError as e:
+        ap.error(f"--free: {e} (give f, k1 and/or k2, comma-separated)")
+    if "f" in a.free and "k1" not in a.free:
+        ap.error("--free: f needs k1 beside it (a focal length freed alone takes up a radial error)")
     if a.keyframes < 3:
         ap.error("--keyframes must be at least 3")
     if a.min_obs < 2:
@@ -409,16 +521,25 @@ def _main(a, extra) -> int:
             raise cli.Failure(f"tvo_replay failed (exit {p.returncode}): {msg}")
         traj = trajio.read_tum(traj_p)
         t, ids, xy = read_tracks(tracks_p)
-    r = check(cam, traj, t, ids, xy, a.keyframes, a.min_obs, a.max_points, 2 if a.free == "k1k2" else 1)
+    r = check(cam, traj, t, ids, xy, a.keyframes, a.min_obs, a.max_points, a.free)
     if not a.quiet:
         print(format_report(r))
     if a.out:
         with open(a.out, "w") as f:
             json.dump(r, f, indent=1)
+    if a.write_yaml and not r.get("consistent", False):
+        h = r["halves"]
+        raise cli.Failure(f"{a.write_yaml} not written: the run's halves "
+                          + (f"disagree ({h['disagreement_sigmas']:.1f} standard errors apart)"
+                             if h["disagreement_sigmas"] is not None else f"could not be checked ({h['reason']})"))
     if a.write_yaml:
         d = list(r["distortion"])
-        for i, c in enumerate(r["change"].values()):
-            d[i] += c["value"]
+        for i, n in enumerate(("k1", "k2")):
+            if n in r["change"]:
+                d[i] += r["change"][n]["value"]
+        s = 1.0 + (r["change"]["f"]["value"] if "f" in r["change"] else 0.0)
+        fu, fv, cu, cv = r["intrinsics"]
+        cam.intrinsics = (s * fu, s * fv, cu, cv)
         cam.distortion_model, cam.distortion = r["model"], tuple(d)
         try:
             trajio.write_sensor_yaml(a.write_yaml, cam)
