@@ -146,6 +146,18 @@ def test_halves_that_differ_by_little_next_to_the_change():
     assert "they agree" in lenscheck.format_report(r)
 
 
+def test_halves_that_cannot_be_adjusted():
+    """Poses for the first half of the run only: the whole run is adjusted on its posed frames, the second
+    half has none, so the halves are not compared and the estimate is not called consistent."""
+    cam, traj, t, ids, xy = _scene()
+    half = trajio.Trajectory(traj.t_ns[:30], traj.poses[:30], "camera")
+    r = lenscheck.check(_with_k1(cam, 0.005), half, t, ids, xy, n_key=20, max_points=600)
+    assert r["change"]["k1"]["value"] == pytest.approx(-0.005, abs=6e-4), r
+    assert r["halves"]["disagreement_sigmas"] is None and "nothing to adjust" in r["halves"]["reason"]
+    assert r["consistent"] is False
+    assert "not checked" in lenscheck.format_report(r)
+
+
 def test_parse_free():
     assert lenscheck.parse_free("k1") == ("k1",)
     assert lenscheck.parse_free("k1k2") == ("k1", "k2")
