@@ -32,6 +32,7 @@ writes nothing and exits with status 1. Arguments after "--" go to tvo_replay (e
 basic)."""
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import subprocess
@@ -41,7 +42,7 @@ import tempfile
 import numpy as np
 
 from . import cli, trajio
-from .synth import distort, undistort
+from .synth import project_points, undistort
 
 PROG = "tinyvo-lenscheck"
 
@@ -86,6 +87,14 @@ def parse_free(text: str):
     return tuple(n for n in PARAMS if n in names)
 
 
+def _changed(cam, d, f_change=0.0):
+    """cam with the distortion coefficients d and its focal length times 1 + f_change (for
+    synth.project_points)."""
+    fu, fv, cu, cv = cam.intrinsics
+    s = 1.0 + f_change
+    return dataclasses.replace(cam, intrinsics=(s * fu, s * fv, cu, cv), distortion=d)
+
+
 class Problem:
     """Keyframe poses T_c_w (the first fixed), points in the world and changes of the camera parameters
     (PARAMS), adjusted by Levenberg-Marquardt on the reprojection errors in pixels (Huber weights of
@@ -106,11 +115,7 @@ class Problem:
         return d
 
     def _pixels(self, Xc, d, f_change=0.0):
-        z = Xc[:, 2]
-        xd, yd = distort(self.cam.distortion_model, Xc[:, 0] / z, Xc[:, 1] / z, d)
-        fu, fv, cu, cv = self.cam.intrinsics
-        s = 1.0 + f_change
-        return np.stack([s * fu * xd + cu, s * fv * yd + cv], axis=1)
+        return project_points(_changed(self.cam, d, f_change), Xc)
 
     def camera_points(self, R=None, t=None, X=None):
         R = self.R if R is None else R
@@ -256,9 +261,7 @@ def _edge_pixels(cam, d, f_change=0.0):
     W, H = cam.width, cam.height
     px = np.array([[0.0, cv], [W - 1.0, cv], [0.0, 0.0], [W - 1.0, 0.0], [0.0, H - 1.0], [W - 1.0, H - 1.0]])
     x, y = undistort(cam.distortion_model, (px[:, 0] - cu) / fu, (px[:, 1] - cv) / fv, cam.distortion)
-    xd, yd = distort(cam.distortion_model, x, y, d)
-    s = 1.0 + f_change
-    return px, np.stack([s * fu * xd + cu, s * fv * yd + cv], axis=1)
+    return px, project_points(_changed(cam, d, f_change), np.stack([x, y, np.ones_like(x)], axis=1))
 
 
 def _edge_shift(cam, d_new, f_change=0.0):
