@@ -452,6 +452,8 @@ int main(int argc, char **argv)
     double *timing[TVO_STAGE_COUNT + 1] = {0};
     long counts_state[TVO_VO_STATE_COUNT] = {0}, counts_skip[SKIP_COUNT] = {0};
     long keyframe_frames = 0; /* frames whose rotation is the keyframe rotation */
+    long lens_updates = 0;
+    double lens_dk[2] = {0.0, 0.0};
     long counts_map[TVO_MAP_STATE_COUNT] = {0}, map_keyframes = 0, ba_turn_refused = 0, map_store_full = 0,
          gain_retries = 0, pred_rescues = 0, map_refound = 0;
     long affine_tried = 0, affine_refined = 0, affine_ended = 0; /* the affine refinement's attempts,
@@ -706,6 +708,12 @@ int main(int argc, char **argv)
         map_keyframes += res.keyframe;
         ba_turn_refused += (res.ba_flags & TVO_VO_BA_TURN_REFUSED) != 0;
         map_store_full = res.map_store_full; /* counted by the VO since init */
+        lens_updates = res.lens_updates;     /* likewise */
+        lens_dk[0] = res.lens_dk[0];
+        lens_dk[1] = res.lens_dk[1];
+        if (res.lens_update && !o.quiet)
+            fprintf(stderr, "tvo_replay: lens refined at t=%lld ns: k1 %+.5f, k2 %+.5f from the calibration's\n",
+                    (long long)t_ns, res.lens_dk[0], res.lens_dk[1]);
         gain_retries += res.gain_retry != 0;
         pred_rescues += res.pred_rescue != 0;
         affine_tried += res.affine_tried;
@@ -885,6 +893,8 @@ int main(int argc, char **argv)
             fprintf(js, "},\n  \"keyframe_rotation_frames\": %ld,\n  \"gain_retries\": %ld,\n",
                     keyframe_frames, gain_retries);
             fprintf(js, "  \"pred_rescues\": %ld,\n", pred_rescues);
+            fprintf(js, "  \"lens\": {\"refine\": %d, \"updates\": %ld, \"dk1\": %.9g, \"dk2\": %.9g},\n",
+                    (int)cfg.lens_refine, lens_updates, lens_dk[0], lens_dk[1]);
             fprintf(js, "  \"affine\": {\"tried\": %ld, \"refined\": %ld, \"ended\": %ld},\n", affine_tried,
                     affine_refined, affine_ended);
             fprintf(js,

@@ -80,6 +80,7 @@ static const setting settings[] = {
         S_D(map_rot_prior),
         S_I(map_rot_prior_obs),
         S_I(map_rot_prior_obs_frames),
+        S_I(lens_refine),
         S_I(detect.fast_threshold),
         S_I(detect.block_size),
         S_F(detect.harris_k),

@@ -2,6 +2,7 @@
 /* tinyvo: pinhole camera models with radial-tangential or equidistant distortion (see camera.h). */
 #include "tinyvo/camera.h"
 #include "tinyvo/dmath.h"
+#include "tinyvo/options.h"
 
 #include <float.h>
 #include <math.h>
@@ -309,3 +310,12 @@ tvo_status tvo_camera_distort_point(const tvo_camera *cam, const tvo_point2d *xn
         return TVO_ERR_NULL;
     return tvo_distort_one(cam, xn, u, v);
 }
+
+#if TVO_WITH_LENS
+#include "tinyvo/camera_impl.h"
+
+void tvo_camera_radtan(const double *k, double x, double y, double *xd, double *yd, double *J)
+{
+    tvo_radtan(k, x, y, xd, yd, J);
+}
+#endif

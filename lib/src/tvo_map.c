@@ -160,6 +160,11 @@ static size_t kf_scratch(const tvo_vo_config *cfg)
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(o, sizeof(tvo_ba_obs))));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(o, sizeof(double))));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(w, sizeof(tvo_ba_rot_prior))));
+#if TVO_WITH_LENS
+    if (cfg->lens_refine)
+        s = tvo_size_add(s, tvo_arena_round(tvo_lens_scratch_size(cfg->map_window, cfg->map_max_landmarks,
+                                                                   cfg->map_window * cfg->max_tracks)));
+#endif
     return tvo_size_add(s, tvo_arena_round(tvo_ba_scratch_size(&bc)));
 }
 
@@ -216,6 +221,7 @@ void tvo_map_reset(tvo_map *m)
     for (int32_t i = 0; i < TVO_MAP_RING; ++i)
         m->ring[i].serial = -1;
     m->next_kf_id = 0;
+    m->lens_kf = -1;
     m->serial = -1;
     m->speed = 0.0;
     m->losses = 0;
@@ -383,8 +389,10 @@ static tvo_map_kf *kf_push(tvo_map *m, const tvo_pose *T_c_w, int64_t t_ns)
     k = &m->kf[(m->kf_head + m->n_kf) % m->window];
     m->n_kf++;
     k->id = m->next_kf_id++;
-    if (m->next_kf_id < 0) /* wrapped after 2^31 keyframes: ids only need to differ within the window */
+    if (m->next_kf_id < 0) { /* wrapped after 2^31 keyframes: ids only need to differ within the window */
         m->next_kf_id = 0;
+        m->lens_kf = -1;
+    }
     k->t_ns = t_ns;
     k->T_c_w = *T_c_w;
     k->n_obs = 0;
@@ -1101,6 +1109,8 @@ typedef struct ba_work {
     tvo_ba_rot_prior *rot;
     void *bs;
     size_t bs_size;
+    void *ls; /* the lens block's scratch (cfg.lens_refine), else NULL */
+    size_t ls_size;
 } ba_work;
 
 /* 1 when the problem was built (enough scratch, >= 3 keyframes, something to adjust). */
@@ -1123,6 +1133,14 @@ static int ba_build(tvo_map *m, const tvo_vo_config *cfg, void *scratch, size_t 
     b->err2 = (double *)take(&c, (size_t)cap_obs * sizeof(double));
     b->rot = (tvo_ba_rot_prior *)take(&c, (size_t)m->window * sizeof(tvo_ba_rot_prior));
     b->bs = take(&c, b->bs_size);
+    b->ls = NULL;
+    b->ls_size = 0;
+#if TVO_WITH_LENS
+    if (cfg->lens_refine) {
+        b->ls_size = tvo_lens_scratch_size(m->window, m->max_lm, cap_obs);
+        b->ls = take(&c, b->ls_size);
+    }
+#endif
     if (b->poses == NULL || b->fixed == NULL || b->X == NULL || b->lm2pt == NULL || b->pt2lm == NULL ||
         b->obs == NULL || b->err2 == NULL || b->rot == NULL || b->bs == NULL || w < 3)
         return 0;
@@ -1275,12 +1293,33 @@ static void bundle_adjust(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *
         kf_at(m, i)->T_c_w = b.poses[i];
     for (int32_t q = 0; q < b.p.n_points; ++q)
         memcpy(m->lm[b.pt2lm[q]].X, b.X[q], sizeof(b.X[q]));
+#if TVO_WITH_LENS
+    /* a lens block from a window that shares no keyframe with the last block's (tvo_lens.h) */
+    if (cfg->lens_refine && b.ls != NULL && b.p.n_poses == m->window &&
+        kf_at(m, 0)->id > m->lens_kf) {
+        if (tvo_lens_window(&cfg->camera, &b.p, cfg->map_ba_huber_px, b.ls, b.ls_size, &out->lens)) {
+            out->lens_ok = 1;
+            m->lens_kf = kf_at(m, m->n_kf - 1)->id;
+        }
+    }
+#endif
     /* outliers: the observations that still do not fit */
     if (tvo_ba_obs_errors(&b.p, b.err2) != TVO_OK)
         return;
     ba_drop_outliers(m, cfg, &b);
     release_unobserved(m, tr);
 }
+
+#if TVO_WITH_LENS
+void tvo_map_remap(tvo_map *m, const tvo_camera *from, const tvo_camera *to)
+{
+    for (int32_t i = 0; i < m->n_kf; ++i) {
+        tvo_map_kf *k = kf_at(m, i);
+        for (int32_t o = 0; o < k->n_obs; ++o)
+            (void)tvo_lens_remap(from, to, &k->obs_x[o]);
+    }
+}
+#endif
 
 /* A keyframe at pose *T (adjusted on return); rescue: the map runs out of points (triangulate_new). */
 static void add_keyframe(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns, tvo_pose *T,

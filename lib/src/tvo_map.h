@@ -28,6 +28,7 @@
 #include "tinyvo/relpose.h"
 #include "tinyvo/se3.h"
 #include "tinyvo/vo.h"
+#include "tvo_lens.h"
 
 /* A keyframe of the window: its pose and the landmark observations made in it. */
 typedef struct tvo_map_kf {
@@ -113,6 +114,7 @@ typedef struct tvo_map {
     double chain_R[9];
     int32_t chain_ok;
     int32_t lm_cursor; /* where the search for a free landmark slot starts */
+    int32_t lens_kf;   /* id of the newest keyframe of the last window that gave a lens block (cfg.lens_refine) */
 } tvo_map;
 
 /* What the map did with a frame (filled into the VO result by tvo_vo.c). */
@@ -123,9 +125,15 @@ typedef struct tvo_map_frame {
     int32_t new_points; /* landmarks triangulated in this frame */
     int32_t ba_iterations, ba_flags;
     tvo_pose T_c_w; /* valid when state is TRACKING or INITIALISED */
+    int32_t lens_ok;     /* 1: the keyframe's adjusted window gave a lens block (cfg.lens_refine; tvo_lens.h) */
+    tvo_lens_block lens; /* valid when lens_ok */
 } tvo_map_frame;
 
 size_t tvo_map_layout_size(const tvo_vo_config *cfg);
+#if TVO_WITH_LENS
+/* The window's observations moved from the lens `from` to the lens `to` (tvo_lens_remap). */
+void tvo_map_remap(tvo_map *m, const tvo_camera *from, const tvo_camera *to);
+#endif
 size_t tvo_map_scratch_size(const tvo_vo_config *cfg);
 /* Carve the map's arrays from arena a (in the order of tvo_map_layout_size). TVO_ERR_NO_MEMORY. */
 tvo_status tvo_map_init(tvo_map *m, const tvo_vo_config *cfg, tvo_arena *a);

@@ -88,6 +88,12 @@ struct tvo_vo {
     tvo_aff_warp *rf_aw;  /* [map_refind] */
     int32_t rf_next;      /* the entry the next ended track overwrites */
 #endif
+#if TVO_WITH_LENS
+    /* the lens refined on the run (cfg.lens_refine; cfg.camera then holds the refined lens): the camera
+       configured at init, and the blocks and changes of tvo_lens.h */
+    tvo_camera cam0;
+    tvo_lens lens;
+#endif
     void *scratch;
     size_t scratch_size;
 };
@@ -247,6 +253,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
        jerk), by all of them elsewhere (docs/rules.md, "A forty-sixth rule") */
     cfg->map_rot_prior_obs = 3;
     cfg->map_rot_prior_obs_frames = 30;
+    cfg->lens_refine = 0;
     cfg->clock = NULL;
     cfg->clock_user = NULL;
     /* the tracker, window and chain step: the balanced preset's (docs/rules.md, "A ninth rule"), or
@@ -368,6 +375,8 @@ static int config_valid(const tvo_vo_config *cfg)
         cfg->map_ba_iterations > 100)
         return 0;
     if (!(cfg->map_ba_max_turn_deg > 0.0 && cfg->map_ba_max_turn_deg <= 180.0))
+        return 0;
+    if (cfg->lens_refine != 0 && (cfg->lens_refine != 1 || !TVO_WITH_LENS))
         return 0;
     if (!(cfg->map_ba_huber_px > 0.0 && cfg->map_ba_huber_px <= 100.0))
         return 0;
@@ -503,6 +512,21 @@ static tvo_status affine_alloc(tvo_vo *vo, const tvo_vo_config *cfg, tvo_arena *
 }
 #endif
 
+/* vo->r2_max from the camera's corners */
+static void set_r2_max(tvo_vo *vo)
+{
+    const tvo_camera *cam = &vo->cfg.camera;
+    vo->r2_max = 0.0;
+    for (int i = 0; i < 4; ++i) {
+        tvo_point2d c;
+        if (tvo_camera_undistort_point(cam, (i & 1) ? cam->width - 1 : 0, (i & 2) ? cam->height - 1 : 0, &c) ==
+            TVO_OK) {
+            const double r2 = 1.21 * (c.x * c.x + c.y * c.y); /* (1.1 x the corner's radius)^2 */
+            vo->r2_max = r2 > vo->r2_max ? r2 : vo->r2_max;
+        }
+    }
+}
+
 tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, size_t mem_size)
 {
     tvo_vo_config cfg_r;
@@ -515,7 +539,9 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
         return TVO_ERR_NULL;
     *out = NULL;
     if (!config_valid(cfg_in))
-        return !TVO_WITH_AFFINE && cfg_in->affine_win_size != 0 ? TVO_ERR_UNSUPPORTED : TVO_ERR_ARG;
+        return (!TVO_WITH_AFFINE && cfg_in->affine_win_size != 0) || (!TVO_WITH_LENS && cfg_in->lens_refine == 1)
+                   ? TVO_ERR_UNSUPPORTED
+                   : TVO_ERR_ARG;
     cfg_r = resolved(cfg_in);
     if (mem_size < layout_size(cfg))
         return TVO_ERR_NO_MEMORY;
@@ -581,14 +607,10 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
     vo->chain_gain = 1.0;
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
     vo->rescue_age = TVO_VO_MAX_RESCUE_FRAMES;
-    for (int i = 0; i < 4; ++i) {
-        tvo_point2d c;
-        if (tvo_camera_undistort_point(&cfg->camera, (i & 1) ? cfg->camera.width - 1 : 0,
-                                       (i & 2) ? cfg->camera.height - 1 : 0, &c) == TVO_OK) {
-            const double r2 = 1.21 * (c.x * c.x + c.y * c.y); /* (1.1 x the corner's radius)^2 */
-            vo->r2_max = r2 > vo->r2_max ? r2 : vo->r2_max;
-        }
-    }
+    set_r2_max(vo);
+#if TVO_WITH_LENS
+    vo->cam0 = cfg->camera;
+#endif
     vo->scratch_size = scratch_need(cfg);
     vo->scratch = tvo_arena_alloc(&a, vo->scratch_size);
     if (vo->pts == NULL || vo->next == NULL || vo->st == NULL || vo->ok1 == NULL || vo->ok2 == NULL ||
@@ -619,6 +641,11 @@ void tvo_vo_reset(tvo_vo *vo)
     vo->next_id = 0;
     vo->has_pred = 0;
     vo->rescue_age = TVO_VO_MAX_RESCUE_FRAMES;
+#if TVO_WITH_LENS
+    vo->cfg.camera = vo->cam0;
+    memset(&vo->lens, 0, sizeof(vo->lens));
+    set_r2_max(vo);
+#endif
 }
 
 static int64_t now_ns(const tvo_vo *vo)
@@ -1265,6 +1292,48 @@ static int map_prior_flags(const tvo_vo *vo, const tvo_vo_result *res)
 
 /* The map's part of a frame, after the two-view step: vo->x2 holds the normalised positions of the
  * vo->n carried tracks. R_cur_prev: this frame's two-view rotation, or NULL. Sets vo->T_c_w. */
+#if TVO_WITH_LENS
+/* The lens changed from cfg.camera to *to: every normalised position the VO and its map keep (the
+ * tracks' previous, current, keyframe, two-frames-back and waiting positions, the window's observations)
+ * moved to where the new lens sees the same pixel. */
+static void lens_apply(tvo_vo *vo, const tvo_camera *to)
+{
+    const tvo_camera from = vo->cfg.camera;
+    for (int32_t i = 0; i < vo->n; ++i) {
+        (void)tvo_lens_remap(&from, to, &vo->x0[i]);
+        (void)tvo_lens_remap(&from, to, &vo->x1[i]);
+        (void)tvo_lens_remap(&from, to, &vo->x2[i]);
+        (void)tvo_lens_remap(&from, to, &vo->xk[i]);
+        (void)tvo_lens_remap(&from, to, &vo->tri_x[i]);
+    }
+    tvo_map_remap(&vo->map, &from, to);
+    vo->cfg.camera = *to;
+    set_r2_max(vo);
+}
+
+/* cfg.lens_refine: the keyframe's lens block (if any) added, and the change adopted when tvo_lens_decide
+ * says so. */
+static void lens_step(tvo_vo *vo, const tvo_map_frame *mf, tvo_vo_result *res)
+{
+    if (vo->cfg.lens_refine && mf->lens_ok) {
+        double dk[2];
+        tvo_camera c;
+        tvo_lens_add(&vo->lens, &mf->lens);
+        if (tvo_lens_decide(&vo->lens, &vo->cfg.camera, dk, NULL, &c) == TVO_LENS_ADOPT) {
+            lens_apply(vo, &c);
+            vo->lens.updates++;
+            vo->lens.dk[0] += dk[0];
+            vo->lens.dk[1] += dk[1];
+            tvo_lens_clear_blocks(&vo->lens);
+            res->lens_update = 1;
+        }
+    }
+    res->lens_updates = vo->lens.updates;
+    res->lens_dk[0] = vo->lens.dk[0];
+    res->lens_dk[1] = vo->lens.dk[1];
+}
+#endif
+
 static void map_step(tvo_vo *vo, tvo_vo_result *res, int64_t t_ns, const double *R_cur_prev)
 {
     tvo_pose prior;
@@ -1298,6 +1367,9 @@ static void map_step(tvo_vo *vo, tvo_vo_result *res, int64_t t_ns, const double 
     res->map_new_points = mf.new_points;
     res->ba_iterations = mf.ba_iterations;
     res->ba_flags = mf.ba_flags;
+#if TVO_WITH_LENS
+    lens_step(vo, &mf, res);
+#endif
 }
 
 /* Tracks from index `first` on were just detected: undistort them into x2 and let the map know. */

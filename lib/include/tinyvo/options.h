@@ -22,4 +22,11 @@
 #define TVO_WITH_AFFINE 1
 #endif
 
+/* 1: the lens's radial coefficients refined on the run (tvo_vo_config.lens_refine) are built in; 0: left
+ * out (the default of Cortex-M builds), and tvo_vo_init() refuses a configuration that asks for them with
+ * TVO_ERR_UNSUPPORTED. CMake: -DTVO_WITH_LENS=OFF. */
+#ifndef TVO_WITH_LENS
+#define TVO_WITH_LENS 1
+#endif
+
 #endif /* TINYVO_OPTIONS_H */

@@ -313,6 +313,12 @@ typedef struct tvo_vo_config {
                                    30. Without pred_rescue (or map_prediction: the basic, accurate and
                                    small presets) no frame has a rescue, so the test uses all the
                                    landmarks (docs/rules.md, "A forty-sixth rule") */
+    int32_t lens_refine;              /* (added) 1: the lens's radial coefficients k1, k2 refined on the run
+                                   from the map's windows and changed when enough windows agree on a
+                                   change (docs/camera.md, "The lens refined on the run"); RADTAN and
+                                   NONE cameras (NONE becomes RADTAN), never EQUIDISTANT; acts with the
+                                   map only; needs a build with TVO_WITH_LENS (options.h). 0: the lens
+                                   stays as configured (default) */
     tvo_clock_fn clock;               /* optional (NULL: no timings) */
     void *clock_user;
 } tvo_vo_config;
@@ -421,6 +427,9 @@ typedef struct tvo_vo_result {
     int32_t ba_iterations;  /* bundle adjustment iterations in this frame (0: none ran) */
     int32_t ba_flags;       /* its TVO_BA_FLAG_* (ba.h), and TVO_VO_BA_TURN_REFUSED */
     int64_t stage_ns[TVO_STAGE_COUNT];
+    int32_t lens_update;  /* (added) 1: the lens was changed after this frame (cfg.lens_refine) */
+    int32_t lens_updates; /* (added) lens changes since init (0 without cfg.lens_refine) */
+    double lens_dk[2];    /* (added) their sum: the k1, k2 in use minus the configured ones */
 } tvo_vo_result;
 
 /* tvo_vo_result.ba_flags: the bundle adjustment's result was not taken, since it turned the newest
