@@ -18,6 +18,8 @@
 #define TVO_LENS_MIN_POINTS 50
 /* A point whose 3x3 block has a Cholesky pivot below this share of its diagonal entry is left out. */
 #define TVO_LENS_POINT_PIVOT 1e-9
+/* The residuals' variance is taken as at least this (px^2): no track is better than 0.01 px. */
+#define TVO_LENS_MIN_S2 1e-4
 /* The pose block's regularisation (relative to its largest diagonal entry): the monocular scale. */
 #define TVO_LENS_POSE_REG 1e-9
 
@@ -189,7 +191,7 @@ int tvo_lens_window(const tvo_camera *cam, const tvo_ba_problem *p, double huber
                     size_t scratch_size, tvo_lens_block *out)
 {
     tvo_arena ar;
-    double k[5], *S, *g, *Y, *B, sum_we2 = 0.0, diag_max = 0.0;
+    double k[5], *S, *g, *Y, *B, sum_we2 = 0.0, drop = 0.0, diag_max = 0.0;
     int32_t *seen, *start, *order, P, na, nc, n_pts = 0, n_used = 0;
     if (!tvo_lens_supported(cam) || p == NULL || out == NULL || p->n_poses < 2 || p->n_points <= 0 ||
         p->n_obs <= 0 || !(huber_px > 0.0))
@@ -309,6 +311,9 @@ int tvo_lens_window(const tvo_camera *cam, const tvo_ba_problem *p, double huber
                 }
             }
         }
+        /* the least-squares cost the point's own step removes: gp^T V^-1 gp */
+        for (int a = 0; a < 3; ++a)
+            drop += gp[a] * (Vi[3 * a] * gp[0] + Vi[3 * a + 1] * gp[1] + Vi[3 * a + 2] * gp[2]);
         sum_we2 += we2;
         n_used += used;
         ++n_pts;
@@ -341,6 +346,9 @@ int tvo_lens_window(const tvo_camera *cam, const tvo_ba_problem *p, double huber
             for (int32_t r = 0; r < na; ++r)
                 col[r] = c < 2 ? S[(size_t)r * (size_t)nc + (size_t)(na + c)] : g[r];
             chol_solve(S, na, nc, col);
+            if (c == 2) /* ...and the poses' step: g_a^T A^-1 g_a */
+                for (int32_t r = 0; r < na; ++r)
+                    drop += g[r] * col[r];
             for (int a = 0; a < 2; ++a) {
                 double s = 0.0;
                 for (int32_t r = 0; r < na; ++r)
@@ -358,8 +366,13 @@ int tvo_lens_window(const tvo_camera *cam, const tvo_ba_problem *p, double huber
             return 0;
         dk[0] = -(H[3] * gk[0] - H[1] * gk[1]) / det;
         dk[1] = -(-H[2] * gk[0] + H[0] * gk[1]) / det;
+        /* the weighted residuals' variance after the whole step (points, poses and dk): the lens error
+           itself is not counted as noise */
+        drop += -(gk[0] * dk[0] + gk[1] * dk[1]);
         dof = 2.0 * n_used - 3.0 * n_pts - na - 1.0;
-        s2 = sum_we2 / (dof > 1.0 ? dof : 1.0);
+        s2 = (sum_we2 - drop) / (dof > 1.0 ? dof : 1.0);
+        if (s2 < TVO_LENS_MIN_S2)
+            s2 = TVO_LENS_MIN_S2;
         if (!(s2 > 0.0) || !isfinite(s2) || !isfinite(dk[0]) || !isfinite(dk[1]))
             return 0;
         for (int a = 0; a < 4; ++a)
