@@ -1109,8 +1109,10 @@ typedef struct ba_work {
     tvo_ba_rot_prior *rot;
     void *bs;
     size_t bs_size;
+#if TVO_WITH_LENS
     void *ls; /* the lens block's scratch (cfg.lens_refine), else NULL */
     size_t ls_size;
+#endif
 } ba_work;
 
 /* 1 when the problem was built (enough scratch, >= 3 keyframes, something to adjust). */
@@ -1133,9 +1135,9 @@ static int ba_build(tvo_map *m, const tvo_vo_config *cfg, void *scratch, size_t 
     b->err2 = (double *)take(&c, (size_t)cap_obs * sizeof(double));
     b->rot = (tvo_ba_rot_prior *)take(&c, (size_t)m->window * sizeof(tvo_ba_rot_prior));
     b->bs = take(&c, b->bs_size);
+#if TVO_WITH_LENS
     b->ls = NULL;
     b->ls_size = 0;
-#if TVO_WITH_LENS
     if (cfg->lens_refine) {
         b->ls_size = tvo_lens_scratch_size(m->window, m->max_lm, cap_obs);
         b->ls = take(&c, b->ls_size);
