@@ -212,6 +212,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             : 0; /* a weak prior judged by checked landmarks */
     cfg.map_rot_prior_obs_frames = ((hdr[4] >> 5) ^ (hdr[6] >> 3)) & 1 ? 1 + (int32_t)(hdr[5] & 31u)
                                                                        : 0; /* ...after a jerk */
+    /* the lens refined on the run, with the map, for half the inputs */
+    cfg.lens_refine = TVO_WITH_LENS && cfg.map && (((hdr[4] >> 6) ^ (hdr[7] >> 2)) & 1);
     while ((need = tvo_vo_required_size(&cfg)) == 0 && cfg.lk.max_level > 0)
         cfg.lk.max_level--;
     TVO_FUZZ_CHECK(need > 0); /* every size from 16x16 up is valid with one level */

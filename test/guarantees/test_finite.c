@@ -45,6 +45,7 @@ static int runner_open(runner *r, int32_t w, int32_t h)
             : 0; /* and every other pair with the affine refinement */
     if (k & 4)   /* every other quadruple with the map's predicted tracks, half of those with the retry */
         tvo_g_predicted_tracks(&cfg, (k >> 3) & 1);
+    cfg.lens_refine = TVO_WITH_LENS && (k & 16) == 0; /* and the lens refined on the run, 16 in 32 */
     while (cfg.lk.max_level >= 0 && (need = tvo_vo_required_size(&cfg)) == 0)
         cfg.lk.max_level--;
     if (need == 0)
