@@ -19,6 +19,8 @@
  *   map        the same run's world poses and what the local map did
  *   refind     the same sequence with a flat bar over most of two frames: the map short of points, the
  *              landmarks of the ended tracks found again by their templates (the default's rescue)
+ *   lens       the lens refinement's block of a noisy window (test/common/tvo_lens_scene.h) and the
+ *              adoption test on it (builds with TVO_WITH_LENS)
  *
  * The stages upstream of a change keep their digests: a relative-pose change moves `relpose` and `vo`,
  * a VO change only `vo`, a tracker change `tracks`, `relpose` and `vo`. When an intended change moves a
@@ -32,6 +34,10 @@
 
 #include "tinyvo/tinyvo.h"
 #include "tvo_room.h"
+#if TVO_WITH_LENS
+#include "tvo_lens.h"
+#include "tvo_lens_scene.h"
+#endif
 
 /* ==== EXPECTED DIGESTS: the one block to update when an intended algorithm change moves a digest ==== */
 #define EXPECT_INPUT 0x6d857fe5cc926e22ULL
@@ -51,6 +57,7 @@
 #define EXPECT_MAP 0x6019563258239bf5ULL
 #define EXPECT_REFIND 0x52168ec1eae3de0eULL
 #endif
+#define EXPECT_LENS 0xbe0451d01a103c0eULL
 /* ==== end of EXPECTED DIGESTS ==== */
 
 #define W 320
@@ -632,12 +639,55 @@ static void test_vo_refind(void **state)
     assert_true(check_digest("refind", "EXPECT_REFIND", d.h, EXPECT_REFIND));
 }
 
+/* The lens refinement (cfg.lens_refine): a window's block (information, estimate, variance) and the
+ * adoption test's verdict and changed camera on two copies of it. */
+static void test_lens(void **state)
+{
+#if TVO_WITH_LENS
+    static tvo_lens_scene sc;
+    const tvo_camera truth = tvo_ls_camera(0.02, -0.01), cfg = tvo_ls_camera(0.0, 0.0);
+    const size_t sz = tvo_lens_scratch_size(TVO_LS_POSES, TVO_LS_POINTS, TVO_LS_POSES * TVO_LS_POINTS);
+    void *mem = malloc(sz);
+    tvo_lens_block b;
+    tvo_lens s;
+    tvo_camera changed;
+    double dk[2], shift;
+    digest d;
+    (void)state;
+    assert_non_null(mem);
+    assert_int_equal(tvo_ls_make(&sc, &truth, &cfg, 0.3), 1);
+    assert_int_equal(tvo_lens_window(&cfg, &sc.p, 2.5, mem, sz, &b), 1);
+    free(mem);
+    dg_init(&d);
+    for (int i = 0; i < 4; ++i)
+        dg_f64(&d, b.I[i]);
+    dg_f64(&d, b.h[0]);
+    dg_f64(&d, b.h[1]);
+    dg_f64(&d, b.s2);
+    dg_i32(&d, b.n_obs);
+    memset(&s, 0, sizeof(s));
+    tvo_lens_add(&s, &b);
+    tvo_lens_add(&s, &b);
+    memset(&changed, 0, sizeof(changed));
+    dg_i32(&d, (int32_t)tvo_lens_decide(&s, &cfg, dk, &shift, &changed));
+    dg_f64(&d, dk[0]);
+    dg_f64(&d, dk[1]);
+    dg_f64(&d, shift);
+    dg_f64(&d, changed.k[0]);
+    dg_f64(&d, changed.k[1]);
+    assert_true(check_digest("lens", "EXPECT_LENS", d.h, EXPECT_LENS));
+#else
+    (void)state;
+    skip();
+#endif
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
             cmocka_unit_test(test_input),     cmocka_unit_test(test_corners),   cmocka_unit_test(test_tracks),
             cmocka_unit_test(test_undistort), cmocka_unit_test(test_relpose),   cmocka_unit_test(test_nn),
-            cmocka_unit_test(test_vo),        cmocka_unit_test(test_vo_refind),
+            cmocka_unit_test(test_vo),        cmocka_unit_test(test_vo_refind), cmocka_unit_test(test_lens),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }

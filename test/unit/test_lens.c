@@ -16,94 +16,21 @@
 #include "tinyvo/vo.h"
 
 #if TVO_WITH_LENS
-#include "tinyvo/linalg.h"
 #include "tvo_lens.h"
+#include "tvo_lens_scene.h"
 
-/* a 640 x 480 camera, f = 500 */
+#define NP TVO_LS_POSES
+#define NPTS TVO_LS_POINTS
+typedef tvo_lens_scene scene;
+
 static tvo_camera cam_640(double k1, double k2)
 {
-    tvo_camera c = tvo_camera_make_pinhole(640, 480, 500.0, 500.0, 319.5, 239.5);
-    c.model = TVO_DIST_RADTAN;
-    c.k[0] = k1;
-    c.k[1] = k2;
-    return c;
+    return tvo_ls_camera(k1, k2);
 }
 
-/* uniform in [a, b) from a fixed LCG */
-static double urand(uint32_t *s, double a, double b)
-{
-    *s = *s * 1664525u + 1013904223u;
-    return a + (b - a) * (double)(*s >> 8) / 16777216.0;
-}
-
-/* gaussian (Box-Muller) */
-static double nrand(uint32_t *s)
-{
-    const double u = urand(s, 1e-12, 1.0), v = urand(s, 0.0, 1.0);
-    return sqrt(-2.0 * log(u)) * cos(6.283185307179586 * v);
-}
-
-#define NP 6
-#define NPTS 400
-
-typedef struct scene {
-    tvo_pose T[NP];
-    uint8_t fixed[NP];
-    double X[NPTS][3];
-    tvo_ba_obs obs[NP * NPTS];
-    tvo_ba_problem p;
-} scene;
-
-/* A camera moving forward and turning (6 poses), NPTS points in front; each point's pixel taken with the
- * lens `truth` (plus noise_px of Gaussian noise), stored as the VO stores it: undistorted with `cfg`. */
 static void make_scene(scene *sc, const tvo_camera *truth, const tvo_camera *cfg, double noise_px)
 {
-    uint32_t s = 12345u;
-    int32_t no = 0;
-    for (int i = 0; i < NP; ++i) {
-        const double w[3] = {0.0, 0.03 * i, 0.0};
-        tvo_la_so3_exp(w, sc->T[i].R);
-        /* camera centre at (0.2 i, 0, 0.5 i) in the world: t = -R C */
-        {
-            const double C[3] = {0.2 * i, 0.0, 0.5 * i};
-            for (int r = 0; r < 3; ++r)
-                sc->T[i].t[r] = -(sc->T[i].R[3 * r] * C[0] + sc->T[i].R[3 * r + 1] * C[1] + sc->T[i].R[3 * r + 2] * C[2]);
-        }
-        sc->fixed[i] = (uint8_t)(i < 2);
-    }
-    for (int j = 0; j < NPTS; ++j) {
-        sc->X[j][0] = urand(&s, -6.0, 7.0);
-        sc->X[j][1] = urand(&s, -4.0, 4.0);
-        sc->X[j][2] = urand(&s, 7.0, 16.0);
-        for (int i = 0; i < NP; ++i) {
-            double P[3], u, v;
-            tvo_point2d x, xn;
-            for (int r = 0; r < 3; ++r)
-                P[r] = sc->T[i].R[3 * r] * sc->X[j][0] + sc->T[i].R[3 * r + 1] * sc->X[j][1] +
-                       sc->T[i].R[3 * r + 2] * sc->X[j][2] + sc->T[i].t[r];
-            x.x = P[0] / P[2];
-            x.y = P[1] / P[2];
-            assert_int_equal(tvo_camera_distort_point(truth, &x, &u, &v), TVO_OK);
-            u += noise_px * nrand(&s);
-            v += noise_px * nrand(&s);
-            if (u < 0.0 || v < 0.0 || u > 639.0 || v > 479.0)
-                continue;
-            assert_int_equal(tvo_camera_undistort_point(cfg, u, v, &xn), TVO_OK);
-            sc->obs[no].pose = i;
-            sc->obs[no].point = j;
-            sc->obs[no].x = xn.x;
-            sc->obs[no].y = xn.y;
-            ++no;
-        }
-    }
-    memset(&sc->p, 0, sizeof(sc->p));
-    sc->p.n_poses = NP;
-    sc->p.T_c_w = sc->T;
-    sc->p.pose_fixed = sc->fixed;
-    sc->p.n_points = NPTS;
-    sc->p.X = sc->X;
-    sc->p.n_obs = no;
-    sc->p.obs = sc->obs;
+    assert_int_equal(tvo_ls_make(sc, truth, cfg, noise_px), 1);
 }
 
 static void block_estimate(const tvo_lens_block *b, double d[2], double se[2])
