@@ -13,6 +13,14 @@
 #include "tinyvo/options.h"
 #include "tvo_affine.h"
 
+#if TVO_WITH_LENS
+/* cfg.lens_refine's state: the camera configured at init, and the blocks and changes of tvo_lens.h */
+typedef struct vo_lens {
+    tvo_camera cam0;
+    tvo_lens s;
+} vo_lens;
+#endif
+
 struct tvo_vo {
     tvo_vo_config cfg;
     tvo_pyramid pyr[2]; /* level 0 borrowed: the current frame's is the caller's image, the previous
@@ -89,10 +97,8 @@ struct tvo_vo {
     int32_t rf_next;      /* the entry the next ended track overwrites */
 #endif
 #if TVO_WITH_LENS
-    /* the lens refined on the run (cfg.lens_refine; cfg.camera then holds the refined lens): the camera
-       configured at init, and the blocks and changes of tvo_lens.h */
-    tvo_camera cam0;
-    tvo_lens lens;
+    /* the lens refined on the run (cfg.lens_refine, else NULL; cfg.camera then holds the refined lens) */
+    struct vo_lens *lens;
 #endif
     void *scratch;
     size_t scratch_size;
@@ -457,6 +463,10 @@ static size_t layout_size(const tvo_vo_config *cfg)
         s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(r, sizeof(tvo_aff_warp))));
     }
 #endif
+#if TVO_WITH_LENS
+    if (cfg->lens_refine)
+        s = tvo_size_add(s, tvo_arena_round(sizeof(vo_lens)));
+#endif
     s = tvo_size_add(s, tvo_arena_round(scratch_need(cfg)));
     return tvo_size_add(s, TVO_ARENA_ALIGN); /* slack for an unaligned block */
 }
@@ -609,7 +619,13 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
     vo->rescue_age = TVO_VO_MAX_RESCUE_FRAMES;
     set_r2_max(vo);
 #if TVO_WITH_LENS
-    vo->cam0 = cfg->camera;
+    if (cfg->lens_refine) {
+        vo->lens = (vo_lens *)tvo_arena_alloc(&a, sizeof(vo_lens));
+        if (vo->lens == NULL)
+            return TVO_ERR_NO_MEMORY;
+        memset(vo->lens, 0, sizeof(*vo->lens));
+        vo->lens->cam0 = cfg->camera;
+    }
 #endif
     vo->scratch_size = scratch_need(cfg);
     vo->scratch = tvo_arena_alloc(&a, vo->scratch_size);
@@ -642,9 +658,11 @@ void tvo_vo_reset(tvo_vo *vo)
     vo->has_pred = 0;
     vo->rescue_age = TVO_VO_MAX_RESCUE_FRAMES;
 #if TVO_WITH_LENS
-    vo->cfg.camera = vo->cam0;
-    memset(&vo->lens, 0, sizeof(vo->lens));
-    set_r2_max(vo);
+    if (vo->lens != NULL) {
+        vo->cfg.camera = vo->lens->cam0;
+        memset(&vo->lens->s, 0, sizeof(vo->lens->s));
+        set_r2_max(vo);
+    }
 #endif
 }
 
@@ -1315,22 +1333,26 @@ static void lens_apply(tvo_vo *vo, const tvo_camera *to)
  * says so. */
 static void lens_step(tvo_vo *vo, const tvo_map_frame *mf, tvo_vo_result *res)
 {
-    if (vo->cfg.lens_refine && mf->lens_ok) {
+    tvo_lens *s;
+    if (vo->lens == NULL)
+        return;
+    s = &vo->lens->s;
+    if (mf->lens_ok) {
         double dk[2];
         tvo_camera c;
-        tvo_lens_add(&vo->lens, &mf->lens);
-        if (tvo_lens_decide(&vo->lens, &vo->cfg.camera, dk, NULL, &c) == TVO_LENS_ADOPT) {
+        tvo_lens_add(s, &mf->lens);
+        if (tvo_lens_decide(s, &vo->cfg.camera, dk, NULL, &c) == TVO_LENS_ADOPT) {
             lens_apply(vo, &c);
-            vo->lens.updates++;
-            vo->lens.dk[0] += dk[0];
-            vo->lens.dk[1] += dk[1];
-            tvo_lens_clear_blocks(&vo->lens);
+            s->updates++;
+            s->dk[0] += dk[0];
+            s->dk[1] += dk[1];
+            tvo_lens_clear_blocks(s);
             res->lens_update = 1;
         }
     }
-    res->lens_updates = vo->lens.updates;
-    res->lens_dk[0] = vo->lens.dk[0];
-    res->lens_dk[1] = vo->lens.dk[1];
+    res->lens_updates = s->updates;
+    res->lens_dk[0] = s->dk[0];
+    res->lens_dk[1] = s->dk[1];
 }
 #endif
 
