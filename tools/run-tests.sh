@@ -8,7 +8,7 @@
 #      and every console script's --help (tools/check-pip-install.sh)
 #   3. an ASan+UBSan build running the ctest tests again
 #   4. a -Os (MinSizeRel) build running the ctest tests again, a build without the affine track
-#      refinement (-DTVO_WITH_AFFINE=OFF) running them again, a shared-library build
+#      refinement nor the lens refinement (-DTVO_WITH_AFFINE=OFF -DTVO_WITH_LENS=OFF) running them again, a shared-library build
 #      (-DBUILD_SHARED_LIBS=ON) running them again, and the Cortex-M size report
 #      (tools/size-report.sh: arm-none-eabi core builds, link check, Cortex-M7 .text <= 96 KiB)
 #   5. cppcheck + clang-tidy with the checked-in configuration (tools/run-static.sh)
@@ -50,8 +50,8 @@ cmake -S . -B build/minsize -G Ninja -DCMAKE_BUILD_TYPE=MinSizeRel -DTVO_WERROR=
 cmake --build build/minsize -j$JOBS
 ctest --test-dir build/minsize -j$JOBS --output-on-failure
 
-echo "== a build without the affine track refinement (-DTVO_WITH_AFFINE=OFF) + unit tests"
-cmake -S . -B build/noaffine -G Ninja -DCMAKE_BUILD_TYPE=Release -DTVO_WITH_AFFINE=OFF -DTVO_WERROR=ON \
+echo "== a build without the affine track refinement and the lens refinement (-DTVO_WITH_AFFINE=OFF -DTVO_WITH_LENS=OFF) + unit tests"
+cmake -S . -B build/noaffine -G Ninja -DCMAKE_BUILD_TYPE=Release -DTVO_WITH_AFFINE=OFF -DTVO_WITH_LENS=OFF -DTVO_WERROR=ON \
       -DTVO_BUILD_BENCH=OFF >/dev/null
 cmake --build build/noaffine -j$JOBS
 ctest --test-dir build/noaffine -j$JOBS --output-on-failure

@@ -558,9 +558,12 @@ int main(int argc, char **argv)
         tvo_vo *probe = NULL;
         uint8_t probe_mem[1];
         if (tvo_vo_init(&probe, &cfg, probe_mem, sizeof(probe_mem)) == TVO_ERR_UNSUPPORTED) {
-            fprintf(stderr,
-                    "tvo_replay: this build of the library leaves out the affine refinement "
-                    "(TVO_WITH_AFFINE off): affine_win_size must be 0\n");
+            if (!TVO_WITH_LENS && cfg.lens_refine != 0)
+                fprintf(stderr, "tvo_replay: this build of the library leaves out the lens refinement "
+                                "(TVO_WITH_LENS off): lens_refine must be 0\n");
+            else
+                fprintf(stderr, "tvo_replay: this build of the library leaves out the affine refinement "
+                                "(TVO_WITH_AFFINE off): affine_win_size must be 0\n");
             goto cleanup;
         }
         fprintf(stderr,
