@@ -559,11 +559,13 @@ int main(int argc, char **argv)
         uint8_t probe_mem[1];
         if (tvo_vo_init(&probe, &cfg, probe_mem, sizeof(probe_mem)) == TVO_ERR_UNSUPPORTED) {
             if (!TVO_WITH_LENS && cfg.lens_refine != 0)
-                fprintf(stderr, "tvo_replay: this build of the library leaves out the lens refinement "
-                                "(TVO_WITH_LENS off): lens_refine must be 0\n");
+                fprintf(stderr,
+                        "tvo_replay: this build of the library leaves out the lens refinement "
+                        "(TVO_WITH_LENS off): lens_refine must be 0\n");
             else
-                fprintf(stderr, "tvo_replay: this build of the library leaves out the affine refinement "
-                                "(TVO_WITH_AFFINE off): affine_win_size must be 0\n");
+                fprintf(stderr,
+                        "tvo_replay: this build of the library leaves out the affine refinement "
+                        "(TVO_WITH_AFFINE off): affine_win_size must be 0\n");
             goto cleanup;
         }
         fprintf(stderr,
@@ -715,7 +717,8 @@ int main(int argc, char **argv)
         lens_dk[0] = res.lens_dk[0];
         lens_dk[1] = res.lens_dk[1];
         if (res.lens_update && !o.quiet)
-            fprintf(stderr, "tvo_replay: lens refined at t=%lld ns: k1 %+.5f, k2 %+.5f from the calibration's\n",
+            fprintf(stderr,
+                    "tvo_replay: lens refined at t=%lld ns: k1 %+.5f, k2 %+.5f from the calibration's\n",
                     (long long)t_ns, res.lens_dk[0], res.lens_dk[1]);
         gain_retries += res.gain_retry != 0;
         pred_rescues += res.pred_rescue != 0;

@@ -45,8 +45,8 @@ size_t tvo_lens_scratch_size(int32_t max_poses, int32_t max_points, int32_t max_
     nc = 6 * (size_t)(max_poses - 1) + 2;
     s = tvo_arena_round(tvo_size_mul(tvo_size_mul(nc, nc), sizeof(double)));    /* S */
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(nc, 3 * sizeof(double)))); /* g, Y (2 columns) */
-    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul((size_t)max_poses, 18 * sizeof(double)))); /* B */
-    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul((size_t)max_poses, sizeof(int32_t))));     /* seen */
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul((size_t)max_poses, 18 * sizeof(double))));  /* B */
+    s = tvo_size_add(s, tvo_arena_round(tvo_size_mul((size_t)max_poses, sizeof(int32_t))));      /* seen */
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul((size_t)max_points + 1, sizeof(int32_t)))); /* start */
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul((size_t)max_obs, sizeof(int32_t))));        /* order */
     return s;
@@ -185,7 +185,7 @@ static void chol_solve(const double *S, int32_t n, int32_t ld, double *b)
 }
 
 /* the block row offset of pose i (>= 1) in S, and of dk */
-#define POSE_ROW(i) (6 * ((i) - 1))
+#define POSE_ROW(i) (6 * ((i)-1))
 
 int tvo_lens_window(const tvo_camera *cam, const tvo_ba_problem *p, double huber_px, void *scratch,
                     size_t scratch_size, tvo_lens_block *out)
@@ -307,7 +307,7 @@ int tvo_lens_window(const tvo_camera *cam, const tvo_ba_problem *p, double huber
                     double *Sa = S + (size_t)(ra + a) * (size_t)nc;
                     for (int b = 0; b < nrb; ++b)
                         Sa[rb + b] -= M[3 * a] * Bb[3 * b] + M[3 * a + 1] * Bb[3 * b + 1] +
-                                      M[3 * a + 2] * Bb[3 * b + 2];
+                                M[3 * a + 2] * Bb[3 * b + 2];
                 }
             }
         }
@@ -415,7 +415,8 @@ int tvo_lens_remap(const tvo_camera *from, const tvo_camera *to, tvo_point2d *x)
 {
     double u, v;
     tvo_point2d y;
-    if (tvo_camera_distort_point(from, x, &u, &v) != TVO_OK || tvo_camera_undistort_point(to, u, v, &y) != TVO_OK)
+    if (tvo_camera_distort_point(from, x, &u, &v) != TVO_OK ||
+        tvo_camera_undistort_point(to, u, v, &y) != TVO_OK)
         return 0;
     *x = y;
     return 1;
@@ -466,7 +467,8 @@ static double border_dist(const tvo_camera *cam, const double da[2], const doubl
         double u, v, ua, va, ub, vb, dd;
         tvo_point2d x;
         border_point(cam, i, &u, &v);
-        if (tvo_camera_undistort_point(cam, u, v, &x) != TVO_OK || tvo_camera_distort_point(&ca, &x, &ua, &va) != TVO_OK ||
+        if (tvo_camera_undistort_point(cam, u, v, &x) != TVO_OK ||
+            tvo_camera_distort_point(&ca, &x, &ua, &va) != TVO_OK ||
             tvo_camera_distort_point(&cb, &x, &ub, &vb) != TVO_OK)
             return -1.0;
         dd = sqrt((ua - ub) * (ua - ub) + (va - vb) * (va - vb));
@@ -488,7 +490,8 @@ tvo_lens_verdict tvo_lens_decide(const tvo_lens *s, const tvo_camera *cam, doubl
         *shift_px = 0.0;
     if (s->n < TVO_LENS_MIN_BLOCKS)
         return TVO_LENS_WAIT;
-    if (!combine(s, 0, s->n, d, C, I) || !combine(s, 0, half, dA, CA, IA) || !combine(s, half, s->n, dB, CB, IB))
+    if (!combine(s, 0, s->n, d, C, I) || !combine(s, 0, half, dA, CA, IA) ||
+        !combine(s, half, s->n, dB, CB, IB))
         return TVO_LENS_SMALL;
     if (dk != NULL) {
         dk[0] = d[0];

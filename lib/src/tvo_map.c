@@ -162,8 +162,9 @@ static size_t kf_scratch(const tvo_vo_config *cfg)
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(w, sizeof(tvo_ba_rot_prior))));
 #if TVO_WITH_LENS
     if (cfg->lens_refine)
-        s = tvo_size_add(s, tvo_arena_round(tvo_lens_scratch_size(cfg->map_window, cfg->map_max_landmarks,
-                                                                   cfg->map_window * cfg->max_tracks)));
+        s = tvo_size_add(s,
+                         tvo_arena_round(tvo_lens_scratch_size(cfg->map_window, cfg->map_max_landmarks,
+                                                               cfg->map_window * cfg->max_tracks)));
 #endif
     return tvo_size_add(s, tvo_arena_round(tvo_ba_scratch_size(&bc)));
 }
@@ -1297,8 +1298,7 @@ static void bundle_adjust(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *
         memcpy(m->lm[b.pt2lm[q]].X, b.X[q], sizeof(b.X[q]));
 #if TVO_WITH_LENS
     /* a lens block from a window that shares no keyframe with the last block's (tvo_lens.h) */
-    if (cfg->lens_refine && b.ls != NULL && b.p.n_poses == m->window &&
-        kf_at(m, 0)->id > m->lens_kf) {
+    if (cfg->lens_refine && b.ls != NULL && b.p.n_poses == m->window && kf_at(m, 0)->id > m->lens_kf) {
         if (tvo_lens_window(&cfg->camera, &b.p, cfg->map_ba_huber_px, b.ls, b.ls_size, &out->lens)) {
             out->lens_ok = 1;
             m->lens_kf = kf_at(m, m->n_kf - 1)->id;

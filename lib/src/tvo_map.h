@@ -114,7 +114,7 @@ typedef struct tvo_map {
     double chain_R[9];
     int32_t chain_ok;
     int32_t lm_cursor; /* where the search for a free landmark slot starts */
-    int32_t lens_kf;   /* id of the newest keyframe of the last window that gave a lens block (cfg.lens_refine) */
+    int32_t lens_kf; /* id of the newest keyframe of the last window that gave a lens block (cfg.lens_refine) */
 } tvo_map;
 
 /* What the map did with a frame (filled into the VO result by tvo_vo.c). */
@@ -124,8 +124,8 @@ typedef struct tvo_map_frame {
     int32_t points;     /* landmarks used for the pose (inliers) */
     int32_t new_points; /* landmarks triangulated in this frame */
     int32_t ba_iterations, ba_flags;
-    tvo_pose T_c_w; /* valid when state is TRACKING or INITIALISED */
-    int32_t lens_ok;     /* 1: the keyframe's adjusted window gave a lens block (cfg.lens_refine; tvo_lens.h) */
+    tvo_pose T_c_w;  /* valid when state is TRACKING or INITIALISED */
+    int32_t lens_ok; /* 1: the keyframe's adjusted window gave a lens block (cfg.lens_refine; tvo_lens.h) */
     tvo_lens_block lens; /* valid when lens_ok */
 } tvo_map_frame;
 

@@ -529,8 +529,8 @@ static void set_r2_max(tvo_vo *vo)
     vo->r2_max = 0.0;
     for (int i = 0; i < 4; ++i) {
         tvo_point2d c;
-        if (tvo_camera_undistort_point(cam, (i & 1) ? cam->width - 1 : 0, (i & 2) ? cam->height - 1 : 0, &c) ==
-            TVO_OK) {
+        if (tvo_camera_undistort_point(cam, (i & 1) ? cam->width - 1 : 0, (i & 2) ? cam->height - 1 : 0,
+                                       &c) == TVO_OK) {
             const double r2 = 1.21 * (c.x * c.x + c.y * c.y); /* (1.1 x the corner's radius)^2 */
             vo->r2_max = r2 > vo->r2_max ? r2 : vo->r2_max;
         }
@@ -549,9 +549,10 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
         return TVO_ERR_NULL;
     *out = NULL;
     if (!config_valid(cfg_in))
-        return (!TVO_WITH_AFFINE && cfg_in->affine_win_size != 0) || (!TVO_WITH_LENS && cfg_in->lens_refine == 1)
-                   ? TVO_ERR_UNSUPPORTED
-                   : TVO_ERR_ARG;
+        return (!TVO_WITH_AFFINE && cfg_in->affine_win_size != 0) ||
+                        (!TVO_WITH_LENS && cfg_in->lens_refine == 1)
+                ? TVO_ERR_UNSUPPORTED
+                : TVO_ERR_ARG;
     cfg_r = resolved(cfg_in);
     if (mem_size < layout_size(cfg))
         return TVO_ERR_NO_MEMORY;

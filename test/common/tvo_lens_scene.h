@@ -52,7 +52,8 @@ static inline double tvo_ls_gauss(uint32_t *s)
 
 /* The window: pixels of lens `truth` plus noise_px of noise, stored undistorted with lens `cfg`; poses 0
  * and 1 flagged fixed. 0 when a library call fails. */
-static inline int tvo_ls_make(tvo_lens_scene *sc, const tvo_camera *truth, const tvo_camera *cfg, double noise_px)
+static inline int tvo_ls_make(tvo_lens_scene *sc, const tvo_camera *truth, const tvo_camera *cfg,
+                              double noise_px)
 {
     uint32_t s = 12345u;
     int32_t no = 0;
@@ -60,7 +61,8 @@ static inline int tvo_ls_make(tvo_lens_scene *sc, const tvo_camera *truth, const
         const double w[3] = {0.0, 0.03 * i, 0.0}, C[3] = {0.2 * i, 0.0, 0.5 * i};
         tvo_la_so3_exp(w, sc->T[i].R);
         for (int r = 0; r < 3; ++r) /* t = -R C */
-            sc->T[i].t[r] = -(sc->T[i].R[3 * r] * C[0] + sc->T[i].R[3 * r + 1] * C[1] + sc->T[i].R[3 * r + 2] * C[2]);
+            sc->T[i].t[r] = -(sc->T[i].R[3 * r] * C[0] + sc->T[i].R[3 * r + 1] * C[1] +
+                              sc->T[i].R[3 * r + 2] * C[2]);
         sc->fixed[i] = (uint8_t)(i < 2);
     }
     for (int j = 0; j < TVO_LS_POINTS; ++j) {
@@ -72,7 +74,7 @@ static inline int tvo_ls_make(tvo_lens_scene *sc, const tvo_camera *truth, const
             tvo_point2d x, xn;
             for (int r = 0; r < 3; ++r)
                 P[r] = sc->T[i].R[3 * r] * sc->X[j][0] + sc->T[i].R[3 * r + 1] * sc->X[j][1] +
-                       sc->T[i].R[3 * r + 2] * sc->X[j][2] + sc->T[i].t[r];
+                        sc->T[i].R[3 * r + 2] * sc->X[j][2] + sc->T[i].t[r];
             x.x = P[0] / P[2];
             x.y = P[1] / P[2];
             if (tvo_camera_distort_point(truth, &x, &u, &v) != TVO_OK)

@@ -181,9 +181,9 @@ static void test_decide_adopts(void **state)
  * halves disagree and nothing is adopted, however many follow. */
 static void test_decide_drift_refused(void **state)
 {
-    const tvo_lens_block b[6] = {blk(0.047, 0.0, 0.002, 0.003),  blk(0.021, 0.0, 0.005, 0.006),
-                                 blk(0.012, 0.0, 0.003, 0.004),  blk(0.006, 0.0, 0.003, 0.004),
-                                 blk(0.002, 0.0, 0.003, 0.004),  blk(0.001, 0.0, 0.003, 0.004)};
+    const tvo_lens_block b[6] = {blk(0.047, 0.0, 0.002, 0.003), blk(0.021, 0.0, 0.005, 0.006),
+                                 blk(0.012, 0.0, 0.003, 0.004), blk(0.006, 0.0, 0.003, 0.004),
+                                 blk(0.002, 0.0, 0.003, 0.004), blk(0.001, 0.0, 0.003, 0.004)};
     double dk[2];
     (void)state;
     for (int n = 2; n <= 6; ++n)
@@ -203,7 +203,8 @@ static void test_decide_close_halves(void **state)
 /* Too small (a render's 0.3 px), not significant, too large, or a lens that folds: not adopted. */
 static void test_decide_small_large(void **state)
 {
-    const tvo_lens_block tiny[2] = {blk(-0.0004, 0.0004, 0.0003, 0.0002), blk(-0.0004, 0.0005, 0.0004, 0.0002)};
+    const tvo_lens_block tiny[2] = {blk(-0.0004, 0.0004, 0.0003, 0.0002),
+                                    blk(-0.0004, 0.0005, 0.0004, 0.0002)};
     const tvo_lens_block loose[2] = {blk(0.02, 0.0, 0.02, 0.01), blk(0.025, 0.0, 0.02, 0.01)};
     const tvo_lens_block huge[2] = {blk(0.2, 0.0, 0.002, 0.002), blk(0.2, 0.0, 0.002, 0.002)};
     const tvo_lens_block fold[2] = {blk(-0.9, 0.0, 0.002, 0.002), blk(-0.9, 0.0, 0.002, 0.002)};
@@ -297,10 +298,14 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
 #if TVO_WITH_LENS
-        cmocka_unit_test(test_window_recovers_change), cmocka_unit_test(test_window_noise),
-        cmocka_unit_test(test_window_refuses),         cmocka_unit_test(test_decide_adopts),
-        cmocka_unit_test(test_decide_drift_refused),   cmocka_unit_test(test_decide_close_halves),
-        cmocka_unit_test(test_decide_small_large),     cmocka_unit_test(test_blocks_ring),
+        cmocka_unit_test(test_window_recovers_change),
+        cmocka_unit_test(test_window_noise),
+        cmocka_unit_test(test_window_refuses),
+        cmocka_unit_test(test_decide_adopts),
+        cmocka_unit_test(test_decide_drift_refused),
+        cmocka_unit_test(test_decide_close_halves),
+        cmocka_unit_test(test_decide_small_large),
+        cmocka_unit_test(test_blocks_ring),
         cmocka_unit_test(test_remap),
 #endif
         cmocka_unit_test(test_vo_config),
