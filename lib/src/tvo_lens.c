@@ -129,7 +129,7 @@ static int sym3_inv(const double V[9], double Vi[9])
         }
     /* Vi = L^-T L^-1, column by column */
     for (int c = 0; c < 3; ++c) {
-        double yv[3], xv[3];
+        double yv[3] = {0.0, 0.0, 0.0}, xv[3] = {0.0, 0.0, 0.0};
         for (int i = 0; i < 3; ++i) {
             d = i == c ? 1.0 : 0.0;
             for (int m = 0; m < i; ++m)
