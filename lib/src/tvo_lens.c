@@ -184,143 +184,178 @@ static void chol_solve(const double *S, int32_t n, int32_t ld, double *b)
     }
 }
 
-/* the block row offset of pose i (>= 1) in S, and of dk */
+/* the block row offset of pose i (>= 1) in S */
 #define POSE_ROW(i) (6 * ((i)-1))
 
-int tvo_lens_window(const tvo_camera *cam, const tvo_ba_problem *p, double huber_px, void *scratch,
-                    size_t scratch_size, tvo_lens_block *out)
+/* tvo_lens_window's work: the system S (nc x nc: the free poses' 6 (P - 1) rows, then dk's 2) and g,
+ * one column of A^-1 (Y), each seen pose's 6x3 block W of the point being eliminated (B) and the list of
+ * those poses (seen), the observations grouped by point (order; run j ends at end[j]), the sums. */
+typedef struct lens_ws {
+    const tvo_camera *cam;
+    const tvo_ba_problem *p;
+    double huber_px, k[5];
+    int32_t na, nc;
+    double *S, *g, *Y, *B;
+    int32_t *seen, *end, *order;
+    double sum_we2, drop; /* the weighted squared residuals, and what the whole step removes of them */
+    int32_t n_pts, n_used;
+} lens_ws;
+
+static int ws_carve(lens_ws *w, void *scratch, size_t scratch_size)
 {
+    const tvo_ba_problem *p = w->p;
     tvo_arena ar;
-    double k[5], *S, *g, *Y, *B, sum_we2 = 0.0, drop = 0.0, diag_max = 0.0;
-    int32_t *seen, *start, *order, P, na, nc, n_pts = 0, n_used = 0;
-    if (!tvo_lens_supported(cam) || p == NULL || out == NULL || p->n_poses < 2 || p->n_points <= 0 ||
-        p->n_obs <= 0 || !(huber_px > 0.0))
-        return 0;
-    P = p->n_poses;
-    na = 6 * (P - 1);
-    nc = na + 2;
-    if (scratch == NULL || scratch_size < tvo_lens_scratch_size(P, p->n_points, p->n_obs))
-        return 0;
     tvo_arena_init(&ar, scratch, scratch_size);
-    S = (double *)tvo_arena_alloc(&ar, (size_t)nc * (size_t)nc * sizeof(double));
-    g = (double *)tvo_arena_alloc(&ar, (size_t)nc * 3 * sizeof(double));
-    B = (double *)tvo_arena_alloc(&ar, (size_t)P * 18 * sizeof(double));
-    seen = (int32_t *)tvo_arena_alloc(&ar, (size_t)P * sizeof(int32_t));
-    start = (int32_t *)tvo_arena_alloc(&ar, ((size_t)p->n_points + 1) * sizeof(int32_t));
-    order = (int32_t *)tvo_arena_alloc(&ar, (size_t)p->n_obs * sizeof(int32_t));
-    if (S == NULL || g == NULL || B == NULL || seen == NULL || start == NULL || order == NULL)
+    w->S = (double *)tvo_arena_alloc(&ar, (size_t)w->nc * (size_t)w->nc * sizeof(double));
+    w->g = (double *)tvo_arena_alloc(&ar, (size_t)w->nc * 3 * sizeof(double));
+    w->B = (double *)tvo_arena_alloc(&ar, (size_t)p->n_poses * 18 * sizeof(double));
+    w->seen = (int32_t *)tvo_arena_alloc(&ar, (size_t)p->n_poses * sizeof(int32_t));
+    w->end = (int32_t *)tvo_arena_alloc(&ar, ((size_t)p->n_points + 1) * sizeof(int32_t));
+    w->order = (int32_t *)tvo_arena_alloc(&ar, (size_t)p->n_obs * sizeof(int32_t));
+    if (w->S == NULL || w->g == NULL || w->B == NULL || w->seen == NULL || w->end == NULL || w->order == NULL)
         return 0;
-    Y = g + nc;
-    radtan_k(cam, k);
-    memset(S, 0, (size_t)nc * (size_t)nc * sizeof(double));
-    memset(g, 0, (size_t)nc * sizeof(double));
-    /* the observations grouped by point (a stable counting sort) */
-    memset(start, 0, ((size_t)p->n_points + 1) * sizeof(int32_t));
+    w->Y = w->g + w->nc;
+    memset(w->S, 0, (size_t)w->nc * (size_t)w->nc * sizeof(double));
+    memset(w->g, 0, (size_t)w->nc * sizeof(double));
+    return 1;
+}
+
+/* The observations grouped by point (a stable counting sort); observations that name no pose or point
+ * of the problem are left out. */
+static void group_by_point(lens_ws *w)
+{
+    const tvo_ba_problem *p = w->p;
+    int32_t *end = w->end;
+    memset(end, 0, ((size_t)p->n_points + 1) * sizeof(int32_t));
     for (int32_t o = 0; o < p->n_obs; ++o) {
         const tvo_ba_obs *ob = &p->obs[o];
-        if (ob->point >= 0 && ob->point < p->n_points && ob->pose >= 0 && ob->pose < P)
-            start[ob->point + 1]++;
+        if (ob->point >= 0 && ob->point < p->n_points && ob->pose >= 0 && ob->pose < p->n_poses)
+            end[ob->point + 1]++;
     }
     for (int32_t j = 0; j < p->n_points; ++j)
-        start[j + 1] += start[j];
+        end[j + 1] += end[j];
     for (int32_t o = 0; o < p->n_obs; ++o) {
         const tvo_ba_obs *ob = &p->obs[o];
-        if (ob->point >= 0 && ob->point < p->n_points && ob->pose >= 0 && ob->pose < P)
-            order[start[ob->point]++] = o; /* start[j] ends at the end of point j's run */
+        if (ob->point >= 0 && ob->point < p->n_points && ob->pose >= 0 && ob->pose < p->n_poses)
+            w->order[end[ob->point]++] = o; /* end[j] ends at the end of point j's run */
     }
-    /* start[j] is now the end of point j's run; its beginning is start[j - 1] (0 for j = 0) */
-    for (int32_t j = 0; j < p->n_points; ++j) {
-        const int32_t o0 = j == 0 ? 0 : start[j - 1], o1 = start[j];
-        double V[9] = {0}, Vi[9], gp[3] = {0}, Bk[6] = {0}, we2 = 0.0;
-        int32_t used = 0, ns = 0;
-        lens_lin L;
-        if (o1 - o0 < TVO_LENS_MIN_OBS)
-            continue;
-        for (int32_t q = o0; q < o1; ++q) {
-            const tvo_ba_obs *ob = &p->obs[order[q]];
-            if (!linearise(cam, k, &p->T_c_w[ob->pose], p->X[j], ob, huber_px, &L))
-                continue;
-            ++used;
-            for (int a = 0; a < 3; ++a)
-                for (int b = 0; b < 3; ++b)
-                    V[3 * a + b] += L.w * (L.Jx[a] * L.Jx[b] + L.Jx[3 + a] * L.Jx[3 + b]);
-        }
-        if (used < TVO_LENS_MIN_OBS || !sym3_inv(V, Vi))
-            continue;
-        /* the point takes part: its observations into S and g, its blocks into B / Bk */
-        for (int32_t q = o0; q < o1; ++q) {
-            const tvo_ba_obs *ob = &p->obs[order[q]];
-            const int32_t i = ob->pose;
-            if (!linearise(cam, k, &p->T_c_w[i], p->X[j], ob, huber_px, &L))
-                continue;
-            we2 += L.w * L.e2;
-            for (int a = 0; a < 3; ++a)
-                gp[a] += L.w * (L.Jx[a] * L.r[0] + L.Jx[3 + a] * L.r[1]);
-            for (int a = 0; a < 2; ++a) {
-                double *Sk = S + (size_t)(na + a) * (size_t)nc;
-                for (int b = 0; b < 2; ++b)
-                    Sk[na + b] += L.w * (L.Jk[a] * L.Jk[b] + L.Jk[2 + a] * L.Jk[2 + b]);
-                g[na + a] += L.w * (L.Jk[a] * L.r[0] + L.Jk[2 + a] * L.r[1]);
-                for (int b = 0; b < 3; ++b)
-                    Bk[3 * a + b] += L.w * (L.Jk[a] * L.Jx[b] + L.Jk[2 + a] * L.Jx[3 + b]);
-            }
-            if (i == 0)
-                continue; /* the held pose */
-            {
-                const int32_t r0 = POSE_ROW(i);
-                double *Bi = B + 18 * (size_t)i;
-                int found = 0;
-                for (int32_t s = 0; s < ns; ++s)
-                    found |= seen[s] == i;
-                if (!found) {
-                    seen[ns++] = i;
-                    memset(Bi, 0, 18 * sizeof(double));
-                }
-                for (int a = 0; a < 6; ++a) {
-                    double *Sa = S + (size_t)(r0 + a) * (size_t)nc;
-                    for (int b = 0; b < 6; ++b)
-                        Sa[r0 + b] += L.w * (L.Jc[a] * L.Jc[b] + L.Jc[6 + a] * L.Jc[6 + b]);
-                    for (int b = 0; b < 2; ++b)
-                        Sa[na + b] += L.w * (L.Jc[a] * L.Jk[b] + L.Jc[6 + a] * L.Jk[2 + b]);
-                    g[r0 + a] += L.w * (L.Jc[a] * L.r[0] + L.Jc[6 + a] * L.r[1]);
-                    for (int b = 0; b < 3; ++b)
-                        Bi[3 * a + b] += L.w * (L.Jc[a] * L.Jx[b] + L.Jc[6 + a] * L.Jx[3 + b]);
-                }
-            }
-        }
-        /* the point eliminated: S -= E V^-1 E^T, g -= E V^-1 gp over its blocks (poses seen, dk) */
-        for (int32_t s = 0; s <= ns; ++s) {
-            const int32_t ra = s < ns ? POSE_ROW(seen[s]) : na, nra = s < ns ? 6 : 2;
-            const double *Ba = s < ns ? B + 18 * (size_t)seen[s] : Bk;
-            double M[18];
-            for (int a = 0; a < nra; ++a)
-                for (int c = 0; c < 3; ++c)
-                    M[3 * a + c] = Ba[3 * a] * Vi[c] + Ba[3 * a + 1] * Vi[3 + c] + Ba[3 * a + 2] * Vi[6 + c];
-            for (int a = 0; a < nra; ++a)
-                g[ra + a] -= M[3 * a] * gp[0] + M[3 * a + 1] * gp[1] + M[3 * a + 2] * gp[2];
-            for (int32_t t = 0; t <= ns; ++t) {
-                const int32_t rb = t < ns ? POSE_ROW(seen[t]) : na, nrb = t < ns ? 6 : 2;
-                const double *Bb = t < ns ? B + 18 * (size_t)seen[t] : Bk;
-                if (rb < ra)
-                    continue; /* the upper triangle of blocks; mirrored below */
-                for (int a = 0; a < nra; ++a) {
-                    double *Sa = S + (size_t)(ra + a) * (size_t)nc;
-                    for (int b = 0; b < nrb; ++b)
-                        Sa[rb + b] -= M[3 * a] * Bb[3 * b] + M[3 * a + 1] * Bb[3 * b + 1] +
-                                M[3 * a + 2] * Bb[3 * b + 2];
-                }
-            }
-        }
-        /* the least-squares cost the point's own step removes: gp^T V^-1 gp */
-        for (int a = 0; a < 3; ++a)
-            drop += gp[a] * (Vi[3 * a] * gp[0] + Vi[3 * a + 1] * gp[1] + Vi[3 * a + 2] * gp[2]);
-        sum_we2 += we2;
-        n_used += used;
-        ++n_pts;
+}
+
+/* One observation of point j into S, g and the point's blocks (gp, Bk; B and seen for its pose). */
+static void add_obs(lens_ws *w, const lens_lin *L, int32_t i, double gp[3], double Bk[6], int32_t *ns)
+{
+    const int32_t na = w->na, nc = w->nc;
+    for (int a = 0; a < 3; ++a)
+        gp[a] += L->w * (L->Jx[a] * L->r[0] + L->Jx[3 + a] * L->r[1]);
+    for (int a = 0; a < 2; ++a) {
+        double *Sk = w->S + (size_t)(na + a) * (size_t)nc;
+        for (int b = 0; b < 2; ++b)
+            Sk[na + b] += L->w * (L->Jk[a] * L->Jk[b] + L->Jk[2 + a] * L->Jk[2 + b]);
+        w->g[na + a] += L->w * (L->Jk[a] * L->r[0] + L->Jk[2 + a] * L->r[1]);
+        for (int b = 0; b < 3; ++b)
+            Bk[3 * a + b] += L->w * (L->Jk[a] * L->Jx[b] + L->Jk[2 + a] * L->Jx[3 + b]);
     }
-    if (n_pts < TVO_LENS_MIN_POINTS)
+    if (i == 0)
+        return; /* the held pose */
+    {
+        const int32_t r0 = POSE_ROW(i);
+        double *Bi = w->B + 18 * (size_t)i;
+        int found = 0;
+        for (int32_t s = 0; s < *ns; ++s)
+            found |= w->seen[s] == i;
+        if (!found) {
+            w->seen[(*ns)++] = i;
+            memset(Bi, 0, 18 * sizeof(double));
+        }
+        for (int a = 0; a < 6; ++a) {
+            double *Sa = w->S + (size_t)(r0 + a) * (size_t)nc;
+            for (int b = 0; b < 6; ++b)
+                Sa[r0 + b] += L->w * (L->Jc[a] * L->Jc[b] + L->Jc[6 + a] * L->Jc[6 + b]);
+            for (int b = 0; b < 2; ++b)
+                Sa[na + b] += L->w * (L->Jc[a] * L->Jk[b] + L->Jc[6 + a] * L->Jk[2 + b]);
+            w->g[r0 + a] += L->w * (L->Jc[a] * L->r[0] + L->Jc[6 + a] * L->r[1]);
+            for (int b = 0; b < 3; ++b)
+                Bi[3 * a + b] += L->w * (L->Jc[a] * L->Jx[b] + L->Jc[6 + a] * L->Jx[3 + b]);
+        }
+    }
+}
+
+/* The point eliminated: S -= E V^-1 E^T and g -= E V^-1 gp over its blocks (the ns poses seen, then dk),
+ * written in the upper triangle of blocks (rows of the block that comes first). */
+static void eliminate_point(lens_ws *w, const double Vi[9], const double gp[3], const double Bk[6],
+                            int32_t ns)
+{
+    const int32_t na = w->na, nc = w->nc;
+    for (int32_t s = 0; s <= ns; ++s) {
+        const int32_t ra = s < ns ? POSE_ROW(w->seen[s]) : na, nra = s < ns ? 6 : 2;
+        const double *Ba = s < ns ? w->B + 18 * (size_t)w->seen[s] : Bk;
+        double M[18];
+        for (int a = 0; a < nra; ++a)
+            for (int c = 0; c < 3; ++c)
+                M[3 * a + c] = Ba[3 * a] * Vi[c] + Ba[3 * a + 1] * Vi[3 + c] + Ba[3 * a + 2] * Vi[6 + c];
+        for (int a = 0; a < nra; ++a)
+            w->g[ra + a] -= M[3 * a] * gp[0] + M[3 * a + 1] * gp[1] + M[3 * a + 2] * gp[2];
+        for (int32_t t = 0; t <= ns; ++t) {
+            const int32_t rb = t < ns ? POSE_ROW(w->seen[t]) : na, nrb = t < ns ? 6 : 2;
+            const double *Bb = t < ns ? w->B + 18 * (size_t)w->seen[t] : Bk;
+            if (rb < ra)
+                continue;
+            for (int a = 0; a < nra; ++a) {
+                double *Sa = w->S + (size_t)(ra + a) * (size_t)nc;
+                for (int b = 0; b < nrb; ++b)
+                    Sa[rb + b] -= M[3 * a] * Bb[3 * b] + M[3 * a + 1] * Bb[3 * b + 1] +
+                            M[3 * a + 2] * Bb[3 * b + 2];
+            }
+        }
+    }
+}
+
+/* Point j: its usable observations (at least TVO_LENS_MIN_OBS, and a well-conditioned 3x3 block) into
+ * the system, the point eliminated. 1 when it took part. */
+static int add_point(lens_ws *w, int32_t j)
+{
+    const tvo_ba_problem *p = w->p;
+    const int32_t o0 = j == 0 ? 0 : w->end[j - 1], o1 = w->end[j];
+    double V[9] = {0}, Vi[9], gp[3] = {0}, Bk[6] = {0}, we2 = 0.0;
+    int32_t used = 0, ns = 0;
+    lens_lin L;
+    if (o1 - o0 < TVO_LENS_MIN_OBS)
         return 0;
-    /* mirror the upper block triangle into the lower one (blocks at ra <= rb were written in rows ra) */
+    for (int32_t q = o0; q < o1; ++q) {
+        const tvo_ba_obs *ob = &p->obs[w->order[q]];
+        if (!linearise(w->cam, w->k, &p->T_c_w[ob->pose], p->X[j], ob, w->huber_px, &L))
+            continue;
+        ++used;
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b)
+                V[3 * a + b] += L.w * (L.Jx[a] * L.Jx[b] + L.Jx[3 + a] * L.Jx[3 + b]);
+    }
+    if (used < TVO_LENS_MIN_OBS || !sym3_inv(V, Vi))
+        return 0;
+    for (int32_t q = o0; q < o1; ++q) {
+        const tvo_ba_obs *ob = &p->obs[w->order[q]];
+        if (!linearise(w->cam, w->k, &p->T_c_w[ob->pose], p->X[j], ob, w->huber_px, &L))
+            continue;
+        we2 += L.w * L.e2;
+        add_obs(w, &L, ob->pose, gp, Bk, &ns);
+    }
+    eliminate_point(w, Vi, gp, Bk, ns);
+    /* the least-squares cost the point's own step removes: gp^T V^-1 gp */
+    for (int a = 0; a < 3; ++a)
+        w->drop += gp[a] * (Vi[3 * a] * gp[0] + Vi[3 * a + 1] * gp[1] + Vi[3 * a + 2] * gp[2]);
+    w->sum_we2 += we2;
+    w->n_used += used;
+    w->n_pts++;
+    return 1;
+}
+
+/* The poses eliminated (H = S_kk - S_ak^T A^-1 S_ak, gk = g_k - S_ak^T A^-1 g_a, A regularised for the
+ * scale) and the block made. 0 when A or H is not positive definite or a value is not finite. */
+static int finish_block(lens_ws *w, tvo_lens_block *out)
+{
+    const int32_t na = w->na, nc = w->nc;
+    double *S = w->S, *g = w->g, *col = w->Y, H[4], gk[2], det, dof, s2, dk[2], diag_max = 0.0;
+    /* mirror the upper block triangle into the lower one */
     for (int32_t a = 0; a < nc; ++a)
         for (int32_t b = 0; b < a; ++b)
             S[(size_t)a * (size_t)nc + (size_t)b] = S[(size_t)b * (size_t)nc + (size_t)a];
@@ -331,58 +366,79 @@ int tvo_lens_window(const tvo_camera *cam, const tvo_ba_problem *p, double huber
         return 0;
     for (int32_t a = 0; a < na; ++a)
         S[(size_t)a * (size_t)nc + (size_t)a] += TVO_LENS_POSE_REG * diag_max;
-    /* the poses eliminated: H = S_kk - S_ak^T A^-1 S_ak, gk = g_k - S_ak^T A^-1 g_a */
-    {
-        double H[4], gk[2], det, dof, s2, dk[2];
-        double *col = Y; /* na doubles, one column at a time */
-        if (!chol(S, na, nc))
-            return 0;
-        for (int a = 0; a < 2; ++a) {
-            gk[a] = g[na + a];
-            for (int b = 0; b < 2; ++b)
-                H[2 * a + b] = S[(size_t)(na + a) * (size_t)nc + (size_t)(na + b)];
-        }
-        for (int c = 0; c < 3; ++c) {
-            for (int32_t r = 0; r < na; ++r)
-                col[r] = c < 2 ? S[(size_t)r * (size_t)nc + (size_t)(na + c)] : g[r];
-            chol_solve(S, na, nc, col);
-            if (c == 2) /* ...and the poses' step: g_a^T A^-1 g_a */
-                for (int32_t r = 0; r < na; ++r)
-                    drop += g[r] * col[r];
-            for (int a = 0; a < 2; ++a) {
-                double s = 0.0;
-                for (int32_t r = 0; r < na; ++r)
-                    s += S[(size_t)r * (size_t)nc + (size_t)(na + a)] * col[r];
-                if (c < 2)
-                    H[2 * a + c] -= s;
-                else
-                    gk[a] -= s;
-            }
-        }
-        H[1] = H[2] = 0.5 * (H[1] + H[2]);
-        det = H[0] * H[3] - H[1] * H[2];
-        if (!(H[0] > 0.0) || !(det > 1e-12 * H[0] * H[3]) || !isfinite(det) || !isfinite(gk[0]) ||
-            !isfinite(gk[1]))
-            return 0;
-        dk[0] = -(H[3] * gk[0] - H[1] * gk[1]) / det;
-        dk[1] = -(-H[2] * gk[0] + H[0] * gk[1]) / det;
-        /* the weighted residuals' variance after the whole step (points, poses and dk): the lens error
-           itself is not counted as noise */
-        drop += -(gk[0] * dk[0] + gk[1] * dk[1]);
-        dof = 2.0 * n_used - 3.0 * n_pts - na - 1.0;
-        s2 = (sum_we2 - drop) / (dof > 1.0 ? dof : 1.0);
-        if (s2 < TVO_LENS_MIN_S2)
-            s2 = TVO_LENS_MIN_S2;
-        if (!(s2 > 0.0) || !isfinite(s2) || !isfinite(dk[0]) || !isfinite(dk[1]))
-            return 0;
-        for (int a = 0; a < 4; ++a)
-            out->I[a] = H[a] / s2;
-        out->h[0] = out->I[0] * dk[0] + out->I[1] * dk[1];
-        out->h[1] = out->I[2] * dk[0] + out->I[3] * dk[1];
-        out->s2 = s2;
-        out->n_obs = n_used;
+    if (!chol(S, na, nc))
+        return 0;
+    for (int a = 0; a < 2; ++a) {
+        gk[a] = g[na + a];
+        for (int b = 0; b < 2; ++b)
+            H[2 * a + b] = S[(size_t)(na + a) * (size_t)nc + (size_t)(na + b)];
     }
+    for (int c = 0; c < 3; ++c) {
+        for (int32_t r = 0; r < na; ++r)
+            col[r] = c < 2 ? S[(size_t)r * (size_t)nc + (size_t)(na + c)] : g[r];
+        chol_solve(S, na, nc, col);
+        if (c == 2) /* ...and the poses' step: g_a^T A^-1 g_a */
+            for (int32_t r = 0; r < na; ++r)
+                w->drop += g[r] * col[r];
+        for (int a = 0; a < 2; ++a) {
+            double sum = 0.0;
+            for (int32_t r = 0; r < na; ++r)
+                sum += S[(size_t)r * (size_t)nc + (size_t)(na + a)] * col[r];
+            if (c < 2)
+                H[2 * a + c] -= sum;
+            else
+                gk[a] -= sum;
+        }
+    }
+    H[1] = H[2] = 0.5 * (H[1] + H[2]);
+    det = H[0] * H[3] - H[1] * H[2];
+    if (!(H[0] > 0.0) || !(det > 1e-12 * H[0] * H[3]) || !isfinite(det) || !isfinite(gk[0]) ||
+        !isfinite(gk[1]))
+        return 0;
+    dk[0] = -(H[3] * gk[0] - H[1] * gk[1]) / det;
+    dk[1] = -(-H[2] * gk[0] + H[0] * gk[1]) / det;
+    /* the weighted residuals' variance after the whole step (points, poses and dk): the lens error itself
+       is not counted as noise */
+    w->drop += -(gk[0] * dk[0] + gk[1] * dk[1]);
+    dof = 2.0 * w->n_used - 3.0 * w->n_pts - na - 1.0;
+    s2 = (w->sum_we2 - w->drop) / (dof > 1.0 ? dof : 1.0);
+    if (s2 < TVO_LENS_MIN_S2)
+        s2 = TVO_LENS_MIN_S2;
+    if (!isfinite(s2) || !isfinite(dk[0]) || !isfinite(dk[1]))
+        return 0;
+    for (int a = 0; a < 4; ++a)
+        out->I[a] = H[a] / s2;
+    out->h[0] = out->I[0] * dk[0] + out->I[1] * dk[1];
+    out->h[1] = out->I[2] * dk[0] + out->I[3] * dk[1];
+    out->s2 = s2;
+    out->n_obs = w->n_used;
     return 1;
+}
+
+int tvo_lens_window(const tvo_camera *cam, const tvo_ba_problem *p, double huber_px, void *scratch,
+                    size_t scratch_size, tvo_lens_block *out)
+{
+    lens_ws w;
+    if (!tvo_lens_supported(cam) || p == NULL || out == NULL || p->n_poses < 2 || p->n_points <= 0 ||
+        p->n_obs <= 0 || !(huber_px > 0.0))
+        return 0;
+    if (scratch == NULL || scratch_size < tvo_lens_scratch_size(p->n_poses, p->n_points, p->n_obs))
+        return 0;
+    memset(&w, 0, sizeof(w));
+    w.cam = cam;
+    w.p = p;
+    w.huber_px = huber_px;
+    w.na = 6 * (p->n_poses - 1);
+    w.nc = w.na + 2;
+    radtan_k(cam, w.k);
+    if (!ws_carve(&w, scratch, scratch_size))
+        return 0;
+    group_by_point(&w);
+    for (int32_t j = 0; j < p->n_points; ++j)
+        (void)add_point(&w, j);
+    if (w.n_pts < TVO_LENS_MIN_POINTS)
+        return 0;
+    return finish_block(&w, out);
 }
 
 void tvo_lens_clear_blocks(tvo_lens *s)
