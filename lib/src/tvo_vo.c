@@ -259,7 +259,8 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
        jerk), by all of them elsewhere (docs/rules.md, "A forty-sixth rule") */
     cfg->map_rot_prior_obs = 3;
     cfg->map_rot_prior_obs_frames = 30;
-    cfg->lens_refine = 0;
+    /* the lens refined on the run where the build has it (docs/rules.md, "A forty-eighth rule") */
+    cfg->lens_refine = TVO_WITH_LENS;
     cfg->clock = NULL;
     cfg->clock_user = NULL;
     /* the tracker, window and chain step: the balanced preset's (docs/rules.md, "A ninth rule"), or
@@ -300,6 +301,7 @@ tvo_status tvo_vo_config_preset(tvo_vo_config *cfg, const tvo_camera *camera, tv
         cfg->lk.max_level = 2;
         cfg->map_window = 5;
         cfg->map_max_landmarks = 160;
+        cfg->lens_refine = 0;
         return TVO_OK;
     default:
         return TVO_ERR_ARG;
@@ -537,6 +539,19 @@ static void set_r2_max(tvo_vo *vo)
     }
 }
 
+#if TVO_WITH_LENS
+/* cfg.lens_refine's state, carved from the arena (NULL when it is exhausted) */
+static vo_lens *lens_alloc(const tvo_vo_config *cfg, tvo_arena *a)
+{
+    vo_lens *l = (vo_lens *)tvo_arena_alloc(a, sizeof(vo_lens));
+    if (l != NULL) {
+        memset(l, 0, sizeof(*l));
+        l->cam0 = cfg->camera;
+    }
+    return l;
+}
+#endif
+
 tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, size_t mem_size)
 {
     tvo_vo_config cfg_r;
@@ -620,13 +635,8 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
     vo->rescue_age = TVO_VO_MAX_RESCUE_FRAMES;
     set_r2_max(vo);
 #if TVO_WITH_LENS
-    if (cfg->lens_refine) {
-        vo->lens = (vo_lens *)tvo_arena_alloc(&a, sizeof(vo_lens));
-        if (vo->lens == NULL)
-            return TVO_ERR_NO_MEMORY;
-        memset(vo->lens, 0, sizeof(*vo->lens));
-        vo->lens->cam0 = cfg->camera;
-    }
+    if (cfg->lens_refine && (vo->lens = lens_alloc(cfg, &a)) == NULL)
+        return TVO_ERR_NO_MEMORY;
 #endif
     vo->scratch_size = scratch_need(cfg);
     vo->scratch = tvo_arena_alloc(&a, vo->scratch_size);

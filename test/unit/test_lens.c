@@ -260,8 +260,9 @@ static void test_remap(void **state)
 }
 #endif
 
-/* The VO's switch: 0 and 1 accepted (1 costs the lens blocks' scratch), anything else refused; a build
- * without the refinement refuses 1 as unsupported. */
+/* The VO's switch: on by default where the build has it (off in the small preset), 0 and 1 accepted (1
+ * costs the lens blocks' scratch), anything else refused; a build without the refinement refuses 1 as
+ * unsupported. */
 static void test_vo_config(void **state)
 {
     const tvo_camera cam = tvo_camera_make_pinhole(320, 240, 250.0, 250.0, 159.5, 119.5);
@@ -269,7 +270,11 @@ static void test_vo_config(void **state)
     size_t off, on;
     (void)state;
     tvo_vo_config_default(&cfg, &cam);
-    assert_int_equal(cfg.lens_refine, 0);
+    assert_int_equal(cfg.lens_refine, TVO_WITH_LENS); /* on where the build has it */
+    assert_int_equal(tvo_vo_config_preset(&cfg, &cam, TVO_VO_PRESET_SMALL), TVO_OK);
+    assert_int_equal(cfg.lens_refine, 0); /* the microcontroller's preset: off */
+    tvo_vo_config_default(&cfg, &cam);
+    cfg.lens_refine = 0;
     off = tvo_vo_required_size(&cfg);
     assert_true(off > 0);
     cfg.lens_refine = 2;

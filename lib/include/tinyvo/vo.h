@@ -317,8 +317,9 @@ typedef struct tvo_vo_config {
                                    from the map's windows and changed when enough windows agree on a
                                    change (docs/camera.md, "The lens refined on the run"); RADTAN and
                                    NONE cameras (NONE becomes RADTAN), never EQUIDISTANT; acts with the
-                                   map only; needs a build with TVO_WITH_LENS (options.h). 0: the lens
-                                   stays as configured (default) */
+                                   map only; needs a build with TVO_WITH_LENS (options.h). Default 1 in
+                                   such builds (docs/rules.md, "A forty-eighth rule"), 0 in the small
+                                   preset and in builds without it. 0: the lens stays as configured */
     tvo_clock_fn clock;               /* optional (NULL: no timings) */
     void *clock_user;
 } tvo_vo_config;
@@ -357,7 +358,8 @@ TVO_API void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
  *                          the least memory of the full-size presets.
  * TVO_VO_PRESET_SMALL      sized for a QVGA (320x240) camera on a microcontroller: the basic preset with
  *                          120 tracks (min_tracks 80, keyframe_min_tracks 40, detect.max_corners 120), 3
- *                          pyramid levels (lk.max_level 2), a map of 5 keyframes and 160 landmarks. At
+ *                          pyramid levels (lk.max_level 2), a map of 5 keyframes and 160 landmarks, the
+ *                          lens as configured (lens_refine 0: a microcontroller build leaves it out). At
  *                          320x240 the VO needs 229,664 bytes on a Cortex-M7 (tools/run-mcu.sh runs it
  *                          there). */
 typedef enum tvo_vo_preset {
