@@ -348,7 +348,8 @@ TVO_API void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
  *                          its instructions; about 1,000 more bytes a track and 54 KB for the store.
  *                          Needs a build with the affine refinement (TVO_WITH_AFFINE, options.h).
  * TVO_VO_PRESET_ACCURATE   the balanced preset with the full tracker on every track (no map prediction):
- *                          more accurate than balanced on the real KITTI 07 and 06, for 1.2-1.3 times the
+ *                          more accurate than balanced on the real KITTI 06 and 01 (KITTI 07 the same once
+ *                          its lens is refined on the run), for 1.2-1.3 times the
  *                          basic preset's instructions and 1.45-1.6 times the two-view time per frame.
  *                          Needs the affine refinement.
  * TVO_VO_PRESET_BASIC      translation-only LK on every track, a window of 6 keyframes with 2 fixed, chain
