@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: windowed bundle adjustment (contract and cost in tinyvo/ba.h). */
 #include "tinyvo/ba.h"
+#include "tinyvo/linalg.h"
 
 #include <math.h>
 #include <string.h>
@@ -216,92 +217,6 @@ static double eval_cost(const tvo_ba_config *c, const tvo_ba_problem *p, const b
 
 /* ---- small dense algebra ---------------------------------------------------------------------- */
 
-/* Inverse of a symmetric 3x3 by Cholesky; 0 when a pivot is not above rel * its diagonal entry. */
-static int chol3_inv(const double A[9], double rel, double Ai[9])
-{
-    double l00, l10, l11, l20, l21, l22, d;
-    double m00, m10, m11, m20, m21, m22; /* L^-1 (lower) */
-    if (!(A[0] > 0.0 && A[4] > 0.0 && A[8] > 0.0))
-        return 0;
-    if (!(A[0] > rel * A[0]))
-        return 0;
-    l00 = sqrt(A[0]);
-    l10 = A[3] / l00;
-    l20 = A[6] / l00;
-    d = A[4] - l10 * l10;
-    if (!(d > rel * A[4]))
-        return 0;
-    l11 = sqrt(d);
-    l21 = (A[7] - l20 * l10) / l11;
-    d = A[8] - l20 * l20 - l21 * l21;
-    if (!(d > rel * A[8]))
-        return 0;
-    l22 = sqrt(d);
-    m00 = 1.0 / l00;
-    m11 = 1.0 / l11;
-    m22 = 1.0 / l22;
-    m10 = -l10 * m00 / l11;
-    m21 = -l21 * m11 / l22;
-    m20 = -(l20 * m00 + l21 * m10) / l22;
-    /* A^-1 = M^T M */
-    Ai[0] = m00 * m00 + m10 * m10 + m20 * m20;
-    Ai[1] = m10 * m11 + m20 * m21;
-    Ai[2] = m20 * m22;
-    Ai[4] = m11 * m11 + m21 * m21;
-    Ai[5] = m21 * m22;
-    Ai[8] = m22 * m22;
-    Ai[3] = Ai[1];
-    Ai[6] = Ai[2];
-    Ai[7] = Ai[5];
-    for (int i = 0; i < 9; ++i)
-        if (!isfinite(Ai[i]))
-            return 0;
-    return 1;
-}
-
-/* In-place Cholesky of the lower triangle of an n x n matrix (row stride n): L L^T. 0 when a pivot is
- * not above rel * its diagonal entry or is not finite. O(n^3 / 6). */
-static int chol_n(double *A, int n, double rel)
-{
-    for (int j = 0; j < n; ++j) {
-        double *rj = A + (size_t)j * (size_t)n;
-        double d = rj[j];
-        const double diag = rj[j];
-        for (int k = 0; k < j; ++k)
-            d -= rj[k] * rj[k];
-        if (!(diag > 0.0 && d > rel * diag && isfinite(d)))
-            return 0;
-        d = sqrt(d);
-        rj[j] = d;
-        for (int i = j + 1; i < n; ++i) {
-            double *ri = A + (size_t)i * (size_t)n;
-            double s = ri[j];
-            for (int k = 0; k < j; ++k)
-                s -= ri[k] * rj[k];
-            ri[j] = s / d;
-        }
-    }
-    return 1;
-}
-
-/* Solves L L^T x = b (x may alias b). */
-static void chol_solve(const double *L, int n, const double *b, double *x)
-{
-    for (int i = 0; i < n; ++i) {
-        const double *ri = L + (size_t)i * (size_t)n;
-        double s = b[i];
-        for (int k = 0; k < i; ++k)
-            s -= ri[k] * x[k];
-        x[i] = s / ri[i];
-    }
-    for (int i = n - 1; i >= 0; --i) {
-        double s = x[i];
-        for (int k = i + 1; k < n; ++k)
-            s -= L[(size_t)k * (size_t)n + (size_t)i] * x[k];
-        x[i] = s / L[(size_t)i * (size_t)n + (size_t)i];
-    }
-}
-
 /* ---- linearisation ---------------------------------------------------------------------------- */
 
 /* One observation linearised at the current state. */
@@ -371,7 +286,7 @@ static int32_t hold_points(const tvo_ba_config *c, const tvo_ba_problem *p, ba_w
             continue;
         for (int a = 0; a < 9; ++a)
             V9[a] = ws->V[j][sym3[a / 3][a % 3]];
-        if (ws->pt_nuse[j] < 2 || !chol3_inv(V9, PIVOT_POINT, Vi)) {
+        if (ws->pt_nuse[j] < 2 || !tvo_la_chol3_inv(V9, PIVOT_POINT, Vi)) {
             ws->pstate[j] = PT_HELD;
             held++;
             continue;
@@ -491,7 +406,7 @@ static int point_inv(const ba_ws *ws, int32_t j, double dmp, double Vi[9])
     Vd[0] *= dmp;
     Vd[4] *= dmp;
     Vd[8] *= dmp;
-    return chol3_inv(Vd, 0.0, Vi);
+    return tvo_la_chol3_inv(Vd, 0.0, Vi);
 }
 
 /* Recomputes free point j's blocks W = Jc^T W Jx with its free poses at the current state (the
@@ -639,12 +554,12 @@ static int build_solve(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *w
                             A[3 * col + r];
             }
     }
-    if (n > 0 && !chol_n(S, n, rel))
+    if (n > 0 && !tvo_la_chol(S, n, n, rel))
         return 0;
     if (!solve)
         return 1;
     if (n > 0)
-        chol_solve(S, n, ws->b, ws->dc);
+        tvo_la_chol_solve(S, n, n, ws->b, ws->dc);
     return back_substitute(c, p, ws, dmp);
 }
 

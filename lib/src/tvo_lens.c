@@ -11,6 +11,8 @@
 #if TVO_WITH_LENS
 
 #include "tinyvo/camera_impl.h"
+#include "tinyvo/linalg.h"
+#include "tinyvo/se3.h"
 
 /* A point takes part when it has at least this many usable observations, and the window when at least
  * TVO_LENS_MIN_POINTS points do. */
@@ -63,8 +65,7 @@ static int linearise(const tvo_camera *cam, const double k[5], const tvo_pose *T
                      const tvo_ba_obs *ob, double huber_px, lens_lin *L)
 {
     double P[3], x, y, z, xd, yd, Jd[4], uo, vo, JP[6], e;
-    for (int i = 0; i < 3; ++i)
-        P[i] = T->R[3 * i] * X[0] + T->R[3 * i + 1] * X[1] + T->R[3 * i + 2] * X[2] + T->t[i];
+    tvo_pose_transform_point(T, X, P);
     z = P[2];
     if (!(z > 1e-9) || !isfinite(P[0]) || !isfinite(P[1]) || !isfinite(ob->x) || !isfinite(ob->y))
         return 0;
@@ -110,7 +111,9 @@ static int linearise(const tvo_camera *cam, const double k[5], const tvo_pose *T
     return 1;
 }
 
-/* 3x3 symmetric inverse by Cholesky; 0 when a pivot is below TVO_LENS_POINT_PIVOT of its entry */
+/* 3x3 symmetric inverse by Cholesky; 0 when a pivot is below TVO_LENS_POINT_PIVOT of its entry. It agrees
+ * with tvo_la_chol3_inv up to rounding, not bit for bit (another order of operations): the lens blocks, and
+ * the runs whose lens they change, were measured with this one. */
 static int sym3_inv(const double V[9], double Vi[9])
 {
     double L[9] = {0}, d;
@@ -146,42 +149,6 @@ static int sym3_inv(const double V[9], double Vi[9])
             Vi[3 * i + c] = xv[i];
     }
     return 1;
-}
-
-/* In-place Cholesky of the n x n leading block of S (row stride ld); 0 when not positive definite */
-static int chol(double *S, int32_t n, int32_t ld)
-{
-    for (int32_t i = 0; i < n; ++i)
-        for (int32_t j = 0; j <= i; ++j) {
-            double s = S[i * ld + j];
-            for (int32_t m = 0; m < j; ++m)
-                s -= S[i * ld + m] * S[j * ld + m];
-            if (i == j) {
-                if (!(s > 0.0))
-                    return 0;
-                S[i * ld + i] = sqrt(s);
-            } else {
-                S[i * ld + j] = s / S[j * ld + j];
-            }
-        }
-    return 1;
-}
-
-/* Solve (L L^T) x = b with L the Cholesky factor in S's lower triangle (x may be b) */
-static void chol_solve(const double *S, int32_t n, int32_t ld, double *b)
-{
-    for (int32_t i = 0; i < n; ++i) {
-        double s = b[i];
-        for (int32_t m = 0; m < i; ++m)
-            s -= S[i * ld + m] * b[m];
-        b[i] = s / S[i * ld + i];
-    }
-    for (int32_t i = n - 1; i >= 0; --i) {
-        double s = b[i];
-        for (int32_t m = i + 1; m < n; ++m)
-            s -= S[m * ld + i] * b[m];
-        b[i] = s / S[i * ld + i];
-    }
 }
 
 /* the block row offset of pose i (>= 1) in S */
@@ -366,7 +333,7 @@ static int finish_block(lens_ws *w, tvo_lens_block *out)
         return 0;
     for (int32_t a = 0; a < na; ++a)
         S[(size_t)a * (size_t)nc + (size_t)a] += TVO_LENS_POSE_REG * diag_max;
-    if (!chol(S, na, nc))
+    if (!tvo_la_chol(S, na, nc, 0.0))
         return 0;
     for (int a = 0; a < 2; ++a) {
         gk[a] = g[na + a];
@@ -376,7 +343,7 @@ static int finish_block(lens_ws *w, tvo_lens_block *out)
     for (int c = 0; c < 3; ++c) {
         for (int32_t r = 0; r < na; ++r)
             col[r] = c < 2 ? S[(size_t)r * (size_t)nc + (size_t)(na + c)] : g[r];
-        chol_solve(S, na, nc, col);
+        tvo_la_chol_solve(S, na, nc, col, col);
         if (c == 2) /* ...and the poses' step: g_a^T A^-1 g_a */
             for (int32_t r = 0; r < na; ++r)
                 w->drop += g[r] * col[r];

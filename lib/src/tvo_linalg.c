@@ -815,3 +815,87 @@ double tvo_la_select_kth(double *a, int32_t n, int32_t k)
     }
     return a[k];
 }
+
+/* ---- Cholesky (the bundle adjustment's and the lens refinement's systems) ----------------------- */
+
+int tvo_la_chol3_inv(const double A[9], double rel, double Ai[9])
+{
+    double l00, l10, l11, l20, l21, l22, d;
+    double m00, m10, m11, m20, m21, m22; /* L^-1 (lower) */
+    if (!(A[0] > 0.0 && A[4] > 0.0 && A[8] > 0.0))
+        return 0;
+    if (!(A[0] > rel * A[0]))
+        return 0;
+    l00 = sqrt(A[0]);
+    l10 = A[3] / l00;
+    l20 = A[6] / l00;
+    d = A[4] - l10 * l10;
+    if (!(d > rel * A[4]))
+        return 0;
+    l11 = sqrt(d);
+    l21 = (A[7] - l20 * l10) / l11;
+    d = A[8] - l20 * l20 - l21 * l21;
+    if (!(d > rel * A[8]))
+        return 0;
+    l22 = sqrt(d);
+    m00 = 1.0 / l00;
+    m11 = 1.0 / l11;
+    m22 = 1.0 / l22;
+    m10 = -l10 * m00 / l11;
+    m21 = -l21 * m11 / l22;
+    m20 = -(l20 * m00 + l21 * m10) / l22;
+    /* A^-1 = M^T M */
+    Ai[0] = m00 * m00 + m10 * m10 + m20 * m20;
+    Ai[1] = m10 * m11 + m20 * m21;
+    Ai[2] = m20 * m22;
+    Ai[4] = m11 * m11 + m21 * m21;
+    Ai[5] = m21 * m22;
+    Ai[8] = m22 * m22;
+    Ai[3] = Ai[1];
+    Ai[6] = Ai[2];
+    Ai[7] = Ai[5];
+    for (int i = 0; i < 9; ++i)
+        if (!isfinite(Ai[i]))
+            return 0;
+    return 1;
+}
+
+int tvo_la_chol(double *A, int n, int ld, double rel)
+{
+    for (int j = 0; j < n; ++j) {
+        double *rj = A + (size_t)j * (size_t)ld;
+        double d = rj[j];
+        const double diag = rj[j];
+        for (int k = 0; k < j; ++k)
+            d -= rj[k] * rj[k];
+        if (!(diag > 0.0 && d > rel * diag && isfinite(d)))
+            return 0;
+        d = sqrt(d);
+        rj[j] = d;
+        for (int i = j + 1; i < n; ++i) {
+            double *ri = A + (size_t)i * (size_t)ld;
+            double s = ri[j];
+            for (int k = 0; k < j; ++k)
+                s -= ri[k] * rj[k];
+            ri[j] = s / d;
+        }
+    }
+    return 1;
+}
+
+void tvo_la_chol_solve(const double *L, int n, int ld, const double *b, double *x)
+{
+    for (int i = 0; i < n; ++i) {
+        const double *ri = L + (size_t)i * (size_t)ld;
+        double s = b[i];
+        for (int k = 0; k < i; ++k)
+            s -= ri[k] * x[k];
+        x[i] = s / ri[i];
+    }
+    for (int i = n - 1; i >= 0; --i) {
+        double s = x[i];
+        for (int k = i + 1; k < n; ++k)
+            s -= L[(size_t)k * (size_t)ld + (size_t)i] * x[k];
+        x[i] = s / L[(size_t)i * (size_t)ld + (size_t)i];
+    }
+}

@@ -56,6 +56,16 @@ tvo_status tvo_la_sym_eig(double *A, int n, double *w, double *V);
  * below 1e-300 or relative 1e-14 of the largest matrix entry. O(n^3). */
 tvo_status tvo_la_solve(double *A, double *b, int n, double *x);
 
+/* Inverse of a symmetric 3x3 A by Cholesky: 1, or 0 when a diagonal entry is not positive, a pivot is not
+ * above rel * its diagonal entry, or an entry of Ai is not finite. */
+int tvo_la_chol3_inv(const double A[9], double rel, double Ai[9]);
+/* In-place Cholesky L L^T of the leading n x n block of A (row stride ld >= n; the lower triangle is
+ * read and overwritten). 1, or 0 when a pivot is not above rel * its diagonal entry or is not finite.
+ * O(n^3 / 6). */
+int tvo_la_chol(double *A, int n, int ld, double rel);
+/* Solves L L^T x = b with L from tvo_la_chol (n, ld as there); x may alias b. O(n^2). */
+void tvo_la_chol_solve(const double *L, int n, int ld, const double *b, double *x);
+
 /* Real roots of the polynomial c[0] + c[1] t + ... + c[deg] t^deg (deg <= 10) by Sturm sequences,
  * bisection and a safeguarded Newton polish. Writes at most deg roots, ascending, to roots[] and
  * returns their count (0 for a constant or all-zero polynomial). Multiple roots are reported once.
