@@ -1319,8 +1319,6 @@ static int map_prior_flags(const tvo_vo *vo, const tvo_vo_result *res)
     return f;
 }
 
-/* The map's part of a frame, after the two-view step: vo->x2 holds the normalised positions of the
- * vo->n carried tracks. R_cur_prev: this frame's two-view rotation, or NULL. Sets vo->T_c_w. */
 #if TVO_WITH_LENS
 /* The lens changed from cfg.camera to *to: every normalised position the VO and its map keep (the
  * tracks' previous, current, keyframe, two-frames-back and waiting positions, the window's observations)
@@ -1367,6 +1365,8 @@ static void lens_step(tvo_vo *vo, const tvo_map_frame *mf, tvo_vo_result *res)
 }
 #endif
 
+/* The map's part of a frame, after the two-view step: vo->x2 holds the normalised positions of the
+ * vo->n carried tracks. R_cur_prev: this frame's two-view rotation, or NULL. Sets vo->T_c_w. */
 static void map_step(tvo_vo *vo, tvo_vo_result *res, int64_t t_ns, const double *R_cur_prev)
 {
     tvo_pose prior;

@@ -19,14 +19,7 @@
 #include "tvo_lens.h"
 #include "tvo_lens_scene.h"
 
-#define NP TVO_LS_POSES
-#define NPTS TVO_LS_POINTS
 typedef tvo_lens_scene scene;
-
-static tvo_camera cam_640(double k1, double k2)
-{
-    return tvo_ls_camera(k1, k2);
-}
 
 static void make_scene(scene *sc, const tvo_camera *truth, const tvo_camera *cfg, double noise_px)
 {
@@ -44,7 +37,7 @@ static void block_estimate(const tvo_lens_block *b, double d[2], double se[2])
 
 static int window(const tvo_camera *cfg, const scene *sc, tvo_lens_block *b)
 {
-    const size_t sz = tvo_lens_scratch_size(NP, NPTS, NP * NPTS);
+    const size_t sz = tvo_lens_scratch_size(TVO_LS_POSES, TVO_LS_POINTS, TVO_LS_POSES * TVO_LS_POINTS);
     void *mem = malloc(sz);
     int ok;
     assert_non_null(mem);
@@ -58,7 +51,7 @@ static int window(const tvo_camera *cfg, const scene *sc, tvo_lens_block *b)
 static void test_window_recovers_change(void **state)
 {
     static scene sc;
-    const tvo_camera truth = cam_640(0.02, -0.01), cfg = cam_640(0.0, 0.0);
+    const tvo_camera truth = tvo_ls_camera(0.02, -0.01), cfg = tvo_ls_camera(0.0, 0.0);
     tvo_lens_block b;
     double d[2], se[2];
     (void)state;
@@ -85,14 +78,13 @@ static void test_window_recovers_change(void **state)
 static void test_window_noise(void **state)
 {
     static scene sc;
-    const tvo_camera truth = cam_640(0.02, -0.01), wrong = cam_640(0.0, 0.0);
+    const tvo_camera truth = tvo_ls_camera(0.02, -0.01), wrong = tvo_ls_camera(0.0, 0.0);
     tvo_lens_block b;
     double d[2], se[2];
     (void)state;
     make_scene(&sc, &truth, &wrong, 0.3);
     assert_int_equal(window(&wrong, &sc, &b), 1);
     block_estimate(&b, d, se);
-    print_message("k1 %.5f (%.5f) k2 %.5f (%.5f) s2 %.4f\n", d[0], se[0], d[1], se[1], b.s2);
     assert_true(se[0] > 0.0 && se[0] < 0.01 && se[1] > 0.0 && se[1] < 0.01);
     assert_true(fabs(d[0] - 0.02) < 4.0 * se[0]);
     assert_true(fabs(d[1] + 0.01) < 4.0 * se[1]);
@@ -107,7 +99,7 @@ static void test_window_noise(void **state)
 static void test_window_refuses(void **state)
 {
     static scene sc;
-    const tvo_camera truth = cam_640(0.0, 0.0);
+    const tvo_camera truth = tvo_ls_camera(0.0, 0.0);
     tvo_camera fish = truth;
     tvo_lens_block b;
     uint8_t small[64];
@@ -119,7 +111,7 @@ static void test_window_refuses(void **state)
     assert_int_equal(tvo_lens_window(&truth, &sc.p, 2.5, small, sizeof(small), &b), 0);
     sc.p.n_points = 20; /* the observations of the others are ignored (out of range) */
     {
-        const size_t sz = tvo_lens_scratch_size(NP, NPTS, NP * NPTS);
+        const size_t sz = tvo_lens_scratch_size(TVO_LS_POSES, TVO_LS_POINTS, TVO_LS_POSES * TVO_LS_POINTS);
         void *mem = malloc(sz);
         int32_t keep = 0;
         for (int32_t o = 0; o < sc.p.n_obs; ++o)
@@ -240,7 +232,7 @@ static void test_blocks_ring(void **state)
  * left unchanged. */
 static void test_remap(void **state)
 {
-    const tvo_camera a = cam_640(0.0, 0.0), b = cam_640(0.03, -0.01);
+    const tvo_camera a = tvo_ls_camera(0.0, 0.0), b = tvo_ls_camera(0.03, -0.01);
     (void)state;
     for (int i = 0; i < 20; ++i) {
         tvo_point2d x = {-0.6 + 0.06 * i, 0.45 - 0.04 * i}, y = x;
