@@ -21,6 +21,11 @@ sequences; the others of any camera, the renders too):
   - reverse:     every frame, the last first, at the original rate with the ground truth moved with the
                  frames: the same path driven backwards (a car reversing; what enters the view now comes
                  in at the borders and leaves at the centre).
+  - stop:        the camera stands still for 50 frames in the middle of the run (a car at a red light):
+                 the middle frame held, each held copy with fresh sensor noise (sigma 2 grey levels), the
+                 frames re-timed at the original rate and the ground truth held still with them; the
+                 map must neither drift nor lose its scale while nothing moves, and go on afterwards.
+  - start:       the same hold of 30 frames on the first frame (a camera switched on at rest, then moving).
 
 Noise is seeded (the same copy on every run). It replays each copy with `tvo_replay --scale none` and the
 given replay arguments, and prints the Sim(3)-aligned ATE (m) of the whole run, the number of frames
@@ -46,7 +51,8 @@ import replay_copies  # noqa: E402  (beside this file)
 from tinyvo_tools import trajio  # noqa: E402
 
 # name: (scale, keep every n-th frame (0: one or two frames on at random, re-timed; -1: every frame, last
-#        first, re-timed), blur sigma px, noise sigma grey levels)
+#        first, re-timed; -2 / -3: every frame with a hold in the middle / at the start, re-timed), blur
+#        sigma px, noise sigma grey levels)
 VARIANTS = {
     "none": (1.0, 1, 0.0, 0.0),
     "blur1": (1.0, 1, 1.0, 0.0),
@@ -56,14 +62,23 @@ VARIANTS = {
     "skip2": (1.0, 2, 0.0, 0.0),
     "jerk": (1.0, 0, 0.0, 0.0),
     "reverse": (1.0, -1, 0.0, 0.0),
+    "stop": (1.0, -2, 0.0, 0.0),
+    "start": (1.0, -3, 0.0, 0.0),
 }
+# the holds of the stop and start copies: frames held, and the sensor noise of each held copy
+HOLD_FRAMES = {-2: 50, -3: 30}
+HOLD_NOISE = 2.0
 
 
 def kept_frames(n: int, every: int) -> list:
     """The indices of the frames a copy keeps: every n-th, (every == 0) steps of 1 or 2 drawn with a
-    fixed seed, or (every < 0) every frame from the last to the first."""
+    fixed seed, (every == -1) every frame from the last to the first, or (every == -2, -3) every frame with
+    the middle or the first one repeated HOLD_FRAMES times."""
     if every > 0:
         return list(range(0, n, every))
+    if every in HOLD_FRAMES:
+        k = n // 2 if every == -2 else 0
+        return list(range(k)) + [k] * HOLD_FRAMES[every] + list(range(k, n))
     if every < 0:
         return list(range(n - 1, -1, -1))
     rng = np.random.default_rng(7)
@@ -90,9 +105,11 @@ def write_copy(seq: str, dst: str, scale: float, every: int, blur: float, noise:
     t_new = [int(t_ns[k]) if every > 0 else int(t_ns[0]) + j * dt for j, k in enumerate(keep)]
     rng = np.random.default_rng(1)
     rows = []
-    for k, t in zip(keep, t_new):
-        name = names[k]
-        img = cv2.imread(os.path.join(cam, "data", name), cv2.IMREAD_GRAYSCALE)
+    for j, (k, t) in enumerate(zip(keep, t_new)):
+        # a held frame's copies are new images: named by their new times
+        held = j > 0 and keep[j - 1] == k
+        name = f"{t}.png" if every in HOLD_FRAMES else names[k]
+        img = cv2.imread(os.path.join(cam, "data", names[k]), cv2.IMREAD_GRAYSCALE)
         if img is None:
             raise SystemExit(f"bench_degrade: cannot read {name}")
         if scale != 1.0:
@@ -102,6 +119,9 @@ def write_copy(seq: str, dst: str, scale: float, every: int, blur: float, noise:
             img = cv2.GaussianBlur(img, (0, 0), blur)
         if noise > 0.0:
             img = np.clip(img.astype(np.float32) + rng.normal(0.0, noise, img.shape) + 0.5, 0, 255)
+            img = img.astype(np.uint8)
+        if held:
+            img = np.clip(img.astype(np.float32) + rng.normal(0.0, HOLD_NOISE, img.shape) + 0.5, 0, 255)
             img = img.astype(np.uint8)
         cv2.imwrite(os.path.join(out, "data", name), img)
         rows.append((int(t), name))

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """test/bench/bench_degrade.py's copies on a tiny ASL sequence written here: the frames each copy keeps,
-the jerk and reversed copies' evenly spaced times and their ground truth moved with their frames, and the refusal of a
-smaller copy of a camera with distortion."""
+the jerk, reversed, stop and start copies' evenly spaced times and their ground truth moved with their frames, the
+stop's held frames with fresh noise, and the refusal of a smaller copy of a camera with distortion."""
 import os
 import pathlib
 import sys
@@ -51,6 +51,32 @@ def test_kept_frames():
     assert 0.3 < np.mean(steps == 2) < 0.7  # both steps, about as often
     assert bench_degrade.kept_frames(200, 0) == keep  # seeded: the same copy every run
     assert bench_degrade.kept_frames(4, -1) == [3, 2, 1, 0]
+    assert bench_degrade.kept_frames(4, -2) == [0, 1] + [2] * 50 + [2, 3]  # the middle frame held
+    assert bench_degrade.kept_frames(3, -3) == [0] * 30 + [0, 1, 2]  # the first frame held
+
+
+@pytest.mark.parametrize("name,k", [("stop", N // 2), ("start", 0)])
+def test_hold_copy(tmp_path, name, k):
+    src = _sequence(tmp_path / "src")
+    dst = tmp_path / name
+    bench_degrade.write_copy(str(src), str(dst), *bench_degrade.VARIANTS[name])
+    hold = bench_degrade.HOLD_FRAMES[bench_degrade.VARIANTS[name][1]]
+    t, names = trajio.read_cam_frames(str(dst / "mav0" / "cam0"))
+    assert len(names) == N + hold and len(set(names)) == N + hold  # every held copy its own file
+    assert (np.diff(t) == DT).all() and t[0] == T0  # evenly spaced at the original rate
+    imgs = [cv2.imread(str(dst / "mav0" / "cam0" / "data" / n), cv2.IMREAD_GRAYSCALE).astype(int) for n in names]
+    for j in range(N + hold):
+        src_k = j if j <= k else (k if j <= k + hold else j - hold)
+        assert abs(float(np.mean(imgs[j])) - src_k) < 1.5  # frame j shows the source frame src_k
+    assert (imgs[k] == k).all()  # the first of the held frames as it was
+    held = imgs[k + 1:k + hold + 1]
+    assert all(np.std(h - k) > 1.0 for h in held)  # each held copy with noise (sigma 2)
+    assert not (held[0] == held[1]).all()  # fresh noise on each
+    gt = trajio.read_euroc_groundtruth(str(dst))
+    np.testing.assert_array_equal(gt.t_ns, t)
+    x = gt.poses[:, 0, 3]
+    np.testing.assert_allclose(x[k:k + hold + 1], 0.1 * k, atol=1e-9)  # standing still
+    np.testing.assert_allclose(x[-1], 0.1 * (N - 1), atol=1e-9)
 
 
 def test_reverse_copy(tmp_path):

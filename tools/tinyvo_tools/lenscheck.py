@@ -28,8 +28,9 @@ agrees with the result; confirm an estimate by replaying with it.
 
 --out writes the figures as JSON, --write-yaml the sensor.yaml with the estimated changes applied (replay
 with it, `tvo_replay --calib FILE`, to confirm it); when the halves disagree or cannot be adjusted it
-writes nothing and exits with status 1. Arguments after "--" go to tvo_replay (e.g. --preset
-basic)."""
+writes nothing and exits with status 1. The replay keeps the lens as configured (`--set lens_refine=0`:
+the VO's own refinement of k1 and k2 on the run is off, so that the check sees the calibration as given).
+Arguments after "--" go to tvo_replay after that (e.g. --preset basic)."""
 from __future__ import annotations
 
 import dataclasses
@@ -517,7 +518,10 @@ def _main(a, extra) -> int:
         raise cli.Failure(f"{a.replay}: not an executable")
     with tempfile.TemporaryDirectory() as tmp:
         traj_p, tracks_p = os.path.join(tmp, "traj.txt"), os.path.join(tmp, "tracks.csv")
-        cmd = [a.replay, "--euroc", a.seq, "--scale", "none", "--out", traj_p, "--tracks", tracks_p, "--quiet"] + extra
+        # the VO keeps the lens as configured (its own refinement off): the check judges the calibration
+        # as given; a later --set lens_refine=1 among the passed arguments turns the refinement back on
+        cmd = [a.replay, "--euroc", a.seq, "--scale", "none", "--out", traj_p, "--tracks", tracks_p, "--quiet",
+               "--set", "lens_refine=0"] + extra
         p = subprocess.run(cmd, capture_output=True, text=True)
         if p.returncode != 0:
             msg = (p.stderr.strip().splitlines() or ["(no message)"])[-1]
