@@ -45,6 +45,7 @@ static const setting settings[] = {
         S_I(gain_retry),
         S_I(pred_rescue),
         S_I(fast_min_threshold),
+        S_I(fast_range_ref),
         S_D(pose_threshold_px),
         S_I(min_scale_points),
         S_D(scale_min_parallax_deg),

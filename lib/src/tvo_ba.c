@@ -152,14 +152,6 @@ static double huber_half(double r, double k, double *w)
     return k * a - 0.5 * k * k;
 }
 
-static int pose_finite(const tvo_pose *T)
-{
-    for (int i = 0; i < 9; ++i)
-        if (!isfinite(T->R[i]))
-            return 0;
-    return isfinite(T->t[0]) && isfinite(T->t[1]) && isfinite(T->t[2]);
-}
-
 static void to_camera(const tvo_pose *T, const double X[3], double P[3])
 {
     P[0] = T->R[0] * X[0] + T->R[1] * X[1] + T->R[2] * X[2] + T->t[0];
@@ -599,7 +591,7 @@ static int apply_step(tvo_ba_problem *p, const ba_ws *ws, int32_t nfree)
         p->X[j][2] += ws->dx[j][2];
     }
     for (int32_t i = 0; i < p->n_poses; ++i)
-        if (!pose_finite(&p->T_c_w[i]))
+        if (!tvo_pose_is_finite(&p->T_c_w[i]))
             return 0;
     for (int32_t j = 0; j < p->n_points; ++j)
         if (!(isfinite(p->X[j][0]) && isfinite(p->X[j][1]) && isfinite(p->X[j][2])))
@@ -660,7 +652,7 @@ static tvo_status check_problem(const tvo_ba_config *cfg, const tvo_ba_problem *
             p->obs[k].point >= p->n_points)
             return TVO_ERR_ARG;
     for (int32_t i = 0; i < p->n_poses; ++i) {
-        if (!pose_finite(&p->T_c_w[i]))
+        if (!tvo_pose_is_finite(&p->T_c_w[i]))
             return TVO_ERR_NOT_FINITE;
         free_vars += !p->pose_fixed[i];
     }

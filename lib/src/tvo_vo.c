@@ -224,6 +224,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->gain_retry = 1;
     cfg->pred_rescue = 1;
     cfg->fast_min_threshold = 7; /* as ORB-SLAM's second FAST pass (20 then 7) */
+    cfg->fast_range_ref = 0;
     cfg->pose_threshold_px = 1.0;
     cfg->min_scale_points = 20;
     cfg->scale_min_parallax_deg = 0.1;
@@ -322,7 +323,8 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (cfg->min_pose_tracks < 8 || cfg->min_pose_tracks > cfg->max_tracks)
         return 0;
-    if (cfg->fast_min_threshold < 0 || cfg->fast_min_threshold > 255)
+    if (cfg->fast_min_threshold < 0 || cfg->fast_min_threshold > 255 || cfg->fast_range_ref < 0 ||
+        cfg->fast_range_ref > 255)
         return 0;
     if (!(cfg->pose_threshold_px > 0.0) || !isfinite(cfg->pose_threshold_px))
         return 0;
@@ -744,15 +746,63 @@ static int32_t track_coverage(const tvo_vo *vo)
     return n;
 }
 
+/* The grey levels of an image in a 256-bin histogram (zeroed here). */
+static void grey_hist(const tvo_image *im, uint32_t hist[256])
+{
+    memset(hist, 0, 256 * sizeof(hist[0]));
+    for (int32_t y = 0; y < im->height; ++y) {
+        const uint8_t *row = im->data + (size_t)y * (size_t)im->stride;
+        for (int32_t x = 0; x < im->width; ++x)
+            hist[row[x]]++;
+    }
+}
+
+/* The first grey level at which k (1 <= k <= the histogram's count) pixels are counted. */
+static int32_t hist_rank(const uint32_t hist[256], uint32_t k)
+{
+    uint32_t acc = hist[0];
+    int32_t v = 0;
+    while (acc < k && v < 255)
+        acc += hist[++v];
+    return v;
+}
+
+/* The median grey level of an image (it has at least one pixel). */
+static int32_t median_grey(const tvo_image *im)
+{
+    uint32_t hist[256];
+    grey_hist(im, hist);
+    return hist_rank(hist, ((uint32_t)im->width * (uint32_t)im->height + 1u) / 2u);
+}
+
+/* The grey-level range of the coarsest level of pyr: its 1st to 99th percentile. */
+static int32_t grey_range(const tvo_pyramid *pyr)
+{
+    const tvo_image im = tvo_pyramid_level(pyr, pyr->levels - 1);
+    const uint32_t n = (uint32_t)im.width * (uint32_t)im.height;
+    uint32_t hist[256];
+    grey_hist(&im, hist);
+    return hist_rank(hist, n - n / 100u) - hist_rank(hist, n / 100u + 1u);
+}
+
 /* Re-detection: the configured threshold first; on a low-contrast frame (fewer than a quarter of the
- * corners wanted) a second pass with fast_min_threshold fills the rest. */
+ * corners wanted) a second pass with fast_min_threshold fills the rest. On a frame whose grey-level range
+ * is below cfg.fast_range_ref both thresholds are scaled by range / fast_range_ref (rounded, at least 1; 0
+ * stays 0). */
 static int32_t redetect(tvo_vo *vo, const tvo_pyramid *pyr)
 {
-    const int32_t wanted = vo->cfg.max_tracks - vo->n;
-    int32_t got = detect_append(vo, pyr, vo->cfg.detect.fast_threshold);
-    if (got < wanted / 4 && vo->cfg.fast_min_threshold > 0 &&
-        vo->cfg.fast_min_threshold < vo->cfg.detect.fast_threshold)
-        got += detect_append(vo, pyr, vo->cfg.fast_min_threshold);
+    const int32_t wanted = vo->cfg.max_tracks - vo->n, ref = vo->cfg.fast_range_ref;
+    const int32_t range = ref > 0 ? grey_range(pyr) : 0;
+    int32_t t[2], got;
+    t[0] = vo->cfg.detect.fast_threshold;
+    t[1] = vo->cfg.fast_min_threshold;
+    for (int k = 0; k < 2 && range < ref; ++k) {
+        const int32_t v = (t[k] * range + ref / 2) / ref;
+        t[k] = t[k] > 0 && v < 1 ? 1 : v;
+    }
+    got = detect_append(vo, pyr, t[0]);
+    if (got < wanted / 4 && t[1] > 0 && t[1] < t[0])
+        got += detect_append(vo, pyr, t[1]);
     vo->cover_ref = track_coverage(vo);
     return got;
 }
@@ -1597,23 +1647,6 @@ static int32_t lk_pass(tvo_vo *vo, const frame_ctx *fc, const tvo_lk_config *lkc
         kept += vo->st[i];
     }
     return kept;
-}
-
-/* The median grey level of an image (a 256-bin histogram; the first level at which half of the pixels
- * are counted, which exists as the image has at least one pixel). */
-static int32_t median_grey(const tvo_image *im)
-{
-    uint32_t hist[256] = {0}, half, acc;
-    int32_t v = 0;
-    for (int32_t y = 0; y < im->height; ++y) {
-        const uint8_t *row = im->data + (size_t)y * (size_t)im->stride;
-        for (int32_t x = 0; x < im->width; ++x)
-            hist[row[x]]++;
-    }
-    half = ((uint32_t)im->width * (uint32_t)im->height + 1u) / 2u;
-    for (acc = hist[0]; acc < half; acc += hist[v])
-        ++v;
-    return v;
 }
 
 /* Scale every level of the previous pyramid by gain g (16.16), rounding, saturating at 255. It is not

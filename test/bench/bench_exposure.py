@@ -10,13 +10,15 @@ EuRoC/ASL sequence with each frame's grey levels multiplied by a gain (rounded, 
   - none:    the frames as they are;
   - sine25:  1 + 0.25 sin(2 pi k / 30) for frame k (exposure hunting, +-25 % over 30 frames);
   - steps:   0.6 on frames 50-99, 1.4 from frame 130 on (two changes of light, each within one frame);
-  - flicker: 0.9 and 1.1 on alternate frames (+-10 %).
+  - flicker: 0.9 and 1.1 on alternate frames (+-10 %);
+  - dark35, dark20, dark12: 0.35, 0.20 and 0.12 on every frame (a camera whose exposure control has run out
+    of range in a dim scene: the frame's grey levels span a third, a fifth or an eighth of what they did).
 
 It replays each copy with `tvo_replay --scale none` and the given replay arguments, and prints the
 Sim(3)-aligned ATE (m), the per-frame rotation RPE (deg), the frames without a pose and the map's losses.
 
 Usage: .venv/bin/python test/bench/bench_exposure.py --seq SEQ --replay BUILD/examples/replay/tvo_replay
-           [--work DIR] [-- REPLAY ARGS]
+           [--work DIR] [--only NAME,NAME] [-- REPLAY ARGS]
 The copies go to --work (default: a temporary folder, removed at the end).
 """
 import argparse
@@ -35,6 +37,9 @@ GAINS = {
     "sine25": lambda k: 1.0 + 0.25 * math.sin(2.0 * math.pi * k / 30.0),
     "steps": lambda k: 0.6 if 50 <= k < 100 else (1.4 if k >= 130 else 1.0),
     "flicker": lambda k: 1.1 if k % 2 else 0.9,
+    "dark35": lambda k: 0.35,
+    "dark20": lambda k: 0.20,
+    "dark12": lambda k: 0.12,
 }
 
 
@@ -61,12 +66,18 @@ def main() -> int:
     ap.add_argument("--seq", required=True)
     ap.add_argument("--replay", required=True)
     ap.add_argument("--work")
+    ap.add_argument("--only", default="", help="comma-separated copies (default: all)")
     ap.add_argument("rest", nargs=argparse.REMAINDER)
     a = ap.parse_args()
     args = a.rest[1:] if a.rest[:1] == ["--"] else a.rest
+    names = [n for n in a.only.split(",") if n] or list(GAINS)
+    for n in names:
+        if n not in GAINS:
+            raise SystemExit(f"bench_exposure: unknown copy {n} (known: {', '.join(GAINS)})")
     with replay_copies.work_folder(a.work, "tvo_exposure_") as work:
         print(f"{'gain':<8} {'ATE m':>8} {'rot RPE deg':>12} {'lost':>5} {'map losses':>11}")
-        for name, gain in GAINS.items():
+        for name in names:
+            gain = GAINS[name]
             dst = replay_copies.fresh(work, name)
             write_copy(a.seq, dst, gain)
             r = replay_copies.replay(a.replay, dst, args, work)

@@ -34,17 +34,20 @@ def fresh(work, name):
 
 
 def replay(replay_bin, seq, args, tmp, after_map=False):
-    """Replay seq with `--scale none` and args: the Sim(3) ATE (m), per-frame rotation RPE (deg), frames
-    without a pose and map losses; with after_map also the frames before the map's first pose (the map
+    """Replay seq with `--scale none` and args: the Sim(3) ATE (m), per-frame rotation RPE (deg) (NaN when
+    the trajectory cannot be aligned: too few poses, or none that move), frames without a pose and map losses; with after_map also the frames before the map's first pose (the map
     state `initialising`) and the ATE of the frames from there on (NaN when there are none)."""
     traj, stats = os.path.join(tmp, "traj.txt"), os.path.join(tmp, "stats.json")
     subprocess.run([replay_bin, "--euroc", seq, "--scale", "none", "--out", traj, "--stats", stats, "--quiet"]
                    + args, check=True)
     with open(stats, encoding="utf-8") as f:
         st = json.load(f)
-    std = tvo_eval.evaluate_files(traj, seq).result["standard"]
-    out = {"ate": std["ate_m"]["rmse"], "rot": std["rpe_frame"]["rotation_deg"]["rmse"],
-           "lost": st["frames"]["lost"], "losses": st.get("map", {}).get("losses", 0)}
+    try:
+        std = tvo_eval.evaluate_files(traj, seq).result["standard"]
+        ate, rot = std["ate_m"]["rmse"], std["rpe_frame"]["rotation_deg"]["rmse"]
+    except ValueError:  # too few poses, or positions that do not span enough to align: no figure
+        ate = rot = float("nan")
+    out = {"ate": ate, "rot": rot, "lost": st["frames"]["lost"], "losses": st.get("map", {}).get("losses", 0)}
     if after_map:
         init = int(st.get("map", {}).get("states", {}).get("initialising", 0))
         # the trajectory holds one row per posed frame, in order

@@ -130,6 +130,11 @@ typedef struct tvo_vo_config {
     int32_t fast_min_threshold; /* low-contrast fallback: when a detection finds fewer than a quarter of the
                                    corners wanted, it is repeated with this FAST threshold (if it is lower
                                    than detect.fast_threshold); [0, 255], 0 disables; default 7 */
+    int32_t fast_range_ref;     /* exposure: on a frame whose grey levels span less than this (the 1st to the
+                                   99th percentile of the coarsest pyramid level), both FAST thresholds above
+                                   are scaled by span / fast_range_ref (rounded, at least 1): with 255 a
+                                   frame's corners do not depend on its exposure gain. [0, 255], 0: the
+                                   thresholds as configured; default 0 */
     double pose_threshold_px; /* RANSAC inlier threshold in pixels, converted with the focal length; default 1.0 */
     int32_t min_scale_points; /* relative scale (tvo_vo_result.rel_scale): fewer usable three-frame tracks
                                    than this -> not available; >= 3 (above max_tracks: never); default 20 */
