@@ -977,6 +977,60 @@ static void test_gain_retry(void **state)
     assert_true(kept_small > 0.9);
 }
 
+/* The room's first frame with every grey level times `gain` (rounded): the corners the VO starts with,
+ * with fast_range_ref `ref`; *tracked: the tracks LK keeps into a second frame 2 cm on. */
+static int32_t dark_first_corners(double gain, int32_t ref, int32_t *tracked)
+{
+    fixture f;
+    tvo_camera cam = test_camera();
+    int32_t corners = 0;
+    tvo_vo_config_default(&f.cfg, &cam);
+    f.cfg.fast_range_ref = ref;
+    open_vo(&f);
+    for (int k = 0; k < 2; ++k) {
+        const double dir[3] = {0.1, 0.05, 1.0};
+        tvo_vo_result res;
+        tvo_image img = tvo_image_make(W, H, W, f.img);
+        const tvo_pose T = motion(k, dir, 0.02, 0.3);
+        render(&T, f.img);
+        for (int i = 0; i < W * H; ++i)
+            f.img[i] = (uint8_t)floor(f.img[i] * gain + 0.5);
+        assert_int_equal(tvo_vo_process(f.vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
+        if (k == 0)
+            corners = res.new_corners;
+        else
+            *tracked = res.tracked;
+    }
+    free(f.mem);
+    return corners;
+}
+
+/* fast_range_ref: a frame at a fifth of its exposure keeps its corners when the FAST thresholds follow
+ * the frame's grey-level range (255), and loses nearly half of them with fixed thresholds (0). */
+static void test_dark_frames(void **state)
+{
+    int32_t tr[4] = {0, 0, 0, 0};
+    const int32_t bright0 = dark_first_corners(1.0, 0, &tr[0]), dark0 = dark_first_corners(0.2, 0, &tr[1]);
+    const int32_t bright = dark_first_corners(1.0, 255, &tr[2]), dark = dark_first_corners(0.2, 255, &tr[3]);
+    tvo_vo_config cfg;
+    tvo_camera cam = test_camera();
+    (void)state;
+    fprintf(stderr,
+            "first frame's corners (tracked into the second), fixed thresholds: %d (%d) bright, %d (%d) at "
+            "0.2; following the range: %d (%d), %d (%d)\n",
+            bright0, tr[0], dark0, tr[1], bright, tr[2], dark, tr[3]);
+    assert_true(dark0 <= bright0 * 6 / 10); /* measured: 163 of 300 */
+    assert_true(dark >= bright * 8 / 10);
+    assert_true(tr[3] >= tr[2] * 8 / 10);
+    /* the setting's range */
+    tvo_vo_config_default(&cfg, &cam);
+    assert_int_equal(cfg.fast_range_ref, 0);
+    cfg.fast_range_ref = 256;
+    assert_int_equal(tvo_vo_required_size(&cfg), 0);
+    cfg.fast_range_ref = -1;
+    assert_int_equal(tvo_vo_required_size(&cfg), 0);
+}
+
 static void test_redetect_coverage(void **state)
 {
     int on_det, on_min, on_last, off_det, off_min, off_last;
@@ -1618,6 +1672,7 @@ int main(void)
       cmocka_unit_test(test_track_prediction),
       cmocka_unit_test(test_redetect_coverage),
       cmocka_unit_test(test_gain_retry),
+      cmocka_unit_test(test_dark_frames),
       cmocka_unit_test(test_pred_rescue),
       cmocka_unit_test(test_prior_obs_after_a_rescue),
       cmocka_unit_test(test_affine_refinement),
