@@ -902,6 +902,21 @@ static void run_turn(double coverage, int *redetections, int *min_cells, int *la
     free(f.mem);
 }
 
+/* Frame k of the walk of run_exposure_step() (motion() along (0.1, 0.05, 1), 2 cm a frame, 0.3 deg of yaw)
+ * into img, every grey level times `gain` (rounded, saturated; 1: as rendered); returns its pose. */
+static tvo_pose render_walk(int k, double gain, uint8_t *img)
+{
+    const double dir[3] = {0.1, 0.05, 1.0};
+    const tvo_pose T = motion(k, dir, 0.02, 0.3);
+    render(&T, img);
+    if (gain != 1.0)
+        for (int i = 0; i < W * H; ++i) {
+            const double v = floor(img[i] * gain + 0.5);
+            img[i] = (uint8_t)(v > 255.0 ? 255.0 : v);
+        }
+    return T;
+}
+
 /* A walk with an exposure step: from frame 10 on every frame's grey levels are times `gain` (rounded,
  * saturated). Counts the LOST frames and the frames re-tracked after the step; *step_tracked: the tracks
  * LK kept into frame 10 of those into frame 9; *rot_err: the largest rotation error of the two-view
@@ -920,16 +935,9 @@ static void run_exposure_step(int32_t retry, double gain, int *lost, int *retrie
     *lost = *retried = 0;
     *rot_err = 0.0;
     for (int k = 0; k < 20; ++k) {
-        const double dir[3] = {0.1, 0.05, 1.0};
         tvo_vo_result res;
         tvo_image img = tvo_image_make(W, H, W, f.img);
-        const tvo_pose T = motion(k, dir, 0.02, 0.3);
-        render(&T, f.img);
-        if (k >= 10)
-            for (int i = 0; i < W * H; ++i) {
-                const double v = floor(f.img[i] * gain + 0.5);
-                f.img[i] = (uint8_t)(v > 255.0 ? 255.0 : v);
-            }
+        const tvo_pose T = render_walk(k, k >= 10 ? gain : 1.0, f.img);
         assert_int_equal(tvo_vo_process(f.vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
         assert_true(tvo_pose_is_finite(&res.T_w_c));
         *lost += k > 0 && res.state == TVO_VO_LOST;
@@ -977,8 +985,8 @@ static void test_gain_retry(void **state)
     assert_true(kept_small > 0.9);
 }
 
-/* The room's first frame with every grey level times `gain` (rounded): the corners the VO starts with,
- * with fast_range_ref `ref`; *tracked: the tracks LK keeps into a second frame 2 cm on. */
+/* The walk's first frame with every grey level times `gain` (render_walk()): the corners the VO starts
+ * with, with fast_range_ref `ref`; *tracked: the tracks LK keeps into the second frame, 2 cm on. */
 static int32_t dark_first_corners(double gain, int32_t ref, int32_t *tracked)
 {
     fixture f;
@@ -988,13 +996,9 @@ static int32_t dark_first_corners(double gain, int32_t ref, int32_t *tracked)
     f.cfg.fast_range_ref = ref;
     open_vo(&f);
     for (int k = 0; k < 2; ++k) {
-        const double dir[3] = {0.1, 0.05, 1.0};
         tvo_vo_result res;
         tvo_image img = tvo_image_make(W, H, W, f.img);
-        const tvo_pose T = motion(k, dir, 0.02, 0.3);
-        render(&T, f.img);
-        for (int i = 0; i < W * H; ++i)
-            f.img[i] = (uint8_t)floor(f.img[i] * gain + 0.5);
+        (void)render_walk(k, gain, f.img);
         assert_int_equal(tvo_vo_process(f.vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
         if (k == 0)
             corners = res.new_corners;
