@@ -111,42 +111,22 @@ static int linearise(const tvo_camera *cam, const double k[5], const tvo_pose *T
     return 1;
 }
 
-/* 3x3 symmetric inverse by Cholesky; 0 when a pivot is below TVO_LENS_POINT_PIVOT of its entry. It agrees
- * with tvo_la_chol3_inv up to rounding, not bit for bit (another order of operations): the lens blocks, and
- * the runs whose lens they change, were measured with this one. */
+/* 3x3 symmetric inverse (the lower triangle of V is read): tvo_la_chol with the pivot bound
+ * TVO_LENS_POINT_PIVOT, then its solve for each unit vector, column by column. 0 when a pivot is not above
+ * that share of its entry. (tvo_la_chol3_inv, the closed form, agrees only up to rounding: the lens
+ * blocks, and the runs whose lens they change, were measured with this order of operations.) */
 static int sym3_inv(const double V[9], double Vi[9])
 {
-    double L[9] = {0}, d;
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j <= i; ++j) {
-            double s = V[3 * i + j];
-            for (int m = 0; m < j; ++m)
-                s -= L[3 * i + m] * L[3 * j + m];
-            if (i == j) {
-                if (!(s > TVO_LENS_POINT_PIVOT * V[3 * i + i]) || !(s > 0.0))
-                    return 0;
-                L[3 * i + i] = sqrt(s);
-            } else {
-                L[3 * i + j] = s / L[3 * j + j];
-            }
-        }
-    /* Vi = L^-T L^-1, column by column */
+    double L[9];
+    memcpy(L, V, sizeof(L));
+    if (!tvo_la_chol(L, 3, 3, TVO_LENS_POINT_PIVOT))
+        return 0;
     for (int c = 0; c < 3; ++c) {
-        double yv[3] = {0.0, 0.0, 0.0}, xv[3] = {0.0, 0.0, 0.0};
-        for (int i = 0; i < 3; ++i) {
-            d = i == c ? 1.0 : 0.0;
-            for (int m = 0; m < i; ++m)
-                d -= L[3 * i + m] * yv[m];
-            yv[i] = d / L[3 * i + i];
-        }
-        for (int i = 2; i >= 0; --i) {
-            d = yv[i];
-            for (int m = i + 1; m < 3; ++m)
-                d -= L[3 * m + i] * xv[m];
-            xv[i] = d / L[3 * i + i];
-        }
+        const double e[3] = {c == 0 ? 1.0 : 0.0, c == 1 ? 1.0 : 0.0, c == 2 ? 1.0 : 0.0};
+        double x[3];
+        tvo_la_chol_solve(L, 3, 3, e, x);
         for (int i = 0; i < 3; ++i)
-            Vi[3 * i + c] = xv[i];
+            Vi[3 * i + c] = x[i];
     }
     return 1;
 }
