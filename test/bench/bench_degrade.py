@@ -111,18 +111,16 @@ def write_copy(seq: str, dst: str, scale: float, every: int, blur: float, noise:
         name = f"{t}.png" if every in HOLD_FRAMES else names[k]
         img = cv2.imread(os.path.join(cam, "data", names[k]), cv2.IMREAD_GRAYSCALE)
         if img is None:
-            raise SystemExit(f"bench_degrade: cannot read {name}")
+            raise SystemExit(f"bench_degrade: cannot read {names[k]}")
         if scale != 1.0:
             img = cv2.resize(img, (int(round(img.shape[1] * scale)), int(round(img.shape[0] * scale))),
                              interpolation=cv2.INTER_AREA)
         if blur > 0.0:
             img = cv2.GaussianBlur(img, (0, 0), blur)
-        if noise > 0.0:
-            img = np.clip(img.astype(np.float32) + rng.normal(0.0, noise, img.shape) + 0.5, 0, 255)
-            img = img.astype(np.uint8)
-        if held:
-            img = np.clip(img.astype(np.float32) + rng.normal(0.0, HOLD_NOISE, img.shape) + 0.5, 0, 255)
-            img = img.astype(np.uint8)
+        for sigma in (noise, HOLD_NOISE if held else 0.0):
+            if sigma > 0.0:
+                img = np.clip(img.astype(np.float32) + rng.normal(0.0, sigma, img.shape) + 0.5, 0, 255)
+                img = img.astype(np.uint8)
         cv2.imwrite(os.path.join(out, "data", name), img)
         rows.append((int(t), name))
     with open(os.path.join(out, "data.csv"), "w", encoding="utf-8", newline="\n") as f:
@@ -156,10 +154,7 @@ def main() -> int:
     ap.add_argument("rest", nargs=argparse.REMAINDER)
     a = ap.parse_args()
     args = a.rest[1:] if a.rest[:1] == ["--"] else a.rest
-    names = [n for n in a.only.split(",") if n] or list(VARIANTS)
-    for n in names:
-        if n not in VARIANTS:
-            raise SystemExit(f"bench_degrade: unknown variant {n} (known: {', '.join(VARIANTS)})")
+    names = replay_copies.pick(a.only, VARIANTS, "bench_degrade")
     with replay_copies.work_folder(a.work, "tvo_degrade_") as work:
         print(f"{'variant':<9} {'ATE m':>8} {'map from':>9} {'ATE after':>10} {'rot RPE deg':>12} {'lost':>5} "
               f"{'map losses':>11}")

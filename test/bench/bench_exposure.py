@@ -70,16 +70,12 @@ def main() -> int:
     ap.add_argument("rest", nargs=argparse.REMAINDER)
     a = ap.parse_args()
     args = a.rest[1:] if a.rest[:1] == ["--"] else a.rest
-    names = [n for n in a.only.split(",") if n] or list(GAINS)
-    for n in names:
-        if n not in GAINS:
-            raise SystemExit(f"bench_exposure: unknown copy {n} (known: {', '.join(GAINS)})")
+    names = replay_copies.pick(a.only, GAINS, "bench_exposure")
     with replay_copies.work_folder(a.work, "tvo_exposure_") as work:
         print(f"{'gain':<8} {'ATE m':>8} {'rot RPE deg':>12} {'lost':>5} {'map losses':>11}")
         for name in names:
-            gain = GAINS[name]
             dst = replay_copies.fresh(work, name)
-            write_copy(a.seq, dst, gain)
+            write_copy(a.seq, dst, GAINS[name])
             r = replay_copies.replay(a.replay, dst, args, work)
             print(f"{name:<8} {r['ate']:>8.4f} {r['rot']:>12.4f} {r['lost']:>5d} {r['losses']:>11d}")
     return 0

@@ -25,6 +25,16 @@ def work_folder(work, prefix):
             shutil.rmtree(path, ignore_errors=True)
 
 
+def pick(only, known, prog):
+    """The copies named in `only` (comma-separated; empty: every one of `known`, in its order); exits with
+    a message naming the known ones when a name is not among them."""
+    names = [n for n in only.split(",") if n] or list(known)
+    for n in names:
+        if n not in known:
+            raise SystemExit(f"{prog}: unknown copy {n} (known: {', '.join(known)})")
+    return names
+
+
 def fresh(work, name):
     """work/name, emptied: the place for one copy."""
     dst = os.path.join(work, name)
@@ -35,8 +45,9 @@ def fresh(work, name):
 
 def replay(replay_bin, seq, args, tmp, after_map=False):
     """Replay seq with `--scale none` and args: the Sim(3) ATE (m), per-frame rotation RPE (deg) (NaN when
-    the trajectory cannot be aligned: too few poses, or none that move), frames without a pose and map losses; with after_map also the frames before the map's first pose (the map
-    state `initialising`) and the ATE of the frames from there on (NaN when there are none)."""
+    the trajectory cannot be aligned: too few poses, or none that move), frames without a pose and map
+    losses; with after_map also the frames before the map's first pose (the map state `initialising`) and
+    the ATE of the frames from there on (NaN when there are none)."""
     traj, stats = os.path.join(tmp, "traj.txt"), os.path.join(tmp, "stats.json")
     subprocess.run([replay_bin, "--euroc", seq, "--scale", "none", "--out", traj, "--stats", stats, "--quiet"]
                    + args, check=True)
