@@ -98,7 +98,10 @@ static void usage(FILE *f)
             "                       (with --map 0: the per-step filter of vo.h)\n"
             "  --step M             constant step length in metres for --scale const\n"
             "  --frame camera|body  pose written: camera (default) or body (through T_BS)\n"
-            "  --stats FILE         JSON with frame counts, status counts and stage timings\n"
+            "  --stats FILE         JSON with frame counts, status counts, stage timings and\n"
+            "                       the tracks kept from frame to frame (tracks: new / old,\n"
+            "                       those detected in the previous frame / older, and how\n"
+            "                       many of each were still tracked)\n"
             "  --features FILE      CSV of the per-frame front-end features (nn.h layout), for\n"
             "                       the dataset builder: t_ns,state,relpose_flags,\n"
             "                       pose_status,inliers,<feature names>,rel_scale,\n"
@@ -458,6 +461,9 @@ int main(int argc, char **argv)
          gain_retries = 0, pred_rescues = 0, map_refound = 0;
     long affine_tried = 0, affine_refined = 0, affine_ended = 0; /* the affine refinement's attempts,
                                                                       successes and tracks ended */
+    /* tracks kept from one processed frame to the next: those detected in the previous frame (age 0
+       there) that are still tracked (age 1), and the older ones (age >= 1 there, >= 2 here) */
+    long kept_new = 0, from_new = 0, kept_old = 0, from_old = 0, prev_new = 0, prev_old = 0;
     map_scale msc;
     tvo_pose T_w_c_vo_prev = {{0}, {0}}; /* the VO's world pose of the previous frame (map on) */
     int vo_reset_pending =
@@ -619,10 +625,16 @@ int main(int argc, char **argv)
             goto cleanup;
         }
     }
-    if (o.tracks != NULL) {
+    if (o.tracks != NULL || o.stats != NULL) {
         trk = (tvo_vo_track *)malloc((size_t)cfg.max_tracks * sizeof(tvo_vo_track));
+        if (trk == NULL) {
+            fprintf(stderr, "tvo_replay: out of memory\n");
+            goto cleanup;
+        }
+    }
+    if (o.tracks != NULL) {
         tracks = fopen(o.tracks, "w");
-        if (trk == NULL || tracks == NULL) {
+        if (tracks == NULL) {
             fprintf(stderr, "tvo_replay: cannot write %s\n", o.tracks);
             goto cleanup;
         }
@@ -681,6 +693,7 @@ int main(int argc, char **argv)
             if (skip != SKIP_TIMESTAMP) {
                 tvo_vo_reset(vo); /* the next good frame starts new tracks (and a new map) */
                 vo_reset_pending = 1;
+                prev_new = prev_old = 0; /* no track is carried over */
             }
             continue;
         }
@@ -694,6 +707,7 @@ int main(int argc, char **argv)
                 goto cleanup;
             tvo_vo_reset(vo);
             vo_reset_pending = 1;
+            prev_new = prev_old = 0;
         }
         t_last = t_ns;
 
@@ -728,13 +742,26 @@ int main(int argc, char **argv)
         map_refound += res.map_refound;
         if (res.keyframe_age > 0)
             keyframe_frames++;
-        if (tracks != NULL) {
+        if (trk != NULL) {
             int32_t nt = 0;
-            if (tvo_vo_tracks(vo, trk, cfg.max_tracks, &nt) == TVO_OK)
-                for (int32_t k = 0; k < nt && k < cfg.max_tracks; ++k)
+            long a0 = 0, a1 = 0, a2 = 0;
+            if (tvo_vo_tracks(vo, trk, cfg.max_tracks, &nt) != TVO_OK)
+                nt = 0;
+            for (int32_t k = 0; k < nt && k < cfg.max_tracks; ++k) {
+                a0 += trk[k].age == 0;
+                a1 += trk[k].age == 1;
+                a2 += trk[k].age >= 2;
+                if (tracks != NULL)
                     fprintf(tracks, "%lld,%u,%.2f,%.2f,%d,%d\n", (long long)t_ns, (unsigned)trk[k].id,
                             (double)trk[k].x, (double)trk[k].y, (int)trk[k].age,
                             (trk[k].inlier ? 1 : 0) | (trk[k].landmark ? 2 : 0) | (res.keyframe ? 4 : 0));
+            }
+            kept_new += a1;
+            from_new += prev_new;
+            kept_old += a2;
+            from_old += prev_old;
+            prev_new = a0;
+            prev_old = a1 + a2;
         }
         if (feat != NULL) {
             fprintf(feat, "%lld,%d,%d,%d,%d", (long long)t_ns, (int)res.state, (int)res.relpose_flags,
@@ -903,6 +930,8 @@ int main(int argc, char **argv)
                     (int)cfg.lens_refine, lens_updates, lens_dk[0], lens_dk[1]);
             fprintf(js, "  \"affine\": {\"tried\": %ld, \"refined\": %ld, \"ended\": %ld},\n", affine_tried,
                     affine_refined, affine_ended);
+            fprintf(js, "  \"tracks\": {\"new\": %ld, \"new_kept\": %ld, \"old\": %ld, \"old_kept\": %ld},\n",
+                    from_new, kept_new, from_old, kept_old);
             fprintf(js,
                     "  \"map\": {\"enabled\": %d, \"keyframes\": %ld, \"losses\": %ld, "
                     "\"ba_turn_refused\": %ld, \"store_full\": %ld, \"refound\": %ld, \"scale\": %.9g, "

@@ -67,6 +67,15 @@ def test_table_and_json_none(seqs, tmp_path):
     f = row.split()
     assert f[1] == "20" and float(f[2]) == pytest.approx(r["ate_m"], abs=1e-4)
     assert float(f[3]) == pytest.approx(r["rpe_rot_deg"], abs=1e-3) and int(f[4]) == r["lost"]
+    # the shares of tracks kept: the replay's counts, each share within [0, 100] % and in the row
+    tr = stats["tracks"]
+    assert 0 <= tr["new_kept"] <= tr["new"] and 0 < tr["old_kept"] <= tr["old"]
+    assert r["kept_old"] == tr["old_kept"] / tr["old"]
+    assert float(f[8]) == pytest.approx(100 * r["kept_old"], abs=0.05)
+    if tr["new"] > 0:
+        assert float(f[7]) == pytest.approx(100 * r["kept_new"], abs=0.05)
+    else:
+        assert r["kept_new"] is None and f[7] == "-"
     assert any(ln.startswith("total ") and ln.split()[1] == "20" for ln in lines)
 
 

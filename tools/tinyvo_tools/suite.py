@@ -17,7 +17,10 @@ tinyvo_tools.eval (evo): ATE RMSE after Sim(3) alignment for ``--scale none`` (u
 counts) and after SE(3) alignment for the metric modes (gt, propagate, model, const). The table has per
 sequence: frames processed, ATE RMSE (m), per-frame rotation RPE RMSE (deg), lost frames (the replay's
 ``frames.lost`` in its stats JSON), and the median and p90 of the VO's time per frame (ms; the replay's
-``timing_us.total``, PNG decoding excluded). With ``--repeat N`` each sequence is replayed N times and the
+``timing_us.total``, PNG decoding excluded), and the share of tracks kept from one frame to the next
+(the replay's ``tracks`` counts, in %): "new kept" of those detected in the previous frame, "old kept" of
+those older (on real frames far fewer new tracks survive their first step than old ones; on renders
+nearly all do). With ``--repeat N`` each sequence is replayed N times and the
 time columns are the medians of the N runs' figures (the trajectory of the last run is evaluated; a run
 whose trajectory differs from the first one's is reported, since the VO is deterministic).
 
@@ -132,6 +135,10 @@ def run_sequence(replay: str, seq: str, scale: str, work: str, extra=(), repeat:
     row["frames"] = int(stats["frames"]["processed"])
     row["frames_total"] = int(stats["frames"]["total"])
     row["lost"] = int(stats["frames"]["lost"])
+    tr = stats.get("tracks", {})
+    for k in ("new", "old"):
+        n = tr.get(k, 0)
+        row[f"kept_{k}"] = tr[f"{k}_kept"] / n if n > 0 else None
     row["median_ms"] = float(np.median(meds))
     row["p90_ms"] = float(np.median(p90s))
     row["runs_ms"] = [{"median": m, "p90": q} for m, q in zip(meds, p90s)]
@@ -164,15 +171,17 @@ def format_table(rows, tot, scale: str) -> str:
     al = "SE(3)" if scale in METRIC_MODES else "Sim(3)"
     w = max([len("sequence"), len("total")] + [len(r["name"]) for r in rows])
     head = (f"{'sequence':<{w}}  {'frames':>6}  {'ATE ' + al + ' m':>14}  {'RPE rot deg':>11}  {'lost':>5}  "
-            f"{'median ms':>9}  {'p90 ms':>7}")
+            f"{'median ms':>9}  {'p90 ms':>7}  {'new kept %':>10}  {'old kept %':>10}")
     lines = [head, "-" * len(head)]
     for r in rows:
         if "error" in r:
             lines.append(f"{r['name']:<{w}}  FAILED: {r['error']}")
             continue
         flag = "  (trajectory differed between runs)" if r.get("nondeterministic") else ""
+        kept = "".join(f"  {'-' if r.get(k) is None else format(100.0 * r[k], '.1f'):>10}"
+                       for k in ("kept_new", "kept_old"))
         lines.append(f"{r['name']:<{w}}  {r['frames']:>6d}  {r['ate_m']:>14.4f}  {r['rpe_rot_deg']:>11.3f}  "
-                     f"{r['lost']:>5d}  {r['median_ms']:>9.2f}  {r['p90_ms']:>7.2f}{flag}")
+                     f"{r['lost']:>5d}  {r['median_ms']:>9.2f}  {r['p90_ms']:>7.2f}{kept}{flag}")
     lines.append("-" * len(head))
     if tot["mean_ate_m"] is None:
         lines.append(f"{'total':<{w}}  no sequence evaluated")
