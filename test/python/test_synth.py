@@ -300,7 +300,7 @@ def test_bad_arguments(tmp_path):
 
 
 def test_renders_along_real_euroc_trajectory(tmp_path):
-    gt_file = DATA / "euroc" / "groundtruth" / "V1_01_easy.txt"
+    gt_file = DATA / "euroc" / "groundtruth" / "V1_01_easy.csv"
     if not gt_file.is_file():
         pytest.skip(f"shared EuRoC data not found at {DATA} (set TVO_DATA_DIR)")
     body = synth.load_trajectory(str(gt_file))

@@ -11,7 +11,7 @@ Conventions (see ../shared/DESIGN.md):
 File formats:
 - EuRoC ground-truth csv: ``#timestamp, p_RS_R_x [m], ..., q_RS_w [], q_RS_x [], ...`` comma separated,
   the first 8 columns required, further columns ignored.
-- Ground-truth txt (../shared/data/euroc/groundtruth/*.txt): the same 8 columns, space separated.
+- Ground-truth txt: the same 8 columns, space separated.
 - TUM: ``t tx ty tz qx qy qz qw`` with t in seconds (TUM RGB-D's groundtruth.txt: the camera's pose).
 - KITTI odometry poses: 12 numbers per line, the row-major 3x4 camera pose ``T_W_C`` of frame i; no
   timestamps (they are in the sequence's ``times.txt``, one per line in seconds).

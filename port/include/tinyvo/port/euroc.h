@@ -124,7 +124,7 @@ TVO_API tvo_status tvo_euroc_groundtruth(const tvo_euroc *seq, int64_t t_ns, int
 TVO_API tvo_status tvo_euroc_groundtruth_interp(const tvo_euroc *seq, int64_t t_ns, int64_t max_gap_ns,
                                                 tvo_pose *T_w_b);
 /* Replace the ground truth by the file at path: a csv (as state_groundtruth_estimate0/data.csv) or
- * a space-separated text file `t px py pz qw qx qy qz` (as ../shared/data/euroc/groundtruth/ *.txt;
+ * a space-separated text file `t px py pz qw qx qy qz` (the layout of some EuRoC trajectory exports;
  * timestamps in ns, a fractional part is rounded). On error the previous ground truth is kept.
  * Errors: TVO_ERR_NULL, TVO_ERR_NOT_FOUND, TVO_ERR_IO, TVO_ERR_FORMAT (message in err),
  * TVO_ERR_NO_MEMORY. */
