@@ -41,6 +41,7 @@ static const setting settings[] = {
         S_I(max_tracks),
         S_I(min_tracks),
         S_D(redetect_coverage),
+        S_D(redetect_cell_kept),
         S_I(min_pose_tracks),
         S_I(gain_retry),
         S_I(pred_rescue),

@@ -21,6 +21,11 @@ typedef struct vo_lens {
 } vo_lens;
 #endif
 
+/* The coverage grid (cfg.redetect_coverage, cfg.redetect_cell_kept): 8 x 6 cells over the frame. */
+#define TVO_VO_COVER_COLS 8
+#define TVO_VO_COVER_ROWS 6
+#define TVO_VO_COVER_CELLS (TVO_VO_COVER_COLS * TVO_VO_COVER_ROWS)
+
 struct tvo_vo {
     tvo_vo_config cfg;
     tvo_pyramid pyr[2]; /* level 0 borrowed: the current frame's is the caller's image, the previous
@@ -75,7 +80,8 @@ struct tvo_vo {
     double chain_gain; /* the two-view chain's step length over its base (chain_scale_sigmas) */
     double rs_se;      /* the standard error of log(rel_scale) of this frame (with chain_scale_sigmas) */
     int32_t aff_tried, aff_refined, aff_ended; /* this frame's affine refinements (tvo_vo_result.affine_*) */
-    int32_t cover_ref;  /* cells of the coverage grid the tracks covered after the last detection */
+    int32_t cover_ref; /* cells of the coverage grid the tracks covered after the last detection */
+    uint32_t cell[2][TVO_VO_COVER_CELLS]; /* cfg.redetect_cell_kept: corners born [0] and kept [1] */
     int32_t rescue_age; /* frames since the last prediction rescue (0: this frame's; saturates) */
     /* affine refinement (cfg.affine_win_size > 0, else all NULL): each track's template, its model
        and warp, valid where hast[i] */
@@ -219,7 +225,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     tvo_relpose_config_default(&cfg->relpose);
     cfg->max_tracks = 300;
     cfg->min_tracks = 200;
-    cfg->redetect_coverage = 0.75;
+    cfg->redetect_coverage = 0.75; /* redetect_cell_kept 0 (memset above) */
     cfg->min_pose_tracks = 30;
     cfg->gain_retry = 1;
     cfg->pred_rescue = 1;
@@ -315,7 +321,8 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (cfg->max_tracks < 16 || cfg->max_tracks > 100000)
         return 0;
-    if (!(cfg->redetect_coverage >= 0.0 && cfg->redetect_coverage <= 1.0))
+    if (!(cfg->redetect_coverage >= 0.0 && cfg->redetect_coverage <= 1.0) ||
+        !(cfg->redetect_cell_kept >= 0.0 && cfg->redetect_cell_kept <= 1.0))
         return 0;
     if (cfg->min_tracks < 0 || cfg->min_tracks > cfg->max_tracks)
         return 0;
@@ -657,6 +664,7 @@ void tvo_vo_reset(tvo_vo *vo)
         return;
     vo->has_prev = 0;
     vo->n = 0;
+    memset(vo->cell, 0, sizeof(vo->cell));
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
     vo->has_pose0 = 0;
     vo->has_kf = 0;
@@ -692,6 +700,49 @@ static void result_clear(tvo_vo_result *res, tvo_vo_state state)
     res->T_w_c = tvo_pose_identity();
 }
 
+/* The cell of the coverage grid a position falls in. */
+static int32_t cover_cell(const tvo_vo *vo, tvo_point2f p)
+{
+    int32_t cx = (int32_t)(p.x * ((float)TVO_VO_COVER_COLS / (float)vo->cfg.camera.width)),
+            cy = (int32_t)(p.y * ((float)TVO_VO_COVER_ROWS / (float)vo->cfg.camera.height));
+    cx = cx < 0 ? 0 : (cx >= TVO_VO_COVER_COLS ? TVO_VO_COVER_COLS - 1 : cx);
+    cy = cy < 0 ? 0 : (cy >= TVO_VO_COVER_ROWS ? TVO_VO_COVER_ROWS - 1 : cy);
+    return cy * TVO_VO_COVER_COLS + cx;
+}
+
+/* The cells of the coverage grid holding a track (cfg.redetect_coverage). */
+static int32_t track_coverage(const tvo_vo *vo)
+{
+    uint64_t cells = 0;
+    int32_t n = 0;
+    for (int32_t i = 0; i < vo->n; ++i)
+        cells |= (uint64_t)1 << cover_cell(vo, vo->pts[i]);
+    for (; cells != 0; cells &= cells - 1)
+        ++n;
+    return n;
+}
+
+/* cfg.redetect_cell_kept: a cell takes no new corners while fewer than that share of the corners detected
+ * in it lately were kept. Each cell counts its corners born and kept in 1/256 (a corner adds 256), both
+ * counts lose 1/8 a frame (rounded down), and a cell is judged once it counts TVO_VO_CELL_MIN_BORN. */
+#define TVO_VO_CELL_MIN_BORN (4u * 256u)
+
+/* The corners detected in the previous frame (age 0) counted in their cells: born, and kept when LK
+ * tracked them (st). */
+static void count_cells(tvo_vo *vo)
+{
+    uint32_t *v = &vo->cell[0][0];
+    for (int32_t c = 0; c < 2 * TVO_VO_COVER_CELLS; ++c)
+        v[c] -= v[c] >> 3;
+    for (int32_t i = 0; i < vo->n; ++i) {
+        if (vo->age[i] == 0) {
+            const int32_t c = cover_cell(vo, vo->pts[i]);
+            vo->cell[0][c] += 256u;
+            vo->cell[1][c] += vo->st[i] ? 256u : 0u;
+        }
+    }
+}
+
 /* Detect corners on pyramid level 0 of `pyr` with FAST threshold `threshold`, avoiding the n current
  * tracks, and append them. */
 static int32_t detect_append(tvo_vo *vo, const tvo_pyramid *pyr, int32_t threshold)
@@ -709,6 +760,18 @@ static int32_t detect_append(tvo_vo *vo, const tvo_pyramid *pyr, int32_t thresho
         return 0; /* a frame without corners is not an error: tracking just stays low */
     if (got > room)
         got = room;
+    if (vo->cfg.redetect_cell_kept > 0.0) {
+        /* the corners in closed cells are dropped */
+        const double share = vo->cfg.redetect_cell_kept;
+        int32_t k = 0;
+        for (int32_t i = 0; i < got; ++i) {
+            const tvo_point2f p = {vo->corners[i].x, vo->corners[i].y};
+            const int32_t c = cover_cell(vo, p);
+            if (vo->cell[0][c] < TVO_VO_CELL_MIN_BORN || (double)vo->cell[1][c] >= share * vo->cell[0][c])
+                vo->corners[k++] = vo->corners[i];
+        }
+        got = k;
+    }
     for (int32_t i = 0; i < got; ++i) {
         vo->pts[vo->n + i].x = vo->corners[i].x;
         vo->pts[vo->n + i].y = vo->corners[i].y;
@@ -724,26 +787,6 @@ static int32_t detect_append(tvo_vo *vo, const tvo_pyramid *pyr, int32_t thresho
     }
     vo->n += got;
     return got;
-}
-
-/* The coverage grid (cfg.redetect_coverage): cells of an 8 x 6 grid over the frame holding a track. */
-#define TVO_VO_COVER_COLS 8
-#define TVO_VO_COVER_ROWS 6
-static int32_t track_coverage(const tvo_vo *vo)
-{
-    uint64_t cells = 0;
-    int32_t n = 0;
-    const float sx = (float)TVO_VO_COVER_COLS / (float)vo->cfg.camera.width,
-                sy = (float)TVO_VO_COVER_ROWS / (float)vo->cfg.camera.height;
-    for (int32_t i = 0; i < vo->n; ++i) {
-        int32_t cx = (int32_t)(vo->pts[i].x * sx), cy = (int32_t)(vo->pts[i].y * sy);
-        cx = cx < 0 ? 0 : (cx >= TVO_VO_COVER_COLS ? TVO_VO_COVER_COLS - 1 : cx);
-        cy = cy < 0 ? 0 : (cy >= TVO_VO_COVER_ROWS ? TVO_VO_COVER_ROWS - 1 : cy);
-        cells |= (uint64_t)1 << (cy * TVO_VO_COVER_COLS + cx);
-    }
-    for (; cells != 0; cells &= cells - 1)
-        ++n;
-    return n;
 }
 
 /* The grey levels of an image in a 256-bin histogram (zeroed here). */
@@ -1762,6 +1805,8 @@ static void stage_track(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
         res->gain_retry = gain_retry(vo, fc, tracked);
     if (!vo->cfg.affine_at_keyframes)
         affine_refine(vo, fc);
+    if (vo->cfg.redetect_cell_kept > 0.0)
+        count_cells(vo);
     fc->m = compact(vo, vo->n, vo->st);
     for (int32_t i = 0; i < fc->m; ++i)
         vo->age[i]++;

@@ -120,6 +120,14 @@ typedef struct tvo_vo_config {
                                    than this share of the cells they covered after the last detection (a
                                    turn leaves the tracks on one side of the frame, and the rotation of a
                                    one-sided set is poorly conditioned); [0, 1], 0 disables; default 0.75 */
+    double redetect_cell_kept;  /* new corners are not taken in a cell of that grid while fewer than this
+                                   share of the corners detected in it lately were tracked into the next
+                                   frame (LK with its forward-backward check; each cell's counts lose 1/8
+                                   a frame, and a cell is judged once it counts 4 corners): where the last
+                                   corners died at once (the road close to a car, motion blur, a moving
+                                   object) the next ones mostly die too, and a closed cell opens again as
+                                   its counts fade. [0, 1], 0 disables; default 0 (docs/rules.md, "A
+                                   fiftieth rule") */
     int32_t min_pose_tracks;    /* fewer tracked points than this -> LOST; default 30 */
     int32_t gain_retry;         /* 1: when LK keeps fewer than half of at least min_pose_tracks tracks and
                                    the median grey level of the coarsest pyramid level changed by 10 % or
