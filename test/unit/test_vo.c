@@ -1035,6 +1035,96 @@ static void test_dark_frames(void **state)
     assert_int_equal(tvo_vo_required_size(&cfg), 0);
 }
 
+/* The walk of render_walk() for 40 frames with the bottom third of every frame blinking: fresh noise on
+ * even frames, a flat grey on odd ones (every corner found there dies in the next frame), with
+ * redetect_cell_kept `share`: the corners detected from frame 10 on in that strip and above it, the
+ * frames LOST and the largest rotation error of the steps. */
+static void run_blink(double share, int32_t *strip, int32_t *above, int *lost, double *rot_err)
+{
+    enum { TOP = 2 * H / 3 };
+    fixture f;
+    tvo_camera cam = test_camera();
+    tvo_pose T_prev = tvo_pose_identity();
+    tvo_vo_track *tk;
+    uint64_t rs = 7;
+    tvo_vo_config_default(&f.cfg, &cam);
+    assert_true(f.cfg.redetect_cell_kept == 0.0);
+    f.cfg.redetect_cell_kept = share;
+    f.cfg.max_tracks = f.cfg.min_tracks = 500; /* room for new corners on every frame, as on KITTI */
+    open_vo(&f);
+    tk = malloc((size_t)f.cfg.max_tracks * sizeof(*tk));
+    assert_non_null(tk);
+    *strip = *above = *lost = 0;
+    *rot_err = 0.0;
+    for (int k = 0; k < 40; ++k) {
+        tvo_vo_result res;
+        tvo_image img = tvo_image_make(W, H, W, f.img);
+        const tvo_pose T = render_walk(k, 1.0, f.img);
+        int32_t nt = 0;
+        for (int i = TOP * W; i < W * H; ++i) { /* noise on even frames, flat grey on odd ones */
+            rs = rs * 6364136223846793005ULL + 1442695040888963407ULL;
+            f.img[i] = (uint8_t)(k % 2 ? 128 : rs >> 56);
+        }
+        assert_int_equal(tvo_vo_process(f.vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
+        assert_true(tvo_pose_is_finite(&res.T_w_c));
+        *lost += k > 0 && res.state == TVO_VO_LOST;
+        assert_int_equal(tvo_vo_tracks(f.vo, tk, f.cfg.max_tracks, &nt), TVO_OK);
+        for (int32_t i = 0; i < nt && k >= 10; ++i) {
+            if (tk[i].age == 0) {
+                if (tk[i].y >= (float)TOP)
+                    ++*strip;
+                else
+                    ++*above;
+            }
+        }
+        if (k > 0 && (res.state == TVO_VO_OK || res.state == TVO_VO_ROTATION_ONLY)) {
+            const tvo_pose inv = tvo_pose_inverse(&T_prev), truth = tvo_pose_compose(&inv, &T);
+            const double e = rot_err_deg(&res.T_prev_cur, &truth);
+            *rot_err = e > *rot_err ? e : *rot_err;
+        }
+        T_prev = T;
+    }
+    free(tk);
+    free(f.mem);
+}
+
+/* redetect_cell_kept: with a blinking strip across the bottom of every frame, the default (0) detects
+ * corners there on every other frame, and they die at once; with 0.15 the strip's cells close and take a few
+ * corners only when they open again, while the corners above it and the poses are as good as before.
+ * The setting's range. */
+static void test_redetect_cell_kept(void **state)
+{
+    int32_t strip_off, above_off, strip_on, above_on;
+    int lost_off, lost_on;
+    double rot_off, rot_on;
+    tvo_vo_config cfg;
+    tvo_camera cam = test_camera();
+    (void)state;
+    run_blink(0.0, &strip_off, &above_off, &lost_off, &rot_off);
+    run_blink(0.15, &strip_on, &above_on, &lost_on, &rot_on);
+    fprintf(stderr,
+            "a blinking strip, frames 10-39: corners detected in it / above it %d / %d (max rotation error "
+            "%.3f deg, %d LOST) with every cell open; %d / %d (%.3f deg, %d LOST) with cells closed "
+            "below 15 %% kept\n",
+            strip_off, above_off, rot_off, lost_off, strip_on, above_on, rot_on, lost_on);
+    /* measured: 1342 in the strip with every cell open (every noise frame refills it), 338 with the
+       cells closed (they take a few corners when they open again) */
+    assert_true(strip_off >= 15 * 30);
+    assert_true(strip_on * 3 <= strip_off);
+    assert_true(above_on * 10 >= above_off * 8);
+    assert_int_equal(lost_on, 0);
+    assert_true(rot_on < 0.2);
+    tvo_vo_config_default(&cfg, &cam);
+    cfg.redetect_cell_kept = 1.0;
+    assert_true(tvo_vo_required_size(&cfg) > 0);
+    cfg.redetect_cell_kept = 1.5;
+    assert_int_equal(tvo_vo_required_size(&cfg), 0);
+    cfg.redetect_cell_kept = -0.1;
+    assert_int_equal(tvo_vo_required_size(&cfg), 0);
+    cfg.redetect_cell_kept = NAN;
+    assert_int_equal(tvo_vo_required_size(&cfg), 0);
+}
+
 static void test_redetect_coverage(void **state)
 {
     int on_det, on_min, on_last, off_det, off_min, off_last;
@@ -1675,6 +1765,7 @@ int main(void)
       cmocka_unit_test(test_keyframe_rotation),
       cmocka_unit_test(test_track_prediction),
       cmocka_unit_test(test_redetect_coverage),
+      cmocka_unit_test(test_redetect_cell_kept),
       cmocka_unit_test(test_gain_retry),
       cmocka_unit_test(test_dark_frames),
       cmocka_unit_test(test_pred_rescue),
