@@ -126,7 +126,8 @@ typedef struct tvo_vo_config {
                                    a frame, and a cell is judged once it counts 4 corners): where the last
                                    corners died at once (the road close to a car, motion blur, a moving
                                    object) the next ones mostly die too, and a closed cell opens again as
-                                   its counts fade. [0, 1], 0 disables; default 0 (docs/rules.md, "A
+                                   its counts fade. [0, 1], 0 disables; default 0: 0.15 helps the shared
+                                   KITTI frames and hurts degraded copies of them (docs/rules.md, "A
                                    fiftieth rule") */
     int32_t min_pose_tracks;    /* fewer tracked points than this -> LOST; default 30 */
     int32_t gain_retry;         /* 1: when LK keeps fewer than half of at least min_pose_tracks tracks and
