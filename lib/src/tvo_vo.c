@@ -1138,7 +1138,7 @@ static int translation_given_rotation(const tvo_vo *vo, const double R[9], int32
 static void refind_keep(tvo_vo *vo, int32_t i)
 {
     const int32_t e = vo->rf_next, j = vo->lm[i];
-    if (vo->rf_lm == NULL || j < 0 || !vo->hast[i] || !vo->map.lm[j].alive)
+    if (vo->rf_lm == NULL || vo->hast == NULL || j < 0 || !vo->hast[i] || !vo->map.lm[j].alive)
         return;
     const size_t tb = tvo_aff_template_bytes(vo->cfg.affine_win_size);
     vo->rf_lm[e] = j;
