@@ -22,6 +22,10 @@ import sys
 import tempfile
 from collections import defaultdict
 
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+from tinyvo_tools import cli  # noqa: E402
+
 
 def read_tracks(path: str):
     """{frame index: {track id: (y, age)}} from a --tracks CSV, frames in time order."""
@@ -46,11 +50,7 @@ def survival(frames, height: int, bands: int):
 
 
 def main(argv=None) -> int:
-    args = sys.argv[1:] if argv is None else list(argv)
-    extra = []
-    if "--" in args:
-        k = args.index("--")
-        args, extra = args[:k], args[k + 1:]
+    args, extra = cli.split_passthrough(argv)
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seq", required=True, help="EuRoC/ASL sequence folder")
     ap.add_argument("--replay", required=True, help="the tvo_replay binary")
