@@ -315,14 +315,30 @@ tvo_status tvo_vo_config_preset(tvo_vo_config *cfg, const tvo_camera *camera, tv
     }
 }
 
+/* lo <= v <= hi, and lo < v <= hi (0 for NaN), called by config_valid for each field: out of line, a
+ * call is less code than the comparisons (160 bytes on a Cortex-M7) */
+#if defined(__GNUC__)
+#define VO_NOINLINE __attribute__((noinline))
+#else
+#define VO_NOINLINE
+#endif
+static VO_NOINLINE int in_range(double v, double lo, double hi)
+{
+    return v >= lo && v <= hi;
+}
+
+static VO_NOINLINE int in_range_above(double v, double lo, double hi)
+{
+    return v > lo && v <= hi;
+}
+
 static int config_valid(const tvo_vo_config *cfg)
 {
     if (cfg == NULL || tvo_camera_check(&cfg->camera) != TVO_OK)
         return 0;
     if (cfg->max_tracks < 16 || cfg->max_tracks > 100000)
         return 0;
-    if (!(cfg->redetect_coverage >= 0.0 && cfg->redetect_coverage <= 1.0) ||
-        !(cfg->redetect_cell_kept >= 0.0 && cfg->redetect_cell_kept <= 1.0))
+    if (!in_range(cfg->redetect_coverage, 0.0, 1.0) || !in_range(cfg->redetect_cell_kept, 0.0, 1.0))
         return 0;
     if (cfg->min_tracks < 0 || cfg->min_tracks > cfg->max_tracks)
         return 0;
@@ -337,15 +353,15 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (cfg->min_scale_points < 3) /* above max_tracks: never available */
         return 0;
-    if (!(cfg->scale_min_parallax_deg > 0.0 && cfg->scale_min_parallax_deg <= 10.0))
+    if (!in_range_above(cfg->scale_min_parallax_deg, 0.0, 10.0))
         return 0;
     if (cfg->keyframe != 0 && cfg->keyframe != 1)
         return 0;
     if (cfg->keyframe_min_tracks < 0) /* above max_tracks: a new keyframe every frame */
         return 0;
-    if (!(cfg->keyframe_max_parallax_deg > 0.0 && cfg->keyframe_max_parallax_deg <= 90.0))
+    if (!in_range_above(cfg->keyframe_max_parallax_deg, 0.0, 90.0))
         return 0;
-    if (!(cfg->keyframe_max_rot_deg > 0.0 && cfg->keyframe_max_rot_deg <= 180.0))
+    if (!in_range_above(cfg->keyframe_max_rot_deg, 0.0, 180.0))
         return 0;
     if (cfg->keyframe_translation != 0 && cfg->keyframe_translation != 1)
         return 0;
@@ -357,7 +373,7 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (cfg->affine_at_keyframes != 0 && cfg->affine_at_keyframes != 1)
         return 0;
-    if (!(cfg->affine_end_share >= 0.0 && cfg->affine_end_share <= 1.0))
+    if (!in_range(cfg->affine_end_share, 0.0, 1.0))
         return 0;
     if (cfg->map_refind < 0 || cfg->map_refind > 4096) /* inert without the map or the templates */
         return 0;
@@ -378,30 +394,29 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (cfg->map_min_points < 6 || cfg->map_min_points > 100000) /* above max_tracks: never a map */
         return 0;
-    if (!(cfg->map_init_parallax_deg > 0.0 && cfg->map_init_parallax_deg <= 30.0) ||
-        !(cfg->map_tri_parallax_deg > 0.0 && cfg->map_tri_parallax_deg <= 30.0))
+    if (!in_range_above(cfg->map_init_parallax_deg, 0.0, 30.0) ||
+        !in_range_above(cfg->map_tri_parallax_deg, 0.0, 30.0))
         return 0;
-    if (!(cfg->map_init_wait_s >= 0.0 && cfg->map_init_wait_s <= 86400.0))
+    if (!in_range(cfg->map_init_wait_s, 0.0, 86400.0))
         return 0;
-    if (!(cfg->chain_scale_sigmas >= 0.0 && cfg->chain_scale_sigmas <= 100.0))
+    if (!in_range(cfg->chain_scale_sigmas, 0.0, 100.0))
         return 0;
-    if (!(cfg->map_kf_baseline > 0.0 && cfg->map_kf_baseline <= 10.0) ||
-        !(cfg->map_kf_points_ratio >= 0.0 && cfg->map_kf_points_ratio <= 1.0))
+    if (!in_range_above(cfg->map_kf_baseline, 0.0, 10.0) || !in_range(cfg->map_kf_points_ratio, 0.0, 1.0))
         return 0;
     if (cfg->map_kf_max_frames < 1 || cfg->map_kf_max_frames > 100000 || cfg->map_ba_iterations < 1 ||
         cfg->map_ba_iterations > 100)
         return 0;
-    if (!(cfg->map_ba_max_turn_deg > 0.0 && cfg->map_ba_max_turn_deg <= 180.0))
+    if (!in_range_above(cfg->map_ba_max_turn_deg, 0.0, 180.0))
         return 0;
     if (cfg->lens_refine != 0 && (cfg->lens_refine != 1 || !TVO_WITH_LENS))
         return 0;
-    if (!(cfg->map_ba_huber_px > 0.0 && cfg->map_ba_huber_px <= 100.0))
+    if (!in_range_above(cfg->map_ba_huber_px, 0.0, 100.0))
         return 0;
-    if (!(cfg->map_ba_rot_prior >= 0.0 && cfg->map_ba_rot_prior <= 1e12))
+    if (!in_range(cfg->map_ba_rot_prior, 0.0, 1e12))
         return 0;
     if (cfg->map_ba_fixed < 2 || cfg->map_ba_fixed > cfg->map_window - 1)
         return 0;
-    if (!(cfg->map_rot_prior >= 0.0 && cfg->map_rot_prior <= 1e12))
+    if (!in_range(cfg->map_rot_prior, 0.0, 1e12))
         return 0;
     if (cfg->map_rot_prior_obs != 0 &&
         (cfg->map_rot_prior_obs < 2 || cfg->map_rot_prior_obs > TVO_VO_MAX_WINDOW))
