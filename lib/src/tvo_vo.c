@@ -253,7 +253,6 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
     cfg->map_min_points = 20;
     cfg->map_init_parallax_deg = 1.0;
     cfg->map_init_wait_s = 0.0;
-    cfg->map_wait_fb_s = 0.0;
     cfg->map_tri_parallax_deg = 0.5;
     cfg->map_kf_baseline = 0.1;
     cfg->map_kf_points_ratio = 0.8;
@@ -398,7 +397,7 @@ static int config_valid(const tvo_vo_config *cfg)
     if (!in_range_above(cfg->map_init_parallax_deg, 0.0, 30.0) ||
         !in_range_above(cfg->map_tri_parallax_deg, 0.0, 30.0))
         return 0;
-    if (!in_range(cfg->map_init_wait_s, 0.0, 86400.0) || !in_range(cfg->map_wait_fb_s, 0.0, 86400.0))
+    if (!in_range(cfg->map_init_wait_s, 0.0, 86400.0))
         return 0;
     if (!in_range(cfg->chain_scale_sigmas, 0.0, 100.0))
         return 0;
@@ -1733,12 +1732,12 @@ static void scale_previous(const frame_ctx *fc, int32_t g)
 /* LK kept `tracked` of the tracks, fewer than half: after an exposure step, track them again from their
  * previous positions (no prediction) on the previous pyramid scaled by the gain, and keep whichever pass
  * tracked more. Returns 1 when the second pass is kept. */
-static int32_t gain_retry(tvo_vo *vo, const frame_ctx *fc, const tvo_lk_config *first, int32_t tracked)
+static int32_t gain_retry(tvo_vo *vo, const frame_ctx *fc, int32_t tracked)
 {
     const int32_t top = fc->pc->levels - 1;
     const tvo_image a = tvo_pyramid_level(fc->pp, top), b = tvo_pyramid_level(fc->pc, top);
     const int32_t mp = median_grey(&a), mc = median_grey(&b);
-    tvo_lk_config lkc = *first; /* the first pass's configuration (its way back), from the tracks' starts */
+    tvo_lk_config lkc = vo->cfg.lk;
     int32_t g;
     if (mp < 8 || mc < 8) /* too dark to measure a ratio */
         return 0;
@@ -1804,18 +1803,6 @@ static int32_t pred_rescue(tvo_vo *vo, const frame_ctx *fc, const tvo_lk_config 
     return tracked;
 }
 
-/* cfg.map_wait_fb_s: 1 when this frame (dt_ns after the last) comes that long after the first frame
- * without a map, and no map has been made since. */
-static int map_waited(const tvo_vo *vo, int64_t dt_ns)
-{
-    uint64_t waited;
-    if (!(vo->cfg.map_wait_fb_s > 0.0) || !vo->cfg.map || !vo->map.waiting)
-        return 0;
-    /* t_prev >= wait_t_ns (a frame's time) and dt_ns >= 0: exact unless the times span 584 years */
-    waited = (uint64_t)vo->t_prev - (uint64_t)vo->map.wait_t_ns + (uint64_t)dt_ns;
-    return (double)waited >= vo->cfg.map_wait_fb_s * 1e9;
-}
-
 /* 1. LK tracking of the tracks into this frame; the tracks that leave the image are dropped. */
 static void stage_track(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
 {
@@ -1825,14 +1812,12 @@ static void stage_track(tvo_vo *vo, frame_ctx *fc, tvo_vo_result *res)
     fc->predicted = predict_tracks(vo, res->dt_ns, vo->ok2);
     if (fc->predicted)
         lkc.use_initial_flow = 1;
-    if (map_waited(vo, res->dt_ns))
-        lkc.fb_levels = 1;
     tracked = lk_pass(vo, fc, &lkc, vo->ok2);
     if (fc->predicted && vo->cfg.pred_rescue)
         tracked = pred_rescue(vo, fc, &lkc, vo->ok2, tracked, &res->pred_rescue);
     vo->rescue_age = res->pred_rescue ? 0 : vo->rescue_age + (vo->rescue_age < TVO_VO_MAX_RESCUE_FRAMES);
     if (vo->cfg.gain_retry && vo->n >= vo->cfg.min_pose_tracks && 2 * tracked < vo->n)
-        res->gain_retry = gain_retry(vo, fc, &lkc, tracked);
+        res->gain_retry = gain_retry(vo, fc, tracked);
     if (!vo->cfg.affine_at_keyframes)
         affine_refine(vo, fc);
     if (vo->cfg.redetect_cell_kept > 0.0)

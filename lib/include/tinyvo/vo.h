@@ -248,14 +248,6 @@ typedef struct tvo_vo_config {
                                    keeps few tracks from frame to frame (blur, noise, a low frame rate)
                                    gets a map at all. [0, 86400], 0: never fewer; default 0
                                    (docs/design.md, "Initialisation") */
-    double map_wait_fb_s;         /* after this many seconds of frames without a map (the first frames, or
-                                   after a loss), until a map is made, the tracks' forward-backward check
-                                   takes the short way back (lk.fb_levels 1: the finest level only, from
-                                   the start point) instead of lk's own: the full way back solves a large
-                                   motion again from nothing through every level, and drops tracks that
-                                   the forward track got right; it costs about a fifth of the tracker.
-                                   Nothing changes while the map tracks. [0, 86400], 0: never;
-                                   default 0 (docs/design.md, "Initialisation") */
     double chain_scale_sigmas;    /* the steps of the two-view chain (the frames without a map pose: before
                                    the first map and while the map is lost) follow the relative scale's
                                    changes (rel_scale) beyond this many of its standard errors: a step
