@@ -97,7 +97,8 @@ static void usage(FILE *f)
             "                       instead of the ratio of the whole path; A in [0, 1]\n"
             "                       (with --map 0: the per-step filter of vo.h)\n"
             "  --step M             constant step length in metres for --scale const\n"
-            "  --frame camera|body  pose written: camera (default) or body (through T_BS)\n"
+            "  --frame camera|body  pose written: camera (default) or body (through T_BS; needs\n"
+            "                       a metric --scale: T_BS is in metres)\n"
             "  --stats FILE         JSON with frame counts, status counts, stage timings and\n"
             "                       the tracks kept from frame to frame (tracks: new / old,\n"
             "                       those detected in the previous frame / older, and how\n"
@@ -339,6 +340,14 @@ static int parse_args(int argc, char **argv, options *o)
     }
     if (o->alpha >= 0.0 && o->scale != SCALE_MODEL && o->scale != SCALE_CONST) {
         fprintf(stderr, "tvo_replay: --scale-alpha goes with --scale model or const\n");
+        return -1;
+    }
+    if (o->body_frame && o->scale == SCALE_NONE) {
+        /* T_BS's translation is in metres, the trajectory in the map's unit: the body's position would be
+           the camera's with the lever arm shrunk or grown by the unknown scale */
+        fprintf(stderr,
+                "tvo_replay: --frame body needs a metric --scale (gt, model, const or propagate): "
+                "with --scale none the trajectory is in the map's unit and T_BS in metres\n");
         return -1;
     }
     return 0;

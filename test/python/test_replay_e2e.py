@@ -190,6 +190,7 @@ def test_cli_usage_errors_name_the_option():
                        (["--euroc", "a", "--tum", "b", "--out", "x"], "--tum: only one of"),
                        (["--euroc", "a", "--out", "x", "--poses", "p"], "--poses goes with --kitti"),
                        (["--euroc", "a", "--out", "x", "--calib-cam", "cam1"], "--calib-cam goes with --calib"),
+                       (["--euroc", "a", "--out", "x", "--frame", "body"], "--frame body needs a metric --scale"),
                        (["--euroc", "a"], "--out is required")):
         r = run([replay] + args)
         assert r.returncode == 2 and part in r.stderr and r.stderr.count("\n") == 1, (args, r.stderr)
