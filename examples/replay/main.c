@@ -35,6 +35,7 @@
 #include "settings.h"
 
 enum scale_mode { SCALE_NONE, SCALE_GT, SCALE_MODEL, SCALE_PROPAGATE, SCALE_CONST };
+static const char *const scale_names[5] = {"none", "gt", "model", "propagate", "const"};
 enum skip_kind { SKIP_MISSING, SKIP_CORRUPT, SKIP_SIZE, SKIP_TIMESTAMP, SKIP_BAD_ROW, SKIP_COUNT };
 static const char *const skip_names[SKIP_COUNT] = {"missing", "corrupt", "wrong_size", "timestamp",
                                                    "bad_row"};
@@ -67,6 +68,12 @@ typedef struct options {
     int n_sets, list_settings;
 } options;
 
+/* The replayed camera's folder name: the EuRoC camera given, or the TUM and KITTI layouts' one. */
+static const char *camera_name(const options *o)
+{
+    return o->source == SRC_EUROC ? o->cam : (o->source == SRC_TUM ? "rgb" : "image_0");
+}
+
 static void usage(FILE *f)
 {
     fprintf(f,
@@ -82,7 +89,9 @@ static void usage(FILE *f)
             "                       Kalibr camchain, OpenCV or ROS camera_info YAML\n"
             "                       (docs/calibration.md); its size must be the frames'\n"
             "  --calib-cam NAME     camera of a Kalibr camchain (default cam0)\n"
-            "  --out FILE           trajectory in TUM format (t tx ty tz qx qy qz qw)\n"
+            "  --out FILE           trajectory in TUM format (t tx ty tz qx qy qz qw) after one\n"
+            "                       '#' line naming the frame, camera and scale (tinyvo-eval\n"
+            "                       reads it)\n"
             "  --scale MODE         the metric scale of the map's trajectory (one unknown\n"
             "                       factor for the whole run): none (the map's own unit, the\n"
             "                       first baseline; default), gt (set at every keyframe from\n"
@@ -654,6 +663,10 @@ int main(int argc, char **argv)
         fprintf(stderr, "tvo_replay: cannot write %s\n", o.out);
         goto cleanup;
     }
+    /* A comment line (TUM readers and evo skip '#' lines) that says whose pose each row is, so that
+     * tinyvo-eval moves the ground truth to the camera that was replayed and not to cam0. */
+    fprintf(out, "# tvo_replay frame=%s source=%s camera=%s scale=%s: t tx ty tz qx qy qz qw\n",
+            o.body_frame ? "body" : "camera", source_names[o.source], camera_name(&o), scale_names[o.scale]);
 
     if (o.features != NULL) {
         feat = fopen(o.features, "w");
@@ -918,8 +931,7 @@ int main(int argc, char **argv)
                 goto cleanup;
             }
             fprintf(js, "{\n  \"sequence\": \"%s\",\n  \"dataset\": \"%s\",\n  \"camera\": \"%s\",\n", o.dir,
-                    source_names[o.source],
-                    o.source == SRC_EUROC ? o.cam : (o.source == SRC_TUM ? "rgb" : "image_0"));
+                    source_names[o.source], camera_name(&o));
             fprintf(js, "  \"width\": %d,\n  \"height\": %d,\n  \"vo_memory_bytes\": %zu,\n",
                     (int)cfg.camera.width, (int)cfg.camera.height, vo_size);
             fprintf(js,

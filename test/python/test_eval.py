@@ -462,3 +462,46 @@ def test_static_estimate_is_a_clear_error():
     est.poses[:, :3, 3] = 0.0
     with pytest.raises(ValueError, match="alignment is not possible"):
         tev.evaluate(est, g)
+
+
+def test_replay_header_names_the_camera_frame_and_unit(tmp_path, capsys):
+    """tvo_replay's first line says whose pose each row is: a cam1 replay is compared with cam1's
+    ground truth (not cam0's, 11 cm away), and options that contradict the header are refused."""
+    g = gt_body(120)
+    seq = euroc_folder(tmp_path / "seq", g)
+    cam1 = EUROC_CAM0_T_BS.copy()
+    cam1[:3, 3] += [0.0, 0.11, 0.0]  # EuRoC's cam1 sits about 11 cm from cam0
+    (seq / "mav0" / "cam1").mkdir()
+    trajio.write_sensor_yaml(str(seq / "mav0" / "cam1" / "sensor.yaml"), trajio.CameraInfo(T_BS=cam1))
+    est = g.to_camera(cam1)
+    est.poses[:, :3, 3] *= 0.5
+
+    def write(name, header):
+        p = tmp_path / name
+        trajio.write_tum(str(p), est)
+        p.write_text(header + p.read_text())
+        return str(p)
+
+    with_hdr = write("cam1.txt", "# tvo_replay frame=camera source=euroc camera=cam1 scale=none: t tx ty tz qx qy qz qw\n")
+    bare = write("bare.txt", "")
+    assert trajio.read_replay_header(with_hdr) == {"frame": "camera", "source": "euroc", "camera": "cam1",
+                                                    "scale": "none"}
+    assert trajio.read_replay_header(bare) == {}
+    ev = tev.evaluate_files(with_hdr, str(seq))
+    assert ev.result["inputs"]["T_BS"].endswith("cam1/sensor.yaml") and ev.result["inputs"]["camera"] == "cam1"
+    assert ev.result["standard"]["ate_m"]["rmse"] < 1e-8
+    # without the header the file is taken for cam0's: the lever arm turning with the body is the error
+    assert tev.evaluate_files(bare, str(seq)).result["standard"]["ate_m"]["rmse"] > 0.005
+    assert tev.evaluate_files(bare, str(seq), cam="cam1").result["standard"]["ate_m"]["rmse"] < 1e-8
+    # contradictions and a metric evaluation of the map's own unit: one line, exit 1
+    for args, words in ((["--cam", "cam0"], "replay of cam1"), (["--frame", "body"], "holds camera poses"),
+                        (["--metric-scale"], "--scale none")):
+        assert tev.main(["--est", with_hdr, "--gt", str(seq), "--quiet"] + args) == 1
+        err = capsys.readouterr().err
+        assert words in err and err.count("\n") == 1
+    cam2 = write("cam2.txt", "# tvo_replay frame=camera source=euroc camera=cam2 scale=none: t tx ty tz qx qy qz qw\n")
+    with pytest.raises(ValueError, match="cam2/sensor.yaml"):
+        tev.evaluate_files(cam2, str(seq))
+    # a KITTI or TUM replay names its image folder: no EuRoC camera, so no effect on T_BS
+    kitti = write("k.txt", "# tvo_replay frame=camera source=kitti camera=image_0 scale=none: t tx ty tz qx qy qz qw\n")
+    assert tev.estimate_frame_and_camera(kitti, None, None, False) == ("camera", "cam0")

@@ -18,6 +18,11 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 REPLAY = pathlib.Path(os.environ.get("TVO_BUILD_DIR", ROOT / "build" / "release")) / "examples" / "replay" / "tvo_replay"
 
 
+def pose_rows(traj):
+    """The pose lines of a trajectory tvo_replay wrote (its first line is a '#' comment)."""
+    return [ln for ln in traj.read_text().splitlines() if not ln.startswith("#")]
+
+
 @pytest.fixture(scope="module")
 def replayed(tmp_path_factory):
     if not REPLAY.exists():
@@ -50,7 +55,10 @@ def test_replay_accuracy(replayed):
 
 def test_replay_trajectory_is_finite_tum(replayed):
     traj, _, _ = replayed
-    rows = [ln.split() for ln in traj.read_text().splitlines()]
+    lines = traj.read_text().splitlines()
+    # one comment line first (TUM readers and evo skip it): whose pose each row is, in which unit
+    assert lines[0] == "# tvo_replay frame=camera source=euroc camera=cam0 scale=gt: t tx ty tz qx qy qz qw"
+    rows = [ln.split() for ln in lines[1:]]
     assert len(rows) == 120
     for r in rows:
         assert len(r) == 8
@@ -69,8 +77,8 @@ def test_replay_scale_propagate(replayed, tmp_path):
     out, feat = tmp_path / "prop.txt", tmp_path / "f.csv"
     subprocess.run([str(REPLAY), "--euroc", str(seq), "--out", str(out), "--scale", "propagate",
                     "--features", str(feat), "--quiet"], check=True)
-    a = [[float(x) for x in ln.split()] for ln in traj_gt.read_text().splitlines()]
-    b = [[float(x) for x in ln.split()] for ln in out.read_text().splitlines()]
+    a = [[float(x) for x in ln.split()] for ln in pose_rows(traj_gt)]
+    b = [[float(x) for x in ln.split()] for ln in pose_rows(out)]
     assert len(a) == len(b) == 120
     assert all(math.isfinite(v) for r in b for v in r)
     assert all(max(abs(x - y) for x, y in zip(ra[4:], rb[4:])) < 1e-9 for ra, rb in zip(a, b))
@@ -341,7 +349,7 @@ def test_replay_malformed_row_is_skipped(replayed, tmp_path):
     st = json.loads(stats.read_text())
     assert st["skipped"]["bad_row"] == 1 and st["frames"]["skipped"] == 1
     assert st["frames"]["processed"] == 119 and st["dataset"] == "euroc"
-    assert len(out.read_text().splitlines()) == 119
+    assert len(pose_rows(out)) == 119
     # --strict: the row is an error
     r = run([str(REPLAY), "--euroc", str(bad), "--out", str(out), "--strict"])
     assert r.returncode == 1 and "data.csv: line 11: bad timestamp" in r.stderr and r.stderr.count("\n") == 1
@@ -449,7 +457,7 @@ def test_replay_tum_layout(kitti_layout, tmp_path):
     assert r.returncode == 0, r.stderr
     r = run([str(REPLAY), "--kitti", str(seq), "--out", str(b), "--scale", "gt", "--quiet"])
     assert r.returncode == 0, r.stderr
-    ta, tb = a.read_text().splitlines(), b.read_text().splitlines()
+    ta, tb = pose_rows(a), pose_rows(b)
     assert len(ta) == len(tb) == 51
     for la, lb in zip(ta, tb):
         va, vb = [float(x) for x in la.split()], [float(x) for x in lb.split()]

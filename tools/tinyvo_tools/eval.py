@@ -2,10 +2,14 @@
 """Trajectory evaluation against ground truth: the standard metrics (via evo) and the paper's protocol.
 
     tinyvo-eval --est TRAJ.txt --gt <EuRoC / TUM / KITTI folder | pose file> [--gt-format F]
-                [--gt-times times.txt] [--tbs sensor.yaml] [--metric-scale] [--out RESULT.json] [--plots DIR]
+                [--gt-times times.txt] [--tbs sensor.yaml] [--cam camN] [--frame camera|body]
+                [--metric-scale] [--out RESULT.json] [--plots DIR]
 
 - ``--est``: TUM file ``t tx ty tz qx qy qz qw`` (seconds), camera pose in the world (``--frame body``
-  if it is a body pose).
+  if it is a body pose). tvo_replay's first line (``# tvo_replay frame=... source=... camera=...
+  scale=...``) says whose pose it is: ``--frame`` and ``--cam`` default to it, an option that
+  contradicts it is refused, and so is ``--metric-scale`` on a ``scale=none`` trajectory (the map's
+  own unit).
 - ``--gt``: a EuRoC csv (``timestamp_ns, p, q w x y z``: body poses), a TUM file (``t p qx qy qz qw``,
   seconds: camera poses) or KITTI poses (12 numbers per line: camera poses; times from ``--gt-times``,
   or the ``times.txt`` next to it or in ``../sequences/<seq>/``), or a folder of one of these datasets.
@@ -13,7 +17,8 @@
   quaternion norm; a file that fits more than one (8 space-separated columns with ns timestamps, say)
   is refused with the reason, and ``--gt-format euroc|tum|kitti`` names it.
 - EuRoC ground truth (body poses) is moved to the camera frame with ``T_BS``: from ``--tbs``, else the
-  cam0 ``sensor.yaml`` of the EuRoC folder, else EuRoC cam0's ``T_BS`` (said so in the output). TUM and
+  estimate's camera's ``sensor.yaml`` (``mav0/camN``) of the EuRoC folder, else, for cam0 only, EuRoC
+  cam0's ``T_BS`` (said so in the output; another camera without its sensor.yaml is refused). TUM and
   KITTI ground truth is the camera's pose already (``T_BS`` identity unless ``--tbs``).
 - Association by nearest timestamp (``--max-diff``, default 10 ms), with evo's ``sync``.
 
@@ -233,11 +238,29 @@ def evaluate(est: Trajectory, gt_body: Trajectory, T_BS=None, metric_scale: bool
     return Evaluation(result, t_s, gt_poses, est_al, paper_protocol_poses(gt_poses, est_raw), dof)
 
 
-def load_groundtruth(path: str, fmt: str = "auto", times=None):
-    """(Trajectory, path of the cam0 sensor.yaml next to it or None, format, why). EuRoC ground truth
-    is the body's pose, TUM and KITTI ground truth the camera's."""
+def load_groundtruth(path: str, fmt: str = "auto", times=None, cam: str = "cam0"):
+    """(Trajectory, path of camera ``cam``'s sensor.yaml next to it or None, format, why). EuRoC ground
+    truth is the body's pose, TUM and KITTI ground truth the camera's."""
     gt, fmt, why = trajio.read_trajectory(path, fmt, times)
-    return gt, (trajio.find_cam_yaml(path) if fmt == "euroc" else None), fmt, why
+    return gt, (trajio.find_cam_yaml(path, cam) if fmt == "euroc" else None), fmt, why
+
+
+def estimate_frame_and_camera(est_path: str, frame: str | None, cam: str | None, metric_scale: bool):
+    """(frame, camera) of an estimate: as given, else as its tvo_replay header says (camera only for a
+    EuRoC replay), else camera and cam0. Refuses what contradicts the header, and an SE(3) evaluation
+    of a trajectory in the map's own unit (``scale=none``): its ATE in metres would mean nothing."""
+    hdr = trajio.read_replay_header(est_path)
+    if frame is None:
+        frame = hdr.get("frame", "camera")
+    elif hdr.get("frame", frame) != frame:
+        raise ValueError(f"--frame {frame}, but {est_path} holds {hdr['frame']} poses (its tvo_replay header)")
+    hcam = hdr.get("camera") if hdr.get("source") == "euroc" else None
+    if cam is not None and hcam is not None and cam != hcam:
+        raise ValueError(f"--cam {cam}, but {est_path} is a replay of {hcam} (its tvo_replay header)")
+    if metric_scale and hdr.get("scale") == "none":
+        raise ValueError(f"--metric-scale, but {est_path} was written with --scale none (the map's own "
+                         "unit): evaluate it with Sim(3), without --metric-scale")
+    return frame, cam or hcam or "cam0"
 
 
 def restrict_to_frames_of(est: Trajectory, other: Trajectory, max_diff_s: float):
@@ -256,15 +279,18 @@ def restrict_to_frames_of(est: Trajectory, other: Trajectory, max_diff_s: float)
 
 
 def evaluate_files(est_path: str, gt_path: str, tbs_yaml: str | None = None, metric_scale: bool = False,
-                   max_diff_s: float = 0.01, frame: str = "camera", plots_dir: str | None = None,
+                   max_diff_s: float = 0.01, frame: str | None = None, plots_dir: str | None = None,
                    out_json: str | None = None, gt_format: str = "auto", gt_times: str | None = None,
-                   same_frames_as: str | None = None, parts: int = 4, rpe_deltas: tuple = ()) -> Evaluation:
-    """The command line's work as a function (used by the bench and the README demo)."""
+                   same_frames_as: str | None = None, parts: int = 4, rpe_deltas: tuple = (),
+                   cam: str | None = None) -> Evaluation:
+    """The command line's work as a function (used by the bench and the README demo). ``frame`` and
+    ``cam`` None: from the estimate's tvo_replay header, else camera and cam0."""
+    frame, cam = estimate_frame_and_camera(est_path, frame, cam, metric_scale)
     est = trajio.read_tum(est_path, frame)
     kept = None
     if same_frames_as:
         est, kept = restrict_to_frames_of(est, trajio.read_tum(same_frames_as, frame), max_diff_s)
-    gt, auto_yaml, fmt, why = load_groundtruth(gt_path, gt_format, gt_times)
+    gt, auto_yaml, fmt, why = load_groundtruth(gt_path, gt_format, gt_times, cam)
     if frame == "body":
         T_BS, tbs_src = np.eye(4), "not used (--frame body)"
     elif tbs_yaml:
@@ -273,11 +299,15 @@ def evaluate_files(est_path: str, gt_path: str, tbs_yaml: str | None = None, met
         T_BS, tbs_src = np.eye(4), f"identity ({fmt} ground truth is the camera's pose)"
     elif auto_yaml:
         T_BS, tbs_src = trajio.read_sensor_yaml(auto_yaml).T_BS, auto_yaml
-    else:
+    elif cam == "cam0":
         T_BS, tbs_src = EUROC_CAM0_T_BS, "EuRoC cam0 T_BS (built in; pass --tbs to change)"
+    else:
+        raise ValueError(f"the estimate is of {cam}, and no {cam}/sensor.yaml is beside the ground truth "
+                         f"{gt_path}: give its T_BS with --tbs")
     ev = evaluate(est, gt, T_BS, metric_scale, max_diff_s, frame, parts, rpe_deltas)
-    ev.result["inputs"] = {"estimate": os.path.abspath(est_path), "ground_truth": gt.source,
-                           "ground_truth_format": fmt, "ground_truth_format_why": why, "T_BS": tbs_src}
+    ev.result["inputs"] = {"estimate": os.path.abspath(est_path), "estimate_frame": frame, "camera": cam,
+                           "ground_truth": gt.source, "ground_truth_format": fmt,
+                           "ground_truth_format_why": why, "T_BS": tbs_src}
     if kept is not None:
         ev.result["inputs"]["same_frames_as"] = {"trajectory": os.path.abspath(same_frames_as),
                                                  "frames_kept": kept[0], "frames_of_estimate": kept[1]}
@@ -378,7 +408,10 @@ def main(argv=None) -> int:
     ap.add_argument("--gt-times", help="KITTI times.txt for a KITTI poses file (default: found next to it)")
     ap.add_argument("--tbs", help="sensor.yaml whose T_BS moves ground truth to the camera frame")
     ap.add_argument("--metric-scale", action="store_true", help="SE(3) alignment (metric output)")
-    ap.add_argument("--frame", choices=("camera", "body"), default="camera", help="frame of --est poses")
+    ap.add_argument("--frame", choices=("camera", "body"),
+                    help="frame of --est poses (default: what its tvo_replay header says, else camera)")
+    ap.add_argument("--cam", help="EuRoC camera of --est, whose sensor.yaml moves the ground truth to it "
+                                  "(default: what its tvo_replay header says, else cam0)")
     ap.add_argument("--max-diff", type=float, default=0.01, help="association tolerance, s (default 0.01)")
     ap.add_argument("--out", help="write the result JSON here")
     ap.add_argument("--plots", help="write PNG plots into this folder")
@@ -394,7 +427,7 @@ def main(argv=None) -> int:
 
     def body():
         ev = evaluate_files(a.est, a.gt, a.tbs, a.metric_scale, a.max_diff, a.frame, a.plots, a.out,
-                            a.gt_format, a.gt_times, a.same_frames_as, a.parts, tuple(a.rpe_delta))
+                            a.gt_format, a.gt_times, a.same_frames_as, a.parts, tuple(a.rpe_delta), a.cam)
         if not a.quiet:
             inp = ev.result["inputs"]
             print(f"ground truth: {inp['ground_truth_format']} ({inp['ground_truth_format_why']})")

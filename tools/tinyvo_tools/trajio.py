@@ -230,6 +230,24 @@ def read_tum(path: str, frame: str = "camera") -> Trajectory:
     return Trajectory(t_ns, pose_from_pq(v[:, 0:3], q_wxyz), frame, str(path))
 
 
+def read_replay_header(path: str) -> dict:
+    """The ``key=value`` fields of the comment line tvo_replay writes first in a trajectory
+    (``# tvo_replay frame=camera source=euroc camera=cam1 scale=none: t tx ty tz qx qy qz qw``): whose
+    pose each row is (``frame``, and ``camera`` of the dataset ``source``) and in which unit (``scale``).
+    {} for a file without one (another program's trajectory)."""
+    with open(path, "r", encoding="utf-8") as f:
+        for line in f:
+            s = line.strip()
+            if not s:
+                continue
+            if not s.startswith("#"):
+                break
+            if s.startswith("# tvo_replay "):
+                fields = s[len("# tvo_replay "):].split(":", 1)[0].split()
+                return dict(tok.split("=", 1) for tok in fields if "=" in tok)
+    return {}
+
+
 def write_tum(path: str, traj: Trajectory) -> None:
     """Write a TUM trajectory (seconds with 9 decimals, exact for int64 ns)."""
     p, q = pq_from_pose(traj.poses)
