@@ -482,7 +482,8 @@ def test_replay_header_names_the_camera_frame_and_unit(tmp_path, capsys):
         p.write_text(header + p.read_text())
         return str(p)
 
-    with_hdr = write("cam1.txt", "# tvo_replay frame=camera source=euroc camera=cam1 scale=none: t tx ty tz qx qy qz qw\n")
+    with_hdr = write("cam1.txt",
+                     "# tvo_replay frame=camera source=euroc camera=cam1 scale=none: t tx ty tz qx qy qz qw\n")
     bare = write("bare.txt", "")
     assert trajio.read_replay_header(with_hdr) == {"frame": "camera", "source": "euroc", "camera": "cam1",
                                                     "scale": "none"}
@@ -502,6 +503,10 @@ def test_replay_header_names_the_camera_frame_and_unit(tmp_path, capsys):
     cam2 = write("cam2.txt", "# tvo_replay frame=camera source=euroc camera=cam2 scale=none: t tx ty tz qx qy qz qw\n")
     with pytest.raises(ValueError, match="cam2/sensor.yaml"):
         tev.evaluate_files(cam2, str(seq))
+    for bad in ("frame=world camera=cam0", "frame=camera camera=../../etc"):
+        p = write("bad.txt", f"# tvo_replay {bad} source=euroc scale=none: t tx ty tz qx qy qz qw\n")
+        with pytest.raises(ValueError, match="tvo_replay header"):
+            tev.evaluate_files(p, str(seq))
     # a KITTI or TUM replay names its image folder: no EuRoC camera, so no effect on T_BS
     kitti = write("k.txt", "# tvo_replay frame=camera source=kitti camera=image_0 scale=none: t tx ty tz qx qy qz qw\n")
     assert tev.estimate_frame_and_camera(kitti, None, None, False) == ("camera", "cam0")
