@@ -9,7 +9,8 @@
  * (t in seconds of CLOCK_MONOTONIC, the camera pose from the VO's local map in the world frame of the
  * first frame, TUM order; translation in the map's unit, one unknown factor for the whole run, or in
  * metres with --model: the map's motion times the networks' path length over the map's, updated at each
- * keyframe, as tvo_replay --scale model). --out also writes the
+ * keyframe, and before the first keyframe each step the networks' length, as tvo_replay --scale model;
+ * examples/replay/map_scale.h). --out also writes the
  * trajectory in TUM format (t tx ty tz qx qy qz qw). Status and errors go to stderr. --calib takes any
  * calibration of tinyvo/port/calib.h (EuRoC sensor.yaml, Kalibr camchain, OpenCV, ROS camera_info);
  * without it a distortion-free pinhole with a 60 degree horizontal field of view is assumed. The
@@ -18,6 +19,7 @@
  * Exit codes: 0 done (--frames reached or Ctrl-C), 1 a runtime error (a bad calibration or model, no
  * device, device busy or unusable, size mismatch, stream lost or stalled: one line on stderr says
  * which), 2 a usage error (one line naming the option). */
+#include "map_scale.h"
 #include "settings.h"
 #include "tinyvo/port/calib.h"
 #include "tinyvo/port/clock.h"
@@ -113,7 +115,7 @@ int main(int argc, char **argv)
     int quiet = 0;
     tvo_vo_preset preset = TVO_VO_PRESET_DEFAULT;
     double unit_m = 1.0; /* metres per map unit: 1 (the map's own unit), or from the networks (--model) */
-    double src_sum = 0.0, vo_sum = 0.0, src_int = 0.0, vo_int = 0.0; /* path lengths, --model */
+    tvo_map_scale msc;   /* --model: the networks' path length over the map's (map_scale.h) */
     tvo_pose T_w_c_prev;
     int32_t width = 0, height = 0, fps = 30, timeout_ms = 2000;
     long frames_max = -1;
@@ -344,6 +346,7 @@ int main(int argc, char **argv)
     }
     tvo_traj_init(&traj, &I);
     T_w_c_prev = I;
+    tvo_map_scale_reset(&msc);
     if (nn != NULL)
         unit_m = 0.0; /* until the first keyframe with a step length from the networks */
 
@@ -381,20 +384,10 @@ int main(int argc, char **argv)
             tvo_pose step;
             T_w_c_prev = res.T_w_c;
             if (nn != NULL) {
-                if (vo_len > 0.0 && isfinite(vo_len))
-                    vo_int += vo_len;
-                if (res.state == TVO_VO_OK && tvo_vo_refine(nn, &res, &step) == TVO_OK) {
-                    const double len = sqrt(step.t[0] * step.t[0] + step.t[1] * step.t[1] +
-                                            step.t[2] * step.t[2]);
-                    if (len > 0.0 && isfinite(len))
-                        src_int += len;
-                }
-                if (res.keyframe && vo_int > 0.0 && src_int > 0.0) {
-                    src_sum += src_int;
-                    vo_sum += vo_int;
-                    unit_m = src_sum / vo_sum;
-                    src_int = vo_int = 0.0;
-                }
+                double len = -1.0;
+                if (res.state == TVO_VO_OK && tvo_vo_refine(nn, &res, &step) == TVO_OK)
+                    len = sqrt(step.t[0] * step.t[0] + step.t[1] * step.t[1] + step.t[2] * step.t[2]);
+                unit_m = tvo_map_scale_frame(&msc, TVO_MAP_SCALE_WHOLE_PATH, 0.0, vo_len, len, res.keyframe);
             }
             (void)tvo_traj_step(&traj, &rel, unit_m);
         }

@@ -32,6 +32,7 @@
 #include "tinyvo/version.h"
 #include "tinyvo/vo.h"
 
+#include "map_scale.h"
 #include "settings.h"
 
 enum scale_mode { SCALE_NONE, SCALE_GT, SCALE_MODEL, SCALE_PROPAGATE, SCALE_CONST };
@@ -99,6 +100,8 @@ static void usage(FILE *f)
             "                       with the per-DoF networks' step lengths, --model),\n"
             "                       const (the same with --step per frame), propagate (set\n"
             "                       once, at the map's first keyframes, from ground truth).\n"
+            "                       Until a keyframe sets the factor (before the first map,\n"
+            "                       after a reset) each step takes the source's own length\n"
             "                       With --map 0, each frame's step length instead (docs)\n"
             "  --model FILE         tinyvo weights file (needed by --scale model)\n"
             "  --scale-alpha A      with model or const: the factor follows each keyframe\n"
@@ -413,48 +416,6 @@ static void *read_file(const char *path, size_t *size)
     return buf;
 }
 
-/* The map's metric scale (--scale with the map on). The VO's world has one unknown scale for the whole
- * run; the replay's trajectory integrates the VO's motion times a factor s (metres per map unit) that the
- * scale source sets at keyframes: path lengths of the source (ground-truth steps, the networks' step
- * lengths, or --step per frame) over the VO's path lengths, keyframe interval by keyframe interval. */
-typedef struct map_scale {
-    double s; /* metres per map unit (1 for --scale none; 0 until a source sets it) */
-    int set;
-    double src_sum, vo_sum; /* path lengths over the keyframe intervals used so far */
-    double src_int, vo_int; /* path lengths since the last keyframe */
-} map_scale;
-
-/* One frame: vo_len the VO's step length (map units), src_len the source's (metres; <= 0: none). At a
- * keyframe the factor is updated: the ratio of the whole path (alpha < 0), the last interval's ratio
- * through a log-space filter of weight alpha, or (once) for propagate. */
-static void map_scale_frame(map_scale *ms, enum scale_mode mode, double alpha, double vo_len, double src_len,
-                            int keyframe)
-{
-    if (mode == SCALE_NONE)
-        return;
-    if (vo_len > 0.0 && isfinite(vo_len))
-        ms->vo_int += vo_len;
-    if (src_len > 0.0 && isfinite(src_len))
-        ms->src_int += src_len;
-    if (!keyframe || !(ms->vo_int > 0.0) || !(ms->src_int > 0.0))
-        return;
-    if (mode == SCALE_PROPAGATE) {
-        if (!ms->set) {
-            ms->s = ms->src_int / ms->vo_int;
-            ms->set = 1;
-        }
-    } else if (alpha >= 0.0 && ms->set) {
-        const double r = ms->src_int / ms->vo_int;
-        ms->s = exp((1.0 - alpha) * log(ms->s) + alpha * log(r));
-    } else {
-        ms->src_sum += ms->src_int;
-        ms->vo_sum += ms->vo_int;
-        ms->s = ms->src_sum / ms->vo_sum;
-        ms->set = 1;
-    }
-    ms->src_int = ms->vo_int = 0.0;
-}
-
 int main(int argc, char **argv)
 {
     options o;
@@ -482,7 +443,8 @@ int main(int argc, char **argv)
     /* tracks kept from one processed frame to the next: those detected in the previous frame (age 0
        there) that are still tracked (age 1), and the older ones (age >= 1 there, >= 2 here) */
     long kept_new = 0, from_new = 0, kept_old = 0, from_old = 0, prev_new = 0, prev_old = 0;
-    map_scale msc;
+    tvo_map_scale msc;
+    double map_unit = 1.0; /* metres per map unit: 1 (--scale none), else the factor msc last gave */
     tvo_pose T_w_c_vo_prev = {{0}, {0}}; /* the VO's world pose of the previous frame (map on) */
     int vo_reset_pending =
             0; /* the VO was reset: its next T_w_c starts again from the identity, in a new unit */
@@ -561,8 +523,7 @@ int main(int argc, char **argv)
         goto cleanup;
     }
     (void)tvo_scale_filter_init(&filt, o.alpha >= 0.0 ? o.alpha : 0.0);
-    memset(&msc, 0, sizeof(msc));
-    msc.s = o.scale == SCALE_NONE ? 1.0 : 0.0;
+    tvo_map_scale_reset(&msc);
     T_bs = calib.has_T_BS ? calib.T_BS : tvo_euroc_T_BS(seq);
     T_sb = tvo_pose_inverse(&T_bs);
     period_ns = (int64_t)llround(1e9 / (tvo_euroc_rate_hz(seq) > 0 ? tvo_euroc_rate_hz(seq) : 20.0));
@@ -816,8 +777,7 @@ int main(int argc, char **argv)
                     /* the trajectory goes on from its last pose; the new map's unit is its own, so the
                        scale source sets the factor again */
                     T_w_c_vo_prev = tvo_pose_identity();
-                    memset(&msc, 0, sizeof(msc));
-                    msc.s = o.scale == SCALE_NONE ? 1.0 : 0.0;
+                    tvo_map_scale_reset(&msc);
                     vo_reset_pending = 0;
                 }
                 rel = processed == 0 ? tvo_pose_identity() : tvo_pose_relative(&T_w_c_vo_prev, &res.T_w_c);
@@ -836,9 +796,14 @@ int main(int argc, char **argv)
                         src = sqrt(refined.t[0] * refined.t[0] + refined.t[1] * refined.t[1] +
                                    refined.t[2] * refined.t[2]);
                 }
-                map_scale_frame(&msc, o.scale, o.alpha, vo_len, src, res.keyframe);
+                if (o.scale != SCALE_NONE)
+                    map_unit = tvo_map_scale_frame(&msc,
+                                                   o.scale == SCALE_PROPAGATE ? TVO_MAP_SCALE_ONCE
+                                                           : o.alpha >= 0.0   ? TVO_MAP_SCALE_FILTER
+                                                                              : TVO_MAP_SCALE_WHOLE_PATH,
+                                                   o.alpha, vo_len, src, res.keyframe);
                 T_w_c_vo_prev = res.T_w_c;
-                if (tvo_traj_step(&traj, &rel, msc.s) != TVO_OK)
+                if (tvo_traj_step(&traj, &rel, map_unit) != TVO_OK)
                     counts_state[TVO_VO_LOST]++;
             } else if (res.state == TVO_VO_OK || res.state == TVO_VO_ROTATION_ONLY) {
                 double scale = 1.0, gt_len = -1.0;
@@ -958,7 +923,7 @@ int main(int argc, char **argv)
                     "\"ba_turn_refused\": %ld, \"store_full\": %ld, \"refound\": %ld, \"scale\": %.9g, "
                     "\"states\": {",
                     (int)cfg.map, map_keyframes, counts_map[TVO_MAP_LOST], ba_turn_refused, map_store_full,
-                    map_refound, msc.s);
+                    map_refound, o.scale == SCALE_NONE ? 1.0 : msc.s);
             for (int k = 0; k < TVO_MAP_STATE_COUNT; ++k)
                 fprintf(js, "%s\"%s\": %ld", k ? ", " : "", map_state_names[k], counts_map[k]);
             fprintf(js, "}},\n  \"timing_us\": {\n");

@@ -67,6 +67,19 @@ def test_kitti_own_scale(name, tmp_path):
     assert e["standard"]["rpe_frame"]["rotation_deg"]["rmse"] < max_rot
 
 
+def test_kitti01_ground_truth_scale_before_the_map(tmp_path):
+    """KITTI 01's map starts at frame 33 (highway, little parallax); with --scale gt the 33 frames before
+    it take the ground truth's step lengths (the trajectory stood still there: 9.75 m SE(3) ATE)."""
+    seq = _kitti("kitti01_51")
+    traj, ev = tmp_path / "traj.txt", tmp_path / "eval.json"
+    subprocess.run([str(REPLAY), "--euroc", str(seq), "--out", str(traj), "--scale", "gt", "--quiet"], check=True)
+    subprocess.run([sys.executable, "-m", "tinyvo_tools.eval", "--est", str(traj), "--gt", str(seq), "--out", str(ev),
+                    "--metric-scale", "--quiet"], check=True, stdout=subprocess.DEVNULL)
+    e = json.loads(ev.read_text())
+    assert e["standard"]["alignment"]["type"] == "se3"
+    assert e["standard"]["ate_m"]["rmse"] < 0.3  # measured 0.115 m
+
+
 def test_kitti07_reversed_keeps_map(tmp_path):
     """KITTI 07 driven backwards (bench_degrade.py's reversed copy): backing through the first turn the
     landmarks leave the view faster than the car moves the baseline a keyframe normally needs; near a loss
