@@ -9,9 +9,10 @@
  *
  * The trajectory is written in TUM format (t tx ty tz qx qy qz qw, seconds). Bad frames (missing,
  * corrupt, wrong size, non-increasing timestamps) and malformed rows of the frame list (data.csv,
- * rgb.txt, times.txt) are reported ("file:line: what" for a row), counted in the stats and skipped;
- * the tracker re-initialises after them and after gaps longer than 1.5 frame periods. --strict turns
- * each of them into a non-zero exit instead.
+ * rgb.txt, times.txt) are reported ("file:line: what" for a row), counted in the stats and skipped, and
+ * so are gaps (intervals longer than 1.5 frame periods); the VO tracks across them, as across the frames
+ * a camera drops, and keeps its map and its unit (--gap-reset S re-initialises it after gaps longer than
+ * S seconds). --strict turns each of them into a non-zero exit instead.
  * Exit codes: 0 done, 1 a runtime error (one line on stderr), 2 a usage error (one line naming the
  * option).
  */
@@ -59,6 +60,7 @@ typedef struct options {
     enum source_kind source;
     enum scale_mode scale;
     double alpha, step; /* --scale-alpha (< 0: not given), --step */
+    double gap_reset;   /* --gap-reset S: reset the VO after a gap longer than S s (0: never) */
     int body_frame, strict, quiet, print_memory;
     int keyframe;         /* --keyframe 0|1 (< 0: the library's default) */
     int track_prediction; /* --track-prediction 0|1 (< 0: the library's default) */
@@ -137,6 +139,9 @@ static void usage(FILE *f)
             "                       LK guesses from the previous frame's rotation on or off\n"
             "                       (vo.h; default: the library's)\n"
             "  --max-frames N       stop after N frames\n"
+            "  --gap-reset S        re-initialise the VO after a gap of more than S seconds\n"
+            "                       between two frames (default 0: never; the VO tracks\n"
+            "                       across dropped frames and keeps the map and its unit)\n"
             "  --strict             exit non-zero at the first bad frame or row instead of skipping it\n"
             "  --quiet              no progress line and no summary (errors and skipped frames\n"
             "                       are still reported)\n"
@@ -253,6 +258,14 @@ static int parse_args(int argc, char **argv, options *o)
                 o->step = x;
             else
                 o->alpha = x;
+        } else if (!strcmp(a, "--gap-reset")) {
+            char *end = NULL;
+            NEED_VALUE();
+            o->gap_reset = strtod(v, &end);
+            if (end == v || *end != '\0' || !isfinite(o->gap_reset) || !(o->gap_reset >= 0.0)) {
+                fprintf(stderr, "tvo_replay: --gap-reset needs seconds >= 0 (got '%s')\n", v);
+                return -1;
+            }
         } else if (!strcmp(a, "--frame")) {
             NEED_VALUE();
             if (!strcmp(v, "body"))
@@ -450,7 +463,7 @@ int main(int argc, char **argv)
             0; /* the VO was reset: its next T_w_c starts again from the identity, in a new unit */
     tvo_vo_track *trk = NULL;
     FILE *tracks = NULL;
-    long n_frames, processed = 0, gaps = 0, gt_missing = 0, timed = 0;
+    long n_frames, processed = 0, gaps = 0, gap_resets = 0, gt_missing = 0, timed = 0;
     int64_t t_last = INT64_MIN, period_ns;
     int have_gt, have_prev_gt = 0, rc = 1, tty;
     size_t vo_size, frame_cap;
@@ -673,24 +686,27 @@ int main(int argc, char **argv)
                     skip_names[skip], o.strict ? " (--strict: stopping)" : "");
             if (o.strict)
                 goto cleanup;
-            if (skip != SKIP_TIMESTAMP) {
-                tvo_vo_reset(vo); /* the next good frame starts new tracks (and a new map) */
-                vo_reset_pending = 1;
-                prev_new = prev_old = 0; /* no track is carried over */
-            }
-            continue;
+            continue; /* the next good frame comes after a gap (below) */
         }
         t_dec = tvo_clock_now_ns() - t_dec;
         if (t_last != INT64_MIN && t_ns - t_last > period_ns + period_ns / 2) {
+            /* Dropped frames: the VO tracks across them (a reset would start a new map in a unit of its
+               own, and one unit for the whole run is what a monocular trajectory has). */
+            const double gap_s = (double)(t_ns - t_last) * 1e-9;
+            const int reset = o.gap_reset > 0.0 && gap_s > o.gap_reset;
             gaps++;
-            fprintf(stderr, "%stvo_replay: gap of %.3f s before frame %ld: re-initialising%s\n",
-                    tty ? "\n" : "", (double)(t_ns - t_last) * 1e-9, i,
-                    o.strict ? " (--strict: stopping)" : "");
+            fprintf(stderr, "%stvo_replay: gap of %.3f s before frame %ld%s\n", tty ? "\n" : "", gap_s, i,
+                    o.strict        ? " (--strict: stopping)"
+                            : reset ? ": re-initialising (--gap-reset)"
+                                    : "");
             if (o.strict)
                 goto cleanup;
-            tvo_vo_reset(vo);
-            vo_reset_pending = 1;
-            prev_new = prev_old = 0;
+            if (reset) {
+                tvo_vo_reset(vo); /* the next frame starts new tracks (and a new map) */
+                vo_reset_pending = 1;
+                prev_new = prev_old = 0; /* no track is carried over */
+                gap_resets++;
+            }
         }
         t_last = t_ns;
 
@@ -905,8 +921,10 @@ int main(int argc, char **argv)
             fprintf(js, "  \"skipped\": {");
             for (int k = 0; k < SKIP_COUNT; ++k)
                 fprintf(js, "%s\"%s\": %ld", k ? ", " : "", skip_names[k], counts_skip[k]);
-            fprintf(js, "},\n  \"gaps\": %ld,\n  \"groundtruth_missing\": %ld,\n  \"status\": {", gaps,
-                    gt_missing);
+            fprintf(js,
+                    "},\n  \"gaps\": %ld,\n  \"gap_resets\": %ld,\n  \"groundtruth_missing\": %ld,\n  "
+                    "\"status\": {",
+                    gaps, gap_resets, gt_missing);
             for (int k = 0; k < TVO_VO_STATE_COUNT; ++k)
                 fprintf(js, "%s\"%s\": %ld", k ? ", " : "", state_names[k], counts_state[k]);
             fprintf(js, "},\n  \"keyframe_rotation_frames\": %ld,\n  \"gain_retries\": %ld,\n",

@@ -9,7 +9,7 @@
 ``mav0/state_groundtruth_estimate0/data.csv``) or a folder of such folders (every subfolder that is a
 sequence, sorted by name). A folder whose frames are not a regular sequence (more than a quarter of the
 frame intervals longer than 1.5 frame periods of its ``sensor.yaml`` rate, e.g. a set of keyframes) is
-skipped with a message, since the replay re-initialises at every such gap.
+skipped with a message: a set of frames far apart is not what a VO is measured on.
 
 For each sequence the replay runs with ``--scale MODE --stats`` (single thread, as always) and the extra
 arguments after ``--`` (e.g. ``-- --model FILE`` for ``--scale model``); the trajectory is evaluated by
