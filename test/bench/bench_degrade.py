@@ -26,6 +26,9 @@ sequences; the others of any camera, the renders too):
                  frames re-timed at the original rate and the ground truth held still with them; the
                  map must neither drift nor lose its scale while nothing moves, and go on afterwards.
   - start:       the same hold of 30 frames on the first frame (a camera switched on at rest, then moving).
+  - drops:       frames dropped as a camera or a recording drops them: from the sixth on each frame with
+                 probability 1/25 (Python's random.Random(52)), and a burst of 3 in the middle third; the
+                 others keep their times and the rate stays: the replay sees gaps of 2-4 frame intervals.
 
 Noise is seeded (the same copy on every run). It replays each copy with `tvo_replay --scale none` and the
 given replay arguments, and prints the Sim(3)-aligned ATE (m) of the whole run, the number of frames
@@ -38,6 +41,7 @@ The copies go to --work (default: a temporary folder, removed at the end).
 """
 import argparse
 import os
+import random
 import shutil
 import sys
 
@@ -64,7 +68,9 @@ VARIANTS = {
     "reverse": (1.0, -1, 0.0, 0.0),
     "stop": (1.0, -2, 0.0, 0.0),
     "start": (1.0, -3, 0.0, 0.0),
+    "drops": (1.0, -4, 0.0, 0.0),
 }
+DROPS = -4
 # the holds of the stop and start copies: frames held, and the sensor noise of each held copy
 HOLD_FRAMES = {-2: 50, -3: 30}
 HOLD_NOISE = 2.0
@@ -72,10 +78,16 @@ HOLD_NOISE = 2.0
 
 def kept_frames(n: int, every: int) -> list:
     """The indices of the frames a copy keeps: every n-th, (every == 0) steps of 1 or 2 drawn with a
-    fixed seed, (every == -1) every frame from the last to the first, or (every == -2, -3) every frame with
-    the middle or the first one repeated HOLD_FRAMES times."""
+    fixed seed, (every == -1) every frame from the last to the first, (every == -2, -3) every frame with
+    the middle or the first one repeated HOLD_FRAMES times, or (every == DROPS) all but the dropped ones."""
     if every > 0:
         return list(range(0, n, every))
+    if every == DROPS:
+        rng_d = random.Random(52)
+        drop = {i for i in range(5, n - 1) if rng_d.random() < 1 / 25}
+        b = rng_d.randrange(n // 3, 2 * n // 3)
+        drop |= {b, b + 1, b + 2}
+        return [i for i in range(n) if i not in drop]
     if every in HOLD_FRAMES:
         k = n // 2 if every == -2 else 0
         return list(range(k)) + [k] * HOLD_FRAMES[every] + list(range(k, n))
@@ -102,7 +114,8 @@ def write_copy(seq: str, dst: str, scale: float, every: int, blur: float, noise:
     keep = kept_frames(len(names), every)
     # a jerk or reversed copy keeps the original frame interval: frame j of the copy at t0 + j * dt
     dt = int(np.median(np.diff(t_ns))) if len(t_ns) > 1 else 0
-    t_new = [int(t_ns[k]) if every > 0 else int(t_ns[0]) + j * dt for j, k in enumerate(keep)]
+    same_times = every > 0 or every == DROPS
+    t_new = [int(t_ns[k]) if same_times else int(t_ns[0]) + j * dt for j, k in enumerate(keep)]
     rng = np.random.default_rng(1)
     rows = []
     for j, (k, t) in enumerate(zip(keep, t_new)):
@@ -134,7 +147,7 @@ def write_copy(seq: str, dst: str, scale: float, every: int, blur: float, noise:
         info.rate_hz = info.rate_hz / every
     trajio.write_sensor_yaml(os.path.join(out, "sensor.yaml"), info)
     gt = os.path.join(seq, "mav0", "state_groundtruth_estimate0")
-    if every > 0:
+    if same_times:
         shutil.copytree(gt, os.path.join(dst, "mav0", "state_groundtruth_estimate0"))
         return
     # the ground truth of each kept frame, at the frame's new time

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: Apache-2.0
 """test/bench/bench_degrade.py's copies on a tiny ASL sequence written here: the frames each copy keeps,
-the jerk, reversed, stop and start copies' evenly spaced times and their ground truth moved with their frames, the
+the jerk, reversed, stop and start copies' evenly spaced times, the drops copy's missing frames and their ground truth moved with their frames, the
 stop's held frames with fresh noise, and the refusal of a smaller copy of a camera with distortion."""
 import os
 import pathlib
@@ -116,6 +116,26 @@ def test_skip_copy_keeps_times_and_ground_truth(tmp_path):
     bench_degrade.write_copy(str(src), str(dst), *bench_degrade.VARIANTS["skip2"])
     t, _ = trajio.read_cam_frames(str(dst / "mav0" / "cam0"))
     np.testing.assert_array_equal(t, T0 + DT * np.arange(0, N, 2))
+    assert (dst / "mav0" / "state_groundtruth_estimate0" / "data.csv").read_bytes() == \
+        (src / "mav0" / "state_groundtruth_estimate0" / "data.csv").read_bytes()
+
+
+def test_drops_copy_keeps_times_rate_and_ground_truth(tmp_path):
+    """The drops copy: seeded frames missing (the first five always kept, a burst of three in the middle
+    third), the others at their own times, the rate and the ground truth unchanged."""
+    keep = bench_degrade.kept_frames(640, bench_degrade.DROPS)
+    assert keep == bench_degrade.kept_frames(640, bench_degrade.DROPS)  # seeded: the same copy every run
+    gone = sorted(set(range(640)) - set(keep))
+    assert keep[:5] == [0, 1, 2, 3, 4] and 640 // 30 <= len(gone) <= 640 // 15
+    assert any(gone[i + 2] - gone[i] == 2 and 640 // 3 <= gone[i] < 2 * 640 // 3 for i in range(len(gone) - 2))
+    src = _sequence(tmp_path / "src")
+    dst = tmp_path / "drops"
+    bench_degrade.write_copy(str(src), str(dst), *bench_degrade.VARIANTS["drops"])
+    t, _ = trajio.read_cam_frames(str(dst / "mav0" / "cam0"))
+    kept = bench_degrade.kept_frames(N, bench_degrade.DROPS)
+    assert len(kept) <= N - 3
+    np.testing.assert_array_equal(t, T0 + DT * np.array(kept))
+    assert trajio.read_sensor_yaml(str(dst / "mav0" / "cam0" / "sensor.yaml")).rate_hz == 20
     assert (dst / "mav0" / "state_groundtruth_estimate0" / "data.csv").read_bytes() == \
         (src / "mav0" / "state_groundtruth_estimate0" / "data.csv").read_bytes()
 
