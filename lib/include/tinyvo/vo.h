@@ -481,8 +481,11 @@ TVO_API tvo_status tvo_vo_init(tvo_vo **vo, const tvo_vo_config *cfg, void *mem,
 TVO_API tvo_status tvo_vo_process(tvo_vo *vo, const tvo_image *frame, int64_t t_ns, tvo_vo_result *res);
 
 /* Forget the tracks and the map: the object behaves as after tvo_vo_init() (the next frame initialises
- * again, T_w_c starts from the identity in a new unit of length). For a gap or a bad frame; a caller that
- * chains trajectories across the reset (as tvo_replay does) composes the new T_w_c onto its last pose. */
+ * again, T_w_c starts from the identity in a new unit of length). For a change of camera or scene (a
+ * camera restart, another recording); dropped frames need no reset: pass the next frame with its time,
+ * and the VO tracks across the gap or, where it cannot, starts a new map that keeps the unit. A caller
+ * that chains trajectories across a reset (tvo_replay --gap-reset) composes the new T_w_c onto its last
+ * pose. */
 TVO_API void tvo_vo_reset(tvo_vo *vo);
 
 /* Read-only view of the current tracks (for drawing or logging): copies min(count, capacity) of them into
