@@ -15,7 +15,7 @@ set(CMAKE_TRY_COMPILE_TARGET_TYPE STATIC_LIBRARY)
 # -Os and section-per-function so a firmware link keeps only what it calls.
 set(CMAKE_C_FLAGS_INIT "${TVO_CPU_FLAGS} -ffunction-sections -fdata-sections")
 # Release means -Os here (CMake's default Release flags would append -O3).
-set(CMAKE_C_FLAGS_RELEASE "-Os -DNDEBUG" CACHE STRING "Release flags for Cortex-M")
+set(CMAKE_C_FLAGS_RELEASE "-Os -fno-schedule-insns2 -fno-tree-loop-distribute-patterns -DNDEBUG" CACHE STRING "Release flags for Cortex-M")
 set(CMAKE_EXE_LINKER_FLAGS_INIT "${TVO_CPU_FLAGS} --specs=nosys.specs -Wl,--gc-sections")
 
 set(CMAKE_FIND_ROOT_PATH /usr/lib/arm-none-eabi)
