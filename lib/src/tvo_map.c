@@ -721,7 +721,7 @@ static tvo_pose predict(const tvo_map *m, int64_t t_ns, const double *R_cur_prev
 int tvo_map_predict_pose(const tvo_map *m, int64_t t_ns, int64_t prev_t_ns, tvo_pose *T)
 {
     tvo_pose step = m->vel;
-    double ratio, v[3];
+    double ratio;
     if (!m->active || !m->has_vel || m->last_t_ns != prev_t_ns || t_ns <= prev_t_ns || m->vel_dt_ns <= 0)
         return 0;
     /* the last step scaled to this interval, its rotation too (after a new map the step spans the
@@ -729,12 +729,9 @@ int tvo_map_predict_pose(const tvo_map *m, int64_t t_ns, int64_t prev_t_ns, tvo_
     ratio = (double)dt_ns(t_ns, m->last_t_ns) / (double)m->vel_dt_ns;
     if (!(ratio > 0.0 && ratio < 4.0))
         return 0;
-    tvo_rot_to_rotvec(m->vel.R, v);
-    for (int c = 0; c < 3; ++c) {
-        v[c] *= ratio;
+    tvo_rot_pow(m->vel.R, ratio, step.R);
+    for (int c = 0; c < 3; ++c)
         step.t[c] *= ratio;
-    }
-    tvo_rotvec_to_rot(v, step.R);
     *T = tvo_pose_compose(&step, &m->last_T_c_w);
     return tvo_pose_is_finite(T);
 }

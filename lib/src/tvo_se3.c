@@ -264,6 +264,16 @@ void tvo_rot_to_rotvec(const double R[9], double v[3])
     v[2] = f * q[3];
 }
 
+void tvo_rot_pow(const double R[9], double s, double out[9])
+{
+    double v[3];
+    tvo_rot_to_rotvec(R, v);
+    v[0] *= s;
+    v[1] *= s;
+    v[2] *= s;
+    tvo_rotvec_to_rot(v, out);
+}
+
 double tvo_rot_angle(const double R[9])
 {
     double q[4];

@@ -1294,7 +1294,7 @@ static void predict_by_neighbours(tvo_vo *vo, const tvo_pose *T, uint8_t *pred)
  * prediction applies. */
 static int predict_tracks(tvo_vo *vo, int64_t dt, uint8_t *pred)
 {
-    double v[3], R[9], ratio = 1.0;
+    double R[9], ratio = 1.0;
     tvo_pose T;
     int rot = vo->cfg.track_prediction && vo->has_pred && vo->dt_pred > 0 && dt > 0;
     const int mp = vo->cfg.map_prediction && vo->cfg.map && dt > 0 &&
@@ -1308,13 +1308,8 @@ static int predict_tracks(tvo_vo *vo, int64_t dt, uint8_t *pred)
         return 0;
     if (tvo_camera_undistort(&vo->cfg.camera, vo->pts, vo->x1, vo->ok1, vo->n) != TVO_OK)
         return 0;
-    if (rot) {
-        tvo_rot_to_rotvec(vo->R_pred, v);
-        v[0] *= ratio;
-        v[1] *= ratio;
-        v[2] *= ratio;
-        tvo_rotvec_to_rot(v, R);
-    }
+    if (rot)
+        tvo_rot_pow(vo->R_pred, ratio, R);
     for (int32_t i = 0; i < vo->n; ++i) {
         const double x = vo->x1[i].x, y = vo->x1[i].y;
         double d0, d1, d2;

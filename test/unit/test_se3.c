@@ -3,6 +3,7 @@
 #include <math.h>
 
 #include "tvo_test.h"
+#include "tinyvo/linalg.h"
 #include "tinyvo/se3.h"
 
 #define PI 3.14159265358979323846
@@ -180,6 +181,35 @@ static void check_rotvec_roundtrip(const double v[3], double tol_abs)
     }
 }
 
+/* R^s: s times the angle about the same axis; R^1 = R, R^0 = I, R^2 = R R, R^0.5 twice = R; in place. */
+static void test_rot_pow(void **state)
+{
+    uint64_t seed = 77;
+    (void)state;
+    for (int k = 0; k < 200; ++k) {
+        const double v[3] = {urand(&seed), urand(&seed), urand(&seed)};
+        double R[9], P[9], Q[9], RR[9], w[3];
+        tvo_rotvec_to_rot(v, R);
+        tvo_rot_pow(R, 1.0, P);
+        assert_true(mat_diff(P, R, 9) < 1e-13);
+        tvo_rot_pow(R, 0.0, P);
+        assert_true(tvo_rot_angle(P) == 0.0);
+        tvo_rot_pow(R, 2.0, P);
+        tvo_la_mat3_mul(R, R, RR);
+        assert_true(mat_diff(P, RR, 9) < 1e-12);
+        tvo_rot_pow(R, 0.5, P);
+        tvo_la_mat3_mul(P, P, Q);
+        assert_true(mat_diff(Q, R, 9) < 1e-12);
+        tvo_rot_pow(R, -1.0, P); /* the inverse */
+        tvo_rot_to_rotvec(P, w);
+        assert_true(fabs(w[0] + v[0]) + fabs(w[1] + v[1]) + fabs(w[2] + v[2]) < 1e-12);
+        memcpy(Q, R, sizeof(Q));
+        tvo_rot_pow(Q, 3.0, Q); /* out may be R */
+        tvo_rot_pow(R, 3.0, P);
+        assert_true(mat_diff(Q, P, 9) == 0.0);
+    }
+}
+
 static void test_rotvec(void **state)
 {
     uint64_t s = 4242;
@@ -352,6 +382,7 @@ int main(void)
             cmocka_unit_test(test_quat),
             cmocka_unit_test(test_quat_degenerate),
             cmocka_unit_test(test_rotvec),
+            cmocka_unit_test(test_rot_pow),
             cmocka_unit_test(test_orthonormalize),
             cmocka_unit_test(test_finite),
             cmocka_unit_test(test_angles),

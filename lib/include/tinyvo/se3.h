@@ -47,6 +47,9 @@ TVO_API void tvo_rotvec_to_rot(const double v[3], double R[9]);
 /* Rotation matrix -> rotation vector with angle in [0, pi], via the quaternion and atan2: accurate
  * near 0 and near pi (at exactly pi the sign of the axis is arbitrary). */
 TVO_API void tvo_rot_to_rotvec(const double R[9], double v[3]);
+/* R to the power s: the rotation about R's axis by s times its angle (its rotation vector times s; a
+ * constant angular velocity over s of R's intervals). out may be R. */
+TVO_API void tvo_rot_pow(const double R[9], double s, double out[9]);
 /* Rotation angle of R in radians, [0, pi] (atan2 form: accurate for small angles too). */
 TVO_API double tvo_rot_angle(const double R[9]);
 /* Replace R by the nearest rotation matrix (Frobenius norm): polar decomposition by Newton's
