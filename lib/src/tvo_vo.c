@@ -83,6 +83,10 @@ struct tvo_vo {
     int32_t cover_ref; /* cells of the coverage grid the tracks covered after the last detection */
     uint32_t cell[2][TVO_VO_COVER_CELLS]; /* cfg.redetect_cell_kept: corners born [0] and kept [1] */
     int32_t rescue_age; /* frames since the last prediction rescue (0: this frame's; saturates) */
+    /* the last posed frame's motion in the world (T_c_w = v_step T_c_w_before) over v_dt ns (0: none);
+       lost_ns: the LOST frames' time it has carried the pose on since (coast_step) */
+    tvo_pose v_step;
+    int64_t v_dt, lost_ns;
     /* affine refinement (cfg.affine_win_size > 0, else all NULL): each track's template, its model
        and warp, valid where hast[i] */
     uint8_t *tpl;      /* [max_tracks x tvo_aff_template_bytes(affine_win_size)] */
@@ -655,6 +659,7 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
 #endif
     vo->T_c_w = tvo_pose_identity();
     vo->chain_gain = 1.0;
+    vo->v_dt = 0;
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
     vo->rescue_age = TVO_VO_MAX_RESCUE_FRAMES;
     set_r2_max(vo);
@@ -690,6 +695,7 @@ void tvo_vo_reset(tvo_vo *vo)
 #endif
     vo->T_c_w = tvo_pose_identity();
     vo->chain_gain = 1.0;
+    vo->v_dt = 0;
     vo->next_id = 0;
     vo->has_pred = 0;
     vo->rescue_age = TVO_VO_MAX_RESCUE_FRAMES;
@@ -1342,12 +1348,36 @@ static int predict_tracks(tvo_vo *vo, int64_t dt, uint8_t *pred)
 
 /* ---- local map ---------------------------------------------------------------------------------- */
 
+/* A LOST frame carries the pose on at the last posed frame's motion for at most this long in all. */
+#define TVO_VO_COAST_NS 1000000000
+/* and with its interval at most this many times that frame's */
+#define TVO_VO_COAST_MAX_RATIO 10.0
+
+/* A LOST frame's step: the last posed frame's motion scaled to dt (its rotation vector and translation
+ * times the ratio of the intervals), or the identity past the limits above. */
+static void coast_step(const tvo_vo *vo, int64_t dt, tvo_pose *step)
+{
+    double r;
+    if (vo->v_dt <= 0 || dt <= 0 || dt > TVO_VO_COAST_NS - vo->lost_ns)
+        return;
+    r = (double)dt / (double)vo->v_dt;
+    if (!(r <= TVO_VO_COAST_MAX_RATIO))
+        return;
+    tvo_rot_pow(vo->v_step.R, r, step->R);
+    for (int c = 0; c < 3; ++c)
+        step->t[c] = vo->v_step.t[c] * r;
+}
+
 /* The pose the two-view chain gives this frame (world -> camera): the last pose moved by this frame's
- * two-view step, its unit translation scaled to the map's last speed (unit steps without a map). */
+ * two-view step, its unit translation scaled to the map's last speed (unit steps without a map). A LOST
+ * frame moves on by the last posed frame's motion scaled to its own interval (constant velocity), for
+ * at most TVO_VO_COAST_NS of LOST frames in a row; then it stands still. */
 static tvo_pose chain_pose(const tvo_vo *vo, const tvo_vo_result *res)
 {
     tvo_pose step = tvo_pose_identity();
-    if (res->state == TVO_VO_OK || res->state == TVO_VO_ROTATION_ONLY) {
+    if (res->state == TVO_VO_LOST) {
+        coast_step(vo, res->dt_ns, &step);
+    } else if (res->state == TVO_VO_OK || res->state == TVO_VO_ROTATION_ONLY) {
         double len = 0.0;
         step = tvo_pose_inverse(&res->T_prev_cur); /* T_cur_prev */
         /* before the first map the unit is one step per frame, and the first map's baseline continues
@@ -1468,6 +1498,20 @@ static void lens_step(tvo_vo *vo, const tvo_map_frame *mf, tvo_vo_result *res)
 }
 #endif
 
+/* Before the frame's pose T_c_w replaces the previous one in vo->T_c_w: a posed frame's motion becomes
+ * the one a LOST frame carries on (coast_step); a LOST frame adds its interval to the time carried. */
+static void keep_velocity(tvo_vo *vo, const tvo_vo_result *res, const tvo_pose *T_c_w)
+{
+    if (res->state != TVO_VO_LOST) { /* OK or rotation-only; the first frame (dt 0) leaves none */
+        const tvo_pose inv_before = tvo_pose_inverse(&vo->T_c_w);
+        vo->v_step = tvo_pose_compose(T_c_w, &inv_before);
+        vo->v_dt = res->dt_ns;
+        vo->lost_ns = 0;
+    } else {
+        vo->lost_ns = res->dt_ns > TVO_VO_COAST_NS - vo->lost_ns ? TVO_VO_COAST_NS : vo->lost_ns + res->dt_ns;
+    }
+}
+
 /* The map's part of a frame, after the two-view step: vo->x2 holds the normalised positions of the
  * vo->n carried tracks. R_cur_prev: this frame's two-view rotation, or NULL. Sets vo->T_c_w. */
 static void map_step(tvo_vo *vo, tvo_vo_result *res, int64_t t_ns, const double *R_cur_prev)
@@ -1478,6 +1522,7 @@ static void map_step(tvo_vo *vo, tvo_vo_result *res, int64_t t_ns, const double 
     chain_follow_scale(vo, res);
     prior = chain_pose(vo, res);
     if (!vo->cfg.map) {
+        keep_velocity(vo, res, &prior);
         vo->T_c_w = prior;
         res->map_state = TVO_MAP_OFF;
         return;
@@ -1494,6 +1539,7 @@ static void map_step(tvo_vo *vo, tvo_vo_result *res, int64_t t_ns, const double 
         mf.T_c_w = prior;
         mf.state = TVO_MAP_LOST;
     }
+    keep_velocity(vo, res, &mf.T_c_w);
     vo->T_c_w = mf.T_c_w;
     if (mf.state == TVO_MAP_TRACKING || mf.state == TVO_MAP_INITIALISED)
         vo->chain_gain = 1.0; /* a chain that starts again (a loss) starts from the map's speed */
