@@ -347,8 +347,6 @@ int main(int argc, char **argv)
     tvo_traj_init(&traj, &I);
     T_w_c_prev = I;
     tvo_map_scale_reset(&msc);
-    if (nn != NULL)
-        unit_m = 0.0; /* until the first keyframe with a step length from the networks */
 
     while (!g_stop && (frames_max < 0 || n < frames_max)) {
         tvo_v4l2_frame f;

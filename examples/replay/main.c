@@ -457,7 +457,6 @@ int main(int argc, char **argv)
        there) that are still tracked (age 1), and the older ones (age >= 1 there, >= 2 here) */
     long kept_new = 0, from_new = 0, kept_old = 0, from_old = 0, prev_new = 0, prev_old = 0;
     tvo_map_scale msc;
-    double map_unit = 1.0; /* metres per map unit: 1 (--scale none), else the factor msc last gave */
     tvo_pose T_w_c_vo_prev = {{0}, {0}}; /* the VO's world pose of the previous frame (map on) */
     int vo_reset_pending =
             0; /* the VO was reset: its next T_w_c starts again from the identity, in a new unit */
@@ -812,12 +811,14 @@ int main(int argc, char **argv)
                         src = sqrt(refined.t[0] * refined.t[0] + refined.t[1] * refined.t[1] +
                                    refined.t[2] * refined.t[2]);
                 }
-                if (o.scale != SCALE_NONE)
-                    map_unit = tvo_map_scale_frame(&msc,
-                                                   o.scale == SCALE_PROPAGATE ? TVO_MAP_SCALE_ONCE
-                                                           : o.alpha >= 0.0   ? TVO_MAP_SCALE_FILTER
-                                                                              : TVO_MAP_SCALE_WHOLE_PATH,
-                                                   o.alpha, vo_len, src, res.keyframe);
+                /* metres per map unit: 1 with --scale none, else the source's factor for this step */
+                const double map_unit = o.scale == SCALE_NONE
+                        ? 1.0
+                        : tvo_map_scale_frame(&msc,
+                                              o.scale == SCALE_PROPAGATE ? TVO_MAP_SCALE_ONCE
+                                                      : o.alpha >= 0.0   ? TVO_MAP_SCALE_FILTER
+                                                                         : TVO_MAP_SCALE_WHOLE_PATH,
+                                              o.alpha, vo_len, src, res.keyframe);
                 T_w_c_vo_prev = res.T_w_c;
                 if (tvo_traj_step(&traj, &rel, map_unit) != TVO_OK)
                     counts_state[TVO_VO_LOST]++;

@@ -251,9 +251,10 @@ def estimate_frame_and_camera(est_path: str, frame: str | None, cam: str | None,
     EuRoC replay), else camera and cam0. Refuses what contradicts the header, and an SE(3) evaluation
     of a trajectory in the map's own unit (``scale=none``): its ATE in metres would mean nothing."""
     hdr = trajio.read_replay_header(est_path)
-    if hdr.get("frame", "camera") not in ("camera", "body") or not re.fullmatch(r"\w{1,63}", hdr.get("camera", "x")):
-        raise ValueError(f"{est_path}: a tvo_replay header with frame={hdr.get('frame')} camera={hdr.get('camera')} "
-                         "(expected frame camera or body, a camera folder name)")
+    if (hdr.get("frame", "camera") not in ("camera", "body")
+            or not re.fullmatch(r"\w{1,63}", hdr.get("camera", "x"))):
+        raise ValueError(f"{est_path}: a tvo_replay header with frame={hdr.get('frame')} "
+                         f"camera={hdr.get('camera')} (expected frame camera or body, a camera folder name)")
     if frame is None:
         frame = hdr.get("frame", "camera")
     elif hdr.get("frame", frame) != frame:
