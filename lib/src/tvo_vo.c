@@ -87,6 +87,7 @@ struct tvo_vo {
        lost_ns: the LOST frames' time it has carried the pose on since (coast_step) */
     tvo_pose v_step;
     int64_t v_dt, lost_ns;
+    int64_t dt_unit; /* the chain's first frame interval: before the first map one unit per dt_unit ns */
     /* affine refinement (cfg.affine_win_size > 0, else all NULL): each track's template, its model
        and warp, valid where hast[i] */
     uint8_t *tpl;      /* [max_tracks x tvo_aff_template_bytes(affine_win_size)] */
@@ -660,6 +661,7 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
     vo->T_c_w = tvo_pose_identity();
     vo->chain_gain = 1.0;
     vo->v_dt = 0;
+    vo->dt_unit = 0;
     vo->t_dir_age = TVO_VO_PRIOR_FRAMES + 1;
     vo->rescue_age = TVO_VO_MAX_RESCUE_FRAMES;
     set_r2_max(vo);
@@ -696,6 +698,7 @@ void tvo_vo_reset(tvo_vo *vo)
     vo->T_c_w = tvo_pose_identity();
     vo->chain_gain = 1.0;
     vo->v_dt = 0;
+    vo->dt_unit = 0;
     vo->next_id = 0;
     vo->has_pred = 0;
     vo->rescue_age = TVO_VO_MAX_RESCUE_FRAMES;
@@ -1380,10 +1383,13 @@ static tvo_pose chain_pose(const tvo_vo *vo, const tvo_vo_result *res)
     } else if (res->state == TVO_VO_OK || res->state == TVO_VO_ROTATION_ONLY) {
         double len = 0.0;
         step = tvo_pose_inverse(&res->T_prev_cur); /* T_cur_prev */
-        /* before the first map the unit is one step per frame, and the first map's baseline continues
-           it (tvo_map.h); times the speed changes chain_follow_scale took (1 without cfg.chain_scale_sigmas) */
+        /* before the first map the unit is one step per the chain's first frame interval (a frame after
+           dropped ones steps further), and the first map's baseline continues it (tvo_map.h); times the
+           speed changes chain_follow_scale took (1 without cfg.chain_scale_sigmas) */
         if (res->state == TVO_VO_OK)
-            len = (vo->cfg.map && vo->map.speed > 0.0 ? vo->map.speed * (double)res->dt_ns * 1e-9 : 1.0) *
+            len = (vo->cfg.map && vo->map.speed > 0.0 ? vo->map.speed * (double)res->dt_ns * 1e-9
+                           : vo->dt_unit > 0          ? (double)res->dt_ns / (double)vo->dt_unit
+                                                      : 1.0) *
                     vo->chain_gain;
         if (!(len >= 0.0) || !isfinite(len))
             len = 0.0;
@@ -1404,7 +1410,10 @@ static void chain_follow_scale(tvo_vo *vo, const tvo_vo_result *res)
     if (!vo->cfg.map || !(vo->cfg.chain_scale_sigmas > 0.0) || res->state != TVO_VO_OK ||
         !(res->rel_scale > 0.0) || !isfinite(res->rel_scale))
         return;
+    /* the speed's change: rel_scale over the ratio of the two frame intervals (1 at a steady rate) */
     z = tvo_dm_log(res->rel_scale);
+    if (vo->dt_pred > 0 && res->dt_ns > 0 && vo->dt_pred != res->dt_ns)
+        z += tvo_dm_log((double)vo->dt_pred / (double)res->dt_ns);
     tau = vo->cfg.chain_scale_sigmas * vo->rs_se;
     w = z > tau ? z - tau : (z < -tau ? z + tau : 0.0);
     vo->chain_gain *= tvo_dm_exp(w);
@@ -1519,6 +1528,8 @@ static void map_step(tvo_vo *vo, tvo_vo_result *res, int64_t t_ns, const double 
     tvo_pose prior;
     tvo_map_tracks tr;
     tvo_map_frame mf;
+    if (vo->cfg.map && vo->dt_unit == 0 && res->dt_ns > 0)
+        vo->dt_unit = res->dt_ns;
     chain_follow_scale(vo, res);
     prior = chain_pose(vo, res);
     if (!vo->cfg.map) {

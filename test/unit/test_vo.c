@@ -380,61 +380,63 @@ static void test_chain_scale(void **state)
 /* Frames dropped and frames lost before the first map (a map that needs 30 deg of parallax never
  * starts, so every pose is the two-view chain's): a camera moving 0.06 m every 50 ms, a slow turn; frames
  * 6, 7 and 14 are not delivered (a gap of 150 ms at frame 8, of 100 ms at frame 15), frame 20 is black.
- * The step after a gap is 3 (or 2) units and the ones after it 1 again (on these clean frames the
- * relative scale, chain_scale_sigmas, sees the longer step and the shorter one after it); the black frame
- * is LOST and moves on by the last step instead of standing still; the frames after it are posed again,
- * one unit a frame. */
+ * The chain's step is one unit per its first frame interval, so the step after a gap is 3 (or 2) units
+ * and the ones after it 1 again, with the relative scale followed (chain_scale_sigmas 3, the default) or
+ * not (0: steps counted in frames would be 1 unit after a gap); the black frame is LOST and moves on by
+ * the last step instead of standing still; the frames after it are posed again, one unit a frame. */
 static void test_dropped_and_lost_frames(void **state)
 {
     fixture *f = *state;
     const double dir[3] = {0.6, 0.1, -0.79};
-    double prev[3] = {0.0, 0.0, 0.0};
-    int64_t t_prev = 0;
-    int lost = 0, checked = 0;
-    f->cfg.map_init_parallax_deg = 30.0;
-    f->cfg.chain_scale_sigmas = 3.0; /* the default's; a build without the affine refinement defaults to 0 */
-    free(f->mem);
-    open_vo(f);
-    for (int k = 0; k < 32; ++k) {
-        const int64_t t = 1000000000LL + k * 50000000LL;
-        const double v[3] = {0.0, 0.003 * k, 0.0};
-        tvo_pose T = tvo_pose_identity();
-        tvo_image img = tvo_image_make(W, H, W, f->img);
-        tvo_vo_result res;
-        if (k == 6 || k == 7 || k == 14)
-            continue;
-        tvo_rotvec_to_rot(v, T.R);
-        for (int i = 0; i < 3; ++i)
-            T.t[i] = dir[i] * 0.06 * k;
-        if (k == 20)
-            memset(f->img, 0, sizeof(f->img));
-        else
-            render(&T, f->img);
-        assert_int_equal(tvo_vo_process(f->vo, &img, t, &res), TVO_OK);
-        assert_true(tvo_pose_is_finite(&res.T_w_c));
-        assert_int_equal(res.map_state, TVO_MAP_INITIALISING);
-        if (k > 0) {
-            const double d[3] = {res.T_w_c.t[0] - prev[0], res.T_w_c.t[1] - prev[1],
-                                 res.T_w_c.t[2] - prev[2]};
-            const double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-            const double frames = (double)(t - t_prev) / 50000000.0; /* the interval in frame periods */
-            if (getenv("TVO_TEST_VERBOSE") != NULL)
-                fprintf(stderr, "frame %2d: state %d step %.3f over %.0f frame(s)\n", k, (int)res.state, len,
-                        frames);
-            if (k == 20) {
-                assert_int_equal(res.state, TVO_VO_LOST);
-                assert_true(fabs(len - 1.0) < 0.1); /* moved on by the last step, one unit */
-                lost++;
-            } else if (res.state == TVO_VO_OK && k != 21) {
-                assert_true(fabs(len / frames - 1.0) < 0.1); /* 1, 2 or 3 units: one per 50 ms */
-                checked++;
+    for (int pass = 0; pass < 2; ++pass) {
+        double prev[3] = {0.0, 0.0, 0.0};
+        int64_t t_prev = 0;
+        int lost = 0, checked = 0;
+        f->cfg.map_init_parallax_deg = 30.0;
+        f->cfg.chain_scale_sigmas = pass == 0 ? 3.0 : 0.0;
+        free(f->mem);
+        open_vo(f);
+        for (int k = 0; k < 32; ++k) {
+            const int64_t t = 1000000000LL + k * 50000000LL;
+            const double v[3] = {0.0, 0.003 * k, 0.0};
+            tvo_pose T = tvo_pose_identity();
+            tvo_image img = tvo_image_make(W, H, W, f->img);
+            tvo_vo_result res;
+            if (k == 6 || k == 7 || k == 14)
+                continue;
+            tvo_rotvec_to_rot(v, T.R);
+            for (int i = 0; i < 3; ++i)
+                T.t[i] = dir[i] * 0.06 * k;
+            if (k == 20)
+                memset(f->img, 0, sizeof(f->img));
+            else
+                render(&T, f->img);
+            assert_int_equal(tvo_vo_process(f->vo, &img, t, &res), TVO_OK);
+            assert_true(tvo_pose_is_finite(&res.T_w_c));
+            assert_int_equal(res.map_state, TVO_MAP_INITIALISING);
+            if (k > 0) {
+                const double d[3] = {res.T_w_c.t[0] - prev[0], res.T_w_c.t[1] - prev[1],
+                                     res.T_w_c.t[2] - prev[2]};
+                const double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                const double frames = (double)(t - t_prev) / 50000000.0; /* the interval in frame periods */
+                if (getenv("TVO_TEST_VERBOSE") != NULL)
+                    fprintf(stderr, "sigmas %g frame %2d: state %d step %.3f over %.0f frame(s)\n",
+                            f->cfg.chain_scale_sigmas, k, (int)res.state, len, frames);
+                if (k == 20) {
+                    assert_int_equal(res.state, TVO_VO_LOST);
+                    assert_true(fabs(len - 1.0) < 0.1); /* moved on by the last step, one unit */
+                    lost++;
+                } else if (res.state == TVO_VO_OK && k != 21) {
+                    assert_true(fabs(len / frames - 1.0) < 0.1); /* 1, 2 or 3 units: one per 50 ms */
+                    checked++;
+                }
             }
+            memcpy(prev, res.T_w_c.t, sizeof(prev));
+            t_prev = t;
         }
-        memcpy(prev, res.T_w_c.t, sizeof(prev));
-        t_prev = t;
+        assert_int_equal(lost, 1);
+        assert_true(checked >= 20);
     }
-    assert_int_equal(lost, 1);
-    assert_true(checked >= 20);
 }
 
 /* Pure rotation: no translation, so never a relative scale. */
