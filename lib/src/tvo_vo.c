@@ -1353,7 +1353,9 @@ static int predict_tracks(tvo_vo *vo, int64_t dt, uint8_t *pred)
 
 /* A LOST frame carries the pose on at the last posed frame's motion for at most this long in all. */
 #define TVO_VO_COAST_NS 1000000000
-/* and with its interval at most this many times that frame's */
+/* and with its interval at most this many times that frame's; a step of the chain before the first map
+   is at most this many units (a first interval far shorter than the rest, a duplicated frame's, would
+   otherwise give steps of thousands of units) */
 #define TVO_VO_COAST_MAX_RATIO 10.0
 
 /* A LOST frame's step: the last posed frame's motion scaled to dt (its rotation vector and translation
@@ -1386,11 +1388,17 @@ static tvo_pose chain_pose(const tvo_vo *vo, const tvo_vo_result *res)
         /* before the first map the unit is one step per the chain's first frame interval (a frame after
            dropped ones steps further), and the first map's baseline continues it (tvo_map.h); times the
            speed changes chain_follow_scale took (1 without cfg.chain_scale_sigmas) */
-        if (res->state == TVO_VO_OK)
-            len = (vo->cfg.map && vo->map.speed > 0.0 ? vo->map.speed * (double)res->dt_ns * 1e-9
-                           : vo->dt_unit > 0          ? (double)res->dt_ns / (double)vo->dt_unit
-                                                      : 1.0) *
-                    vo->chain_gain;
+        if (res->state == TVO_VO_OK) {
+            if (vo->cfg.map && vo->map.speed > 0.0)
+                len = vo->map.speed * (double)res->dt_ns * 1e-9;
+            else if (vo->dt_unit > 0) /* at most TVO_VO_COAST_MAX_RATIO units */
+                len = (double)res->dt_ns > TVO_VO_COAST_MAX_RATIO * (double)vo->dt_unit
+                        ? TVO_VO_COAST_MAX_RATIO
+                        : (double)res->dt_ns / (double)vo->dt_unit;
+            else
+                len = 1.0;
+            len *= vo->chain_gain;
+        }
         if (!(len >= 0.0) || !isfinite(len))
             len = 0.0;
         for (int c = 0; c < 3; ++c)

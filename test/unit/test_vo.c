@@ -439,6 +439,45 @@ static void test_dropped_and_lost_frames(void **state)
     }
 }
 
+/* A first frame interval far shorter than the rest (a duplicated frame 1 us after the first): before the
+ * first map the chain's unit is that interval, so every later step would be 50,000 units; it takes at
+ * most 10 (the LOST frames' bound), finite, and the map still starts. */
+static void test_short_first_interval(void **state)
+{
+    fixture *f = *state;
+    const double dir[3] = {0.6, 0.1, -0.79};
+    double prev[3] = {0.0, 0.0, 0.0};
+    int checked = 0, mapped = 0;
+    f->cfg.chain_scale_sigmas = 0.0; /* steps of one length: 10 units, not 10 times a gain */
+    free(f->mem);
+    open_vo(f);
+    for (int k = 0; k < 40; ++k) {
+        const int64_t t = k == 0 ? 1000000000LL : 1000001000LL + (k - 1) * 50000000LL;
+        tvo_pose T = tvo_pose_identity();
+        tvo_image img = tvo_image_make(W, H, W, f->img);
+        tvo_vo_result res;
+        for (int i = 0; i < 3; ++i)
+            T.t[i] = dir[i] * 0.06 * (k == 0 ? 0.0 : (double)(k - 1) + 1e-5);
+        render(&T, f->img);
+        assert_int_equal(tvo_vo_process(f->vo, &img, t, &res), TVO_OK);
+        assert_true(tvo_pose_is_finite(&res.T_w_c));
+        if (res.map_state == TVO_MAP_TRACKING)
+            mapped++;
+        if (k > 1 && res.state == TVO_VO_OK && res.map_state == TVO_MAP_INITIALISING) {
+            const double d[3] = {res.T_w_c.t[0] - prev[0], res.T_w_c.t[1] - prev[1],
+                                 res.T_w_c.t[2] - prev[2]};
+            const double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            if (getenv("TVO_TEST_VERBOSE") != NULL)
+                fprintf(stderr, "short first interval, frame %2d: step %.3f\n", k, len);
+            assert_true(len <= 10.0 + 1e-9);
+            checked++;
+        }
+        memcpy(prev, res.T_w_c.t, sizeof(prev));
+    }
+    assert_true(checked >= 5);
+    assert_true(mapped > 0);
+}
+
 /* Pure rotation: no translation, so never a relative scale. */
 static void test_relative_scale_rotation_only(void **state)
 {
@@ -1825,6 +1864,7 @@ int main(void)
       cmocka_unit_test_setup_teardown(test_relative_scale_rotation_only, setup, teardown),
       cmocka_unit_test_setup_teardown(test_chain_scale, setup_basic, teardown),
       cmocka_unit_test_setup_teardown(test_dropped_and_lost_frames, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_short_first_interval, setup, teardown),
       cmocka_unit_test(test_keyframe_rotation),
       cmocka_unit_test(test_track_prediction),
       cmocka_unit_test(test_redetect_coverage),
