@@ -378,7 +378,7 @@ TVO_API void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
  *                          120 tracks (min_tracks 80, keyframe_min_tracks 40, detect.max_corners 120), 3
  *                          pyramid levels (lk.max_level 2), a map of 5 keyframes and 160 landmarks, the
  *                          lens as configured (lens_refine 0: a microcontroller build leaves it out). At
- *                          320x240 the VO needs 229,680 bytes on a Cortex-M7 (tools/run-mcu.sh runs it
+ *                          320x240 the VO needs 230,192 bytes on a Cortex-M7 (tools/run-mcu.sh runs it
  *                          there). */
 typedef enum tvo_vo_preset {
     TVO_VO_PRESET_DEFAULT = 0,
