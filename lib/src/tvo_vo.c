@@ -1354,8 +1354,8 @@ static int predict_tracks(tvo_vo *vo, int64_t dt, uint8_t *pred)
 /* A LOST frame carries the pose on at the last posed frame's motion for at most this long in all. */
 #define TVO_VO_COAST_NS 1000000000
 /* and with its interval at most this many times that frame's; a step of the chain before the first map
-   is at most this many units (a first interval far shorter than the rest, a duplicated frame's, would
-   otherwise give steps of thousands of units) */
+   is at most this many units (chain_units: a first interval far shorter than the rest, a duplicated
+   frame's, would otherwise give steps of thousands of units) */
 #define TVO_VO_COAST_MAX_RATIO 10.0
 
 /* A LOST frame's step: the last posed frame's motion scaled to dt (its rotation vector and translation
@@ -1371,6 +1371,24 @@ static void coast_step(const tvo_vo *vo, int64_t dt, tvo_pose *step)
     tvo_rot_pow(vo->v_step.R, r, step->R);
     for (int c = 0; c < 3; ++c)
         step->t[c] = vo->v_step.t[c] * r;
+}
+
+/* A frame interval within this factor of the chain's first (either way) counts as one frame: timestamps
+   that jitter around a steady rate (a driver's or a USB camera's) give steps of one length, and only a
+   frame after dropped ones (an interval of 2, 3, ... frames) or a change of the frame rate steps further. */
+#define TVO_VO_CHAIN_DT_BAND 1.5
+
+/* The chain's length of a frame interval dt before the first map, in units of its first interval
+ * (dt_unit): 1 within TVO_VO_CHAIN_DT_BAND of it, else dt / dt_unit, at most TVO_VO_COAST_MAX_RATIO. */
+static double chain_units(const tvo_vo *vo, int64_t dt)
+{
+    double r;
+    if (vo->dt_unit <= 0 || dt <= 0)
+        return 1.0;
+    r = (double)dt / (double)vo->dt_unit;
+    if (r > TVO_VO_COAST_MAX_RATIO)
+        return TVO_VO_COAST_MAX_RATIO;
+    return r * TVO_VO_CHAIN_DT_BAND > 1.0 && r < TVO_VO_CHAIN_DT_BAND ? 1.0 : r;
 }
 
 /* The pose the two-view chain gives this frame (world -> camera): the last pose moved by this frame's
@@ -1391,12 +1409,8 @@ static tvo_pose chain_pose(const tvo_vo *vo, const tvo_vo_result *res)
         if (res->state == TVO_VO_OK) {
             if (vo->cfg.map && vo->map.speed > 0.0)
                 len = vo->map.speed * (double)res->dt_ns * 1e-9;
-            else if (vo->dt_unit > 0) /* at most TVO_VO_COAST_MAX_RATIO units */
-                len = (double)res->dt_ns > TVO_VO_COAST_MAX_RATIO * (double)vo->dt_unit
-                        ? TVO_VO_COAST_MAX_RATIO
-                        : (double)res->dt_ns / (double)vo->dt_unit;
             else
-                len = 1.0;
+                len = chain_units(vo, res->dt_ns);
             len *= vo->chain_gain;
         }
         if (!(len >= 0.0) || !isfinite(len))
@@ -1418,10 +1432,14 @@ static void chain_follow_scale(tvo_vo *vo, const tvo_vo_result *res)
     if (!vo->cfg.map || !(vo->cfg.chain_scale_sigmas > 0.0) || res->state != TVO_VO_OK ||
         !(res->rel_scale > 0.0) || !isfinite(res->rel_scale))
         return;
-    /* the speed's change: rel_scale over the ratio of the two frame intervals (1 at a steady rate) */
+    /* the speed's change: rel_scale over the ratio of the two frame intervals in the chain's units (1 at
+       a steady rate, timestamp jitter included) */
     z = tvo_dm_log(res->rel_scale);
-    if (vo->dt_pred > 0 && res->dt_ns > 0 && vo->dt_pred != res->dt_ns)
-        z += tvo_dm_log((double)vo->dt_pred / (double)res->dt_ns);
+    if (vo->dt_pred > 0 && res->dt_ns > 0) {
+        const double q = chain_units(vo, vo->dt_pred) / chain_units(vo, res->dt_ns);
+        if (q != 1.0)
+            z += tvo_dm_log(q);
+    }
     tau = vo->cfg.chain_scale_sigmas * vo->rs_se;
     w = z > tau ? z - tau : (z < -tau ? z + tau : 0.0);
     vo->chain_gain *= tvo_dm_exp(w);

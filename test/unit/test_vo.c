@@ -439,6 +439,50 @@ static void test_dropped_and_lost_frames(void **state)
     }
 }
 
+/* Timestamps that jitter around a steady rate (a driver's stamps, up to 5 ms of a 50 ms interval, so
+ * intervals of 40-60 ms) while the camera moves at a constant speed: before the first map every step is
+ * one unit, as the frames show, not the jittered intervals (steps of 0.8-1.2 units, and with
+ * chain_scale_sigmas a speed that wanders). */
+static void test_timestamp_jitter(void **state)
+{
+    fixture *f = *state;
+    const double dir[3] = {0.6, 0.1, -0.79};
+    const int jitter[12] = {0, 4, -3, 5, -5, 2, -4, 4, -1, 5, -3, 3}; /* milliseconds of 50 */
+    for (int pass = 0; pass < 2; ++pass) {
+        double prev[3] = {0.0, 0.0, 0.0};
+        int checked = 0;
+        f->cfg.map_init_parallax_deg = 30.0;
+        f->cfg.chain_scale_sigmas = pass == 0 ? 0.0 : 3.0;
+        free(f->mem);
+        open_vo(f);
+        for (int k = 0; k < 30; ++k) {
+            const int64_t t = 1000000000LL + k * 50000000LL + (k == 0 ? 0 : jitter[k % 12] * 1000000LL);
+            tvo_pose T = tvo_pose_identity();
+            tvo_image img = tvo_image_make(W, H, W, f->img);
+            tvo_vo_result res;
+            for (int i = 0; i < 3; ++i)
+                T.t[i] = dir[i] * 0.06 * k;
+            render(&T, f->img);
+            assert_int_equal(tvo_vo_process(f->vo, &img, t, &res), TVO_OK);
+            assert_true(tvo_pose_is_finite(&res.T_w_c));
+            assert_int_equal(res.map_state, TVO_MAP_INITIALISING);
+            if (k > 1 && res.state == TVO_VO_OK) {
+                const double d[3] = {res.T_w_c.t[0] - prev[0], res.T_w_c.t[1] - prev[1],
+                                     res.T_w_c.t[2] - prev[2]};
+                const double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                if (getenv("TVO_TEST_VERBOSE") != NULL)
+                    fprintf(stderr, "jitter, sigmas %g frame %2d: step %.3f\n", f->cfg.chain_scale_sigmas, k,
+                            len);
+                /* sigmas 3: the relative scale's own noise beyond its threshold (as without jitter) */
+                assert_true(fabs(len - 1.0) < (pass == 0 ? 1e-6 : 0.1));
+                checked++;
+            }
+            memcpy(prev, res.T_w_c.t, sizeof(prev));
+        }
+        assert_true(checked >= 20);
+    }
+}
+
 /* A first frame interval far shorter than the rest (a duplicated frame 1 us after the first): before the
  * first map the chain's unit is that interval, so every later step would be 50,000 units; it takes at
  * most 10 (the LOST frames' bound), finite, and the map still starts. */
@@ -1865,6 +1909,7 @@ int main(void)
       cmocka_unit_test_setup_teardown(test_chain_scale, setup_basic, teardown),
       cmocka_unit_test_setup_teardown(test_dropped_and_lost_frames, setup, teardown),
       cmocka_unit_test_setup_teardown(test_short_first_interval, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_timestamp_jitter, setup, teardown),
       cmocka_unit_test(test_keyframe_rotation),
       cmocka_unit_test(test_track_prediction),
       cmocka_unit_test(test_redetect_coverage),

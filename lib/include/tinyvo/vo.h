@@ -30,7 +30,8 @@
  * The map starts from two frames with cfg.map_init_parallax_deg of median parallax (5-point pose,
  * triangulated inliers: at least max(40, cfg.max_tracks / 3) landmarks). Until then, and after a loss, T_w_c continues the two-view chain: its rotation,
  * and its translation direction times the last map's speed (before the first map one unit per the
- * chain's first frame interval, so that a frame after dropped ones steps further, at most 10 units).
+ * chain's first frame interval, an interval within a factor of 1.5 of it counting as one, so that a frame
+ * after dropped ones steps further and jittered timestamps do not: at most 10 units).
  * A frame without a two-view pose (LOST) moves on by the last posed frame's motion scaled to its
  * interval, for at most 1 s of LOST frames in a row, then stands still.
  * A frame whose PnP fails, or whose map rotation is more than 5 deg from its own two-view rotation, loses
