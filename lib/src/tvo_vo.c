@@ -87,7 +87,7 @@ struct tvo_vo {
        lost_ns: the LOST frames' time it has carried the pose on since (coast_step) */
     tvo_pose v_step;
     int64_t v_dt, lost_ns;
-    int64_t dt_unit; /* the chain's first frame interval: before the first map one unit per dt_unit ns */
+    int64_t dt_unit; /* the chain's first frame interval: before the first map the chain counts frames by it */
     /* affine refinement (cfg.affine_win_size > 0, else all NULL): each track's template, its model
        and warp, valid where hast[i] */
     uint8_t *tpl;      /* [max_tracks x tvo_aff_template_bytes(affine_win_size)] */
@@ -1403,9 +1403,9 @@ static tvo_pose chain_pose(const tvo_vo *vo, const tvo_vo_result *res)
     } else if (res->state == TVO_VO_OK || res->state == TVO_VO_ROTATION_ONLY) {
         double len = 0.0;
         step = tvo_pose_inverse(&res->T_prev_cur); /* T_cur_prev */
-        /* before the first map the unit is one step per the chain's first frame interval (a frame after
-           dropped ones steps further), and the first map's baseline continues it (tvo_map.h); times the
-           speed changes chain_follow_scale took (1 without cfg.chain_scale_sigmas) */
+        /* before the first map one unit per frame, counted by chain_units (a frame after dropped ones
+           steps further), and the first map's baseline continues it (tvo_map.h); times the speed changes
+           chain_follow_scale took (1 without cfg.chain_scale_sigmas) */
         if (res->state == TVO_VO_OK) {
             if (vo->cfg.map && vo->map.speed > 0.0)
                 len = vo->map.speed * (double)res->dt_ns * 1e-9;
