@@ -29,6 +29,9 @@ sequences; the others of any camera, the renders too):
   - drops:       frames dropped as a camera or a recording drops them: from the sixth on each frame with
                  probability 1/25 (Python's random.Random(52)), and a burst of 3 in the middle third; the
                  others keep their times and the rate stays: the replay sees gaps of 2-4 frame intervals.
+  - jitter10:    every frame, with its timestamp (not the frame, nor the ground truth) moved at random by
+                 up to 10 % of the frame interval (uniform, Python's random.Random(55); the first and last
+                 frames keep theirs): stamps taken on arrival by a driver, around a steady capture rate.
 
 Noise is seeded (the same copy on every run). It replays each copy with `tvo_replay --scale none` and the
 given replay arguments, and prints the Sim(3)-aligned ATE (m) of the whole run, the number of frames
@@ -69,8 +72,11 @@ VARIANTS = {
     "stop": (1.0, -2, 0.0, 0.0),
     "start": (1.0, -3, 0.0, 0.0),
     "drops": (1.0, -4, 0.0, 0.0),
+    "jitter10": (1.0, -5, 0.0, 0.0),
 }
 DROPS = -4
+JITTER = -5
+JITTER_SHARE = 0.10  # of the frame interval
 # the holds of the stop and start copies: frames held, and the sensor noise of each held copy
 HOLD_FRAMES = {-2: 50, -3: 30}
 HOLD_NOISE = 2.0
@@ -82,6 +88,8 @@ def kept_frames(n: int, every: int) -> list:
     the middle or the first one repeated HOLD_FRAMES times, or (every == DROPS) all but the dropped ones."""
     if every > 0:
         return list(range(0, n, every))
+    if every == JITTER:
+        return list(range(n))
     if every == DROPS:
         rng_d = random.Random(52)
         drop = {i for i in range(5, n - 1) if rng_d.random() < 1 / 25}
@@ -101,6 +109,18 @@ def kept_frames(n: int, every: int) -> list:
     return keep
 
 
+def jittered_times(t_ns: list) -> list:
+    """The jitter copy's stamps: each frame but the first and the last moved by up to JITTER_SHARE of the
+    frame interval around it (half the distance between its neighbours), uniform, seeded."""
+    rng_j = random.Random(55)
+    out = []
+    for i, t in enumerate(t_ns):
+        if 0 < i < len(t_ns) - 1:
+            t = int(t + rng_j.uniform(-JITTER_SHARE, JITTER_SHARE) * (t_ns[i + 1] - t_ns[i - 1]) / 2)
+        out.append(t)
+    return out
+
+
 def write_copy(seq: str, dst: str, scale: float, every: int, blur: float, noise: float) -> None:
     """seq's mav0/cam0 frames degraded, with the calibration scaled and the ground truth beside them."""
     cam = os.path.join(seq, "mav0", "cam0")
@@ -114,8 +134,10 @@ def write_copy(seq: str, dst: str, scale: float, every: int, blur: float, noise:
     keep = kept_frames(len(names), every)
     # a jerk or reversed copy keeps the original frame interval: frame j of the copy at t0 + j * dt
     dt = int(np.median(np.diff(t_ns))) if len(t_ns) > 1 else 0
-    same_times = every > 0 or every == DROPS
+    same_times = every > 0 or every in (DROPS, JITTER)
     t_new = [int(t_ns[k]) if same_times else int(t_ns[0]) + j * dt for j, k in enumerate(keep)]
+    if every == JITTER:
+        t_new = jittered_times([int(t) for t in t_ns])
     rng = np.random.default_rng(1)
     rows = []
     for j, (k, t) in enumerate(zip(keep, t_new)):

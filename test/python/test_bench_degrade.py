@@ -140,6 +140,27 @@ def test_drops_copy_keeps_times_rate_and_ground_truth(tmp_path):
         (src / "mav0" / "state_groundtruth_estimate0" / "data.csv").read_bytes()
 
 
+def test_jitter_copy_moves_only_the_stamps(tmp_path):
+    """The jitter copy: every frame as it was, each stamp but the first and the last moved by at most 10 %
+    of the frame interval (seeded, not all the same way), the order kept, the ground truth unchanged."""
+    src = _sequence(tmp_path / "src")
+    dst = tmp_path / "jitter10"
+    bench_degrade.write_copy(str(src), str(dst), *bench_degrade.VARIANTS["jitter10"])
+    t, names = trajio.read_cam_frames(str(dst / "mav0" / "cam0"))
+    t0, names0 = trajio.read_cam_frames(str(src / "mav0" / "cam0"))
+    assert list(names) == list(names0)
+    for n in names:
+        assert (dst / "mav0" / "cam0" / "data" / n).read_bytes() == (src / "mav0" / "cam0" / "data" / n).read_bytes()
+    shift = np.asarray(t, dtype=np.int64) - np.asarray(t0, dtype=np.int64)
+    assert shift[0] == 0 and shift[-1] == 0
+    assert (np.abs(shift) <= 0.1 * DT).all() and (shift[1:-1] > 0).any() and (shift[1:-1] < 0).any()
+    assert (np.diff(t) > 0).all()
+    t2 = bench_degrade.jittered_times([int(x) for x in t0])
+    np.testing.assert_array_equal(t, t2)  # seeded: the same copy every run
+    assert (dst / "mav0" / "state_groundtruth_estimate0" / "data.csv").read_bytes() == \
+        (src / "mav0" / "state_groundtruth_estimate0" / "data.csv").read_bytes()
+
+
 def test_distortion(tmp_path):
     src = _sequence(tmp_path / "src", distortion=(-0.28, 0.07, 0.0002, 0.00002))
     bench_degrade.write_copy(str(src), str(tmp_path / "jerk"), *bench_degrade.VARIANTS["jerk"])
