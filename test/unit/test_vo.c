@@ -76,6 +76,13 @@ static int teardown(void **state)
     return 0;
 }
 
+/* The distance between two positions (a step of the trajectory). */
+static double dist3(const double a[3], const double b[3])
+{
+    const double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+    return sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+}
+
 static double angle_between(const double a[3], const double b[3])
 {
     const double na = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
@@ -355,9 +362,7 @@ static void test_chain_scale(void **state)
             assert_true(tvo_pose_is_finite(&res.T_w_c));
             assert_int_equal(res.map_state, TVO_MAP_INITIALISING);
             if (k > 0 && res.state == TVO_VO_OK) {
-                const double d[3] = {res.T_w_c.t[0] - prev_c[0], res.T_w_c.t[1] - prev_c[1],
-                                     res.T_w_c.t[2] - prev_c[2]};
-                const double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                const double len = dist3(res.T_w_c.t, prev_c);
                 double e;
                 if (first == 0.0)
                     first = len;
@@ -415,9 +420,7 @@ static void test_dropped_and_lost_frames(void **state)
             assert_true(tvo_pose_is_finite(&res.T_w_c));
             assert_int_equal(res.map_state, TVO_MAP_INITIALISING);
             if (k > 0) {
-                const double d[3] = {res.T_w_c.t[0] - prev[0], res.T_w_c.t[1] - prev[1],
-                                     res.T_w_c.t[2] - prev[2]};
-                const double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                const double len = dist3(res.T_w_c.t, prev);
                 const double frames = (double)(t - t_prev) / 50000000.0; /* the interval in frame periods */
                 if (getenv("TVO_TEST_VERBOSE") != NULL)
                     fprintf(stderr, "sigmas %g frame %2d: state %d step %.3f over %.0f frame(s)\n",
@@ -467,9 +470,7 @@ static void test_timestamp_jitter(void **state)
             assert_true(tvo_pose_is_finite(&res.T_w_c));
             assert_int_equal(res.map_state, TVO_MAP_INITIALISING);
             if (k > 1 && res.state == TVO_VO_OK) {
-                const double d[3] = {res.T_w_c.t[0] - prev[0], res.T_w_c.t[1] - prev[1],
-                                     res.T_w_c.t[2] - prev[2]};
-                const double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                const double len = dist3(res.T_w_c.t, prev);
                 if (getenv("TVO_TEST_VERBOSE") != NULL)
                     fprintf(stderr, "jitter, sigmas %g frame %2d: step %.3f\n", f->cfg.chain_scale_sigmas, k,
                             len);
@@ -508,9 +509,7 @@ static void test_short_first_interval(void **state)
         if (res.map_state == TVO_MAP_TRACKING)
             mapped++;
         if (k > 1 && res.state == TVO_VO_OK && res.map_state == TVO_MAP_INITIALISING) {
-            const double d[3] = {res.T_w_c.t[0] - prev[0], res.T_w_c.t[1] - prev[1],
-                                 res.T_w_c.t[2] - prev[2]};
-            const double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            const double len = dist3(res.T_w_c.t, prev);
             if (getenv("TVO_TEST_VERBOSE") != NULL)
                 fprintf(stderr, "short first interval, frame %2d: step %.3f\n", k, len);
             assert_true(len <= 10.0 + 1e-9);
