@@ -134,10 +134,11 @@ def write_copy(seq: str, dst: str, scale: float, every: int, blur: float, noise:
     keep = kept_frames(len(names), every)
     # a jerk or reversed copy keeps the original frame interval: frame j of the copy at t0 + j * dt
     dt = int(np.median(np.diff(t_ns))) if len(t_ns) > 1 else 0
-    same_times = every > 0 or every in (DROPS, JITTER)
-    t_new = [int(t_ns[k]) if same_times else int(t_ns[0]) + j * dt for j, k in enumerate(keep)]
-    if every == JITTER:
+    same_times = every > 0 or every == DROPS
+    if every == JITTER:  # the frames at their own times, only their stamps moved
         t_new = jittered_times([int(t) for t in t_ns])
+    else:
+        t_new = [int(t_ns[k]) if same_times else int(t_ns[0]) + j * dt for j, k in enumerate(keep)]
     rng = np.random.default_rng(1)
     rows = []
     for j, (k, t) in enumerate(zip(keep, t_new)):
@@ -169,7 +170,7 @@ def write_copy(seq: str, dst: str, scale: float, every: int, blur: float, noise:
         info.rate_hz = info.rate_hz / every
     trajio.write_sensor_yaml(os.path.join(out, "sensor.yaml"), info)
     gt = os.path.join(seq, "mav0", "state_groundtruth_estimate0")
-    if same_times:
+    if same_times or every == JITTER:
         shutil.copytree(gt, os.path.join(dst, "mav0", "state_groundtruth_estimate0"))
         return
     # the ground truth of each kept frame, at the frame's new time
