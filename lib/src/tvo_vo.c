@@ -2,7 +2,9 @@
 /* tinyvo: the VO object. See vo.h for the per-frame data flow. */
 #include "tinyvo/vo.h"
 
+#include <float.h>
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 #include "tinyvo/arena.h"
@@ -320,30 +322,54 @@ tvo_status tvo_vo_config_preset(tvo_vo_config *cfg, const tvo_camera *camera, tv
     }
 }
 
-/* lo <= v <= hi, and lo < v <= hi (0 for NaN), called by config_valid for each field: out of line, a
- * call is less code than the comparisons (160 bytes on a Cortex-M7) */
-#if defined(__GNUC__)
-#define VO_NOINLINE __attribute__((noinline))
-#else
-#define VO_NOINLINE
-#endif
-static VO_NOINLINE int in_range(double v, double lo, double hi)
-{
-    return v >= lo && v <= hi;
-}
+/* The double fields of tvo_vo_config and their ranges, checked by config_valid from one table (less code
+ * than a comparison per field: the Cortex-M7 core's budget): 0 <= v <= hi, or 0 < v <= hi with above set
+ * (NaN fails both); hi is range_hi[hi]. */
+typedef struct range_check {
+    uint16_t off; /* offsetof: the struct is far below 64 KiB */
+    uint8_t hi, above;
+} range_check;
 
-static VO_NOINLINE int in_range_above(double v, double lo, double hi)
+/* range_hi's entries, by name */
+enum { HI_1, HI_10, HI_30, HI_90, HI_100, HI_180, HI_DAY_S, HI_1E12, HI_FINITE };
+static const double range_hi[] = {1.0, 10.0, 30.0, 90.0, 100.0, 180.0, 86400.0, 1e12, DBL_MAX};
+
+static const range_check ranges[] = {
+        {(uint16_t)offsetof(tvo_vo_config, redetect_coverage), HI_1, 0},
+        {(uint16_t)offsetof(tvo_vo_config, redetect_cell_kept), HI_1, 0},
+        {(uint16_t)offsetof(tvo_vo_config, pose_threshold_px), HI_FINITE, 1},
+        {(uint16_t)offsetof(tvo_vo_config, scale_min_parallax_deg), HI_10, 1},
+        {(uint16_t)offsetof(tvo_vo_config, keyframe_max_parallax_deg), HI_90, 1},
+        {(uint16_t)offsetof(tvo_vo_config, keyframe_max_rot_deg), HI_180, 1},
+        {(uint16_t)offsetof(tvo_vo_config, affine_end_share), HI_1, 0},
+        {(uint16_t)offsetof(tvo_vo_config, map_init_parallax_deg), HI_30, 1},
+        {(uint16_t)offsetof(tvo_vo_config, map_tri_parallax_deg), HI_30, 1},
+        {(uint16_t)offsetof(tvo_vo_config, map_init_wait_s), HI_DAY_S, 0},
+        {(uint16_t)offsetof(tvo_vo_config, chain_scale_sigmas), HI_100, 0},
+        {(uint16_t)offsetof(tvo_vo_config, map_kf_baseline), HI_10, 1},
+        {(uint16_t)offsetof(tvo_vo_config, map_kf_points_ratio), HI_1, 0},
+        {(uint16_t)offsetof(tvo_vo_config, map_ba_max_turn_deg), HI_180, 1},
+        {(uint16_t)offsetof(tvo_vo_config, map_ba_huber_px), HI_100, 1},
+        {(uint16_t)offsetof(tvo_vo_config, map_ba_rot_prior), HI_1E12, 0},
+        {(uint16_t)offsetof(tvo_vo_config, map_rot_prior), HI_1E12, 0},
+};
+
+static int ranges_valid(const tvo_vo_config *cfg)
 {
-    return v > lo && v <= hi;
+    for (size_t i = 0; i < sizeof(ranges) / sizeof(ranges[0]); ++i) {
+        double v;
+        memcpy(&v, (const char *)cfg + ranges[i].off, sizeof(v));
+        if (!(ranges[i].above ? v > 0.0 : v >= 0.0) || !(v <= range_hi[ranges[i].hi]))
+            return 0;
+    }
+    return 1;
 }
 
 static int config_valid(const tvo_vo_config *cfg)
 {
-    if (cfg == NULL || tvo_camera_check(&cfg->camera) != TVO_OK)
+    if (cfg == NULL || tvo_camera_check(&cfg->camera) != TVO_OK || !ranges_valid(cfg))
         return 0;
     if (cfg->max_tracks < 16 || cfg->max_tracks > 100000)
-        return 0;
-    if (!in_range(cfg->redetect_coverage, 0.0, 1.0) || !in_range(cfg->redetect_cell_kept, 0.0, 1.0))
         return 0;
     if (cfg->min_tracks < 0 || cfg->min_tracks > cfg->max_tracks)
         return 0;
@@ -354,19 +380,11 @@ static int config_valid(const tvo_vo_config *cfg)
     if (cfg->fast_min_threshold < 0 || cfg->fast_min_threshold > 255 || cfg->fast_range_ref < 0 ||
         cfg->fast_range_ref > 255)
         return 0;
-    if (!(cfg->pose_threshold_px > 0.0) || !isfinite(cfg->pose_threshold_px))
-        return 0;
     if (cfg->min_scale_points < 3) /* above max_tracks: never available */
-        return 0;
-    if (!in_range_above(cfg->scale_min_parallax_deg, 0.0, 10.0))
         return 0;
     if (cfg->keyframe != 0 && cfg->keyframe != 1)
         return 0;
     if (cfg->keyframe_min_tracks < 0) /* above max_tracks: a new keyframe every frame */
-        return 0;
-    if (!in_range_above(cfg->keyframe_max_parallax_deg, 0.0, 90.0))
-        return 0;
-    if (!in_range_above(cfg->keyframe_max_rot_deg, 0.0, 180.0))
         return 0;
     if (cfg->keyframe_translation != 0 && cfg->keyframe_translation != 1)
         return 0;
@@ -377,8 +395,6 @@ static int config_valid(const tvo_vo_config *cfg)
          (cfg->affine_win_size & 1) == 0))
         return 0;
     if (cfg->affine_at_keyframes != 0 && cfg->affine_at_keyframes != 1)
-        return 0;
-    if (!in_range(cfg->affine_end_share, 0.0, 1.0))
         return 0;
     if (cfg->map_refind < 0 || cfg->map_refind > 4096) /* inert without the map or the templates */
         return 0;
@@ -399,29 +415,12 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (cfg->map_min_points < 6 || cfg->map_min_points > 100000) /* above max_tracks: never a map */
         return 0;
-    if (!in_range_above(cfg->map_init_parallax_deg, 0.0, 30.0) ||
-        !in_range_above(cfg->map_tri_parallax_deg, 0.0, 30.0))
-        return 0;
-    if (!in_range(cfg->map_init_wait_s, 0.0, 86400.0))
-        return 0;
-    if (!in_range(cfg->chain_scale_sigmas, 0.0, 100.0))
-        return 0;
-    if (!in_range_above(cfg->map_kf_baseline, 0.0, 10.0) || !in_range(cfg->map_kf_points_ratio, 0.0, 1.0))
-        return 0;
     if (cfg->map_kf_max_frames < 1 || cfg->map_kf_max_frames > 100000 || cfg->map_ba_iterations < 1 ||
         cfg->map_ba_iterations > 100)
         return 0;
-    if (!in_range_above(cfg->map_ba_max_turn_deg, 0.0, 180.0))
-        return 0;
     if (cfg->lens_refine != 0 && (cfg->lens_refine != 1 || !TVO_WITH_LENS))
         return 0;
-    if (!in_range_above(cfg->map_ba_huber_px, 0.0, 100.0))
-        return 0;
-    if (!in_range(cfg->map_ba_rot_prior, 0.0, 1e12))
-        return 0;
     if (cfg->map_ba_fixed < 2 || cfg->map_ba_fixed > cfg->map_window - 1)
-        return 0;
-    if (!in_range(cfg->map_rot_prior, 0.0, 1e12))
         return 0;
     if (cfg->map_rot_prior_obs != 0 &&
         (cfg->map_rot_prior_obs < 2 || cfg->map_rot_prior_obs > TVO_VO_MAX_WINDOW))
