@@ -32,6 +32,10 @@
 #define TVO_MAP_KF_RESCUE_POINTS 2
 /* PnP inlier threshold, in pixels. */
 #define TVO_MAP_PNP_THRESHOLD_PX 2.0
+/* With cfg.map_inlier_sigmas, the gate on the inliers' reprojection errors never goes below this (px). */
+#define TVO_MAP_GATE_MIN_PX 0.5
+/* The median of the norm of a 2D Gaussian error of sigma 1 per axis (Rayleigh: sqrt(2 ln 2)). */
+#define TVO_MAP_RAYLEIGH_MEDIAN 1.1774
 /* The initial pair needs max(TVO_MAP_INIT_MIN_POINTS, cfg.max_tracks / TVO_MAP_INIT_TRACKS_DIV)
  * triangulated landmarks (100 with the default 300 tracks, as ORB-SLAM's monocular initialisation asks
  * for 100 map points; twice the divisor, 50, after cfg.map_init_wait_s seconds without a map), and half
@@ -909,6 +913,56 @@ static const uint8_t *prior_judges(const tvo_map *m, const tvo_vo_config *cfg, c
 
 /* Pose this frame on the landmarks the tracks carry. 1 when posed (T written, tr->inlier set, the
  * outliers' landmarks unlinked from their tracks); *depth_med gets the inliers' median depth. */
+#if TVO_WITH_AFFINE
+/* Squared reprojection error of X (world) seen at x by the camera T; 1e60 behind the camera. Not inlined:
+ * gate_inliers calls it twice, and -Os code for the Cortex-M budget keeps one copy. */
+#if defined(__GNUC__) || defined(__clang__)
+__attribute__((noinline))
+#endif
+static double
+reproj2(const tvo_pose *T, const double X[3], tvo_point2d x)
+{
+    double p[3], dx, dy;
+    tvo_pose_transform_point(T, X, p);
+    if (!(p[2] > 0.0))
+        return 1e60;
+    dx = p[0] / p[2] - x.x;
+    dy = p[1] / p[2] - x.y;
+    return dx * dx + dy * dy;
+}
+
+/* cfg.map_inlier_sigmas: the inliers of the pose T whose reprojection error is above that many times
+ * the frame's robust sigma (the median of the inliers' errors over the Rayleigh median), kept between
+ * TVO_MAP_GATE_MIN_PX and TVO_MAP_PNP_THRESHOLD_PX, become outliers. err: scratch for k values. Returns
+ * the inliers left (ni when the gate does not apply: off, or fewer than map_min_points inliers). */
+static int32_t gate_inliers(const tvo_vo_config *cfg, const tvo_pose *T, const double (*X)[3],
+                            const tvo_point2d *x, int32_t k, uint8_t *inl, int32_t ni, double *err)
+{
+    const double f = focal(cfg), lo = TVO_MAP_GATE_MIN_PX / f, hi = TVO_MAP_PNP_THRESHOLD_PX / f;
+    double thr;
+    int32_t ne = 0;
+    if (!(cfg->map_inlier_sigmas > 0.0))
+        return ni;
+    for (int32_t q = 0; q < k; ++q)
+        if (inl[q])
+            err[ne++] = sqrt(reproj2(T, X[q], x[q]));
+    if (ne < cfg->map_min_points)
+        return ni;
+    thr = cfg->map_inlier_sigmas * (tvo_la_select_kth(err, ne, ne / 2) / TVO_MAP_RAYLEIGH_MEDIAN);
+    thr = thr < lo ? lo : (thr > hi ? hi : thr);
+    ne = 0;
+    for (int32_t q = 0; q < k; ++q) {
+        if (inl[q] && reproj2(T, X[q], x[q]) > thr * thr)
+            inl[q] = 0;
+        ne += inl[q];
+    }
+    return ne;
+}
+#else
+/* left out with the affine refinement (options.h): config_valid refuses map_inlier_sigmas there */
+#define gate_inliers(cfg, T, X, x, k, inl, ni, err) (ni)
+#endif
+
 static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
                        const double *R_cur_prev, int prior_flags, void *scratch, size_t scratch_size,
                        tvo_pose *T, int32_t *n_in, double *depth_med)
@@ -992,6 +1046,7 @@ static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr,
         if (tvo_la_rot_dist(Rrel, R_cur_prev) > deg2rad(TVO_MAP_ROT_CHECK_DEG))
             return 0;
     }
+    ni = gate_inliers(cfg, T, (const double(*)[3])X, x, k, inl, ni, depth);
     for (int32_t q = 0; q < k; ++q) {
         const int32_t i = idx[q];
         if (inl[q]) {

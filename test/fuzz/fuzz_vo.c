@@ -214,6 +214,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                                                                        : 0; /* ...after a jerk */
     /* the lens refined on the run, with the map, for half the inputs */
     cfg.lens_refine = TVO_WITH_LENS && cfg.map && (((hdr[4] >> 6) ^ (hdr[7] >> 2)) & 1);
+    /* the map's inlier gate at 4 sigmas, or a near-zero one that the 0.5 px floor holds, for half the inputs
+       of a build that has it */
+    cfg.map_inlier_sigmas = TVO_WITH_AFFINE && (((hdr[4] >> 7) ^ (hdr[6] >> 1)) & 1)
+            ? ((hdr[5] >> 6) & 1 ? 1e-9 : 4.0)
+            : 0.0;
     while ((need = tvo_vo_required_size(&cfg)) == 0 && cfg.lk.max_level > 0)
         cfg.lk.max_level--;
     TVO_FUZZ_CHECK(need > 0); /* every size from 16x16 up is valid with one level */

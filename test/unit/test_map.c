@@ -698,6 +698,11 @@ static void test_map_config(void **state)
     REFUSED(chain_scale_sigmas, -1.0);
     REFUSED(chain_scale_sigmas, 100.5);
     REFUSED(chain_scale_sigmas, NAN);
+    REFUSED(map_inlier_sigmas, -1.0);
+    REFUSED(map_inlier_sigmas, NAN);
+#if TVO_WITH_AFFINE
+    REFUSED(map_inlier_sigmas, 100.5);
+#endif
     REFUSED(map_tri_parallax_deg, 31.0);
     REFUSED(map_kf_baseline, 0.0);
     REFUSED(map_kf_baseline, INFINITY);

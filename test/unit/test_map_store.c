@@ -10,6 +10,7 @@
 
 #include "tinyvo/arena.h"
 #include "tinyvo/linalg.h"
+#include "tinyvo/options.h"
 #include "tinyvo/se3.h"
 #include "tinyvo/vo.h"
 #include "tvo_map.h"
@@ -258,6 +259,81 @@ static void test_checked_landmarks_only_after_a_jerk(void **state)
     assert_true(all > 0.5 && checked < 0.3);
 }
 
+#if TVO_WITH_AFFINE
+/* cfg.map_inlier_sigmas along the road with 0.1 px of track noise: on every fourth frame from the 20th,
+ * three tracks that carry a landmark slide off their points by 1.2 px (and stay off, as a track that has
+ * locked onto a neighbouring texel does). Counts those slides, and of them the tracks that still carry the
+ * same landmark as an inlier of the frame's pose. Returns that share; *slides gets the count. */
+static double slid_share_kept(double sigmas, int32_t *slides)
+{
+    road_map rm;
+    tvo_road *r = &rm.r;
+    const tvo_map *m = &rm.m;
+    int32_t n_slid = 0, n_kept = 0;
+    uint32_t seed = 99u;
+    road_config(&rm.cfg);
+    rm.cfg.map_max_landmarks = 2 * rm.cfg.max_tracks; /* the VO's default (0) as tvo_vo_init resolves it */
+    rm.cfg.map_window = 8;
+    rm.cfg.map_ba_fixed = 4;
+    rm.cfg.map_inlier_sigmas = sigmas;
+    road_map_open(&rm, 0.1, 0.0, 4242u);
+    for (int k = 0; k < FRAMES; ++k) {
+        int32_t pid[3], lm[3], n = 0;
+        if (k >= 20 && k % 4 == 0) {
+            for (int32_t i = 0; i < r->n && n < 3; ++i) {
+                const double a = 6.283185307179586 * tvo_road_rnd(&seed);
+                if (r->lm[i] < 0 || r->life[i] < 3) /* carries a landmark, and lives through this frame */
+                    continue;
+                r->off[i].x += 1.2 * cos(a) / TVO_ROAD_FOCAL;
+                r->off[i].y += 1.2 * sin(a) / TVO_ROAD_FOCAL;
+                pid[n] = r->pid[i];
+                lm[n++] = r->lm[i];
+                i += 7; /* spread over the image */
+            }
+        }
+        (void)road_map_frame(&rm, k);
+        for (int32_t q = 0; q < n; ++q)
+            for (int32_t i = 0; i < r->n; ++i)
+                if (r->pid[i] == pid[q]) {
+                    ++n_slid;
+                    n_kept += r->lm[i] == lm[q] && r->inlier[i];
+                }
+    }
+    if (getenv("TVO_MAP_TEST_VERBOSE"))
+        fprintf(stderr, "  map_inlier_sigmas %.1f: %d slides of 1.2 px, %d kept their landmark; %d losses\n",
+                sigmas, (int)n_slid, (int)n_kept, (int)m->losses);
+    assert_int_equal(m->losses, 0);
+    road_map_close(&rm);
+    *slides = n_slid;
+    return n_slid > 0 ? (double)n_kept / n_slid : 0.0;
+}
+
+/* With the fixed 2 px gate (map_inlier_sigmas 0) a track that slid 1.2 px keeps its landmark as an
+ * inlier; with the gate at 4 sigmas of the frame's reprojection noise (here 0.5 px, its floor) it gives
+ * the landmark up. */
+static void test_inlier_gate_follows_the_noise(void **state)
+{
+    int32_t slides0 = 0, slides4 = 0;
+    const double fixed = slid_share_kept(0.0, &slides0), gated = slid_share_kept(4.0, &slides4);
+    (void)state;
+    assert_true(slides0 >= 40 && slides4 >= 40);
+    assert_true(fixed > 0.8);
+    assert_true(gated < 0.1);
+}
+#else
+/* A build without the affine refinement leaves the gate out, and refuses a configuration that asks for it
+ * (tvo_vo_init: TVO_ERR_UNSUPPORTED, test_vo). */
+static void test_inlier_gate_follows_the_noise(void **state)
+{
+    tvo_vo_config cfg;
+    (void)state;
+    road_config(&cfg);
+    assert_true(tvo_vo_required_size(&cfg) > 0);
+    cfg.map_inlier_sigmas = 4.0;
+    assert_int_equal(tvo_vo_required_size(&cfg), 0);
+}
+#endif
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -266,6 +342,7 @@ int main(void)
             cmocka_unit_test(test_store_full_counted),
             cmocka_unit_test(test_weak_prior_judged_by_checked_landmarks),
             cmocka_unit_test(test_checked_landmarks_only_after_a_jerk),
+            cmocka_unit_test(test_inlier_gate_follows_the_noise),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

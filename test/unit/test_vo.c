@@ -990,6 +990,12 @@ static void test_affine_refinement(void **state)
     assert_int_equal(tvo_vo_required_size(&cfg), 0);
     assert_int_equal(tvo_vo_init(&vo, &cfg, mem, sizeof(mem)), TVO_ERR_UNSUPPORTED);
     assert_null(vo);
+    /* the map's inlier gate is left out with it */
+    tvo_vo_config_default(&cfg, &cam);
+    cfg.map_inlier_sigmas = 4.0;
+    assert_int_equal(tvo_vo_required_size(&cfg), 0);
+    assert_int_equal(tvo_vo_init(&vo, &cfg, mem, sizeof(mem)), TVO_ERR_UNSUPPORTED);
+    assert_null(vo);
 }
 #endif
 

@@ -340,6 +340,13 @@ typedef struct tvo_vo_config {
                                    preset and in builds without it. 0: the lens stays as configured */
     tvo_clock_fn clock;               /* optional (NULL: no timings) */
     void *clock_user;
+    double map_inlier_sigmas; /* (added) a landmark whose reprojection error in this frame's map pose is
+                                   above this many times the frame's robust reprojection sigma (the
+                                   median of its inliers' errors / 1.1774), at least 0.5 px and at most
+                                   the fixed 2 px gate, is given up by its track as an outlier's is: a
+                                   track that has slid off its point stops holding the landmark.
+                                   [0, 100]; 0: the fixed 2 px gate only; default 0 (docs/design.md,
+                                   "Tracking"; docs/rules.md, "A fifty-ninth rule") */
 } tvo_vo_config;
 
 /* Fill cfg with defaults for `camera` (copied): the balanced preset's tracker and window below (the
