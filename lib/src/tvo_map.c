@@ -911,16 +911,16 @@ static const uint8_t *prior_judges(const tvo_map *m, const tvo_vo_config *cfg, c
     return nj >= cfg->map_min_points ? judge : NULL;
 }
 
-/* Pose this frame on the landmarks the tracks carry. 1 when posed (T written, tr->inlier set, the
- * outliers' landmarks unlinked from their tracks); *depth_med gets the inliers' median depth. */
 #if TVO_WITH_AFFINE
-/* Squared reprojection error of X (world) seen at x by the camera T; 1e60 behind the camera. Not inlined:
- * gate_inliers calls it twice, and -Os code for the Cortex-M budget keeps one copy. */
 #if defined(__GNUC__) || defined(__clang__)
-__attribute__((noinline))
+#define MAP_NOINLINE __attribute__((noinline))
+#else
+#define MAP_NOINLINE
 #endif
-static double
-reproj2(const tvo_pose *T, const double X[3], tvo_point2d x)
+
+/* Squared reprojection error of X (world) seen at x by the camera T; 1e60 behind the camera. Not inlined:
+ * gate_inliers calls it twice, and -Os code keeps one copy. */
+static MAP_NOINLINE double reproj2(const tvo_pose *T, const double X[3], tvo_point2d x)
 {
     double p[3], dx, dy;
     tvo_pose_transform_point(T, X, p);
@@ -963,6 +963,8 @@ static int32_t gate_inliers(const tvo_vo_config *cfg, const tvo_pose *T, const d
 #define gate_inliers(cfg, T, X, x, k, inl, ni, err) (ni)
 #endif
 
+/* Pose this frame on the landmarks the tracks carry. 1 when posed (T written, tr->inlier set, the
+ * outliers' landmarks unlinked from their tracks); *depth_med gets the inliers' median depth. */
 static int track_frame(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, int64_t t_ns,
                        const double *R_cur_prev, int prior_flags, void *scratch, size_t scratch_size,
                        tvo_pose *T, int32_t *n_in, double *depth_med)
