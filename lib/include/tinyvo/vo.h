@@ -346,7 +346,9 @@ typedef struct tvo_vo_config {
                                    the fixed 2 px gate, is given up by its track as an outlier's is: a
                                    track that has slid off its point stops holding the landmark.
                                    [0, 100]; 0: the fixed 2 px gate only; default 0 (docs/design.md,
-                                   "Tracking"; docs/rules.md, "A fifty-ninth rule") */
+                                   "Tracking"; docs/rules.md, "A fifty-ninth rule"). Needs a build with
+                                   the affine refinement (TVO_WITH_AFFINE, options.h): without it only 0
+                                   (tvo_vo_init: TVO_ERR_UNSUPPORTED) */
 } tvo_vo_config;
 
 /* Fill cfg with defaults for `camera` (copied): the balanced preset's tracker and window below (the
