@@ -432,6 +432,25 @@ static void update_speed(tvo_map *m)
 
 /* ---- triangulation ------------------------------------------------------------------------------ */
 
+#if defined(__GNUC__) || defined(__clang__)
+#define MAP_NOINLINE __attribute__((noinline))
+#else
+#define MAP_NOINLINE
+#endif
+
+/* Squared reprojection error of X (world) seen at x by the camera T (normalised units); 1e60 behind the
+ * camera. Not inlined: triangulate and gate_inliers call it in loops, and -Os code keeps one copy. */
+static MAP_NOINLINE double reproj2(const tvo_pose *T, const double X[3], tvo_point2d x)
+{
+    double p[3], dx, dy;
+    tvo_pose_transform_point(T, X, p);
+    if (!(p[2] > 0.0))
+        return 1e60;
+    dx = p[0] / p[2] - x.x;
+    dy = p[1] / p[2] - x.y;
+    return dx * dx + dy * dy;
+}
+
 /* Midpoint triangulation of normalised x1 (camera 1) and x2 (camera 2) into world X; 1 when the rays are
  * at least min_cos apart (cos of the angle below min_cos), the point is in front of both cameras, and it
  * reprojects within max_err (normalised units) in both. */
@@ -473,16 +492,9 @@ static int triangulate(const tvo_pose *T1, const tvo_pose *T2, tvo_point2d x1, t
     {
         const tvo_pose *T[2] = {T1, T2};
         const tvo_point2d *x[2] = {&x1, &x2};
-        for (int v = 0; v < 2; ++v) {
-            double p[3], ex, ey;
-            tvo_pose_transform_point(T[v], X, p);
-            if (!(p[2] > 0.0))
+        for (int v = 0; v < 2; ++v)
+            if (!(reproj2(T[v], X, *x[v]) < max_err * max_err)) /* also behind the camera */
                 return 0;
-            ex = p[0] / p[2] - x[v]->x;
-            ey = p[1] / p[2] - x[v]->y;
-            if (!(ex * ex + ey * ey < max_err * max_err))
-                return 0;
-        }
     }
     return isfinite(X[0]) && isfinite(X[1]) && isfinite(X[2]);
 }
@@ -912,25 +924,6 @@ static const uint8_t *prior_judges(const tvo_map *m, const tvo_vo_config *cfg, c
 }
 
 #if TVO_WITH_AFFINE
-#if defined(__GNUC__) || defined(__clang__)
-#define MAP_NOINLINE __attribute__((noinline))
-#else
-#define MAP_NOINLINE
-#endif
-
-/* Squared reprojection error of X (world) seen at x by the camera T; 1e60 behind the camera. Not inlined:
- * gate_inliers calls it twice, and -Os code keeps one copy. */
-static MAP_NOINLINE double reproj2(const tvo_pose *T, const double X[3], tvo_point2d x)
-{
-    double p[3], dx, dy;
-    tvo_pose_transform_point(T, X, p);
-    if (!(p[2] > 0.0))
-        return 1e60;
-    dx = p[0] / p[2] - x.x;
-    dy = p[1] / p[2] - x.y;
-    return dx * dx + dy * dy;
-}
-
 /* cfg.map_inlier_sigmas: the inliers of the pose T whose reprojection error is above that many times
  * the frame's robust sigma (the median of the inliers' errors over the Rayleigh median), kept between
  * TVO_MAP_GATE_MIN_PX and TVO_MAP_PNP_THRESHOLD_PX, become outliers. err: scratch for k values. Returns

@@ -15,9 +15,10 @@
 #endif
 
 /* 1: the affine track refinement (tvo_vo_config.affine_win_size) and the map's inlier gate
- * (tvo_vo_config.map_inlier_sigmas) are built in; 0: they are left out (7,850 bytes less code on a
- * Cortex-M7), and tvo_vo_init() refuses a configuration that asks for either with TVO_ERR_UNSUPPORTED. CMake: -DTVO_WITH_AFFINE=OFF (the default of Cortex-M builds; this header's
- * default, 1, is for builds without CMake). */
+ * (tvo_vo_config.map_inlier_sigmas) are built in; 0: they are left out (7,754 bytes less code on a
+ * Cortex-M7), and tvo_vo_init() refuses a configuration that asks for either with TVO_ERR_UNSUPPORTED.
+ * CMake: -DTVO_WITH_AFFINE=OFF (the default of Cortex-M builds; this header's default, 1, is for builds
+ * without CMake). */
 #ifndef TVO_WITH_AFFINE
 #define TVO_WITH_AFFINE 1
 #endif
