@@ -2,6 +2,7 @@
 /* tinyvo: windowed bundle adjustment (contract and cost in tinyvo/ba.h). */
 #include "tinyvo/ba.h"
 #include "tinyvo/linalg.h"
+#include "tinyvo/options.h"
 
 #include <math.h>
 #include <string.h>
@@ -186,6 +187,21 @@ static double rot_prior_res(const tvo_ba_problem *p, const tvo_ba_rot_prior *q, 
 
 /* Cost of the current state over the observations marked usable; +inf when one of them fell below
  * min_depth or a value is not finite. O(obs). */
+#if TVO_WITH_AFFINE
+/* 1/2 X^T L X + g^T X + c of a point prior q (tvo_ba_problem.prior); LX gets L X + g, its gradient */
+static double prior_cost(const double *q, const double X[3], double LX[3])
+{
+    LX[0] = q[0] * X[0] + q[1] * X[1] + q[2] * X[2];
+    LX[1] = q[1] * X[0] + q[3] * X[1] + q[4] * X[2];
+    LX[2] = q[2] * X[0] + q[4] * X[1] + q[5] * X[2];
+    const double v = 0.5 * (X[0] * LX[0] + X[1] * LX[1] + X[2] * LX[2]) + q[6] * X[0] + q[7] * X[1] +
+            q[8] * X[2] + q[9];
+    for (int a = 0; a < 3; ++a)
+        LX[a] += q[6 + a];
+    return v;
+}
+#endif
+
 static double eval_cost(const tvo_ba_config *c, const tvo_ba_problem *p, const ba_ws *ws)
 {
     double cost = 0.0, w;
@@ -204,6 +220,13 @@ static double eval_cost(const tvo_ba_config *c, const tvo_ba_problem *p, const b
         double e[3], A[9];
         cost += rot_prior_res(p, &p->rot[q], e, A);
     }
+#if TVO_WITH_AFFINE
+    if (p->prior != NULL)
+        for (int32_t j = 0; j < p->n_points; ++j) {
+            double g[3];
+            cost += prior_cost(p->prior[j], p->X[j], g);
+        }
+#endif
     return isfinite(cost) ? cost : INFINITY;
 }
 
@@ -316,6 +339,17 @@ static double linearise(const tvo_ba_config *c, const tvo_ba_problem *p, ba_ws *
         memset(ws->V[j], 0, sizeof ws->V[j]);
         memset(ws->gx[j], 0, sizeof ws->gx[j]);
         ws->pstate[j] = (p->point_fixed != NULL && p->point_fixed[j]) ? PT_FIXED : PT_FREE;
+#if TVO_WITH_AFFINE
+        if (p->prior != NULL) {
+            /* the prior's quadratic: its matrix is the block's start, its gradient the gradient's */
+            double g[3];
+            cost += prior_cost(p->prior[j], p->X[j], g);
+            if (ws->pstate[j] == PT_FREE) {
+                memcpy(ws->V[j], p->prior[j], sizeof ws->V[j]);
+                memcpy(ws->gx[j], g, sizeof ws->gx[j]);
+            }
+        }
+#endif
     }
     for (int32_t k = 0; k < p->n_obs; ++k) {
         const tvo_ba_obs *o = &p->obs[k];
@@ -643,6 +677,10 @@ static tvo_status check_problem(const tvo_ba_config *cfg, const tvo_ba_problem *
     if (p->T_c_w == NULL || p->pose_fixed == NULL || (p->n_points > 0 && p->X == NULL) ||
         (p->n_obs > 0 && p->obs == NULL))
         return TVO_ERR_NULL;
+#if !TVO_WITH_AFFINE
+    if (p->prior != NULL) /* left out with the affine refinement (options.h) */
+        return TVO_ERR_UNSUPPORTED;
+#endif
     if (p->n_poses < 1 || p->n_points < 0 || p->n_obs < 0)
         return TVO_ERR_ARG;
     if (p->n_poses > cfg->max_poses || p->n_points > cfg->max_points || p->n_obs > cfg->max_obs)
@@ -659,6 +697,12 @@ static tvo_status check_problem(const tvo_ba_config *cfg, const tvo_ba_problem *
     for (int32_t j = 0; j < p->n_points; ++j) {
         if (!(isfinite(p->X[j][0]) && isfinite(p->X[j][1]) && isfinite(p->X[j][2])))
             return TVO_ERR_NOT_FINITE;
+#if TVO_WITH_AFFINE
+        if (p->prior != NULL)
+            for (int a = 0; a < TVO_BA_PRIOR_SIZE; ++a)
+                if (!isfinite(p->prior[j][a]))
+                    return TVO_ERR_NOT_FINITE;
+#endif
         free_vars += p->point_fixed == NULL || !p->point_fixed[j];
     }
     if (free_vars == 0 || p->n_obs == 0)
@@ -811,6 +855,65 @@ tvo_status tvo_ba_solve(const tvo_ba_config *cfg, tvo_ba_problem *p, void *scrat
         *rep = r;
     return TVO_OK;
 }
+
+#if TVO_WITH_AFFINE
+int tvo_ba_point_prior_add(double prior[TVO_BA_PRIOR_SIZE], const tvo_pose *T_c_w, const double X[3],
+                           double x, double y, double huber, double weight)
+{
+    /* the observation linearised as lin_obs does, r ~ r0 + J (X' - X) = J X' + d with d = r0 - J X: its
+       weighted square w |J X' + d|^2 / 2 is 1/2 X'^T (w J^T J) X' + (w J^T d)^T X' + w |d|^2 / 2 */
+    tvo_ba_config c;
+    tvo_ba_obs o;
+    tvo_ba_problem p;
+    obs_lin L;
+    double q[TVO_BA_PRIOR_SIZE];
+    if (prior == NULL || T_c_w == NULL || X == NULL || !(huber > 0.0) || !(weight >= 0.0) ||
+        !isfinite(weight) || !isfinite(huber) || !tvo_pose_is_finite(T_c_w) ||
+        !(isfinite(X[0]) && isfinite(X[1]) && isfinite(X[2])))
+        return 0;
+    tvo_ba_config_default(&c);
+    c.huber = huber;
+    memset(&p, 0, sizeof(p));
+    p.T_c_w = (tvo_pose *)T_c_w;
+    p.X = (double(*)[3])X;
+    o.pose = 0;
+    o.point = 0;
+    o.x = x;
+    o.y = y;
+    if (!lin_obs(&c, &p, &o, &L))
+        return 0;
+    memcpy(q, prior, sizeof(q));
+    for (int i = 0; i < 2; ++i) {
+        const double *J = L.Jx[i], w = weight * (i == 0 ? L.w0 : L.w1);
+        const double d = (i == 0 ? L.r0 : L.r1) - (J[0] * X[0] + J[1] * X[1] + J[2] * X[2]);
+        for (int a = 0; a < 3; ++a) {
+            for (int b = a; b < 3; ++b)
+                q[sym3[a][b]] += w * J[a] * J[b];
+            q[6 + a] += w * J[a] * d;
+        }
+        q[9] += 0.5 * w * d * d;
+    }
+    for (int a = 0; a < TVO_BA_PRIOR_SIZE; ++a)
+        if (!isfinite(q[a]))
+            return 0;
+    memcpy(prior, q, sizeof(q));
+    return 1;
+}
+#else
+/* left out with the affine refinement (options.h): nothing is added */
+int tvo_ba_point_prior_add(double prior[TVO_BA_PRIOR_SIZE], const tvo_pose *T_c_w, const double X[3],
+                           double x, double y, double huber, double weight)
+{
+    (void)prior;
+    (void)T_c_w;
+    (void)X;
+    (void)x;
+    (void)y;
+    (void)huber;
+    (void)weight;
+    return 0;
+}
+#endif
 
 tvo_status tvo_ba_obs_errors(const tvo_ba_problem *p, double *err2)
 {

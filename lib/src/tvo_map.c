@@ -109,6 +109,19 @@ static double focal(const tvo_vo_config *cfg)
 
 /* ---- layout ------------------------------------------------------------------------------------- */
 
+/* The landmarks' priors (cfg.map_lm_prior): in the map, and as the adjustment's copy in its scratch. */
+static size_t prior_size(const tvo_vo_config *cfg)
+{
+#if TVO_WITH_AFFINE
+    if (cfg->map_lm_prior > 0.0)
+        return tvo_arena_round(
+                tvo_size_mul((size_t)cfg->map_max_landmarks, TVO_BA_PRIOR_SIZE * sizeof(double)));
+#else
+    (void)cfg;
+#endif
+    return 0;
+}
+
 size_t tvo_map_layout_size(const tvo_vo_config *cfg)
 {
     const size_t w = (size_t)cfg->map_window, n = (size_t)cfg->max_tracks, l = (size_t)cfg->map_max_landmarks;
@@ -116,7 +129,7 @@ size_t tvo_map_layout_size(const tvo_vo_config *cfg)
     s = tvo_size_add(s, tvo_size_mul(w, tvo_arena_round(tvo_size_mul(n, sizeof(int32_t)))));
     s = tvo_size_add(s, tvo_size_mul(w, tvo_arena_round(tvo_size_mul(n, sizeof(tvo_point2d)))));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(l, sizeof(tvo_map_lm))));
-    return s;
+    return tvo_size_add(s, prior_size(cfg));
 }
 
 /* The per-call scratch of each phase (they never overlap in time). */
@@ -164,6 +177,7 @@ static size_t kf_scratch(const tvo_vo_config *cfg)
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(o, sizeof(tvo_ba_obs))));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(o, sizeof(double))));
     s = tvo_size_add(s, tvo_arena_round(tvo_size_mul(w, sizeof(tvo_ba_rot_prior))));
+    s = tvo_size_add(s, prior_size(cfg));
 #if TVO_WITH_LENS
     if (cfg->lens_refine)
         s = tvo_size_add(s,
@@ -202,6 +216,17 @@ tvo_status tvo_map_init(tvo_map *m, const tvo_vo_config *cfg, tvo_arena *a)
     m->lm = (tvo_map_lm *)tvo_arena_alloc(a, (size_t)m->max_lm * sizeof(tvo_map_lm));
     if (m->lm == NULL)
         return TVO_ERR_NO_MEMORY;
+#if TVO_WITH_AFFINE
+    if (cfg->map_lm_prior > 0.0) {
+        m->prior = (double(*)[TVO_BA_PRIOR_SIZE])tvo_arena_alloc(a,
+                                                                 (size_t)m->max_lm * TVO_BA_PRIOR_SIZE *
+                                                                         sizeof(double));
+        if (m->prior == NULL)
+            return TVO_ERR_NO_MEMORY;
+        m->prior_w = cfg->map_lm_prior;
+        m->prior_huber = cfg->map_ba_huber_px / focal(cfg);
+    }
+#endif
 #if TVO_WITH_AFFINE
     for (int32_t i = 0; i < m->max_lm; ++i)
         m->lm[i].gen = 0;
@@ -329,6 +354,10 @@ static int32_t lm_alloc(tvo_map *m)
             m->lm[j].n_obs = 0;
             m->lm[j].tracked = 0;
 #if TVO_WITH_AFFINE
+            if (m->prior != NULL)
+                memset(m->prior[j], 0, sizeof(m->prior[j]));
+#endif
+#if TVO_WITH_AFFINE
             m->lm[j].gen++;
 #endif
             m->n_lm++;
@@ -370,13 +399,19 @@ static int32_t lm_make(tvo_map *m, tvo_map_tracks *tr, int32_t i, const double X
     return j;
 }
 
-/* Drop the oldest keyframe of the window: its observations go, and landmarks nobody observes or tracks
- * any more are freed. */
+/* Drop the oldest keyframe of the window: its observations go (with cfg.map_lm_prior, into their
+ * landmarks' priors, linearised where the window left the keyframe and the landmark), and landmarks
+ * nobody observes or tracks any more are freed. */
 static void kf_drop_oldest(tvo_map *m)
 {
     tvo_map_kf *k = kf_at(m, 0);
     for (int32_t o = 0; o < k->n_obs; ++o) {
         const int32_t j = k->obs_lm[o];
+#if TVO_WITH_AFFINE
+        if (m->prior != NULL)
+            (void)tvo_ba_point_prior_add(m->prior[j], &k->T_c_w, m->lm[j].X, k->obs_x[o].x, k->obs_x[o].y,
+                                         m->prior_huber, m->prior_w);
+#endif
         m->lm[j].n_obs--;
         if (m->lm[j].n_obs <= 0 && !m->lm[j].tracked)
             lm_free(m, j);
@@ -1227,6 +1262,19 @@ static int ba_build(tvo_map *m, const tvo_vo_config *cfg, void *scratch, size_t 
     b->p.point_fixed = NULL;
     b->p.n_obs = no;
     b->p.obs = b->obs;
+#if TVO_WITH_AFFINE
+    if (m->prior != NULL) {
+        /* cfg.map_lm_prior: the points' priors in the problem's order */
+        double(*pr)[TVO_BA_PRIOR_SIZE] = (double(*)[TVO_BA_PRIOR_SIZE])take(&c,
+                                                                            (size_t)m->max_lm *
+                                                                                    sizeof(m->prior[0]));
+        if (pr == NULL)
+            return 0;
+        for (int32_t q = 0; q < np; ++q)
+            memcpy(pr[q], m->prior[b->pt2lm[q]], sizeof(pr[q]));
+        b->p.prior = (const double(*)[TVO_BA_PRIOR_SIZE])pr;
+    }
+#endif
     b->p.rot = b->rot;
     b->p.n_rot = 0;
     if (cfg->map_ba_rot_prior > 0.0)
@@ -1367,6 +1415,11 @@ void tvo_map_remap(tvo_map *m, const tvo_camera *from, const tvo_camera *to)
         for (int32_t o = 0; o < k->n_obs; ++o)
             (void)tvo_lens_remap(from, to, &k->obs_x[o]);
     }
+#if TVO_WITH_AFFINE
+    /* the priors were linearised in the old lens's coordinates: they go */
+    if (m->prior != NULL)
+        memset(m->prior, 0, (size_t)m->max_lm * sizeof(m->prior[0]));
+#endif
 }
 #endif
 

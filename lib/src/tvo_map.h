@@ -86,6 +86,10 @@ typedef struct tvo_map {
     int32_t n_lm;    /* alive landmarks */
     int32_t next_kf_id;
     int32_t active; /* 1 while the map poses frames */
+    /* cfg.map_lm_prior > 0: each landmark's prior from the observations of the keyframes that left the
+       window (tvo_ba_problem.prior's layout), zero for a new landmark; else NULL */
+    double (*prior)[TVO_BA_PRIOR_SIZE]; /* [max_lm] */
+    double prior_w, prior_huber;        /* cfg.map_lm_prior, the adjustment's Huber width (normalised) */
     tvo_map_frame_pose ring[TVO_MAP_RING];
     int32_t serial; /* serial of the frame being processed (increases by one per frame) */
     /* initialisation: the reference frame (its serial, pose and time); the tracks first seen in it */

@@ -331,10 +331,11 @@ typedef struct range_check {
 } range_check;
 
 /* range_hi's entries, by name */
-enum { HI_1, HI_10, HI_30, HI_90, HI_100, HI_180, HI_DAY_S, HI_1E12, HI_FINITE, HI_GATE };
+enum { HI_1, HI_10, HI_30, HI_90, HI_100, HI_180, HI_DAY_S, HI_1E12, HI_FINITE, HI_GATE, HI_PRIOR };
 static const double range_hi[] = {1.0, 10.0, 30.0, 90.0, 100.0, 180.0, 86400.0, 1e12, DBL_MAX,
-                                  /* the inlier gate is left out with the affine refinement: only 0 there */
-                                  TVO_WITH_AFFINE ? 100.0 : 0.0};
+                                  /* the inlier gate and the landmark priors are left out with the affine
+                                     refinement: only 0 there */
+                                  TVO_WITH_AFFINE ? 100.0 : 0.0, TVO_WITH_AFFINE ? 1.0 : 0.0};
 
 static const range_check ranges[] = {
         {(uint16_t)offsetof(tvo_vo_config, redetect_coverage), HI_1, 0},
@@ -349,6 +350,7 @@ static const range_check ranges[] = {
         {(uint16_t)offsetof(tvo_vo_config, map_init_wait_s), HI_DAY_S, 0},
         {(uint16_t)offsetof(tvo_vo_config, chain_scale_sigmas), HI_100, 0},
         {(uint16_t)offsetof(tvo_vo_config, map_inlier_sigmas), HI_GATE, 0},
+        {(uint16_t)offsetof(tvo_vo_config, map_lm_prior), HI_PRIOR, 0},
         {(uint16_t)offsetof(tvo_vo_config, map_kf_baseline), HI_10, 1},
         {(uint16_t)offsetof(tvo_vo_config, map_kf_points_ratio), HI_1, 0},
         {(uint16_t)offsetof(tvo_vo_config, map_ba_max_turn_deg), HI_180, 1},
@@ -595,7 +597,9 @@ tvo_status tvo_vo_init(tvo_vo **out, const tvo_vo_config *cfg_in, void *mem, siz
         return TVO_ERR_NULL;
     *out = NULL;
     if (!config_valid(cfg_in))
-        return (!TVO_WITH_AFFINE && (cfg_in->affine_win_size != 0 || cfg_in->map_inlier_sigmas > 0.0)) ||
+        return (!TVO_WITH_AFFINE &&
+                (cfg_in->affine_win_size != 0 || cfg_in->map_inlier_sigmas > 0.0 ||
+                 cfg_in->map_lm_prior > 0.0)) ||
                         (!TVO_WITH_LENS && cfg_in->lens_refine == 1)
                 ? TVO_ERR_UNSUPPORTED
                 : TVO_ERR_ARG;

@@ -219,6 +219,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cfg.map_inlier_sigmas = TVO_WITH_AFFINE && (((hdr[4] >> 7) ^ (hdr[6] >> 1)) & 1)
             ? ((hdr[5] >> 6) & 1 ? 1e-9 : 4.0)
             : 0.0;
+    /* the landmarks' priors, full or faint, for half the inputs of a build that has them */
+    cfg.map_lm_prior = TVO_WITH_AFFINE && cfg.map && (((hdr[5] >> 7) ^ (hdr[7] >> 3)) & 1)
+            ? ((hdr[6] >> 7) & 1 ? 1.0 : 1e-12)
+            : 0.0;
     while ((need = tvo_vo_required_size(&cfg)) == 0 && cfg.lk.max_level > 0)
         cfg.lk.max_level--;
     TVO_FUZZ_CHECK(need > 0); /* every size from 16x16 up is valid with one level */

@@ -2,7 +2,7 @@
 /* Windowed bundle adjustment (tvo_ba_solve, tvo_ba_obs_errors): synthetic windows of 6 poses along a
  * path and 200 points; convergence without noise, with 0.5 px noise and with 10 % gross outliers,
  * points at infinity, a singular window, an already optimal state, the documented statuses, duplicated
- * observations, the scratch budget, and the stack used by one solve. Focal length 458 px converts pixels to the normalised units. */
+ * observations, point priors, the scratch budget, and the stack used by one solve. Focal length 458 px converts pixels to the normalised units. */
 #define _POSIX_C_SOURCE 200809L /* pthread_attr_setstack, posix_memalign */
 #include <math.h>
 #include <pthread.h>
@@ -10,6 +10,7 @@
 #include "tvo_test.h"
 #include "tinyvo/ba.h"
 #include "tinyvo/linalg.h"
+#include "tinyvo/options.h"
 #include "tinyvo/se3.h"
 
 #define FOCAL 458.0
@@ -1063,6 +1064,135 @@ static void test_rot_priors(void **state)
     }
 }
 
+#if TVO_WITH_AFFINE
+/* Point priors (tvo_ba_problem.prior, tvo_ba_point_prior_add): a window's optimum (0.5 px noise, 5 %
+ * outliers, so that Huber weights below 1 occur), then the same window with camera 0's observations
+ * replaced by priors linearised at that optimum (camera 0 stays, fixed, without observations), started
+ * from a perturbed state: it returns to the same optimum, since the priors have the observations'
+ * gradient and Gauss-Newton matrix there. Without the priors it ends elsewhere (they carry what camera 0
+ * saw). A prior point behind the camera or a non-finite input leaves the prior unchanged; a non-finite
+ * prior is refused; a huge finite one never gives a non-finite state. */
+static void test_point_priors(void **state)
+{
+    static double prior[NPT_MAX][TVO_BA_PRIOR_SIZE];
+    scene *s = make_scene(120, 0.5, 0.05, 41), *b = (scene *)malloc(sizeof *s),
+          *c = (scene *)malloc(sizeof *s);
+    tvo_ba_config bc;
+    tvo_ba_report rep;
+    double rot, trans, pt, rot_c, trans_c, pt_c;
+    int32_t kept = 0;
+    (void)state;
+    assert_non_null(b);
+    assert_non_null(c);
+    tvo_ba_config_default(&bc);
+    perturb(s, 0.01, 0.05, 0.1, 5);
+    assert_int_equal(solve(s, 100, &rep), TVO_OK);
+    print_rep("  window", &rep);
+    memcpy(b, s, sizeof *b);
+    memcpy(b->T_true, s->T, sizeof b->T_true);
+    memcpy(b->X_true, s->X, sizeof b->X_true);
+    memset(prior, 0, sizeof prior);
+    for (int32_t k = 0; k < s->n_obs; ++k) {
+        const tvo_ba_obs *o = &s->obs[k];
+        if (o->pose == 0)
+            assert_int_equal(tvo_ba_point_prior_add(prior[o->point], &s->T[0], s->X[o->point], o->x, o->y,
+                                                    bc.huber, 1.0),
+                             1);
+        else
+            b->obs[kept++] = *o;
+    }
+    b->n_obs = kept;
+    b->p.n_obs = kept;
+    b->p.obs = b->obs;
+    b->p.T_c_w = b->T;
+    b->p.pose_fixed = b->pose_fixed;
+    b->p.X = b->X;
+    perturb(b, 0.01, 0.05, 0.1, 6);
+    memcpy(c, b, sizeof *c);
+    c->p.obs = c->obs;
+    c->p.T_c_w = c->T;
+    c->p.pose_fixed = c->pose_fixed;
+    c->p.X = c->X;
+    b->p.prior = (const double(*)[TVO_BA_PRIOR_SIZE])prior;
+    assert_int_equal(solve(b, 100, &rep), TVO_OK);
+    print_rep("  with priors", &rep);
+    assert_int_equal(solve(c, 100, &rep), TVO_OK);
+    pose_errors(b, &rot, &trans);
+    pt = point_error(b);
+    pose_errors(c, &rot_c, &trans_c);
+    pt_c = point_error(c);
+    fprintf(stderr,
+            "  with priors: %.3g rad %.3g m, points %.3g m; without: %.3g rad %.3g m, points %.3g m\n", rot,
+            trans, pt, rot_c, trans_c, pt_c);
+    {
+        /* the solver's own spread: the full window solved again from another start */
+        scene *a = (scene *)malloc(sizeof *a);
+        double rot_a, trans_a, pt_a;
+        assert_non_null(a);
+        memcpy(a, b, sizeof *a);
+        memcpy(a->obs, s->obs, sizeof a->obs);
+        a->n_obs = s->n_obs;
+        a->p = s->p;
+        a->p.obs = a->obs;
+        a->p.n_obs = s->n_obs;
+        a->p.T_c_w = a->T;
+        a->p.pose_fixed = a->pose_fixed;
+        a->p.X = a->X;
+        memcpy(a->T, s->T, sizeof a->T);
+        memcpy(a->X, s->X, sizeof a->X);
+        perturb(a, 0.01, 0.05, 0.1, 6);
+        assert_int_equal(solve(a, 100, &rep), TVO_OK);
+        pose_errors(a, &rot_a, &trans_a);
+        pt_a = point_error(a);
+        fprintf(stderr, "  the full window again: %.3g rad %.3g m, points %.3g m\n", rot_a, trans_a, pt_a);
+        free(a);
+        assert_true(rot <= 10.0 * rot_a && trans <= 10.0 * trans_a && pt <= 10.0 * pt_a);
+    }
+    assert_true(100.0 * rot < rot_c && 100.0 * trans < trans_c && 100.0 * pt < pt_c);
+    {
+        /* a point behind the camera, a non-finite observation or weight: nothing added */
+        double q[TVO_BA_PRIOR_SIZE] = {0}, q0[TVO_BA_PRIOR_SIZE] = {0};
+        const double behind[3] = {0.0, 0.0, -5.0};
+        assert_int_equal(tvo_ba_point_prior_add(q, &s->T[0], behind, 0.0, 0.0, bc.huber, 1.0), 0);
+        assert_int_equal(tvo_ba_point_prior_add(q, &s->T[0], s->X[0], NAN, 0.0, bc.huber, 1.0), 0);
+        assert_int_equal(tvo_ba_point_prior_add(q, &s->T[0], s->X[0], 0.0, 0.0, bc.huber, INFINITY), 0);
+        assert_int_equal(tvo_ba_point_prior_add(q, &s->T[0], s->X[0], 0.0, 0.0, 0.0, 1.0), 0);
+        assert_memory_equal(q, q0, sizeof q);
+        /* a non-finite prior is refused, a huge finite one leaves a finite state */
+        prior[3][9] = NAN;
+        assert_int_equal(solve(b, 5, &rep), TVO_ERR_NOT_FINITE);
+        for (int a = 0; a < TVO_BA_PRIOR_SIZE; ++a)
+            prior[3][a] = a == 1 || a == 2 || a == 4 ? -1e300 : 1e300;
+        assert_int_equal(solve(b, 5, &rep), TVO_OK);
+        for (int i = 0; i < NPOSE; ++i)
+            assert_true(tvo_pose_is_finite(&b->T[i]));
+        for (int32_t j = 0; j < b->n_pt; ++j)
+            assert_true(isfinite(b->X[j][0]) && isfinite(b->X[j][1]) && isfinite(b->X[j][2]));
+    }
+    free(s);
+    free(b);
+    free(c);
+}
+#else
+/* A build without the affine refinement (options.h) leaves the point priors out: a problem with priors is
+ * refused, and tvo_ba_point_prior_add adds nothing. */
+static void test_point_priors(void **state)
+{
+    static double prior[NPT_MAX][TVO_BA_PRIOR_SIZE];
+    scene *s = make_scene(50, 0.5, 0.0, 41);
+    tvo_ba_config bc;
+    tvo_ba_report rep;
+    (void)state;
+    tvo_ba_config_default(&bc);
+    assert_int_equal(tvo_ba_point_prior_add(prior[0], &s->T[0], s->X[0], s->obs[0].x, s->obs[0].y, bc.huber,
+                                            1.0),
+                     0);
+    s->p.prior = (const double(*)[TVO_BA_PRIOR_SIZE])prior;
+    assert_int_equal(solve(s, 5, &rep), TVO_ERR_UNSUPPORTED);
+    free(s);
+}
+#endif
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1081,6 +1211,7 @@ int main(void)
             cmocka_unit_test(test_duplicated_observations),
             cmocka_unit_test(test_scratch_budget),
             cmocka_unit_test(test_rot_priors),
+            cmocka_unit_test(test_point_priors),
             cmocka_unit_test(test_stack),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -703,6 +703,11 @@ static void test_map_config(void **state)
 #if TVO_WITH_AFFINE
     REFUSED(map_inlier_sigmas, 100.5);
 #endif
+    REFUSED(map_lm_prior, -0.1);
+    REFUSED(map_lm_prior, NAN);
+#if TVO_WITH_AFFINE
+    REFUSED(map_lm_prior, 1.5);
+#endif
     REFUSED(map_tri_parallax_deg, 31.0);
     REFUSED(map_kf_baseline, 0.0);
     REFUSED(map_kf_baseline, INFINITY);

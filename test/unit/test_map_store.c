@@ -320,6 +320,46 @@ static void test_inlier_gate_follows_the_noise(void **state)
     assert_true(fixed > 0.8);
     assert_true(gated < 0.1);
 }
+
+/* cfg.map_lm_prior along the road (0.1 px of track noise, 8 keyframes, 4 fixed): the keyframes that leave
+ * the window leave priors on the landmarks that live on. After every frame each alive landmark's prior is
+ * finite with a positive semidefinite diagonal; at the end more than a quarter of the alive landmarks carry
+ * one (a long-lived track's landmark was seen by keyframes that have left), and the map was never lost. */
+static void test_landmark_priors_taken(void **state)
+{
+    road_map rm;
+    const tvo_map *m = &rm.m;
+    int32_t with = 0, alive = 0;
+    (void)state;
+    road_config(&rm.cfg);
+    rm.cfg.map_max_landmarks = 2 * rm.cfg.max_tracks;
+    rm.cfg.map_window = 8;
+    rm.cfg.map_ba_fixed = 4;
+    rm.cfg.map_lm_prior = 1.0;
+    road_map_open(&rm, 0.1, 0.0, 4242u);
+    assert_non_null(m->prior);
+    for (int k = 0; k < FRAMES; ++k) {
+        (void)road_map_frame(&rm, k);
+        for (int32_t j = 0; j < m->max_lm; ++j) {
+            if (!m->lm[j].alive)
+                continue;
+            for (int a = 0; a < TVO_BA_PRIOR_SIZE; ++a)
+                assert_true(isfinite(m->prior[j][a]));
+            assert_true(m->prior[j][0] >= 0.0 && m->prior[j][3] >= 0.0 && m->prior[j][5] >= 0.0);
+        }
+    }
+    for (int32_t j = 0; j < m->max_lm; ++j)
+        if (m->lm[j].alive) {
+            ++alive;
+            with += m->prior[j][0] + m->prior[j][3] + m->prior[j][5] > 0.0;
+        }
+    if (getenv("TVO_MAP_TEST_VERBOSE"))
+        fprintf(stderr, "  map_lm_prior 1: %d of %d alive landmarks carry a prior; %d losses\n", (int)with,
+                (int)alive, (int)m->losses);
+    assert_int_equal(m->losses, 0);
+    assert_true(alive > 0 && 4 * with > alive);
+    road_map_close(&rm);
+}
 #else
 /* A build without the affine refinement leaves the gate out, and refuses a configuration that asks for it
  * (tvo_vo_init: TVO_ERR_UNSUPPORTED, test_vo). */
@@ -330,6 +370,16 @@ static void test_inlier_gate_follows_the_noise(void **state)
     road_config(&cfg);
     assert_true(tvo_vo_required_size(&cfg) > 0);
     cfg.map_inlier_sigmas = 4.0;
+    assert_int_equal(tvo_vo_required_size(&cfg), 0);
+}
+
+/* ... and the landmarks' priors (cfg.map_lm_prior) */
+static void test_landmark_priors_taken(void **state)
+{
+    tvo_vo_config cfg;
+    (void)state;
+    road_config(&cfg);
+    cfg.map_lm_prior = 1.0;
     assert_int_equal(tvo_vo_required_size(&cfg), 0);
 }
 #endif
@@ -343,6 +393,7 @@ int main(void)
             cmocka_unit_test(test_weak_prior_judged_by_checked_landmarks),
             cmocka_unit_test(test_checked_landmarks_only_after_a_jerk),
             cmocka_unit_test(test_inlier_gate_follows_the_noise),
+            cmocka_unit_test(test_landmark_priors_taken),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -996,6 +996,12 @@ static void test_affine_refinement(void **state)
     assert_int_equal(tvo_vo_required_size(&cfg), 0);
     assert_int_equal(tvo_vo_init(&vo, &cfg, mem, sizeof(mem)), TVO_ERR_UNSUPPORTED);
     assert_null(vo);
+    /* and so are the landmarks' priors */
+    tvo_vo_config_default(&cfg, &cam);
+    cfg.map_lm_prior = 1.0;
+    assert_int_equal(tvo_vo_required_size(&cfg), 0);
+    assert_int_equal(tvo_vo_init(&vo, &cfg, mem, sizeof(mem)), TVO_ERR_UNSUPPORTED);
+    assert_null(vo);
 }
 #endif
 

@@ -98,6 +98,9 @@ extern "C" {
  * non-finite observation or projection). */
 #define TVO_BA_ERR_INVALID 1e30
 
+/* Doubles per point of tvo_ba_problem.prior. */
+#define TVO_BA_PRIOR_SIZE 10
+
 typedef struct tvo_ba_obs {
     int32_t pose, point; /* indices into the problem's poses and points */
     double x, y;         /* normalised image coordinates x = X_c / Z_c, y = Y_c / Z_c */
@@ -143,6 +146,12 @@ typedef struct tvo_ba_problem {
                                   except for rounding) */
     int32_t n_rot;              /* 0..n_poses: relative-rotation priors (0: none, as before) */
     const tvo_ba_rot_prior *rot; /* [n_rot] */
+    /* (added) a quadratic prior on each point (NULL: none, as before; zero the struct before filling
+       it): cost 1/2 X^T L X + g^T X + c added for point j, prior[j] = {L00 L01 L02 L11 L12 L22, g0 g1 g2,
+       c} with L symmetric positive semidefinite: observations linearised at a pose no longer in the
+       problem (tvo_ba_point_prior_add), or any Gaussian belief about the point. It adds to the point's
+       3x3 block; a point still needs 2 usable observations to be optimised */
+    const double (*prior)[TVO_BA_PRIOR_SIZE];
 } tvo_ba_problem;
 
 enum {
@@ -165,6 +174,15 @@ typedef struct tvo_ba_report {
                                 x, y or Z_c < min_depth) */
     int32_t poses_free;     /* (added) free poses that were optimised at the last linearisation */
 } tvo_ba_report;
+
+/* Adds to prior (TVO_BA_PRIOR_SIZE doubles, see tvo_ba_problem.prior) the observation (x, y) of the point
+ * X by a camera held at T_c_w, linearised at X: the reprojection error's Gauss-Newton quadratic in the
+ * point, with the Huber weight (width huber, normalised units) of the error at X times weight. What an
+ * observation in a keyframe that leaves a window would have added to the point's cost had the keyframe
+ * stayed, fixed. Returns 0 (prior unchanged) when the point is not in front of the camera (Z_c below
+ * 1e-3 world units) or an input is not finite, else 1. */
+TVO_API int tvo_ba_point_prior_add(double prior[TVO_BA_PRIOR_SIZE], const tvo_pose *T_c_w, const double X[3],
+                                   double x, double y, double huber, double weight);
 
 /* Bytes of scratch tvo_ba_solve() needs for problems within cfg's capacities; 0 for an invalid (or
  * NULL) config. 5 B per max_obs + 129 B per max_points + 832 B per max_poses + (6 max_poses)^2 doubles
