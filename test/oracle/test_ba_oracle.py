@@ -57,7 +57,8 @@ class Problem(ctypes.Structure):
                 ("pose_fixed", ctypes.POINTER(ctypes.c_uint8)), ("n_points", ctypes.c_int32),
                 ("X", ctypes.c_void_p), ("point_fixed", ctypes.POINTER(ctypes.c_uint8)),
                 ("n_obs", ctypes.c_int32), ("obs", ctypes.POINTER(Obs)),
-                ("n_rot", ctypes.c_int32), ("rot", ctypes.c_void_p)]  # no rotation priors (left 0 / NULL)
+                ("n_rot", ctypes.c_int32), ("rot", ctypes.c_void_p),  # no rotation priors (left 0 / NULL)
+                ("prior", ctypes.c_void_p)]  # no point priors (NULL)
 
 
 class Report(ctypes.Structure):
