@@ -408,7 +408,7 @@ static void kf_drop_oldest(tvo_map *m)
     for (int32_t o = 0; o < k->n_obs; ++o) {
         const int32_t j = k->obs_lm[o];
 #if TVO_WITH_AFFINE
-        if (m->prior != NULL)
+        if (m->prior != NULL && k->adjusted)
             (void)tvo_ba_point_prior_add(m->prior[j], &k->T_c_w, m->lm[j].X, k->obs_x[o].x, k->obs_x[o].y,
                                          m->prior_huber, m->prior_w);
 #endif
@@ -437,6 +437,7 @@ static tvo_map_kf *kf_push(tvo_map *m, const tvo_pose *T_c_w, int64_t t_ns)
     k->T_c_w = *T_c_w;
     k->n_obs = 0;
     k->has_R_prev = 0;
+    k->adjusted = 0;
     return k;
 }
 
@@ -1387,8 +1388,12 @@ static void bundle_adjust(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *
             return;
         }
     }
-    for (int32_t i = 0; i < b.p.n_poses; ++i)
+    for (int32_t i = 0; i < b.p.n_poses; ++i) {
         kf_at(m, i)->T_c_w = b.poses[i];
+#if TVO_WITH_AFFINE
+        kf_at(m, i)->adjusted |= !b.fixed[i];
+#endif
+    }
     for (int32_t q = 0; q < b.p.n_points; ++q)
         memcpy(m->lm[b.pt2lm[q]].X, b.X[q], sizeof(b.X[q]));
 #if TVO_WITH_LENS

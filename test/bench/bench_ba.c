@@ -153,6 +153,7 @@ int main(int argc, char **argv)
     p.obs = obs;
     p.n_rot = 0; /* no rotation priors */
     p.rot = NULL;
+    p.prior = NULL; /* no point priors */
     for (int c = 0; c < calls; ++c) {
         double t0;
         tvo_status st;

@@ -498,6 +498,7 @@ static void test_rejected_step_restores(void **state)
     p.obs = obs;
     p.n_rot = 0;
     p.rot = NULL;
+    p.prior = NULL;
     tvo_ba_config_default(&cfg);
     cfg.max_iterations = 1;
     cfg.max_poses = 2;
@@ -640,6 +641,7 @@ static void test_hostile_inputs_finite(void **state)
         p.obs = obs;
         p.n_rot = 0;
         p.rot = NULL;
+        p.prior = NULL;
         st = tvo_ba_solve(&cfg, &p, mem, size, &rep);
         assert_true(st == TVO_OK || st == TVO_ERR_TOO_FEW);
         if (st == TVO_OK) {

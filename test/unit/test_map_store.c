@@ -322,14 +322,15 @@ static void test_inlier_gate_follows_the_noise(void **state)
 }
 
 /* cfg.map_lm_prior along the road (0.1 px of track noise, 8 keyframes, 4 fixed): the keyframes that leave
- * the window leave priors on the landmarks that live on. After every frame each alive landmark's prior is
+ * the window leave priors on the landmarks that live on, if an adjustment had them free (the map's first
+ * two keyframes never are: they hold the gauge). After every frame each alive landmark's prior is
  * finite with a positive semidefinite diagonal; at the end more than a quarter of the alive landmarks carry
  * one (a long-lived track's landmark was seen by keyframes that have left), and the map was never lost. */
 static void test_landmark_priors_taken(void **state)
 {
     road_map rm;
     const tvo_map *m = &rm.m;
-    int32_t with = 0, alive = 0;
+    int32_t with = 0, alive = 0, adjusted = 0;
     (void)state;
     road_config(&rm.cfg);
     rm.cfg.map_max_landmarks = 2 * rm.cfg.max_tracks;
@@ -340,6 +341,13 @@ static void test_landmark_priors_taken(void **state)
     assert_non_null(m->prior);
     for (int k = 0; k < FRAMES; ++k) {
         (void)road_map_frame(&rm, k);
+        for (int32_t i = 0; i < m->n_kf; ++i) {
+            /* the map's first two keyframes hold its gauge: never free, they leave no priors */
+            const tvo_map_kf *kf = &m->kf[(m->kf_head + i) % m->window];
+            if (kf->id < 2)
+                assert_int_equal(kf->adjusted, 0);
+            adjusted += kf->adjusted;
+        }
         for (int32_t j = 0; j < m->max_lm; ++j) {
             if (!m->lm[j].alive)
                 continue;
@@ -357,6 +365,7 @@ static void test_landmark_priors_taken(void **state)
         fprintf(stderr, "  map_lm_prior 1: %d of %d alive landmarks carry a prior; %d losses\n", (int)with,
                 (int)alive, (int)m->losses);
     assert_int_equal(m->losses, 0);
+    assert_true(adjusted > 0);
     assert_true(alive > 0 && 4 * with > alive);
     road_map_close(&rm);
 }

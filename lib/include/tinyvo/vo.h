@@ -350,16 +350,18 @@ typedef struct tvo_vo_config {
                                    the affine refinement (TVO_WITH_AFFINE, options.h): without it only 0
                                    (tvo_vo_init: TVO_ERR_UNSUPPORTED) */
     double map_lm_prior;      /* (added) a keyframe that leaves the window leaves its observations of the
-                                   landmarks that live on as priors on them, at this weight: each
-                                   observation's reprojection error linearised at the landmark (Huber
-                                   weighted, the keyframe held where the window last had it), added to
-                                   the landmark's cost in every later bundle adjustment. A landmark seen
-                                   for long keeps what its old keyframes said, which holds the scale over
-                                   long runs. [0, 1]; 0: off (a landmark only knows the window's
-                                   keyframes); default 0 (docs/design.md, "Windowed bundle adjustment").
-                                   Memory: 80 bytes a landmark (map_max_landmarks) and as much scratch.
-                                   Needs a build with the affine refinement (TVO_WITH_AFFINE, options.h):
-                                   without it only 0 (tvo_vo_init: TVO_ERR_UNSUPPORTED) */
+                                   landmarks that live on as priors on them, at this weight (a keyframe
+                                   that an adjustment had free: not the map's first two, which hold its
+                                   gauge): each observation's reprojection error linearised at the
+                                   landmark (Huber weighted, the keyframe held where the window last had
+                                   it), added to the landmark's cost in every later bundle adjustment. A
+                                   landmark seen for long keeps what its old keyframes said, which holds
+                                   the scale over long runs; best with map_ba_fixed 2 (docs/camera.md).
+                                   [0, 1]; 0: off (a landmark only knows the window's keyframes);
+                                   default 0 (docs/design.md, "Windowed bundle adjustment"). Memory: 80
+                                   bytes a landmark (map_max_landmarks) and as much scratch. Needs a
+                                   build with the affine refinement (TVO_WITH_AFFINE, options.h): without
+                                   it only 0 (tvo_vo_init: TVO_ERR_UNSUPPORTED) */
 } tvo_vo_config;
 
 /* Fill cfg with defaults for `camera` (copied): the balanced preset's tracker and window below (the
