@@ -32,10 +32,10 @@
 
 /* A keyframe of the window: its pose and the landmark observations made in it. */
 typedef struct tvo_map_kf {
-    int32_t id; /* increasing keyframe id (never reused) */
+    int32_t id;       /* increasing keyframe id (never reused) */
+    int32_t adjusted; /* 1 once an adjustment that was taken had it free (cfg.map_lm_prior only) */
     int64_t t_ns;
     tvo_pose T_c_w;     /* world -> camera */
-    int32_t adjusted;   /* 1 once an adjustment that was taken had it free (cfg.map_lm_prior only) */
     int32_t has_R_prev; /* 1: R_prev holds the two-view rotations chained since the previous keyframe */
     double R_prev[9];   /* X_this = R_prev X_previous keyframe */
     int32_t n_obs;
