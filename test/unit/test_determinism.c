@@ -21,6 +21,8 @@
  *              landmarks of the ended tracks found again by their templates (the default's rescue)
  *   lens       the lens refinement's block of a noisy window (test/common/tvo_lens_scene.h) and the
  *              adoption test on it (builds with TVO_WITH_LENS)
+ *   ba_prior   the bundle adjustment of that window with one camera's observations as point priors
+ *              (tvo_ba_point_prior_add; cfg.map_lm_prior's path, builds with TVO_WITH_AFFINE)
  *
  * The stages upstream of a change keep their digests: a relative-pose change moves `relpose` and `vo`,
  * a VO change only `vo`, a tracker change `tracks`, `relpose` and `vo`. When an intended change moves a
@@ -58,6 +60,7 @@
 #define EXPECT_REFIND 0x52168ec1eae3de0eULL
 #endif
 #define EXPECT_LENS 0xbe0451d01a103c0eULL
+#define EXPECT_BA_PRIOR 0x82ddecdb2ce7654aULL
 /* ==== end of EXPECTED DIGESTS ==== */
 
 #define W 320
@@ -682,12 +685,76 @@ static void test_lens(void **state)
 #endif
 }
 
+/* The bundle adjustment with point priors (cfg.map_lm_prior's path; builds with the affine refinement):
+ * the lens stage's noisy window with the lens as calibrated, camera 0's observations turned into priors on
+ * their points (tvo_ba_point_prior_add, at the points' true positions) and left out, the free poses and
+ * every point moved, then adjusted. The digest covers the status, the report and the adjusted state. */
+static void test_ba_prior(void **state)
+{
+#if TVO_WITH_AFFINE
+    static tvo_lens_scene sc;
+    static double prior[TVO_LS_POINTS][TVO_BA_PRIOR_SIZE];
+    const tvo_camera cam = tvo_ls_camera(0.0, 0.0);
+    tvo_ba_config bc;
+    tvo_ba_report rep;
+    tvo_status st;
+    int32_t kept = 0, added = 0;
+    size_t sz;
+    void *mem;
+    digest d;
+    (void)state;
+    assert_int_equal(tvo_ls_make(&sc, &cam, &cam, 0.3), 1);
+    tvo_ba_config_default(&bc);
+    bc.max_poses = TVO_LS_POSES;
+    bc.max_points = TVO_LS_POINTS;
+    bc.max_obs = TVO_LS_POSES * TVO_LS_POINTS;
+    memset(prior, 0, sizeof(prior));
+    for (int32_t k = 0; k < sc.p.n_obs; ++k) {
+        const tvo_ba_obs o = sc.obs[k];
+        if (o.pose == 0)
+            added += tvo_ba_point_prior_add(prior[o.point], &sc.T[0], sc.X[o.point], o.x, o.y, bc.huber, 1.0);
+        else
+            sc.obs[kept++] = o;
+    }
+    sc.p.n_obs = kept;
+    sc.p.prior = (const double(*)[TVO_BA_PRIOR_SIZE])prior;
+    for (int i = 2; i < TVO_LS_POSES; ++i)
+        sc.T[i].t[0] += 0.01 * i;
+    for (int j = 0; j < TVO_LS_POINTS; ++j)
+        sc.X[j][2] *= 1.0 + 0.02 * (double)(j % 5 - 2);
+    sz = tvo_ba_scratch_size(&bc);
+    mem = malloc(sz);
+    assert_non_null(mem);
+    st = tvo_ba_solve(&bc, &sc.p, mem, sz, &rep);
+    free(mem);
+    dg_init(&d);
+    dg_i32(&d, added);
+    dg_i32(&d, (int32_t)st);
+    dg_i32(&d, rep.iterations);
+    dg_i32(&d, rep.flags);
+    dg_f64(&d, rep.cost_final);
+    for (int i = 0; i < TVO_LS_POSES; ++i)
+        dg_pose(&d, &sc.T[i]);
+    for (int j = 0; j < TVO_LS_POINTS; ++j)
+        for (int a = 0; a < 3; ++a)
+            dg_f64(&d, sc.X[j][a]);
+    fprintf(stderr, "determinism, ba_prior: %d priors, status %d, %d iterations, cost %.6g\n", (int)added,
+            (int)st, (int)rep.iterations, rep.cost_final);
+    assert_true(added > 100 && st == TVO_OK);
+    assert_true(check_digest("ba_prior", "EXPECT_BA_PRIOR", d.h, EXPECT_BA_PRIOR));
+#else
+    (void)state;
+    skip();
+#endif
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
             cmocka_unit_test(test_input),     cmocka_unit_test(test_corners),   cmocka_unit_test(test_tracks),
             cmocka_unit_test(test_undistort), cmocka_unit_test(test_relpose),   cmocka_unit_test(test_nn),
             cmocka_unit_test(test_vo),        cmocka_unit_test(test_vo_refind), cmocka_unit_test(test_lens),
+            cmocka_unit_test(test_ba_prior),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }
