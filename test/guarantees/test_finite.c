@@ -46,6 +46,7 @@ static int runner_open(runner *r, int32_t w, int32_t h)
     if (k & 4)   /* every other quadruple with the map's predicted tracks, half of those with the retry */
         tvo_g_predicted_tracks(&cfg, (k >> 3) & 1);
     cfg.lens_refine = TVO_WITH_LENS && (k & 16) == 0; /* and the lens refined on the run, 16 in 32 */
+    cfg.map_lm_prior = TVO_WITH_AFFINE && k % 3 == 1 ? 1.0 : 0.0; /* and the landmarks' priors, 1 in 3 */
     while (cfg.lk.max_level >= 0 && (need = tvo_vo_required_size(&cfg)) == 0)
         cfg.lk.max_level--;
     if (need == 0)

@@ -113,6 +113,7 @@ static void vo_open(vo_box *b, const tvo_camera *cam)
     cfg.affine_win_size = TVO_WITH_AFFINE ? 21 : 0;
     tvo_g_predicted_tracks(&cfg, 1); /* and the map's predicted tracks (the balanced preset's LK) */
     cfg.lens_refine = TVO_WITH_LENS; /* and the lens refined on the run (its blocks at keyframes) */
+    cfg.map_lm_prior = TVO_WITH_AFFINE ? 1.0 : 0.0; /* and the landmarks' priors (at keyframes) */
     need = tvo_vo_required_size(&cfg);
     assert_true(need > 0);
     b->mem = malloc(need);

@@ -35,6 +35,7 @@ static void run(const tvo_camera *cam, const uint8_t *frames, const int64_t *t, 
     /* its templates live in the block too: garbage there must not matter */
     cfg.affine_win_size = TVO_WITH_AFFINE ? 21 : 0;
     tvo_g_predicted_tracks(&cfg, 0); /* and the map's predicted tracks (the balanced preset's LK) */
+    cfg.map_lm_prior = TVO_WITH_AFFINE ? 1.0 : 0.0; /* and the landmarks' priors: garbage there too */
     need = tvo_vo_required_size(&cfg);
     assert_true(need > 0);
     block = malloc(need + 64);

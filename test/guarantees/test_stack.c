@@ -49,6 +49,7 @@ static size_t config_for(const tvo_camera *cam, tvo_vo_config *cfg)
     cfg->affine_win_size = TVO_WITH_AFFINE ? 21 : 0;
     tvo_g_predicted_tracks(cfg, 1);   /* and the map's predicted tracks (the balanced preset's LK) */
     cfg->lens_refine = TVO_WITH_LENS; /* and the lens refined on the run (its blocks at keyframes) */
+    cfg->map_lm_prior = TVO_WITH_AFFINE ? 1.0 : 0.0; /* and the landmarks' priors (at keyframes) */
     while (cfg->lk.max_level >= 0 && (need = tvo_vo_required_size(cfg)) == 0)
         cfg->lk.max_level--;
     return need;
