@@ -38,8 +38,8 @@
 #include "tvo_room.h"
 #if TVO_WITH_LENS
 #include "tvo_lens.h"
-#include "tvo_lens_scene.h"
 #endif
+#include "tvo_lens_scene.h" /* the lens stage's window, and the ba_prior stage's */
 
 /* ==== EXPECTED DIGESTS: the one block to update when an intended algorithm change moves a digest ==== */
 #define EXPECT_INPUT 0x6d857fe5cc926e22ULL
