@@ -185,8 +185,6 @@ static double rot_prior_res(const tvo_ba_problem *p, const tvo_ba_rot_prior *q, 
     return 0.5 * q->weight * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
 }
 
-/* Cost of the current state over the observations marked usable; +inf when one of them fell below
- * min_depth or a value is not finite. O(obs). */
 #if TVO_WITH_AFFINE
 /* 1/2 X^T L X + g^T X + c of a point prior q (tvo_ba_problem.prior); LX gets L X + g, its gradient */
 static double prior_cost(const double *q, const double X[3], double LX[3])
@@ -202,6 +200,8 @@ static double prior_cost(const double *q, const double X[3], double LX[3])
 }
 #endif
 
+/* Cost of the current state over the observations marked usable; +inf when one of them fell below
+ * min_depth or a value is not finite. O(obs). */
 static double eval_cost(const tvo_ba_config *c, const tvo_ba_problem *p, const ba_ws *ws)
 {
     double cost = 0.0, w;

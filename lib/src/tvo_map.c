@@ -226,8 +226,6 @@ tvo_status tvo_map_init(tvo_map *m, const tvo_vo_config *cfg, tvo_arena *a)
         m->prior_w = cfg->map_lm_prior;
         m->prior_huber = cfg->map_ba_huber_px / focal(cfg);
     }
-#endif
-#if TVO_WITH_AFFINE
     for (int32_t i = 0; i < m->max_lm; ++i)
         m->lm[i].gen = 0;
 #endif
@@ -356,8 +354,6 @@ static int32_t lm_alloc(tvo_map *m)
 #if TVO_WITH_AFFINE
             if (m->prior != NULL)
                 memset(m->prior[j], 0, sizeof(m->prior[j]));
-#endif
-#if TVO_WITH_AFFINE
             m->lm[j].gen++;
 #endif
             m->n_lm++;
@@ -1266,9 +1262,8 @@ static int ba_build(tvo_map *m, const tvo_vo_config *cfg, void *scratch, size_t 
 #if TVO_WITH_AFFINE
     if (m->prior != NULL) {
         /* cfg.map_lm_prior: the points' priors in the problem's order */
-        double(*pr)[TVO_BA_PRIOR_SIZE] = (double(*)[TVO_BA_PRIOR_SIZE])take(&c,
-                                                                            (size_t)m->max_lm *
-                                                                                    sizeof(m->prior[0]));
+        const size_t bytes = (size_t)m->max_lm * sizeof(m->prior[0]);
+        double(*pr)[TVO_BA_PRIOR_SIZE] = (double(*)[TVO_BA_PRIOR_SIZE])take(&c, bytes);
         if (pr == NULL)
             return 0;
         for (int32_t q = 0; q < np; ++q)
