@@ -71,6 +71,7 @@ static const setting settings[] = {
         S_D(map_init_wait_s),
         S_D(map_inlier_sigmas),
         S_D(map_lm_prior),
+        S_D(map_lm_prior_gate),
         S_D(chain_scale_sigmas),
         S_D(map_tri_parallax_deg),
         S_D(map_kf_baseline),

@@ -34,6 +34,10 @@
 #define TVO_MAP_PNP_THRESHOLD_PX 2.0
 /* With cfg.map_inlier_sigmas, the gate on the inliers' reprojection errors never goes below this (px). */
 #define TVO_MAP_GATE_MIN_PX 0.5
+/* With cfg.map_lm_prior_gate, the gate on a landmark's prior never goes below this (px), and it needs the
+ * priors of at least TVO_MAP_PRIOR_GATE_MIN_N of the leaving keyframe's landmarks for its median. */
+#define TVO_MAP_PRIOR_GATE_MIN_PX 0.1
+#define TVO_MAP_PRIOR_GATE_MIN_N 8
 /* The median of the norm of a 2D Gaussian error of sigma 1 per axis (Rayleigh: sqrt(2 ln 2)). */
 #define TVO_MAP_RAYLEIGH_MEDIAN 1.1774
 /* The initial pair needs max(TVO_MAP_INIT_MIN_POINTS, cfg.max_tracks / TVO_MAP_INIT_TRACKS_DIV)
@@ -115,7 +119,7 @@ static size_t prior_size(const tvo_vo_config *cfg)
 #if TVO_WITH_AFFINE
     if (cfg->map_lm_prior > 0.0)
         return tvo_arena_round(
-                tvo_size_mul((size_t)cfg->map_max_landmarks, TVO_BA_PRIOR_SIZE * sizeof(double)));
+                tvo_size_mul((size_t)cfg->map_max_landmarks, TVO_MAP_PRIOR_SIZE * sizeof(double)));
 #else
     (void)cfg;
 #endif
@@ -218,9 +222,9 @@ tvo_status tvo_map_init(tvo_map *m, const tvo_vo_config *cfg, tvo_arena *a)
         return TVO_ERR_NO_MEMORY;
 #if TVO_WITH_AFFINE
     if (cfg->map_lm_prior > 0.0) {
-        m->prior = (double(*)[TVO_BA_PRIOR_SIZE])tvo_arena_alloc(a,
-                                                                 (size_t)m->max_lm * TVO_BA_PRIOR_SIZE *
-                                                                         sizeof(double));
+        m->prior = (double(*)[TVO_MAP_PRIOR_SIZE])tvo_arena_alloc(a,
+                                                                  (size_t)m->max_lm * TVO_MAP_PRIOR_SIZE *
+                                                                          sizeof(double));
         if (m->prior == NULL)
             return TVO_ERR_NO_MEMORY;
         m->prior_w = cfg->map_lm_prior;
@@ -395,18 +399,66 @@ static int32_t lm_make(tvo_map *m, tvo_map_tracks *tr, int32_t i, const double X
     return j;
 }
 
+#if TVO_WITH_AFFINE
+/* The mean square of the reprojection errors a landmark's prior holds (normalised units), at X: the
+ * prior's cost 1/2 X^T L X + g^T X + c over half its weight; 0 for an empty prior. */
+static double prior_ms(const tvo_map *m, const double *q, const double X[3])
+{
+    const double cost = 0.5 * (q[0] * X[0] * X[0] + q[3] * X[1] * X[1] + q[5] * X[2] * X[2]) +
+            q[1] * X[0] * X[1] + q[2] * X[0] * X[2] + q[4] * X[1] * X[2] + q[6] * X[0] + q[7] * X[1] +
+            q[8] * X[2] + q[9];
+    const double n = q[TVO_BA_PRIOR_SIZE];
+    return n > 0.0 && cost > 0.0 ? 2.0 * cost / (m->prior_w * n) : 0.0;
+}
+
+/* cfg.map_lm_prior_gate: the squared gate on the priors of keyframe k's landmarks, from the median of
+ * their mean squares (err: scratch for cap values), or -1 (no gate: off, no cfg or scratch, too few
+ * priors). */
+static double prior_gate2(const tvo_map *m, const tvo_vo_config *cfg, const tvo_map_kf *k, double *err,
+                          int32_t cap)
+{
+    int32_t ne = 0;
+    double g2, lo;
+    if (cfg == NULL || !(cfg->map_lm_prior_gate > 0.0) || err == NULL)
+        return -1.0;
+    for (int32_t o = 0; o < k->n_obs && ne < cap; ++o) {
+        const int32_t j = k->obs_lm[o];
+        if (m->prior[j][TVO_BA_PRIOR_SIZE] > 0.0)
+            err[ne++] = prior_ms(m, m->prior[j], m->lm[j].X);
+    }
+    if (ne < TVO_MAP_PRIOR_GATE_MIN_N)
+        return -1.0;
+    g2 = cfg->map_lm_prior_gate * cfg->map_lm_prior_gate * tvo_la_select_kth(err, ne, ne / 2);
+    lo = TVO_MAP_PRIOR_GATE_MIN_PX / focal(cfg);
+    return g2 > lo * lo ? g2 : lo * lo;
+}
+#endif
+
 /* Drop the oldest keyframe of the window: its observations go (with cfg.map_lm_prior, into their
- * landmarks' priors, linearised where the window left the keyframe and the landmark), and landmarks
- * nobody observes or tracks any more are freed. */
-static void kf_drop_oldest(tvo_map *m)
+ * landmarks' priors, linearised where the window left the keyframe and the landmark; a prior the gate of
+ * cfg.map_lm_prior_gate refuses is emptied first), and landmarks nobody observes or tracks any more are
+ * freed. cfg, err: the configuration and scratch for cap values for the gate (NULL: no gate). */
+static void kf_drop_oldest(tvo_map *m, const tvo_vo_config *cfg, double *err, int32_t cap)
 {
     tvo_map_kf *k = kf_at(m, 0);
+#if TVO_WITH_AFFINE
+    const double g2 = m->prior != NULL && k->adjusted ? prior_gate2(m, cfg, k, err, cap) : -1.0;
+#else
+    (void)cfg;
+    (void)err;
+    (void)cap;
+#endif
     for (int32_t o = 0; o < k->n_obs; ++o) {
         const int32_t j = k->obs_lm[o];
 #if TVO_WITH_AFFINE
-        if (m->prior != NULL && k->adjusted)
-            (void)tvo_ba_point_prior_add(m->prior[j], &k->T_c_w, m->lm[j].X, k->obs_x[o].x, k->obs_x[o].y,
-                                         m->prior_huber, m->prior_w);
+        if (m->prior != NULL && k->adjusted) {
+            double *q = m->prior[j];
+            if (g2 >= 0.0 && q[TVO_BA_PRIOR_SIZE] > 0.0 && !(prior_ms(m, q, m->lm[j].X) <= g2))
+                memset(q, 0, sizeof(m->prior[j]));
+            if (tvo_ba_point_prior_add(q, &k->T_c_w, m->lm[j].X, k->obs_x[o].x, k->obs_x[o].y, m->prior_huber,
+                                       m->prior_w))
+                q[TVO_BA_PRIOR_SIZE] += 1.0;
+        }
 #endif
         m->lm[j].n_obs--;
         if (m->lm[j].n_obs <= 0 && !m->lm[j].tracked)
@@ -417,11 +469,14 @@ static void kf_drop_oldest(tvo_map *m)
     m->n_kf--;
 }
 
-static tvo_map_kf *kf_push(tvo_map *m, const tvo_pose *T_c_w, int64_t t_ns)
+/* A new keyframe at the window's end (the oldest dropped when the window is full; cfg, err, cap: as
+ * kf_drop_oldest takes them). */
+static tvo_map_kf *kf_push(tvo_map *m, const tvo_pose *T_c_w, int64_t t_ns, const tvo_vo_config *cfg,
+                           double *err, int32_t cap)
 {
     tvo_map_kf *k;
     if (m->n_kf == m->window)
-        kf_drop_oldest(m);
+        kf_drop_oldest(m, cfg, err, cap);
     k = &m->kf[(m->kf_head + m->n_kf) % m->window];
     m->n_kf++;
     k->id = m->next_kf_id++;
@@ -652,8 +707,8 @@ static int32_t init_landmarks(tvo_map *m, const tvo_vo_config *cfg, tvo_map_trac
     for (int32_t i = 0; i < tr->n; ++i)
         tr->lm[i] = -1;
     tvo_map_clear(m);
-    k0 = kf_push(m, T0, t0);
-    k1 = kf_push(m, T1, t_ns);
+    k0 = kf_push(m, T0, t0, NULL, NULL, 0);
+    k1 = kf_push(m, T1, t_ns, NULL, NULL, 0);
     for (int32_t q = 0; q < ip->k; ++q) {
         double X[3];
         int32_t j;
@@ -1432,7 +1487,17 @@ static void add_keyframe(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
     if (tr->refine != NULL)
         tr->refine(tr->refine_ctx);
     mark_tracked(m, tr);
-    kn = kf_push(m, T, t_ns);
+#if TVO_WITH_AFFINE
+    {
+        /* the scratch is free until the adjustment: the priors' gate takes max_tracks values of it */
+        carve c;
+        tvo_arena_init(&c.a, scratch, scratch_size);
+        kn = kf_push(m, T, t_ns, cfg, (double *)take(&c, (size_t)m->max_tracks * sizeof(double)),
+                     m->max_tracks);
+    }
+#else
+    kn = kf_push(m, T, t_ns, NULL, NULL, 0);
+#endif
     kn->has_R_prev = m->chain_ok;
     memcpy(kn->R_prev, m->chain_R, sizeof(kn->R_prev));
     chain_reset(m);

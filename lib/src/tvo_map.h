@@ -30,6 +30,10 @@
 #include "tinyvo/vo.h"
 #include "tvo_lens.h"
 
+/* A landmark's prior in the map: the adjustment's TVO_BA_PRIOR_SIZE values, then the number of
+ * observations it holds (cfg.map_lm_prior_gate's mean). */
+#define TVO_MAP_PRIOR_SIZE (TVO_BA_PRIOR_SIZE + 1)
+
 /* A keyframe of the window: its pose and the landmark observations made in it. */
 typedef struct tvo_map_kf {
     int32_t id;       /* increasing keyframe id (never reused) */
@@ -88,9 +92,10 @@ typedef struct tvo_map {
     int32_t next_kf_id;
     int32_t active; /* 1 while the map poses frames */
     /* cfg.map_lm_prior > 0: each landmark's prior from the observations of the keyframes that left the
-       window (tvo_ba_problem.prior's layout), zero for a new landmark; else NULL */
-    double (*prior)[TVO_BA_PRIOR_SIZE]; /* [max_lm] */
-    double prior_w, prior_huber;        /* cfg.map_lm_prior, the adjustment's Huber width (normalised) */
+       window (tvo_ba_problem.prior's layout, then how many observations it holds), zero for a new
+       landmark; else NULL */
+    double (*prior)[TVO_MAP_PRIOR_SIZE]; /* [max_lm] */
+    double prior_w, prior_huber;         /* cfg.map_lm_prior, the adjustment's Huber width (normalised) */
     tvo_map_frame_pose ring[TVO_MAP_RING];
     int32_t serial; /* serial of the frame being processed (increases by one per frame) */
     /* initialisation: the reference frame (its serial, pose and time); the tracks first seen in it */

@@ -273,6 +273,8 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
        jerk), by all of them elsewhere (docs/rules.md, "A forty-sixth rule") */
     cfg->map_rot_prior_obs = 3;
     cfg->map_rot_prior_obs_frames = 30;
+    /* the landmarks' priors (map_lm_prior, off by default) forget what a slid track's old keyframes saw */
+    cfg->map_lm_prior_gate = 2.0;
     /* the lens refined on the run where the build has it (docs/rules.md, "A forty-eighth rule") */
     cfg->lens_refine = TVO_WITH_LENS;
     cfg->clock = NULL;
@@ -351,6 +353,7 @@ static const range_check ranges[] = {
         {(uint16_t)offsetof(tvo_vo_config, chain_scale_sigmas), HI_100, 0},
         {(uint16_t)offsetof(tvo_vo_config, map_inlier_sigmas), HI_GATE, 0},
         {(uint16_t)offsetof(tvo_vo_config, map_lm_prior), HI_PRIOR, 0},
+        {(uint16_t)offsetof(tvo_vo_config, map_lm_prior_gate), HI_100, 0},
         {(uint16_t)offsetof(tvo_vo_config, map_kf_baseline), HI_10, 1},
         {(uint16_t)offsetof(tvo_vo_config, map_kf_points_ratio), HI_1, 0},
         {(uint16_t)offsetof(tvo_vo_config, map_ba_max_turn_deg), HI_180, 1},

@@ -223,6 +223,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cfg.map_lm_prior = TVO_WITH_AFFINE && cfg.map && (((hdr[5] >> 7) ^ (hdr[7] >> 3)) & 1)
             ? ((hdr[6] >> 7) & 1 ? 1.0 : 1e-12)
             : 0.0;
+    /* their gate at the default 2 times the median, or one that its 0.1 px floor holds */
+    cfg.map_lm_prior_gate = ((hdr[6] >> 6) ^ (hdr[5] >> 5)) & 1 ? 1e-9 : 2.0;
     while ((need = tvo_vo_required_size(&cfg)) == 0 && cfg.lk.max_level > 0)
         cfg.lk.max_level--;
     TVO_FUZZ_CHECK(need > 0); /* every size from 16x16 up is valid with one level */

@@ -708,6 +708,10 @@ static void test_map_config(void **state)
 #if TVO_WITH_AFFINE
     REFUSED(map_lm_prior, 1.5);
 #endif
+    REFUSED(map_lm_prior_gate, -0.5);
+    REFUSED(map_lm_prior_gate, NAN);
+    REFUSED(map_lm_prior_gate, 100.5);
+    REFUSED(map_lm_prior_gate, INFINITY);
     REFUSED(map_tri_parallax_deg, 31.0);
     REFUSED(map_kf_baseline, 0.0);
     REFUSED(map_kf_baseline, INFINITY);

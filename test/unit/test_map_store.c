@@ -369,6 +369,93 @@ static void test_landmark_priors_taken(void **state)
     assert_true(alive > 0 && 4 * with > alive);
     road_map_close(&rm);
 }
+
+/* cfg.map_lm_prior_gate along the road (0.1 px of track noise, 8 keyframes, 4 fixed, map_lm_prior 1):
+ * from the 60th frame, 6 landmarks of the window's oldest keyframe whose priors hold 2 or more
+ * observations are moved sideways by 5 % of their distance from the origin (as a window that has put
+ * them elsewhere would), the others left alone, and the road runs on until a keyframe makes that
+ * keyframe leave. Returns how many of the 6 priors held a single observation after it (emptied, then
+ * given the leaving keyframe's); *alive gets how many of the 6 are still alive (a track can end), *others
+ * the share of the other alive landmarks with a prior whose prior holds only one observation. */
+static int32_t moved_priors_emptied(double gate, double *others, int32_t *alive)
+{
+    road_map rm;
+    tvo_map *m = &rm.m;
+    int32_t moved[6], n_moved = 0, emptied = 0, n_other = 0, one_other = 0, k = 0;
+    int32_t leaving = -1;
+    road_config(&rm.cfg);
+    rm.cfg.map_max_landmarks = 2 * rm.cfg.max_tracks;
+    rm.cfg.map_window = 8;
+    rm.cfg.map_ba_fixed = 4;
+    rm.cfg.map_lm_prior = 1.0;
+    rm.cfg.map_lm_prior_gate = gate;
+    road_map_open(&rm, 0.1, 0.0, 4242u);
+    for (; k < 60; ++k)
+        (void)road_map_frame(&rm, k);
+    assert_int_equal(m->n_kf, m->window);
+    {
+        const tvo_map_kf *old = &m->kf[m->kf_head % m->window];
+        leaving = old->id;
+        assert_true(old->adjusted);
+        for (int32_t o = 0; o < old->n_obs && n_moved < 6; o += 3) {
+            const int32_t j = old->obs_lm[o];
+            double d;
+            if (!(m->prior[j][TVO_BA_PRIOR_SIZE] >= 2.0))
+                continue;
+            d = sqrt(m->lm[j].X[0] * m->lm[j].X[0] + m->lm[j].X[1] * m->lm[j].X[1] +
+                     m->lm[j].X[2] * m->lm[j].X[2]);
+            m->lm[j].X[0] += 0.05 * d;
+            moved[n_moved++] = j;
+        }
+    }
+    assert_int_equal(n_moved, 6);
+    /* on until the keyframe that was the oldest has left */
+    for (; k < FRAMES && m->kf[m->kf_head % m->window].id == leaving; ++k)
+        (void)road_map_frame(&rm, k);
+    assert_true(m->kf[m->kf_head % m->window].id != leaving);
+    for (int32_t q = 0; q < n_moved; ++q) {
+        if (getenv("TVO_MAP_TEST_VERBOSE"))
+            fprintf(stderr, "    moved %d: alive %d, prior of %.0f\n", (int)moved[q],
+                    (int)m->lm[moved[q]].alive, m->prior[moved[q]][TVO_BA_PRIOR_SIZE]);
+        emptied += m->lm[moved[q]].alive && m->prior[moved[q]][TVO_BA_PRIOR_SIZE] == 1.0;
+        *alive += m->lm[moved[q]].alive;
+    }
+    for (int32_t j = 0; j < m->max_lm; ++j) {
+        int is_moved = 0;
+        for (int32_t q = 0; q < n_moved; ++q)
+            is_moved |= moved[q] == j;
+        if (is_moved || !m->lm[j].alive || !(m->prior[j][TVO_BA_PRIOR_SIZE] > 0.0))
+            continue;
+        ++n_other;
+        one_other += m->prior[j][TVO_BA_PRIOR_SIZE] == 1.0;
+    }
+    if (getenv("TVO_MAP_TEST_VERBOSE"))
+        fprintf(stderr,
+                "  map_lm_prior_gate %.1f: %d of 6 moved landmarks' priors emptied; %d of %d others hold one "
+                "observation; %d losses\n",
+                gate, (int)emptied, (int)one_other, (int)n_other, (int)m->losses);
+    assert_int_equal(m->losses, 0);
+    road_map_close(&rm);
+    *others = n_other > 0 ? (double)one_other / n_other : 1.0;
+    return emptied;
+}
+
+/* A landmark that the window has put several pixels from where its prior holds it forgets the prior when
+ * the next keyframe leaves (the gate at the default 2 times the median), every one still alive; the landmarks
+ * that agree with theirs keep them about as often as without the gate; without it (0) every prior is
+ * kept. */
+static void test_prior_gate_empties_disagreeing_priors(void **state)
+{
+    double others0 = 1.0, others2 = 1.0;
+    int32_t alive0 = 0, alive2 = 0, emptied0, emptied2;
+    (void)state;
+    emptied0 = moved_priors_emptied(0.0, &others0, &alive0);
+    emptied2 = moved_priors_emptied(2.0, &others2, &alive2);
+    assert_int_equal(emptied0, 0);
+    assert_int_equal(emptied2, alive2);
+    assert_true(alive0 >= 4 && alive2 >= 4);
+    assert_true(others2 <= others0 + 0.15);
+}
 #else
 /* A build without the affine refinement leaves the gate out, and refuses a configuration that asks for it
  * (tvo_vo_init: TVO_ERR_UNSUPPORTED, test_vo). */
@@ -391,6 +478,16 @@ static void test_landmark_priors_taken(void **state)
     cfg.map_lm_prior = 1.0;
     assert_int_equal(tvo_vo_required_size(&cfg), 0);
 }
+
+/* ... and so their gate, which acts only on them (cfg.map_lm_prior_gate is accepted: it has nothing to do) */
+static void test_prior_gate_empties_disagreeing_priors(void **state)
+{
+    tvo_vo_config cfg;
+    (void)state;
+    road_config(&cfg);
+    cfg.map_lm_prior_gate = 2.0;
+    assert_true(tvo_vo_required_size(&cfg) > 0);
+}
 #endif
 
 int main(void)
@@ -403,6 +500,7 @@ int main(void)
             cmocka_unit_test(test_checked_landmarks_only_after_a_jerk),
             cmocka_unit_test(test_inlier_gate_follows_the_noise),
             cmocka_unit_test(test_landmark_priors_taken),
+            cmocka_unit_test(test_prior_gate_empties_disagreeing_priors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -362,6 +362,16 @@ typedef struct tvo_vo_config {
                                    bytes a landmark (map_max_landmarks) and as much scratch. Needs a
                                    build with the affine refinement (TVO_WITH_AFFINE, options.h): without
                                    it only 0 (tvo_vo_init: TVO_ERR_UNSUPPORTED) */
+    double map_lm_prior_gate; /* (added) with map_lm_prior: when a keyframe leaves, a landmark whose prior
+                                   disagrees with where the window has put it (the root mean square of
+                                   the prior's reprojection errors at the landmark) by more than this
+                                   many times the median over the leaving keyframe's landmarks (at
+                                   least 0.1 px) forgets its prior before taking the keyframe's
+                                   observation: what its old keyframes saw no longer agrees with what
+                                   the window sees (a track that slid, old poses that drifted), and a
+                                   prior kept through that holds the disagreement in the map (on the
+                                   renders its scale drifted). [0, 100]; 0: no gate; default 2
+                                   (docs/design.md, "Windowed bundle adjustment") */
 } tvo_vo_config;
 
 /* Fill cfg with defaults for `camera` (copied): the balanced preset's tracker and window below (the
