@@ -358,8 +358,8 @@ typedef struct tvo_vo_config {
                                    landmark seen for long keeps what its old keyframes said, which holds
                                    the scale over long runs; best with map_ba_fixed 2 (docs/camera.md).
                                    [0, 1]; 0: off (a landmark only knows the window's keyframes);
-                                   default 0 (docs/design.md, "Windowed bundle adjustment"). Memory: 80
-                                   bytes a landmark (map_max_landmarks) and as much scratch. Needs a
+                                   default 0 (docs/design.md, "Windowed bundle adjustment"). Memory: 88
+                                   bytes a landmark (map_max_landmarks) and 80 of scratch. Needs a
                                    build with the affine refinement (TVO_WITH_AFFINE, options.h): without
                                    it only 0 (tvo_vo_init: TVO_ERR_UNSUPPORTED) */
     double map_lm_prior_gate; /* (added) with map_lm_prior: when a keyframe leaves, a landmark whose prior
