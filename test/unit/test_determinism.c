@@ -23,6 +23,8 @@
  *              adoption test on it (builds with TVO_WITH_LENS)
  *   ba_prior   the bundle adjustment of that window with one camera's observations as point priors
  *              (tvo_ba_point_prior_add; cfg.map_lm_prior's path, builds with TVO_WITH_AFFINE)
+ *   vo_prior   the room sequence with a short window, the landmarks' priors and their gate
+ *              (cfg.map_lm_prior, map_lm_prior_gate; builds with TVO_WITH_AFFINE)
  *
  * The stages upstream of a change keep their digests: a relative-pose change moves `relpose` and `vo`,
  * a VO change only `vo`, a tracker change `tracks`, `relpose` and `vo`. When an intended change moves a
@@ -61,6 +63,7 @@
 #endif
 #define EXPECT_LENS 0xbe0451d01a103c0eULL
 #define EXPECT_BA_PRIOR 0x82ddecdb2ce7654aULL
+#define EXPECT_VO_PRIOR 0xeede9bb74f7dcadeULL
 /* ==== end of EXPECTED DIGESTS ==== */
 
 #define W 320
@@ -642,6 +645,73 @@ static void test_vo_refind(void **state)
     assert_true(check_digest("refind", "EXPECT_REFIND", d.h, EXPECT_REFIND));
 }
 
+#if TVO_WITH_AFFINE
+/* The map digest of the room sequence, there and back, with a short window whose keyframes leave often (3
+ * keyframes, 2 fixed, a keyframe at least every 2 frames), the landmarks' priors at weight w with their
+ * gate g. */
+static uint64_t run_vo_prior(seq *s, double w, double g, int *kf)
+{
+    const tvo_camera cam = pinhole();
+    tvo_vo_config cfg;
+    tvo_vo *vo = NULL;
+    size_t need;
+    void *mem;
+    digest d;
+    tvo_vo_config_default(&cfg, &cam);
+    cfg.map_window = 3;
+    cfg.map_ba_fixed = 2;
+    cfg.map_kf_max_frames = 2;
+    cfg.map_lm_prior = w;
+    cfg.map_lm_prior_gate = g;
+    need = tvo_vo_required_size(&cfg);
+    mem = malloc(need);
+    assert_non_null(mem);
+    assert_int_equal(tvo_vo_init(&vo, &cfg, mem, need), TVO_OK);
+    dg_init(&d);
+    *kf = 0;
+    for (int k = 0; k < 2 * FRAMES - 1; ++k) { /* the room there and back: keyframes enough to leave */
+        tvo_vo_result res;
+        tvo_image img = tvo_image_make(W, H, W, s->img[k < FRAMES ? k : 2 * FRAMES - 2 - k]);
+        assert_int_equal(tvo_vo_process(vo, &img, 1000000000LL + k * 50000000LL, &res), TVO_OK);
+        assert_true(tvo_pose_is_finite(&res.T_w_c));
+        dg_pose(&d, &res.T_w_c);
+        dg_i32(&d, (int32_t)res.map_state);
+        dg_i32(&d, res.keyframe);
+        dg_i32(&d, res.map_points);
+        dg_i32(&d, res.map_landmarks);
+        dg_i32(&d, res.ba_iterations);
+        dg_i32(&d, res.ba_flags);
+        *kf += res.keyframe;
+        if (g > 0.0 && w > 0.0)
+            trace("vo_prior", k, &d);
+    }
+    free(mem);
+    return d.h;
+}
+#endif
+
+/* The map with the landmarks' priors and their gate (cfg.map_lm_prior, map_lm_prior_gate; builds with
+ * the affine refinement): world poses and what the map did. The priors and the gate both change the run
+ * (the digests without the priors, and with them but without the gate, differ), so the path is taken. */
+static void test_vo_prior(void **state)
+{
+#if TVO_WITH_AFFINE
+    seq *s = *state;
+    int kf = 0, kf0 = 0, kf_nogate = 0;
+    const uint64_t h = run_vo_prior(s, 1.0, 2.0, &kf);
+    const uint64_t h0 = run_vo_prior(s, 0.0, 2.0, &kf0), h_nogate = run_vo_prior(s, 1.0, 0.0, &kf_nogate);
+    fprintf(stderr, "determinism, vo_prior: %d keyframes (without the priors %d, without the gate %d)\n", kf,
+            kf0, kf_nogate);
+    assert_true(kf >= 6);
+    assert_true(h != h0);
+    assert_true(h != h_nogate);
+    assert_true(check_digest("vo_prior", "EXPECT_VO_PRIOR", h, EXPECT_VO_PRIOR));
+#else
+    (void)state;
+    skip();
+#endif
+}
+
 /* The lens refinement (cfg.lens_refine): a window's block (information, estimate, variance) and the
  * adoption test's verdict and changed camera on two copies of it. */
 static void test_lens(void **state)
@@ -754,7 +824,7 @@ int main(void)
             cmocka_unit_test(test_input),     cmocka_unit_test(test_corners),   cmocka_unit_test(test_tracks),
             cmocka_unit_test(test_undistort), cmocka_unit_test(test_relpose),   cmocka_unit_test(test_nn),
             cmocka_unit_test(test_vo),        cmocka_unit_test(test_vo_refind), cmocka_unit_test(test_lens),
-            cmocka_unit_test(test_ba_prior),
+            cmocka_unit_test(test_ba_prior),  cmocka_unit_test(test_vo_prior),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }
