@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* tinyvo: windowed bundle adjustment (contract and cost in tinyvo/ba.h). */
 #include "tinyvo/ba.h"
+#include "tinyvo/ba_prior.h"
 #include "tinyvo/linalg.h"
 #include "tinyvo/options.h"
 
@@ -197,6 +198,12 @@ static double prior_cost(const double *q, const double X[3], double LX[3])
     for (int a = 0; a < 3; ++a)
         LX[a] += q[6 + a];
     return v;
+}
+
+double tvo_ba_prior_cost(const double q[TVO_BA_PRIOR_SIZE], const double X[3])
+{
+    double LX[3];
+    return prior_cost(q, X, LX);
 }
 #endif
 

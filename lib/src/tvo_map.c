@@ -5,6 +5,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "tinyvo/ba_prior.h"
 #include "tinyvo/dmath.h"
 #include "tinyvo/linalg.h"
 
@@ -404,9 +405,7 @@ static int32_t lm_make(tvo_map *m, tvo_map_tracks *tr, int32_t i, const double X
  * prior's cost 1/2 X^T L X + g^T X + c over half its weight; 0 for an empty prior. */
 static double prior_ms(const tvo_map *m, const double *q, const double X[3])
 {
-    const double cost = 0.5 * (q[0] * X[0] * X[0] + q[3] * X[1] * X[1] + q[5] * X[2] * X[2]) +
-            q[1] * X[0] * X[1] + q[2] * X[0] * X[2] + q[4] * X[1] * X[2] + q[6] * X[0] + q[7] * X[1] +
-            q[8] * X[2] + q[9];
+    const double cost = tvo_ba_prior_cost(q, X);
     const double n = q[TVO_BA_PRIOR_SIZE];
     return n > 0.0 && cost > 0.0 ? 2.0 * cost / (m->prior_w * n) : 0.0;
 }
