@@ -511,18 +511,22 @@ static void test_nn(void **state)
 }
 
 /* The default VO for the pinhole camera, in memory the caller frees. */
+/* A VO with cfg in memory of its own (returned: the caller frees it). */
+static void *open_vo(const tvo_vo_config *cfg, tvo_vo **vo)
+{
+    const size_t need = tvo_vo_required_size(cfg);
+    void *mem = malloc(need);
+    assert_non_null(mem);
+    assert_int_equal(tvo_vo_init(vo, cfg, mem, need), TVO_OK);
+    return mem;
+}
+
 static void *open_default_vo(tvo_vo **vo)
 {
     const tvo_camera cam = pinhole();
     tvo_vo_config cfg;
-    size_t need;
-    void *mem;
     tvo_vo_config_default(&cfg, &cam);
-    need = tvo_vo_required_size(&cfg);
-    mem = malloc(need);
-    assert_non_null(mem);
-    assert_int_equal(tvo_vo_init(vo, &cfg, mem, need), TVO_OK);
-    return mem;
+    return open_vo(&cfg, vo);
 }
 
 static void test_vo(void **state)
@@ -654,7 +658,6 @@ static uint64_t run_vo_prior(seq *s, double w, double g, int *kf)
     const tvo_camera cam = pinhole();
     tvo_vo_config cfg;
     tvo_vo *vo = NULL;
-    size_t need;
     void *mem;
     digest d;
     tvo_vo_config_default(&cfg, &cam);
@@ -663,10 +666,7 @@ static uint64_t run_vo_prior(seq *s, double w, double g, int *kf)
     cfg.map_kf_max_frames = 2;
     cfg.map_lm_prior = w;
     cfg.map_lm_prior_gate = g;
-    need = tvo_vo_required_size(&cfg);
-    mem = malloc(need);
-    assert_non_null(mem);
-    assert_int_equal(tvo_vo_init(&vo, &cfg, mem, need), TVO_OK);
+    mem = open_vo(&cfg, &vo);
     dg_init(&d);
     *kf = 0;
     for (int k = 0; k < 2 * FRAMES - 1; ++k) { /* the room there and back: keyframes enough to leave */
