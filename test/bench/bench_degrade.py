@@ -3,8 +3,8 @@
 """Benchmark: the VO on degraded copies of a real sequence (blur, noise, a smaller camera, a lower rate).
 
 A user's camera is rarely as sharp, quiet, large and fast as the shared KITTI frames. This program writes
-copies of an EuRoC/ASL sequence (the smaller copy only of a camera without distortion, as the shared KITTI
-sequences; the others of any camera, the renders too):
+copies of an EuRoC/ASL sequence (the resized copies only of a camera without distortion, as the shared
+KITTI sequences; the others of any camera, the renders too):
 
   - none:        the frames as they are;
   - blur1:       Gaussian blur, sigma 1 px;
@@ -13,6 +13,9 @@ sequences; the others of any camera, the renders too):
   - noise6:      Gaussian noise, sigma 6 grey levels;
   - half:        every frame at half the width and height (OpenCV INTER_AREA), the intrinsics halved
                  about the pixel centres;
+  - up15, up2:   every frame at 1.5 or 2 times the width and height (OpenCV INTER_CUBIC), the intrinsics
+                 scaled about the pixel centres: a camera with more pixels over the same view (the motion
+                 in pixels 1.5 or 2 times as large), though without the finer detail a real one would see;
   - skip2:       every second frame (half the rate: twice the motion between frames);
   - jerk:        one or two frames on from each kept frame, at random (seeded), the kept frames then given
                  evenly spaced times at the original rate and their ground truth moved with them: the
@@ -66,6 +69,8 @@ VARIANTS = {
     "blur15n3": (1.0, 1, 1.5, 3.0),
     "noise6": (1.0, 1, 0.0, 6.0),
     "half": (0.5, 1, 0.0, 0.0),
+    "up15": (1.5, 1, 0.0, 0.0),
+    "up2": (2.0, 1, 0.0, 0.0),
     "skip2": (1.0, 2, 0.0, 0.0),
     "jerk": (1.0, 0, 0.0, 0.0),
     "reverse": (1.0, -1, 0.0, 0.0),
@@ -128,7 +133,7 @@ def write_copy(seq: str, dst: str, scale: float, every: int, blur: float, noise:
     os.makedirs(os.path.join(out, "data"))
     info = trajio.read_sensor_yaml(os.path.join(cam, "sensor.yaml"))
     if scale != 1.0 and any(d != 0.0 for d in info.distortion):
-        raise SystemExit("bench_degrade: the sequence's camera has distortion; a smaller copy needs a pinhole "
+        raise SystemExit("bench_degrade: the sequence's camera has distortion; a resized copy needs a pinhole "
                          "sequence")
     t_ns, names = trajio.read_cam_frames(cam)
     keep = kept_frames(len(names), every)
@@ -150,7 +155,7 @@ def write_copy(seq: str, dst: str, scale: float, every: int, blur: float, noise:
             raise SystemExit(f"bench_degrade: cannot read {names[k]}")
         if scale != 1.0:
             img = cv2.resize(img, (int(round(img.shape[1] * scale)), int(round(img.shape[0] * scale))),
-                             interpolation=cv2.INTER_AREA)
+                             interpolation=cv2.INTER_AREA if scale < 1.0 else cv2.INTER_CUBIC)
         if blur > 0.0:
             img = cv2.GaussianBlur(img, (0, 0), blur)
         for sigma in (noise, HOLD_NOISE if held else 0.0):

@@ -1,7 +1,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """test/bench/bench_degrade.py's copies on a tiny ASL sequence written here: the frames each copy keeps,
-the jerk, reversed, stop and start copies' evenly spaced times, the drops copy's missing frames and their ground truth moved with their frames, the
-stop's held frames with fresh noise, and the refusal of a smaller copy of a camera with distortion."""
+the jerk, reversed, stop and start copies' evenly spaced times, the drops copy's missing frames and their
+ground truth moved with their frames, the stop's held frames with fresh noise, the larger copies' frames and
+intrinsics, and the refusal of a resized copy of a camera with distortion."""
 import os
 import pathlib
 import sys
@@ -169,3 +170,23 @@ def test_distortion(tmp_path):
     with pytest.raises(SystemExit, match="distortion"):
         bench_degrade.write_copy(str(src), str(tmp_path / "half"), *bench_degrade.VARIANTS["half"])
     assert not os.path.exists(tmp_path / "half" / "mav0" / "cam0" / "data.csv")
+
+
+@pytest.mark.parametrize("name,scale", [("up15", 1.5), ("up2", 2.0)])
+def test_larger_copy_scales_frames_and_intrinsics(tmp_path, name, scale):
+    src = _sequence(tmp_path / "src")
+    dst = tmp_path / name
+    bench_degrade.write_copy(str(src), str(dst), *bench_degrade.VARIANTS[name])
+    cam = dst / "mav0" / "cam0"
+    t, names = trajio.read_cam_frames(str(cam))
+    assert len(names) == N and t[0] == T0
+    w, h = round(32 * scale), round(24 * scale)
+    for k in (0, N - 1):
+        img = cv2.imread(str(cam / "data" / names[k]), cv2.IMREAD_GRAYSCALE)
+        assert img.shape == (h, w) and (img == k).all()  # a flat frame stays flat through INTER_CUBIC
+    info = trajio.read_sensor_yaml(str(cam / "sensor.yaml"))
+    assert (info.width, info.height) == (w, h)
+    # the same rays: pixel centres scale about (-0.5, -0.5)
+    np.testing.assert_allclose(info.intrinsics, (30.0 * scale, 30.0 * scale, 16.0 * scale - 0.5, 12.0 * scale - 0.5))
+    assert (dst / "mav0" / "state_groundtruth_estimate0" / "data.csv").read_bytes() == \
+        (src / "mav0" / "state_groundtruth_estimate0" / "data.csv").read_bytes()
