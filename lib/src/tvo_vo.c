@@ -219,6 +219,21 @@ static void preset_balanced(tvo_vo_config *cfg)
     cfg->lk.pred_win_size = 11;
 }
 
+/* LK's pyramid for frames of w x h px (0 x 0 without a camera): 3 levels above the frame (lk.max_level 3)
+ * up to TVO_VO_COARSE_PX x 8 px on the larger side, one more for each doubling beyond, so that the
+ * coarsest level keeps at most TVO_VO_COARSE_PX px and LK's reach follows the motion in pixels of a camera
+ * with more of them (docs/rules.md, "A sixty-first rule"); a level is only added while its smaller side
+ * stays above the window `win` (LK does not use a level that small). */
+#define TVO_VO_COARSE_PX 160
+static int32_t lk_levels_for(int32_t w, int32_t h, int32_t win)
+{
+    const int32_t big = w > h ? w : h, small = w > h ? h : w;
+    int32_t l = 3;
+    while (l < TVO_MAX_PYR_LEVELS - 1 && big > (TVO_VO_COARSE_PX << l) && (small >> (l + 1)) > win)
+        ++l;
+    return l;
+}
+
 void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
 {
     if (cfg == NULL)
@@ -228,6 +243,7 @@ void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera)
         cfg->camera = *camera;
     tvo_detect_config_default(&cfg->detect);
     tvo_lk_config_default(&cfg->lk);
+    cfg->lk.max_level = lk_levels_for(cfg->camera.width, cfg->camera.height, cfg->lk.win_size);
     cfg->lk.fb_check = 1;
     tvo_relpose_config_default(&cfg->relpose);
     cfg->max_tracks = 300;

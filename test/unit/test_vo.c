@@ -1764,6 +1764,34 @@ static void test_presets(void **state)
     assert_int_equal(tvo_vo_config_preset(NULL, &cam, TVO_VO_PRESET_SMALL), TVO_ERR_NULL);
 }
 
+/* LK's pyramid follows the frame's size (vo.h, tvo_vo_config_default): 3 levels above the frame up to
+ * 1280 px on the larger side, one more for each doubling beyond, whichever side is the larger, while the
+ * new level's smaller side stays above LK's window (21 px); 3 without a camera; every preset but the small
+ * one keeps it, and the VO accepts each. */
+static void test_levels_follow_frame_size(void **state)
+{
+    static const struct {
+        int32_t w, h, levels;
+    } cases[] = {{320, 240, 3},   {752, 480, 3},   {1226, 370, 3},  {1280, 720, 3},  {1281, 720, 4},
+                 {2452, 740, 4},  {1080, 1920, 4}, {2560, 1440, 4}, {2561, 1440, 5}, {3840, 2160, 5},
+                 {8192, 8192, 6}, {100, 5121, 3},  {5000, 300, 3},  {5000, 400, 4}};
+    tvo_vo_config c;
+    (void)state;
+    tvo_vo_config_default(&c, NULL);
+    assert_int_equal(c.lk.max_level, 3);
+    for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); ++i) {
+        const tvo_camera cam = tvo_camera_make_pinhole(cases[i].w, cases[i].h, 500.0, 500.0,
+                                                       0.5 * cases[i].w - 0.5, 0.5 * cases[i].h - 0.5);
+        tvo_vo_config_default(&c, &cam);
+        assert_int_equal(c.lk.max_level, cases[i].levels);
+        assert_true(tvo_vo_required_size(&c) > 0);
+        assert_int_equal(tvo_vo_config_preset(&c, &cam, TVO_VO_PRESET_BASIC), TVO_OK);
+        assert_int_equal(c.lk.max_level, cases[i].levels);
+        assert_int_equal(tvo_vo_config_preset(&c, &cam, TVO_VO_PRESET_SMALL), TVO_OK);
+        assert_int_equal(c.lk.max_level, 2); /* the small preset's own */
+    }
+}
+
 /* A shake: the camera walks towards the far wall (2 cm a frame, 0.2 deg of yaw a frame) with the map's
  * predicted tracks on 2 levels and 11x11 windows (the balanced preset's tracker), and at frame `shake` it
  * turns `deg` further and back at the next frame: the map's constant-velocity pose puts the predicted
@@ -1936,6 +1964,7 @@ int main(void)
 #endif
       cmocka_unit_test(test_scale_filter),
       cmocka_unit_test(test_presets),
+      cmocka_unit_test(test_levels_follow_frame_size),
       cmocka_unit_test(test_refine_step_length),
       cmocka_unit_test_setup_teardown(test_bad_input, setup_basic, teardown),
     };

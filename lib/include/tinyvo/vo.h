@@ -376,7 +376,11 @@ typedef struct tvo_vo_config {
 
 /* Fill cfg with defaults for `camera` (copied): the balanced preset's tracker and window below (the
  * affine refinement, the map's predicted tracks, 8 keyframes with 4 fixed) in a build with the affine
- * refinement (TVO_WITH_AFFINE, the default build), the basic preset's in a build without it. */
+ * refinement (TVO_WITH_AFFINE, the default build), the basic preset's in a build without it. LK's pyramid
+ * follows the frame's size: lk.max_level 3 up to 1280 px on the larger side, one more level for each
+ * doubling beyond (4 up to 2560, 5 up to 5120, at most TVO_MAX_PYR_LEVELS - 1), so that the coarsest
+ * level keeps at most 160 px, while the new level's smaller side stays above lk.win_size (LK does not
+ * use a level that small); 3 for a NULL camera. */
 TVO_API void tvo_vo_config_default(tvo_vo_config *cfg, const tvo_camera *camera);
 
 /* Named configurations (docs/camera.md, "Presets"):
