@@ -130,6 +130,9 @@ struct tvo_vo {
 #define TVO_VO_AFF_EPS 0.02f
 #define TVO_VO_AFF_MIN_NCC 0.8f
 #define TVO_VO_AFF_MAX_MOVE 2.0f
+/* The default pyramid's coarsest level keeps at most this many pixels on the frame's larger side, with 3
+ * levels above the frame at least (lk_levels_for). */
+#define TVO_VO_COARSE_PX 160
 
 #if TVO_WITH_AFFINE
 /* cfg.map_refind: a landmark is first looked for this many frames after its track ended (not in the frame
@@ -224,7 +227,6 @@ static void preset_balanced(tvo_vo_config *cfg)
  * coarsest level keeps at most TVO_VO_COARSE_PX px and LK's reach follows the motion in pixels of a camera
  * with more of them (docs/rules.md, "A sixty-first rule"); a level is only added while its smaller side
  * stays above the window `win` (LK does not use a level that small). */
-#define TVO_VO_COARSE_PX 160
 static int32_t lk_levels_for(int32_t w, int32_t h, int32_t win)
 {
     const int32_t big = w > h ? w : h, small = w > h ? h : w;
