@@ -510,7 +510,6 @@ static void test_nn(void **state)
     assert_true(check_digest("nn", "EXPECT_NN", d.h, EXPECT_NN));
 }
 
-/* The default VO for the pinhole camera, in memory the caller frees. */
 /* A VO with cfg in memory of its own (returned: the caller frees it). */
 static void *open_vo(const tvo_vo_config *cfg, tvo_vo **vo)
 {
@@ -521,6 +520,7 @@ static void *open_vo(const tvo_vo_config *cfg, tvo_vo **vo)
     return mem;
 }
 
+/* The default VO for the pinhole camera, in memory the caller frees. */
 static void *open_default_vo(tvo_vo **vo)
 {
     const tvo_camera cam = pinhole();
