@@ -31,10 +31,6 @@
 /* ...unless fewer than this many times cfg.map_min_points landmarks are left (the map runs out of points:
  * below map_min_points it is lost). */
 #define TVO_MAP_KF_RESCUE_POINTS 2
-/* ...or unless, at the rate they fell since the last frame, fewer than cfg.map_min_points landmarks would
- * be left within this many frames, before the baseline grows to a keyframe's at its rate (the map is
- * dying: a fast turn while the camera barely moves; docs/rules.md, "A sixty-second rule"). */
-#define TVO_MAP_KF_DYING_FRAMES 2
 /* PnP inlier threshold, in pixels. */
 #define TVO_MAP_PNP_THRESHOLD_PX 2.0
 /* With cfg.map_inlier_sigmas, the gate on the inliers' reprojection errors never goes below this (px). */
@@ -275,7 +271,6 @@ void tvo_map_clear(tvo_map *m)
     m->has_vel = 0;
     m->kf_points = 0;
     m->frames_since_kf = 0;
-    m->last_n_in = 0;
     m->cur_kf_id = -1;
     m->lm_cursor = 0;
     m->depth_med = 0.0;
@@ -777,7 +772,6 @@ static int try_init(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *tr, in
     m->active = 1; /* the rotation chain starts here: init_landmarks cleared the map */
     m->kf_points = made;
     m->frames_since_kf = 0;
-    m->last_n_in = 0;
     m->cur_kf_id = kf_at(m, 1)->id;
     m->last_T_c_w = T1;
     m->last_t_ns = t_ns;
@@ -1161,38 +1155,20 @@ static int running_out(const tvo_vo_config *cfg, int32_t n_in)
     return n_in < TVO_MAP_KF_RESCUE_POINTS * cfg->map_min_points;
 }
 
-/* The map is dying: its landmarks in view fell since the last frame, at that rate fewer than map_min_points
- * would be left within TVO_MAP_KF_DYING_FRAMES frames, and the baseline (base, below a keyframe's least by
- * need) grows too slowly to get there first. The landmarks left, over the drop, is the frames the map has
- * (left / drop); the baseline needs need / gain frames, never if it does not grow. */
-static int dying(const tvo_map *m, const tvo_vo_config *cfg, int32_t n_in, double base, double need)
-{
-    const double left = (double)(n_in - cfg->map_min_points), drop = (double)(m->last_n_in - n_in);
-    return m->last_n_in > 0 && drop > 0.0 && left < TVO_MAP_KF_DYING_FRAMES * drop && need > 0.0 &&
-            need * drop > left * (base - m->last_base);
-}
-
-/* Whether the frame at pose T (n_in PnP inliers) becomes a keyframe; *rescue: one made because the map
- * runs out of points or is dying (triangulate_new). */
-static int need_keyframe(tvo_map *m, const tvo_vo_config *cfg, const tvo_pose *T, int32_t n_in,
-                         double depth_med, int *rescue)
+static int need_keyframe(const tvo_map *m, const tvo_vo_config *cfg, const tvo_pose *T, int32_t n_in,
+                         double depth_med)
 {
     const tvo_map_kf *k = &m->kf[(m->kf_head + m->n_kf - 1) % m->window];
     const double base = centre_distance(&k->T_c_w, T);
-    const double need = TVO_MAP_KF_MIN_BASELINE * cfg->map_kf_baseline * depth_med - base;
-    const int dies = depth_med > 0.0 && dying(m, cfg, n_in, base, need);
-    *rescue = dies || running_out(cfg, n_in);
-    m->last_n_in = n_in;
-    m->last_base = base;
     /* a keyframe that barely moved adds little structure and, as one of the oldest of a later window,
-       would hold the scale on a tiny baseline: none while the camera only turns... unless the map runs
-       out of points or is dying (a turn, or a camera backing away from what it sees, takes them out of
-       view faster than the baseline grows): then a keyframe is the only way to new landmarks, and the
-       tracks that wait since an older keyframe count their parallax from there, not from the last
-       keyframe */
-    if (!(depth_med > 0.0) || (!*rescue && need > 0.0))
+       would hold the scale on a tiny baseline: none while the camera only turns... unless the map is
+       running out of points (a turn, or a camera backing away from what it sees, takes them out of view
+       faster than the baseline grows): then a keyframe is the only way to new landmarks, and the tracks
+       that wait since an older keyframe count their parallax from there, not from the last keyframe */
+    if (!(depth_med > 0.0) ||
+        (!running_out(cfg, n_in) && base < TVO_MAP_KF_MIN_BASELINE * cfg->map_kf_baseline * depth_med))
         return 0;
-    if (dies || m->frames_since_kf + 1 >= cfg->map_kf_max_frames)
+    if (m->frames_since_kf + 1 >= cfg->map_kf_max_frames)
         return 1;
     if ((double)n_in < cfg->map_kf_points_ratio * (double)m->kf_points)
         return 1;
@@ -1534,7 +1510,6 @@ static void add_keyframe(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
     *T = kn->T_c_w;
     m->kf_points = seen + out->new_points;
     m->frames_since_kf = 0;
-    m->last_n_in = 0;
     m->cur_kf_id = kn->id;
     out->keyframe = 1;
     update_speed(m);
@@ -1581,7 +1556,6 @@ static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
 {
     tvo_pose T;
     int32_t n_in = 0;
-    int rescue;
     double depth_med = 0.0;
     for (int32_t i = 0; i < tr->n; ++i)
         tr->inlier[i] = 0;
@@ -1628,12 +1602,12 @@ static void tvo_map_step(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks *t
         }
     }
     out->points = n_in;
-    if (need_keyframe(m, cfg, &T, n_in, depth_med, &rescue)) {
+    if (need_keyframe(m, cfg, &T, n_in, depth_med)) {
         /* the frame keeps its tracking pose (what it was measured to be when it came); the map keeps the
            adjusted keyframe, on which the next frames are posed (reporting the adjusted pose instead
            puts each correction into one frame's step: a jump in the per-frame rotation) */
         tvo_pose Tk = T;
-        add_keyframe(m, cfg, tr, t_ns, &Tk, rescue, scratch, scratch_size, out);
+        add_keyframe(m, cfg, tr, t_ns, &Tk, running_out(cfg, n_in), scratch, scratch_size, out);
     } else {
         m->frames_since_kf++;
     }

@@ -114,10 +114,6 @@ typedef struct tvo_map {
     double speed;      /* map units per second of the last map (> 0 when known) */
     int32_t kf_points; /* landmarks the last keyframe saw (for the keyframe decision) */
     int32_t frames_since_kf;
-    /* the last tracked frame's PnP inliers (0: none since the last keyframe or map) and its distance from
-       the newest keyframe (for the keyframe decision: how fast the map runs out of points) */
-    int32_t last_n_in;
-    double last_base;
     double depth_med; /* median depth of the last tracked frame's inliers (map units; 0: unknown) */
     double rms;       /* the last landmarks-only PnP reprojection RMS (normalised; 0: unknown) */
     int32_t losses;

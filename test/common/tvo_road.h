@@ -1,7 +1,6 @@
 /* SPDX-License-Identifier: Apache-2.0 */
 /* A synthetic road for driving the VO's map module (lib/src/tvo_map.h, internal) directly with exact
- * tracks: test_map_store checks the map's landmark store (and its keyframes in a turn) on it,
- * bench_map_road measures the map's drift.
+ * tracks: test_map_store checks the map's landmark store on it, bench_map_road measures the map's drift.
  *
  * A camera drives 0.15 m a frame (10 Hz) down a road, swaying 0.4 m sideways and 3 degrees in yaw, among
  * points 1-6 m to the sides and 3 m above and below, spread along the road to 30 m beyond its end. Each
@@ -10,11 +9,7 @@
  * point's projection plus its offset (a random walk of drift_px a frame, and a jump of up to +-8 px per
  * axis with probability jump_prob a frame, which stays) plus noise_px of independent noise; every width
  * is the full width of a uniform distribution. The map gets the exact two-view rotations and the true
- * pose as the pose a new map starts from. Deterministic for a seed. Needs the include paths of lib/src.
- *
- * A turn (tvo_road_turn): from a given frame the camera stops on the road and turns in yaw at a fixed rate
- * while it creeps along its own axis (a drone that hovers and turns); new tracks then come from any
- * point in view that no track follows. */
+ * pose as the pose a new map starts from. Deterministic for a seed. Needs the include paths of lib/src. */
 #ifndef TVO_ROAD_H
 #define TVO_ROAD_H
 
@@ -23,7 +18,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "tinyvo/linalg.h"
 #include "tinyvo/se3.h"
 #include "tvo_map.h"
 
@@ -37,9 +31,7 @@ typedef struct tvo_road {
     int32_t frames, max_tracks, n_points;
     double noise_px, drift_px, jump_prob;
     int prior_flags; /* TVO_MAP_PRIOR_* bits of the next frames' two-view rotation (0 after open) */
-    int32_t turn_at, turn_frames; /* 0: no turn; else the first frame of the turn and its length */
-    double turn_rad, creep_m;     /* the turn's yaw a frame (rad) and its creep a frame (m) */
-    uint32_t seed;                /* the generator's state */
+    uint32_t seed;   /* the generator's state */
     double (*pts)[3];
     /* the tracks, n of them, in the layout tvo_map_tracks views */
     int32_t n, next_point;
@@ -63,38 +55,6 @@ static inline tvo_pose tvo_road_camera(int k)
     tvo_rotvec_to_rot(v, T_w_c.R);
     T_w_c.t[0] = 0.4 * sin(0.05 * k);
     T_w_c.t[2] = TVO_ROAD_STEP_M * k;
-    return tvo_pose_inverse(&T_w_c);
-}
-
-/* The turn: from frame at (> 0) the camera turns deg a frame in yaw for the given frames, creeping creep_m
- * a frame along its own axis (and on after the turn). */
-static inline void tvo_road_turn(tvo_road *r, int32_t at, int32_t frames, double deg, double creep_m)
-{
-    r->turn_at = at;
-    r->turn_frames = frames;
-    r->turn_rad = deg * 3.14159265358979323846 / 180.0;
-    r->creep_m = creep_m;
-}
-
-/* the camera of frame k on this road (with its turn), world -> camera */
-static inline tvo_pose tvo_road_pose(const tvo_road *r, int k)
-{
-    tvo_pose T_w_c;
-    double Ry[9], R[9];
-    const tvo_pose T0 = tvo_road_camera(k);
-    if (r->turn_at <= 0 || k <= r->turn_at - 1)
-        return T0;
-    {
-        const int32_t j = k - (r->turn_at - 1);
-        const tvo_pose Ts = tvo_road_camera(r->turn_at - 1);
-        const double v[3] = {0.0, r->turn_rad * (j < r->turn_frames ? j : r->turn_frames), 0.0};
-        T_w_c = tvo_pose_inverse(&Ts);
-        tvo_rotvec_to_rot(v, Ry);
-        tvo_la_mat3_mul(Ry, T_w_c.R, R);
-        memcpy(T_w_c.R, R, sizeof(R));
-        for (int c = 0; c < 3; ++c) /* along the camera's own axis */
-            T_w_c.t[c] += r->creep_m * j * R[3 * c + 2];
-    }
     return tvo_pose_inverse(&T_w_c);
 }
 
@@ -174,7 +134,7 @@ static inline tvo_map_tracks tvo_road_tracks(tvo_road *r)
 static inline tvo_status tvo_road_frame(tvo_road *r, tvo_map *m, const tvo_vo_config *cfg, int k,
                                         void *scratch, size_t scratch_size, tvo_map_frame *out)
 {
-    const tvo_pose T = tvo_road_pose(r, k);
+    const tvo_pose T = tvo_road_camera(k);
     const double f = TVO_ROAD_FOCAL;
     tvo_map_tracks tr;
     double R_cur_prev[9];
@@ -201,7 +161,7 @@ static inline tvo_status tvo_road_frame(tvo_road *r, tvo_map *m, const tvo_vo_co
     }
     r->n = kept;
     if (k > 0) {
-        const tvo_pose Tp = tvo_road_pose(r, k - 1), Twp = tvo_pose_inverse(&Tp),
+        const tvo_pose Tp = tvo_road_camera(k - 1), Twp = tvo_pose_inverse(&Tp),
                        d = tvo_pose_compose(&T, &Twp);
         memcpy(R_cur_prev, d.R, sizeof(R_cur_prev));
     }
@@ -211,17 +171,10 @@ static inline tvo_status tvo_road_frame(tvo_road *r, tvo_map *m, const tvo_vo_co
     if (st != TVO_OK)
         return st;
     first = r->n;
-    if (r->turn_at > 0 && k >= r->turn_at)
-        r->next_point = 0; /* in the turn: any point in view that no track follows */
     while (r->n < r->max_tracks && r->next_point < r->n_points) {
         tvo_point2d p;
         const int32_t i = r->next_point++;
-        int32_t followed = 0;
         if (!tvo_road_project(&T, r->pts[i], &p))
-            continue;
-        for (int32_t t = 0; t < r->n && r->turn_at > 0; ++t)
-            followed |= r->pid[t] == i;
-        if (followed)
             continue;
         r->pid[r->n] = i;
         r->life[r->n] = 10 + (int32_t)(30.0 * tvo_road_rnd(&r->seed));

@@ -16,7 +16,7 @@
 
 /* 1: the affine track refinement (tvo_vo_config.affine_win_size), the map's inlier gate
  * (tvo_vo_config.map_inlier_sigmas) and the landmarks' priors (tvo_vo_config.map_lm_prior, the bundle
- * adjustment's tvo_ba_problem.prior) are built in; 0: they are left out (9,520 bytes less code on a
+ * adjustment's tvo_ba_problem.prior) are built in; 0: they are left out (9,528 bytes less code on a
  * Cortex-M7), and tvo_vo_init() refuses a configuration that asks for any of them with
  * TVO_ERR_UNSUPPORTED (tvo_ba_solve() a problem with priors).
  * CMake: -DTVO_WITH_AFFINE=OFF (the default of Cortex-M builds; this header's default, 1, is for builds

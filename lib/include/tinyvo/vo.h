@@ -19,9 +19,7 @@
  * keyframe is made when the camera moved more than cfg.map_kf_baseline x the median landmark depth since
  * the last one, when fewer than cfg.map_kf_points_ratio of its landmarks remain, or after
  * cfg.map_kf_max_frames frames, and not when it barely moved (a turn on the spot adds little structure)
- * unless fewer than 2 x cfg.map_min_points landmarks are left, or fewer than cfg.map_min_points would be
- * left within 2 frames at the rate they fell since the last frame, before the baseline reaches a
- * keyframe's at its rate (the map is about to be lost).
+ * unless fewer than 2 x cfg.map_min_points landmarks are left (the map is about to be lost).
  * At each keyframe: new landmarks (at a keyframe of a map running out of points, also from the tracks
  * born since the last keyframe, triangulated from the frame they were born in), then a bundle adjustment
  * of the window (ba.h: Huber reprojection error in normalised coordinates, Levenberg-Marquardt with the
