@@ -15,20 +15,15 @@
 #define LA_SSE2 1
 #endif
 
-/* The root finder's helpers are inlined into a body specialised for degree 10 (the 5-point
- * solver's case: loops over the degree unroll, same operations in the same order). -Os builds
- * (Cortex-M), which have only the general body, leave them to the compiler: 2,012 bytes less code on
- * the Cortex-M7, the same results. */
+/* The helpers below (the linear solver's, the root finder's and its Sturm chain's) are inlined into
+ * their callers, the root finder's into a body specialised for degree 10 (the 5-point solver's case:
+ * loops over the degree unroll, same operations in the same order). -Os builds (Cortex-M), which have
+ * only the general body, leave them to the compiler: 2,012 bytes less code on the Cortex-M7, the same
+ * results. */
 #if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
 #define LA_INLINE static inline __attribute__((always_inline))
 #else
 #define LA_INLINE static inline
-#endif
-/* the Sturm chain's steps: inlined for speed, left to the compiler in -Os builds (Cortex-M) */
-#if defined(__GNUC__) && !defined(__OPTIMIZE_SIZE__)
-#define LA_INLINE_BIG static inline __attribute__((always_inline))
-#else
-#define LA_INLINE_BIG static inline
 #endif
 
 void tvo_la_mat3_mul(const double A[9], const double B[9], double C[9])
@@ -449,7 +444,7 @@ LA_INLINE int sturm_changes(const sturm_chain *s, int n, double t)
 
 /* one step of the fast chain: u = p(k-1) (degree d + 1), v = p(k) (degree d) -> w = p(k+1);
  * 0 when the remainder is not generic */
-LA_INLINE_BIG int sturm_fast_step(sturm_chain *s, const double *u, const double *v, double *w, int k, int d)
+LA_INLINE int sturm_fast_step(sturm_chain *s, const double *u, const double *v, double *w, int k, int d)
 {
     double q1 = u[d + 1] / v[d];
     double q0 = (u[d] - q1 * v[d - 1]) / v[d];
