@@ -85,6 +85,7 @@ static const setting settings[] = {
         S_D(map_rot_prior),
         S_I(map_rot_prior_obs),
         S_I(map_rot_prior_obs_frames),
+        S_I(map_twin_dir),
         S_I(lens_refine),
         S_I(detect.fast_threshold),
         S_I(detect.block_size),

@@ -809,6 +809,16 @@ static tvo_pose predicted_step(const tvo_map *m, int64_t t_ns)
     return step;
 }
 
+int tvo_map_motion_dir(const tvo_map *m, double dir[3])
+{
+    const double n = sqrt(dot3(m->vel.t, m->vel.t));
+    if (!m->active || !m->has_vel || !(n > 0.0) || !isfinite(n))
+        return 0;
+    for (int c = 0; c < 3; ++c)
+        dir[c] = m->vel.t[c] / n;
+    return 1;
+}
+
 /* The predicted pose of this frame: the last pose moved by the last velocity (scaled to this frame's
  * interval) with the two-view rotation of this frame when there is one. */
 static tvo_pose predict(const tvo_map *m, int64_t t_ns, const double *R_cur_prev)

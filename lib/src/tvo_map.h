@@ -176,6 +176,10 @@ tvo_status tvo_map_process(tvo_map *m, const tvo_vo_config *cfg, tvo_map_tracks 
  * the frame at prev_t_ns (the VO's previous frame) and has a velocity; else 0 and *T untouched. */
 int tvo_map_predict_pose(const tvo_map *m, int64_t t_ns, int64_t prev_t_ns, tvo_pose *T);
 
+/* The direction of the map's last step (X_cur = R X_prev + t: t / |t|, in the camera's frame) in dir: 1
+ * while the map poses frames and has moved, else 0. */
+int tvo_map_motion_dir(const tvo_map *m, double dir[3]);
+
 /* Tracks added after tvo_map_process (re-detection) start their wait for triangulation in this frame. */
 void tvo_map_new_tracks(const tvo_map *m, tvo_map_tracks *tr, int32_t first);
 

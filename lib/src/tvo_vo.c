@@ -424,6 +424,8 @@ static int config_valid(const tvo_vo_config *cfg)
         return 0;
     if (cfg->map_refind < 0 || cfg->map_refind > 4096) /* inert without the map or the templates */
         return 0;
+    if (cfg->map_twin_dir != 0 && cfg->map_twin_dir != 1)
+        return 0;
     if (cfg->map_refind_rescue != 0 && cfg->map_refind_rescue != 1)
         return 0;
     if (cfg->affine_step < 1 || cfg->affine_step > 15 ||
@@ -917,7 +919,8 @@ static void take_twin(tvo_relpose *rp)
 /* A plane seen with a small baseline has two poses that explain the plane's tracks equally well
  * (relpose flags AMBIGUOUS). The tracks off the plane fit only the true twin's epipolar geometry: the
  * twin they clearly favour (tvo_relpose_twin_choice at the pose threshold) is taken. Otherwise the
- * twin whose translation continues the recent motion (frames at camera rate move smoothly). Without a
+ * twin whose translation continues the recent motion (frames at camera rate move smoothly): the map's
+ * last step with cfg.map_twin_dir while the map poses frames, else the last two-view directions. Without a
  * recent direction, or when neither twin is within 45 degrees of it, the epipolar model alone (rc
  * without the homography) picks one. The frame keeps the AMBIGUOUS flag. If that fails too, only the
  * rotation is kept (the twins' rotations differ by about the parallax, which is small here).
@@ -930,8 +933,10 @@ static tvo_vo_state resolve_ambiguous(tvo_vo *vo, tvo_relpose_config rc, int32_t
         take_twin(rp);
     if (twin >= 0)
         return TVO_VO_OK;
-    if (vo->t_dir_age <= TVO_VO_PRIOR_FRAMES) {
-        const double *d = vo->t_dir;
+    double md[3];
+    const int map_dir = vo->cfg.map_twin_dir && vo->cfg.map && tvo_map_motion_dir(&vo->map, md);
+    if (map_dir || vo->t_dir_age <= TVO_VO_PRIOR_FRAMES) {
+        const double *d = map_dir ? md : vo->t_dir;
         double c0 = rp->t[0] * d[0] + rp->t[1] * d[1] + rp->t[2] * d[2];
         double c1 = rp->t_alt[0] * d[0] + rp->t_alt[1] * d[1] + rp->t_alt[2] * d[2];
         if (c1 > c0) {

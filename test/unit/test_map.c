@@ -420,6 +420,57 @@ static void test_map_fast_turn(void **state)
     close_vo(f);
 }
 
+/* Walk to build the map, then turn at 4 deg a frame for 40 frames while the camera creeps 12 mm a frame
+ * along its own axis from where the walk ended (a spiral: the step turns sideways, 28 mm a frame at the
+ * end). The view is mostly one wall, so the two-view pose has a plane's twin that the tracks off the
+ * plane often cannot tell apart; choosing by the last two-view directions, the choice drifts to the
+ * wrong twin (its translation flips sideways, its rotation is off by up to 0.6 deg a frame) and the
+ * default ends 12.6 deg off (docs/evaluation.md, "Fast turns in the test room"). With map_twin_dir the
+ * map's last step tells the twins apart: no map loss, the rotation error within 1.5 deg over the turn
+ * (0.52 measured at its worst, 0.40 at the end). Skipped without the affine refinement. */
+static void test_map_twin_dir_turn(void **state)
+{
+#if !TVO_WITH_AFFINE
+    /* the basic tracker (translation-only LK) ends about 10 deg off with or without map_twin_dir: its
+       tracks, not the twins, fail this turn (docs/evaluation.md, "Fast turns in the test room") */
+    skip();
+#endif
+    fixture *f = new_fixture(1);
+    const int walk1 = 60, turn = 40;
+    const double rate = 4.0 * M_PI / 180.0, creep = 0.012;
+    const tvo_pose W0 = walk(walk1 - 1);
+    double max_rot = 0.0;
+    tvo_vo_result res;
+    (void)state;
+    f->cfg.map_twin_dir = 1;
+    start_vo(f);
+    for (int k = 0; k < walk1 + turn; ++k) {
+        tvo_pose T = W0;
+        if (k < walk1) {
+            T = walk(k);
+        } else {
+            const int j = k - walk1 + 1;
+            const double v[3] = {0.0, rate * j, 0.0};
+            double Ry[9];
+            tvo_rotvec_to_rot(v, Ry);
+            tvo_la_mat3_mul(Ry, W0.R, T.R);
+            for (int c = 0; c < 3; ++c)
+                T.t[c] = W0.t[c] + creep * j * T.R[3 * c + 2];
+        }
+        assert_int_equal(step(f, &T, k, &res), TVO_OK);
+        assert_true(tvo_pose_is_finite(&res.T_w_c));
+        if (k >= walk1) {
+            const double r = rot_err_deg(&res.T_w_c, &T);
+            max_rot = r > max_rot ? r : max_rot;
+        }
+    }
+    fprintf(stderr, "map twin dir turn: %d losses, max rotation error %.3f deg\n", (int)res.map_losses,
+            max_rot);
+    assert_int_equal(res.map_losses, 0);
+    assert_true(max_rot < 1.5);
+    close_vo(f);
+}
+
 /* Walk to build the map, then hover for 120 frames: the camera drifts sideways by 8 mm a frame (and up
  * and down by 3 cm, in yaw by 1.7 deg, slowly) facing the room's far wall, 4.7 m away. The two-view
  * estimate of every hover frame is rotation-only (the drift's flow, 0.1 deg a frame, is mostly a turn's
@@ -738,17 +789,12 @@ static void test_map_config(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-            cmocka_unit_test(test_map_consistent_scale),
-            cmocka_unit_test(test_map_off),
-            cmocka_unit_test(test_map_pure_rotation),
-            cmocka_unit_test(test_map_rotation_after_map),
-            cmocka_unit_test(test_map_fast_turn),
-            cmocka_unit_test(test_map_loss_and_new_map),
-            cmocka_unit_test(test_tracks_view),
-            cmocka_unit_test(test_map_config),
-            cmocka_unit_test(test_map_hover),
-            cmocka_unit_test(test_map_ba_turn_check),
-            cmocka_unit_test(test_map_init_wait),
+            cmocka_unit_test(test_map_consistent_scale), cmocka_unit_test(test_map_off),
+            cmocka_unit_test(test_map_pure_rotation),    cmocka_unit_test(test_map_rotation_after_map),
+            cmocka_unit_test(test_map_fast_turn),        cmocka_unit_test(test_map_twin_dir_turn),
+            cmocka_unit_test(test_map_loss_and_new_map), cmocka_unit_test(test_tracks_view),
+            cmocka_unit_test(test_map_config),           cmocka_unit_test(test_map_hover),
+            cmocka_unit_test(test_map_ba_turn_check),    cmocka_unit_test(test_map_init_wait),
             cmocka_unit_test(test_map_init_fallback),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
