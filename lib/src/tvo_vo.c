@@ -919,8 +919,9 @@ static void take_twin(tvo_relpose *rp)
 /* A plane seen with a small baseline has two poses that explain the plane's tracks equally well
  * (relpose flags AMBIGUOUS). The tracks off the plane fit only the true twin's epipolar geometry: the
  * twin they clearly favour (tvo_relpose_twin_choice at the pose threshold) is taken. Otherwise the
- * twin whose translation continues the recent motion (frames at camera rate move smoothly): the map's
- * last step with cfg.map_twin_dir while the map poses frames, else the last two-view directions. Without a
+ * twin whose translation continues the recent motion (frames at camera rate move smoothly): with
+ * cfg.map_twin_dir the map's last step while the map poses frames, when it is within 45 degrees of a
+ * twin's direction; else the last two-view directions. Without a
  * recent direction, or when neither twin is within 45 degrees of it, the epipolar model alone (rc
  * without the homography) picks one. The frame keeps the AMBIGUOUS flag. If that fails too, only the
  * rotation is kept (the twins' rotations differ by about the parallax, which is small here).
@@ -934,9 +935,18 @@ static tvo_vo_state resolve_ambiguous(tvo_vo *vo, tvo_relpose_config rc, int32_t
     if (twin >= 0)
         return TVO_VO_OK;
     double md[3];
-    const int map_dir = vo->cfg.map_twin_dir && vo->cfg.map && tvo_map_motion_dir(&vo->map, md);
-    if (map_dir || vo->t_dir_age <= TVO_VO_PRIOR_FRAMES) {
-        const double *d = map_dir ? md : vo->t_dir;
+    if (vo->cfg.map_twin_dir && vo->cfg.map && tvo_map_motion_dir(&vo->map, md)) {
+        /* the map's last step, when it is within 45 deg of a twin's direction (else the map's motion
+           says nothing about this frame's: a young map's first steps) */
+        const double c0 = rp->t[0] * md[0] + rp->t[1] * md[1] + rp->t[2] * md[2];
+        const double c1 = rp->t_alt[0] * md[0] + rp->t_alt[1] * md[1] + rp->t_alt[2] * md[2];
+        if (c1 > c0 && c1 >= TVO_VO_PRIOR_COS)
+            take_twin(rp);
+        if ((c1 > c0 ? c1 : c0) >= TVO_VO_PRIOR_COS)
+            return TVO_VO_OK;
+    }
+    if (vo->t_dir_age <= TVO_VO_PRIOR_FRAMES) {
+        const double *d = vo->t_dir;
         double c0 = rp->t[0] * d[0] + rp->t[1] * d[1] + rp->t[2] * d[2];
         double c1 = rp->t_alt[0] * d[0] + rp->t_alt[1] * d[1] + rp->t_alt[2] * d[2];
         if (c1 > c0) {

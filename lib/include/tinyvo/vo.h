@@ -375,12 +375,12 @@ typedef struct tvo_vo_config {
     int32_t map_twin_dir;     /* (added) 1: a plane's twin poses (two-view poses that explain a dominant
                                    plane's tracks equally well) that the tracks off the plane cannot
                                    tell apart are told apart by the direction of the map's last step
-                                   while the map poses frames, not by the last two-view directions
-                                   (which follow the twin they chose: in a turn with a sideways step in
-                                   front of one wall they drift to the wrong twin, whose rotation is
-                                   off by up to 0.6 deg a frame, and the map's rotation prior follows
-                                   it). 0 or 1; default 0 (docs/rules.md, "Plane twins told apart by
-                                   the map's motion") */
+                                   while the map poses frames, when it is within 45 deg of one twin's,
+                                   before the last two-view directions are asked (which follow the twin
+                                   they chose: in a turn with a sideways step in front of one wall they
+                                   slide to the wrong twin, whose rotation is off by up to 0.6 deg a
+                                   frame, and the map's rotation prior follows it). 0 or 1; default 0
+                                   (docs/evaluation.md, "Fast turns in the test room") */
 } tvo_vo_config;
 
 /* Fill cfg with defaults for `camera` (copied): the balanced preset's tracker and window below (the
