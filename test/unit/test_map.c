@@ -364,6 +364,26 @@ static void test_map_rotation_after_map(void **state)
     close_vo(f);
 }
 
+/* Frame k of the walk's first walk1 frames, then of a yaw turn from where the walk ended: rate (rad) a
+ * frame about the vertical while creeping by creep (m) a frame along the camera's own axis. */
+static tvo_pose walk_then_turn(int k, int walk1, double rate, double creep)
+{
+    const tvo_pose W0 = walk(walk1 - 1);
+    tvo_pose T = W0;
+    if (k < walk1)
+        return walk(k);
+    {
+        const int j = k - walk1 + 1;
+        const double v[3] = {0.0, rate * j, 0.0};
+        double Ry[9];
+        tvo_rotvec_to_rot(v, Ry);
+        tvo_la_mat3_mul(Ry, W0.R, T.R);
+        for (int c = 0; c < 3; ++c) /* along the camera's own axis */
+            T.t[c] = W0.t[c] + creep * j * T.R[3 * c + 2];
+    }
+    return T;
+}
+
 /* Walk to build the map, then turn at 2.5 deg a frame while creeping forward 5 mm a frame for 50 frames:
  * the landmarks leave the view faster than the baseline grows, so no keyframe comes for 18 frames while
  * the landmarks tracked fall from 136 to 35, and the keyframes made then (the map running out of points)
@@ -376,24 +396,12 @@ static void test_map_fast_turn(void **state)
     fixture *f = open_vo(1);
     const int walk1 = 60, turn = 50;
     const double rate = 2.5 * M_PI / 180.0, creep = 0.005;
-    const tvo_pose W0 = walk(walk1 - 1);
     double max_rot = 0.0;
     int rescue_points = 0, min_points = 1 << 30;
     tvo_vo_result res;
     (void)state;
     for (int k = 0; k < walk1 + turn; ++k) {
-        tvo_pose T = W0;
-        if (k < walk1) {
-            T = walk(k);
-        } else {
-            const int j = k - walk1 + 1;
-            const double v[3] = {0.0, rate * j, 0.0};
-            double Ry[9];
-            tvo_rotvec_to_rot(v, Ry);
-            tvo_la_mat3_mul(Ry, W0.R, T.R);
-            for (int c = 0; c < 3; ++c) /* along the camera's own axis */
-                T.t[c] = W0.t[c] + creep * j * T.R[3 * c + 2];
-        }
+        const tvo_pose T = walk_then_turn(k, walk1, rate, creep);
         assert_int_equal(step(f, &T, k, &res), TVO_OK);
         assert_true(tvo_pose_is_finite(&res.T_w_c));
         if (k >= walk1) {
@@ -438,25 +446,13 @@ static void test_map_twin_dir_turn(void **state)
     fixture *f = new_fixture(1);
     const int walk1 = 60, turn = 40;
     const double rate = 4.0 * M_PI / 180.0, creep = 0.012;
-    const tvo_pose W0 = walk(walk1 - 1);
     double max_rot = 0.0;
     tvo_vo_result res;
     (void)state;
     f->cfg.map_twin_dir = 1;
     start_vo(f);
     for (int k = 0; k < walk1 + turn; ++k) {
-        tvo_pose T = W0;
-        if (k < walk1) {
-            T = walk(k);
-        } else {
-            const int j = k - walk1 + 1;
-            const double v[3] = {0.0, rate * j, 0.0};
-            double Ry[9];
-            tvo_rotvec_to_rot(v, Ry);
-            tvo_la_mat3_mul(Ry, W0.R, T.R);
-            for (int c = 0; c < 3; ++c)
-                T.t[c] = W0.t[c] + creep * j * T.R[3 * c + 2];
-        }
+        const tvo_pose T = walk_then_turn(k, walk1, rate, creep);
         assert_int_equal(step(f, &T, k, &res), TVO_OK);
         assert_true(tvo_pose_is_finite(&res.T_w_c));
         if (k >= walk1) {
